@@ -1,0 +1,17 @@
+//! Robust losses on the squared residual (Ceres convention).
+
+use std::fmt::Debug;
+
+/// A robust loss `ρ(s)` on the squared residual norm `s = |r|²` of one match, Ceres style.
+///
+/// Serialisable as a tagged trait object: `{"type": "cauchy", "scale": 0.0065}` in JSON,
+/// `type = "cauchy"` / `scale = 0.0065` in TOML.
+#[typetag::serde(tag = "type")]
+pub trait RobustLoss: Debug + Send + Sync {
+    /// `[ρ(s), ρ'(s), ρ''(s)]`.
+    fn evaluate(&self, s: f64) -> [f64; 3];
+
+    /// The residual magnitude that separates inliers from outliers (`|r| <= scale`), in the
+    /// metric's units; `f64::INFINITY` for a non-robust loss.
+    fn scale(&self) -> f64;
+}

@@ -1,0 +1,304 @@
+//! The least-squares problem of one frame pair: a rig, its matches, a motion manifold, a
+//! residual metric and a robust loss, differentiated through num-dual.
+
+use crate::error::CoreError;
+use crate::lie::Pose;
+use crate::loss::RobustLoss;
+use crate::manifold::Manifold;
+use crate::metric::{MAX_RESIDUALS, ResidualMetric};
+use crate::rig::{FrameObservations, Rig};
+use crate::scalar::Scalar;
+use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
+use nalgebra::{DMatrix, SMatrix, SVector};
+use num_dual::DualSVec64;
+
+/// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
+///
+/// `min_p ½ Σ_j Σ_i ρ(|r(C_j(p), x_ij)|²)`, with camera motion `C_j = P_j⁻¹ M(p) P_j`.
+///
+/// Some parameters may be held fixed (the arc length from odometry); the solver sees only the
+/// free ones. Residuals and Jacobians are evaluated with fixed-size dual numbers whose width is
+/// the number of free parameters (monomorphised for 1..=8), with no heap allocation in the
+/// per-match loop.
+#[derive(Debug, Clone)]
+pub struct Problem<'a, M: Manifold, R: ResidualMetric> {
+    model: &'a M,
+    metric: &'a R,
+    loss: &'a dyn RobustLoss,
+    rig: &'a Rig,
+    obs: &'a FrameObservations,
+    /// Full parameter vector; free entries are overwritten by the solver's `x`.
+    full: [f64; MAX_PARAMS],
+    /// Indices (into the full vector) of the free parameters.
+    free: [usize; MAX_PARAMS],
+    n_free: usize,
+}
+
+impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
+    /// A problem with all parameters free, at `params` (the full vector of the model).
+    pub fn new(
+        model: &'a M,
+        metric: &'a R,
+        loss: &'a dyn RobustLoss,
+        rig: &'a Rig,
+        obs: &'a FrameObservations,
+        params: &[f64],
+    ) -> Result<Self, CoreError> {
+        let np = M::PARAMS.len();
+        assert!(np <= MAX_PARAMS, "a model may have at most {MAX_PARAMS} parameters");
+        if params.len() != np {
+            return Err(CoreError::ParameterCount {
+                expected: np,
+                got: params.len(),
+            });
+        }
+        for (j, c) in rig.cameras().iter().enumerate() {
+            let used = obs.per_camera.get(j).is_some_and(|o| !o.is_empty());
+            if used {
+                metric.supports(&c.model).map_err(|reason| CoreError::UnsupportedCamera {
+                    metric: std::any::type_name::<R>().rsplit("::").next().unwrap_or("metric").into(),
+                    camera: j,
+                    reason,
+                })?;
+            }
+        }
+        let mut full = [0.0; MAX_PARAMS];
+        full[..np].copy_from_slice(params);
+        let mut free = [0; MAX_PARAMS];
+        for (i, f) in free.iter_mut().enumerate().take(np) {
+            *f = i;
+        }
+        Ok(Self {
+            model,
+            metric,
+            loss,
+            rig,
+            obs,
+            full,
+            free,
+            n_free: np,
+        })
+    }
+
+    /// Holds the parameters with `fixed[i] == true` at their current values.
+    pub fn with_fixed(mut self, fixed: &[bool]) -> Self {
+        let np = M::PARAMS.len();
+        self.n_free = 0;
+        for i in 0..np {
+            if !fixed.get(i).copied().unwrap_or(false) {
+                self.free[self.n_free] = i;
+                self.n_free += 1;
+            }
+        }
+        self
+    }
+
+    /// The free parameters of the current full vector, as the solver's `x`.
+    pub fn free_params(&self) -> ParamVec {
+        let mut x = ParamVec::zeros();
+        for k in 0..self.n_free {
+            x[k] = self.full[self.free[k]];
+        }
+        x
+    }
+
+    /// The full parameter vector for the solver's `x`.
+    pub fn full_params(&self, x: &ParamVec) -> Vec<f64> {
+        let mut p = self.full;
+        for k in 0..self.n_free {
+            p[self.free[k]] = x[k];
+        }
+        p[..M::PARAMS.len()].to_vec()
+    }
+
+    /// Indices of the free parameters in the full vector.
+    pub fn free_indices(&self) -> &[usize] {
+        &self.free[..self.n_free]
+    }
+
+    /// Calls `f(camera, residual norm)` for every match at the full parameters `params`.
+    pub fn for_each_residual_norm(&self, params: &[f64], mut f: impl FnMut(usize, f64)) {
+        let m = self.model.motion(params);
+        let mut r = [0.0; MAX_RESIDUALS];
+        for (j, cam) in self.rig.cameras().iter().enumerate() {
+            let Some(obs) = self.obs.per_camera.get(j) else { continue };
+            if obs.is_empty() {
+                continue;
+            }
+            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            let prep = self.metric.prepare(&cam.model, &c);
+            for o in obs {
+                self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
+                f(j, r[..R::RESIDUALS].iter().map(|v| v * v).sum::<f64>().sqrt());
+            }
+        }
+    }
+
+    /// The raw (not robustified) residuals and their Jacobian with respect to the *free*
+    /// parameters at the full parameters `params`, evaluated by automatic differentiation.
+    /// Rows are matches x residuals, in camera order. For checks and covariances; the solver
+    /// path uses [`LeastSquares::linearize`].
+    pub fn residuals_and_jacobian(&self, params: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        let mut me = self.clone();
+        me.full[..params.len()].copy_from_slice(params);
+        let x = me.free_params();
+        let mut res = Vec::new();
+        let mut rows: Vec<[f64; MAX_PARAMS]> = Vec::new();
+        macro_rules! go {
+            ($n:literal) => {
+                me.visit::<$n>(&x, |r: &[DualSVec64<$n>]| {
+                    for v in r {
+                        res.push(v.re);
+                        let mut row = [0.0; MAX_PARAMS];
+                        if let Some(e) = v.eps.0 {
+                            row[..$n].copy_from_slice(e.as_slice());
+                        }
+                        rows.push(row);
+                    }
+                })
+            };
+        }
+        match self.n_free {
+            0 => me.visit::<0>(&x, |r: &[DualSVec64<0>]| {
+                for v in r {
+                    res.push(v.re);
+                    rows.push([0.0; MAX_PARAMS]);
+                }
+            }),
+            1 => go!(1),
+            2 => go!(2),
+            3 => go!(3),
+            4 => go!(4),
+            5 => go!(5),
+            6 => go!(6),
+            7 => go!(7),
+            _ => go!(8),
+        }
+        let jac = DMatrix::from_fn(rows.len(), self.n_free, |i, k| rows[i][k]);
+        (res, jac)
+    }
+
+    /// Builds the full parameter vector in dual numbers (free entries seeded) and calls `f` with
+    /// the residuals of each match.
+    #[inline(always)]
+    fn visit<const N: usize>(&self, x: &ParamVec, mut f: impl FnMut(&[DualSVec64<N>])) {
+        let np = M::PARAMS.len();
+        let mut p = [DualSVec64::<N>::from_re(0.0); MAX_PARAMS];
+        for i in 0..np {
+            p[i] = DualSVec64::from_re(self.full[i]);
+        }
+        for k in 0..self.n_free.min(N) {
+            p[self.free[k]] = DualSVec64::from_re(x[k]).derivative(k);
+        }
+        let m = self.model.motion(&p[..np]);
+        let mut r = [DualSVec64::<N>::from_re(0.0); MAX_RESIDUALS];
+        for (j, cam) in self.rig.cameras().iter().enumerate() {
+            let Some(obs) = self.obs.per_camera.get(j) else { continue };
+            if obs.is_empty() {
+                continue;
+            }
+            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            let prep = self.metric.prepare(&cam.model, &c);
+            for o in obs {
+                self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
+                f(&r[..R::RESIDUALS]);
+            }
+        }
+    }
+
+    /// Robustified normal equations with `N` free parameters.
+    fn linearize_n<const N: usize>(&self, x: &ParamVec) -> Linearization {
+        let mut h = SMatrix::<f64, N, N>::zeros();
+        let mut g = SVector::<f64, N>::zeros();
+        let mut cost = 0.0;
+        let loss = self.loss;
+        self.visit::<N>(x, |r| {
+            let mut s = 0.0;
+            for v in r {
+                s += v.re * v.re;
+            }
+            let [rho, rho1, rho2] = loss.evaluate(s);
+            cost += 0.5 * rho;
+            if rho1 <= 0.0 {
+                return; // Tukey beyond its scale: no pull, no curvature.
+            }
+            let sqrt_rho1 = rho1.sqrt();
+            // Ceres' Corrector (Triggs et al.): with rho'' > 0 add the curvature term.
+            let (residual_scaling, alpha_sq_norm) = if s == 0.0 || rho2 <= 0.0 {
+                (sqrt_rho1, 0.0)
+            } else {
+                let d = 1.0 + 2.0 * s * rho2 / rho1;
+                let alpha = 1.0 - d.sqrt();
+                (sqrt_rho1 / (1.0 - alpha), alpha / s)
+            };
+            // rᵀJ (for the correction), then accumulate J̃ᵀJ̃ and J̃ᵀr̃.
+            let mut rtj = SVector::<f64, N>::zeros();
+            if alpha_sq_norm != 0.0 {
+                for v in r {
+                    if let Some(e) = &v.eps.0 {
+                        rtj += e * v.re;
+                    }
+                }
+            }
+            for v in r {
+                let Some(e) = &v.eps.0 else { continue };
+                let jt = (e - rtj * (alpha_sq_norm * v.re)) * sqrt_rho1;
+                h += jt * jt.transpose();
+                g += jt * (residual_scaling * v.re);
+            }
+        });
+        let mut out = Linearization {
+            cost,
+            gradient: ParamVec::zeros(),
+            hessian: NormalMatrix::zeros(),
+        };
+        out.hessian.fixed_view_mut::<N, N>(0, 0).copy_from(&h);
+        out.gradient.fixed_rows_mut::<N>(0).copy_from(&g);
+        out
+    }
+}
+
+impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
+    fn num_params(&self) -> usize {
+        self.n_free
+    }
+
+    fn cost(&self, x: &ParamVec) -> f64 {
+        let mut p = self.full;
+        for k in 0..self.n_free {
+            p[self.free[k]] = x[k];
+        }
+        let mut cost = 0.0;
+        self.for_each_residual_norm(&p[..M::PARAMS.len()], |_, n| {
+            cost += 0.5 * self.loss.evaluate(n * n)[0];
+        });
+        cost
+    }
+
+    fn linearize(&self, x: &ParamVec) -> Linearization {
+        match self.n_free {
+            0 => Linearization {
+                cost: self.cost(x),
+                gradient: ParamVec::zeros(),
+                hessian: NormalMatrix::zeros(),
+            },
+            1 => self.linearize_n::<1>(x),
+            2 => self.linearize_n::<2>(x),
+            3 => self.linearize_n::<3>(x),
+            4 => self.linearize_n::<4>(x),
+            5 => self.linearize_n::<5>(x),
+            6 => self.linearize_n::<6>(x),
+            7 => self.linearize_n::<7>(x),
+            _ => self.linearize_n::<8>(x),
+        }
+    }
+}
+
+/// The camera motion `C_j = P_j⁻¹ M P_j` of a camera with extrinsic `P_j = T_vehicle_camera`
+/// for the vehicle motion `M` (`DESIGN.md`).
+#[inline]
+pub fn camera_motion<T: Scalar>(vehicle_motion: &Pose<T>, t_vehicle_camera: &Pose<f64>) -> Pose<T> {
+    let p = Pose::<T>::lift(t_vehicle_camera);
+    let p_inv = Pose::<T>::lift(&t_vehicle_camera.inverse());
+    p_inv.compose(&vehicle_motion.compose(&p))
+}
