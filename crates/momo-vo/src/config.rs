@@ -1,0 +1,223 @@
+//! The estimator configuration: model, metric, loss and solver named by type tag (typetag), plus
+//! the odometry driver's options. Read from TOML or JSON; `momo config` prints the default.
+
+use momo_core::{MetricSpec, ModelSpec, RobustLoss, Solver};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use thiserror::Error;
+
+/// A configuration error (unreadable file, unknown type tag, bad value).
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Read {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The file could not be parsed.
+    #[error("{path}:{line}: {reason}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// 1-based line of the problem (1 if unknown).
+        line: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A value is out of range.
+    #[error("{path}: {reason}")]
+    Invalid {
+        /// The file (or `<default>`).
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// Options of the odometry driver (everything that is not model, metric, loss or solver).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OdometryOptions {
+    /// Below this arc length (metres per frame) the vehicle is at standstill: only the rotation
+    /// is estimated (rotation-only residual), the translation is zero.
+    pub standstill_arc_length: f64,
+    /// Frames with fewer matches (all cameras) hold the previous motion.
+    pub min_matches: usize,
+    /// Arc length assumed before any is known when there is no odometry (metres per frame).
+    pub initial_arc_length: f64,
+    /// Estimate the arc length where the rig makes it observable and odometry is absent.
+    pub estimate_scale: bool,
+    /// An estimated arc length is accepted if its standard deviation is below this fraction of
+    /// its value; otherwise the last value is held.
+    pub max_relative_scale_sigma: f64,
+    /// Try more starts when the inlier ratio falls below this value.
+    pub restart_inlier_ratio: f64,
+    /// Yaw offsets (radians) of the extra starts around the previous motion.
+    pub restart_yaw_offsets: Vec<f64>,
+}
+
+impl Default for OdometryOptions {
+    fn default() -> Self {
+        Self {
+            standstill_arc_length: 0.01,
+            min_matches: 8,
+            initial_arc_length: 1.0,
+            estimate_scale: true,
+            max_relative_scale_sigma: 0.2,
+            restart_inlier_ratio: 0.5,
+            restart_yaw_offsets: vec![-0.1, -0.03, 0.03, 0.1],
+        }
+    }
+}
+
+/// The whole configuration of an estimator.
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// The motion model (`type = "se3"`, `"single_track_2d"`, `"single_track_3d"`).
+    pub model: Box<dyn ModelSpec>,
+    /// The residual metric (`type = "angle_plane"`, `"geo_line"`, `"sampson"`).
+    pub metric: Box<dyn MetricSpec>,
+    /// The robust loss and its scale in the metric's units (`type = "cauchy"`, `scale = 0.002`).
+    pub loss: Box<dyn RobustLoss>,
+    /// The solver and its options (`type = "levenberg_marquardt"`, ...).
+    pub solver: Box<dyn Solver>,
+    /// The odometry driver's options.
+    #[serde(default)]
+    pub odometry: OdometryOptions,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            model: Box::new(momo_models::Se3::default()),
+            metric: Box::new(momo_costs::AnglePlane),
+            loss: Box::new(momo_costs::Cauchy::new(0.002)),
+            solver: Box::new(momo_solvers::LevenbergMarquardt::default()),
+            odometry: OdometryOptions::default(),
+        }
+    }
+}
+
+/// Comments printed above each section by [`Config::to_commented_toml`].
+const SECTION_COMMENTS: &[(&str, &str)] = &[
+    (
+        "model",
+        "# Motion model (the manifold): se3 (rotation + direction of travel + arc length),\n\
+         # single_track_2d (yaw, arc length), single_track_3d (yaw, arc length, pitch, roll).\n\
+         # With odometry.csv the arc length is fixed per frame.",
+    ),
+    (
+        "metric",
+        "# Residual metric: angle_plane (any camera; sine of the angle to the epipolar plane),\n\
+         # geo_line (pinhole; pixel distance to the epipolar lines), sampson (pinhole).",
+    ),
+    (
+        "loss",
+        "# Robust loss on the squared residual: cauchy, huber, tukey, trivial.\n\
+         # scale is in the metric's units: radians for angle_plane (0.002 ~ 1.4 px at f = 718 px),\n\
+         # pixels for geo_line and sampson.",
+    ),
+    (
+        "solver",
+        "# Solver: levenberg_marquardt, gauss_newton, dogleg, with their options.",
+    ),
+    ("odometry", "# Odometry driver: degenerate frames, scale and restarts."),
+];
+
+impl Config {
+    /// Parses TOML or JSON (chosen by the extension `.json`, otherwise TOML) from a file.
+    pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let name = path.display().to_string();
+        let config = if is_json {
+            Self::from_json_str(&text, &name)?
+        } else {
+            Self::from_toml_str(&text, &name)?
+        };
+        Ok(config)
+    }
+
+    /// Parses a TOML configuration; `name` is used in messages.
+    pub fn from_toml_str(text: &str, name: &str) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
+                .unwrap_or(1);
+            ConfigError::Parse {
+                path: name.into(),
+                line,
+                reason: e.message().trim().to_string(),
+            }
+        })?;
+        config.validate(name)?;
+        Ok(config)
+    }
+
+    /// Parses a JSON configuration; `name` is used in messages.
+    pub fn from_json_str(text: &str, name: &str) -> Result<Self, ConfigError> {
+        let config: Config = serde_json::from_str(text).map_err(|e| ConfigError::Parse {
+            path: name.into(),
+            line: e.line().max(1),
+            reason: e.to_string(),
+        })?;
+        config.validate(name)?;
+        Ok(config)
+    }
+
+    /// Checks value ranges that the types cannot express.
+    pub fn validate(&self, name: &str) -> Result<(), ConfigError> {
+        let o = &self.odometry;
+        let bad = |reason: String| {
+            Err(ConfigError::Invalid {
+                path: name.into(),
+                reason,
+            })
+        };
+        let scale = self.loss.scale();
+        if !(scale > 0.0) {
+            return bad(format!("loss scale must be positive, got {scale}"));
+        }
+        if !(o.standstill_arc_length >= 0.0 && o.standstill_arc_length.is_finite()) {
+            return bad("odometry.standstill_arc_length must be finite and >= 0".into());
+        }
+        if !(o.initial_arc_length > 0.0 && o.initial_arc_length.is_finite()) {
+            return bad("odometry.initial_arc_length must be finite and > 0".into());
+        }
+        if !(0.0..=1.0).contains(&o.restart_inlier_ratio) {
+            return bad("odometry.restart_inlier_ratio must be within 0..=1".into());
+        }
+        if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
+            return bad("odometry.restart_yaw_offsets must be finite".into());
+        }
+        Ok(())
+    }
+
+    /// The configuration as TOML with a comment above each section.
+    pub fn to_commented_toml(&self) -> String {
+        let plain = toml::to_string(self).unwrap_or_else(|e| format!("# cannot serialise: {e}\n"));
+        let mut out = String::from(
+            "# momo estimator configuration (TOML). Pass it with `momo run --config FILE`.\n\
+             # Every section is tagged by `type`; unknown fields are rejected.\n",
+        );
+        for line in plain.lines() {
+            let header = line.trim().strip_prefix('[').and_then(|l| l.strip_suffix(']'));
+            if let Some((_, comment)) = header.and_then(|h| SECTION_COMMENTS.iter().find(|(s, _)| *s == h)) {
+                out.push('\n');
+                out.push_str(comment);
+                out.push('\n');
+            }
+            out.push_str(line);
+            out.push('\n');
+        }
+        out
+    }
+}

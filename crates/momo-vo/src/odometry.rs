@@ -1,0 +1,443 @@
+//! The odometry driver: one frame pair's matches in, the vehicle motion and diagnostics out,
+//! warm-started from the previous motion (the paper's prior).
+
+use crate::config::{Config, ConfigError};
+use momo_core::{
+    CoreError, FrameEstimator, FrameObservations, FrameSolution, Pose, Rig, SolveRequest, Termination,
+};
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+use thiserror::Error;
+
+/// Errors of the driver (configuration that does not fit the rig).
+#[derive(Debug, Error)]
+pub enum VoError {
+    /// The configuration is invalid.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// Model, metric and rig do not fit together.
+    #[error(transparent)]
+    Core(#[from] CoreError),
+}
+
+/// What happened to a frame pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrameStatus {
+    /// The motion was estimated from the matches.
+    Estimated,
+    /// Standstill (arc length below the threshold): rotation only, zero translation.
+    Standstill,
+    /// Too few matches: the previous motion was held.
+    NoMatches,
+    /// The solver failed (non-finite cost, no step): the previous motion was held.
+    SolverFailure,
+}
+
+/// Where the frame's arc length (scale) came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScaleSource {
+    /// From odometry.csv.
+    Odometry,
+    /// Estimated from the matches (observable through the rig's lever arm in a curve).
+    Estimated,
+    /// Not observable in this frame: the last value was held.
+    Held,
+}
+
+/// Per-frame diagnostics (one row of `--diagnostics`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameDiagnostics {
+    /// Frame index k (the pair k-1, k).
+    pub frame: usize,
+    /// What happened.
+    pub status: FrameStatus,
+    /// Where the scale came from.
+    pub scale: ScaleSource,
+    /// Parameter names of the model.
+    pub param_names: Vec<String>,
+    /// Final parameters.
+    pub params: Vec<f64>,
+    /// Standard deviations of the free parameters (NaN for fixed or unknown ones).
+    pub param_sigmas: Vec<f64>,
+    /// Covariance of the free parameters, row-major (`free x free`), empty if unavailable.
+    pub covariance: Vec<f64>,
+    /// Indices of the free parameters.
+    pub free: Vec<usize>,
+    /// Cost at the start of the chosen solve.
+    pub initial_cost: f64,
+    /// Cost at the end.
+    pub final_cost: f64,
+    /// Solver iterations (of the chosen solve).
+    pub iterations: usize,
+    /// Why the solver stopped (`None` when no solve ran).
+    pub termination: Option<Termination>,
+    /// Matches of the frame pair, all cameras.
+    pub matches: usize,
+    /// Matches whose residual is within the loss scale.
+    pub inliers: usize,
+    /// Inliers per camera.
+    pub inliers_per_camera: Vec<usize>,
+    /// Extra starts tried because the first result looked bad (0 if none).
+    pub restarts: usize,
+    /// Whether an extra start won.
+    pub restart_won: bool,
+    /// Compute time of the frame in microseconds.
+    pub time_us: f64,
+}
+
+/// The result of one frame pair.
+#[derive(Clone, Debug)]
+pub struct FrameResult {
+    /// Vehicle motion `T_{k-1,k}`.
+    pub motion: Pose<f64>,
+    /// Diagnostics.
+    pub diagnostics: FrameDiagnostics,
+}
+
+/// The frame-to-frame odometry: feed it frame pairs in order with [`Odometry::process`].
+///
+/// Behaviour on degenerate frames (documented in the README and tested):
+/// - fewer than `min_matches` matches: the previous motion is held (with the frame's odometry
+///   arc length if given), status [`FrameStatus::NoMatches`];
+/// - arc length below `standstill_arc_length`: rotation-only residual, zero arc length, status
+///   [`FrameStatus::Standstill`];
+/// - solver failure: the previous motion is held, status [`FrameStatus::SolverFailure`];
+/// - a camera whose matches are all outliers is down-weighted by the robust loss, the others
+///   carry the estimate (visible in `inliers_per_camera`);
+/// - an inlier ratio below `restart_inlier_ratio` triggers extra starts (yaw offsets around the
+///   previous motion, and straight ahead); the lowest cost wins.
+#[derive(Debug)]
+pub struct Odometry {
+    rig: Rig,
+    config: Config,
+    estimator: Box<dyn FrameEstimator>,
+    previous: Vec<f64>,
+    last_arc_length: Option<f64>,
+    scale_observable: bool,
+    frame: usize,
+}
+
+impl Odometry {
+    /// A driver for a rig and a configuration.
+    pub fn new(rig: Rig, config: Config) -> Result<Self, VoError> {
+        config.validate("<config>")?;
+        let estimator = config.model.build(config.metric.as_ref())?;
+        let observable = estimator.observable(&rig);
+        let scale_observable = estimator.arc_length_index().is_some_and(|i| observable[i]);
+        let previous = estimator.initial_params(config.odometry.initial_arc_length);
+        Ok(Self {
+            rig,
+            config,
+            estimator,
+            previous,
+            last_arc_length: None,
+            scale_observable,
+            frame: 0,
+        })
+    }
+
+    /// The rig.
+    pub fn rig(&self) -> &Rig {
+        &self.rig
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The type-erased estimator (model and metric).
+    pub fn estimator(&self) -> &dyn FrameEstimator {
+        self.estimator.as_ref()
+    }
+
+    /// Whether the rig lets the arc length be estimated without odometry.
+    pub fn scale_observable(&self) -> bool {
+        self.scale_observable
+    }
+
+    /// The parameters of the previous frame (the warm start of the next).
+    pub fn previous_params(&self) -> &[f64] {
+        &self.previous
+    }
+
+    /// Estimates the motion of the next frame pair from its matches and, if known, the arc
+    /// length travelled (odometry).
+    pub fn process(&mut self, obs: &FrameObservations, arc_length: Option<f64>) -> FrameResult {
+        let start = Instant::now();
+        self.frame += 1;
+        let arc_index = self.estimator.arc_length_index();
+        let n_params = self.estimator.param_names().len();
+        let arc_length = arc_length.filter(|l| l.is_finite() && *l >= 0.0);
+
+        let mut init = self.previous.clone();
+        let mut fixed = vec![false; n_params];
+        let scale = match (arc_index, arc_length) {
+            (Some(i), Some(l)) => {
+                init[i] = l;
+                fixed[i] = true;
+                ScaleSource::Odometry
+            }
+            (Some(i), None) => {
+                if !(self.config.odometry.estimate_scale && self.scale_observable) {
+                    fixed[i] = true;
+                    ScaleSource::Held
+                } else {
+                    ScaleSource::Estimated
+                }
+            }
+            (None, _) => ScaleSource::Estimated,
+        };
+        let standstill = arc_index.is_some_and(|i| init[i] < self.config.odometry.standstill_arc_length && fixed[i]);
+        if standstill && let Some(i) = arc_index {
+            init[i] = 0.0;
+        }
+
+        let matches = obs.len();
+        let mut diag = FrameDiagnostics {
+            frame: self.frame,
+            status: FrameStatus::Estimated,
+            scale,
+            param_names: self.estimator.param_names().iter().map(|s| s.to_string()).collect(),
+            params: init.clone(),
+            param_sigmas: vec![f64::NAN; n_params],
+            covariance: Vec::new(),
+            free: Vec::new(),
+            initial_cost: f64::NAN,
+            final_cost: f64::NAN,
+            iterations: 0,
+            termination: None,
+            matches,
+            inliers: 0,
+            inliers_per_camera: vec![0; self.rig.len()],
+            restarts: 0,
+            restart_won: false,
+            time_us: 0.0,
+        };
+
+        let result = if matches < self.config.odometry.min_matches.max(1) {
+            diag.status = FrameStatus::NoMatches;
+            None
+        } else {
+            self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag)
+        };
+
+        let params = match result {
+            Some(sol) => {
+                if standstill {
+                    diag.status = FrameStatus::Standstill;
+                }
+                // Scale: accept an estimated arc length only where it is well determined.
+                let mut sol = sol;
+                if scale == ScaleSource::Estimated
+                    && let Some(i) = arc_index
+                    && !self.scale_ok(&sol, i)
+                {
+                    diag.scale = ScaleSource::Held;
+                    let mut held_init = sol.params.clone();
+                    held_init[i] = self.last_arc_length.unwrap_or(self.previous[i]);
+                    let mut held_fixed = fixed.clone();
+                    held_fixed[i] = true;
+                    if let Some(s2) = self.solve_once(obs, &held_init, &held_fixed, false) {
+                        sol = s2;
+                    } else {
+                        sol.params[i] = held_init[i];
+                    }
+                }
+                self.fill_diagnostics(&sol, &mut diag);
+                sol.params
+            }
+            None => {
+                if diag.status == FrameStatus::Estimated {
+                    diag.status = FrameStatus::SolverFailure;
+                }
+                // Hold the previous motion, with this frame's arc length if known.
+                let mut held = self.previous.clone();
+                if let (Some(i), Some(l)) = (arc_index, arc_length) {
+                    held[i] = if standstill { 0.0 } else { l };
+                }
+                if diag.scale == ScaleSource::Estimated {
+                    diag.scale = ScaleSource::Held;
+                }
+                held
+            }
+        };
+
+        if let Some(i) = arc_index
+            && params[i] > self.config.odometry.standstill_arc_length
+        {
+            self.last_arc_length = Some(params[i]);
+        }
+        let motion = self.estimator.motion(&params);
+        diag.params = params.clone();
+        // The warm start keeps the last moving arc length so that the next frame's start is sane.
+        self.previous = params;
+        if let (Some(i), Some(l)) = (arc_index, self.last_arc_length)
+            && self.previous[i] <= self.config.odometry.standstill_arc_length
+        {
+            self.previous[i] = l;
+        }
+        diag.time_us = start.elapsed().as_secs_f64() * 1e6;
+        FrameResult { motion, diagnostics: diag }
+    }
+
+    fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
+        let Some(k) = sol.free.iter().position(|&f| f == arc_index) else {
+            return false;
+        };
+        let l = sol.params[arc_index];
+        let Some(cov) = covariance(sol) else { return false };
+        let sigma = cov[(k, k)].max(0.0).sqrt();
+        l > self.config.odometry.standstill_arc_length
+            && l.is_finite()
+            && sigma <= self.config.odometry.max_relative_scale_sigma * l
+    }
+
+    fn solve_once(
+        &self,
+        obs: &FrameObservations,
+        init: &[f64],
+        fixed: &[bool],
+        rotation_only: bool,
+    ) -> Option<FrameSolution> {
+        let req = SolveRequest {
+            rig: &self.rig,
+            observations: obs,
+            loss: self.config.loss.as_ref(),
+            solver: self.config.solver.as_ref(),
+            initial: init,
+            fixed,
+            rotation_only,
+        };
+        let sol = self.estimator.solve(&req).ok()?;
+        let ok = sol.report.termination != Termination::NumericalFailure
+            && sol.params.iter().all(|p| p.is_finite())
+            && sol.report.final_cost.is_finite();
+        ok.then_some(sol)
+    }
+
+    fn solve_with_restarts(
+        &self,
+        obs: &FrameObservations,
+        init: &[f64],
+        fixed: &[bool],
+        standstill: bool,
+        diag: &mut FrameDiagnostics,
+    ) -> Option<FrameSolution> {
+        let first = self.solve_once(obs, init, fixed, standstill);
+        let ratio = |s: &FrameSolution| s.inliers() as f64 / obs.len().max(1) as f64;
+        let threshold = self.config.odometry.restart_inlier_ratio;
+        if first.as_ref().is_some_and(|s| ratio(s) >= threshold) {
+            return first;
+        }
+        // The result looks bad: try more starts and keep the lowest cost.
+        let mut best = first;
+        for start in self.restart_points(init) {
+            diag.restarts += 1;
+            let Some(sol) = self.solve_once(obs, &start, fixed, standstill) else { continue };
+            let better = best.as_ref().is_none_or(|b| sol.report.final_cost < b.report.final_cost * (1.0 - 1e-9));
+            if better {
+                best = Some(sol);
+                diag.restart_won = true;
+            }
+        }
+        best
+    }
+
+    /// Extra starts: straight ahead, and the previous motion turned by the configured yaw
+    /// offsets (where the model can express a motion in closed form).
+    fn restart_points(&self, init: &[f64]) -> Vec<Vec<f64>> {
+        let arc = self.estimator.arc_length_index().map_or(1.0, |i| init[i]);
+        let mut starts = vec![self.estimator.initial_params(arc)];
+        let base = self.estimator.motion(init);
+        for &dy in &self.config.odometry.restart_yaw_offsets {
+            let (s, c) = dy.sin_cos();
+            let rz = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+            let turned = Pose::new(rz * base.rotation, rz * base.translation);
+            if let Some(mut p) = self.estimator.params_from_motion(&turned) {
+                if let Some(i) = self.estimator.arc_length_index() {
+                    p[i] = arc; // keep the (possibly fixed) arc length
+                }
+                starts.push(p);
+            }
+        }
+        starts
+    }
+
+    fn fill_diagnostics(&self, sol: &FrameSolution, diag: &mut FrameDiagnostics) {
+        diag.initial_cost = sol.report.initial_cost;
+        diag.final_cost = sol.report.final_cost;
+        diag.iterations = sol.report.iterations;
+        diag.termination = Some(sol.report.termination);
+        diag.inliers = sol.inliers();
+        diag.inliers_per_camera = sol.inliers_per_camera.clone();
+        diag.free = sol.free.clone();
+        if let Some(cov) = covariance(sol) {
+            for (k, &i) in sol.free.iter().enumerate() {
+                diag.param_sigmas[i] = cov[(k, k)].max(0.0).sqrt();
+            }
+            diag.covariance = cov.transpose().iter().copied().collect();
+        }
+    }
+}
+
+/// Parameter covariance `σ² (JᵀJ)⁻¹` with `σ²` estimated from the final cost
+/// (`2 cost / (m - n)`, robust-weighted).
+fn covariance(sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+    let n = sol.free.len();
+    let m: usize = sol.inliers_per_camera.iter().sum::<usize>().max(n + 1);
+    let sigma2 = 2.0 * sol.report.final_cost / (m - n) as f64;
+    sol.report.covariance(sigma2)
+}
+
+/// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:
+/// `T_cam0(0)_cam0(k) = P0⁻¹ · (M_1 ⋯ M_k) · P0`.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    t_vehicle_cam0: Pose<f64>,
+    vehicle: Pose<f64>,
+}
+
+impl Trajectory {
+    /// Starts at the identity for a rig's camera 0.
+    pub fn new(rig: &Rig) -> Self {
+        Self {
+            t_vehicle_cam0: rig.cameras()[0].t_vehicle_camera,
+            vehicle: Pose::identity(),
+        }
+    }
+
+    /// Appends a vehicle motion `T_{k-1,k}` and returns camera 0's pose at k.
+    pub fn push(&mut self, motion: &Pose<f64>) -> Pose<f64> {
+        self.vehicle = self.vehicle.compose(motion);
+        // Re-orthonormalise now and then is unnecessary over a few thousand frames (errors ~1e-13).
+        self.camera0()
+    }
+
+    /// Camera 0's current pose in camera 0's frame at frame 0.
+    pub fn camera0(&self) -> Pose<f64> {
+        self.t_vehicle_cam0.inverse().compose(&self.vehicle).compose(&self.t_vehicle_cam0)
+    }
+
+    /// The vehicle's current pose in the vehicle frame at frame 0.
+    pub fn vehicle(&self) -> Pose<f64> {
+        self.vehicle
+    }
+}
+
+/// Rotation angle between two rotations, in degrees.
+pub fn rotation_error_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    momo_core::so3_log(&(a.transpose() * b)).norm().to_degrees()
+}
+
+/// Angle between two translation directions in degrees (NaN if either is ~zero).
+pub fn direction_error_deg(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let (na, nb) = (a.norm(), b.norm());
+    if na < 1e-12 || nb < 1e-12 {
+        return f64::NAN;
+    }
+    (a.dot(b) / (na * nb)).clamp(-1.0, 1.0).acos().to_degrees()
+}
