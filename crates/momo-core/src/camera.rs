@@ -20,7 +20,10 @@ pub trait CameraModel {
     /// Whether a pixel lies inside the image, extended by `margin` pixels on every side.
     fn contains(&self, px: &Vector2<f64>, margin: f64) -> bool {
         let (w, h) = self.size();
-        px.x >= -0.5 - margin && px.y >= -0.5 - margin && px.x <= w - 0.5 + margin && px.y <= h - 0.5 + margin
+        px.x >= -0.5 - margin
+            && px.y >= -0.5 - margin
+            && px.x <= w - 0.5 + margin
+            && px.y <= h - 0.5 + margin
     }
 }
 
@@ -66,7 +69,8 @@ impl Pinhole {
 
 impl CameraModel for Pinhole {
     fn project(&self, p: &Vector3<f64>) -> Option<Vector2<f64>> {
-        (p.z > 0.0).then(|| Vector2::new(self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy))
+        (p.z > 0.0)
+            .then(|| Vector2::new(self.fx * p.x / p.z + self.cx, self.fy * p.y / p.z + self.cy))
     }
 
     fn unproject(&self, px: &Vector2<f64>) -> Option<Vector3<f64>> {
@@ -112,7 +116,9 @@ impl KannalaBrandt {
     fn distort(&self, theta: f64) -> (f64, f64) {
         let t2 = theta * theta;
         let poly = 1.0 + t2 * (self.k1 + t2 * (self.k2 + t2 * (self.k3 + t2 * self.k4)));
-        let dpoly = 1.0 + t2 * (3.0 * self.k1 + t2 * (5.0 * self.k2 + t2 * (7.0 * self.k3 + t2 * 9.0 * self.k4)));
+        let dpoly = 1.0
+            + t2 * (3.0 * self.k1
+                + t2 * (5.0 * self.k2 + t2 * (7.0 * self.k3 + t2 * 9.0 * self.k4)));
         (theta * poly, dpoly)
     }
 }
@@ -125,7 +131,10 @@ impl CameraModel for KannalaBrandt {
         }
         let theta = rho.atan2(p.z);
         let (d, _) = self.distort(theta);
-        Some(Vector2::new(self.fx * d * p.x / rho + self.cx, self.fy * d * p.y / rho + self.cy))
+        Some(Vector2::new(
+            self.fx * d * p.x / rho + self.cx,
+            self.fy * d * p.y / rho + self.cy,
+        ))
     }
 
     fn unproject(&self, px: &Vector2<f64>) -> Option<Vector3<f64>> {
@@ -255,14 +264,23 @@ mod tests {
     fn fisheye_beyond_ninety_degrees_unprojects_behind() {
         let c = fisheye();
         let p = Vector3::new(1.0, 0.0, -0.3);
-        let b = c.unproject(&c.project(&p).expect("projects")).expect("unprojects");
+        let b = c
+            .unproject(&c.project(&p).expect("projects"))
+            .expect("unprojects");
         assert!(b.z < 0.0);
         assert!((b - p.normalize()).norm() < 1e-9);
     }
 
     #[test]
     fn pinhole_behind_is_none() {
-        let c = Pinhole { fx: 500.0, fy: 500.0, cx: 320.0, cy: 240.0, width: 640.0, height: 480.0 };
+        let c = Pinhole {
+            fx: 500.0,
+            fy: 500.0,
+            cx: 320.0,
+            cy: 240.0,
+            width: 640.0,
+            height: 480.0,
+        };
         assert!(c.project(&Vector3::new(0.0, 0.0, -1.0)).is_none());
         assert!((c.k() * c.k_inv() - Matrix3::identity()).amax() < 1e-15);
     }

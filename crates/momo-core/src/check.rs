@@ -14,7 +14,9 @@ use thiserror::Error;
 
 /// Where automatic and numeric derivatives disagree.
 #[derive(Debug, Error, Clone, PartialEq)]
-#[error("derivative mismatch at {what} (row {row}, column {col}): AD {ad:.12e}, finite differences {fd:.12e}, error {error:.3e} > {tolerance:.1e}")]
+#[error(
+    "derivative mismatch at {what} (row {row}, column {col}): AD {ad:.12e}, finite differences {fd:.12e}, error {error:.3e} > {tolerance:.1e}"
+)]
 pub struct JacobianMismatch {
     /// What was checked.
     pub what: String,
@@ -36,7 +38,14 @@ fn step(x: f64) -> f64 {
     1e-6 * x.abs().max(1.0)
 }
 
-fn compare(what: &str, row: usize, col: usize, ad: f64, fd: f64, tol: f64) -> Result<f64, JacobianMismatch> {
+fn compare(
+    what: &str,
+    row: usize,
+    col: usize,
+    ad: f64,
+    fd: f64,
+    tol: f64,
+) -> Result<f64, JacobianMismatch> {
     let error = (ad - fd).abs() / fd.abs().max(1.0);
     if error <= tol && ad.is_finite() {
         Ok(error)
@@ -55,7 +64,11 @@ fn compare(what: &str, row: usize, col: usize, ad: f64, fd: f64, tol: f64) -> Re
 
 /// Checks the Jacobian of the motion `M(p)` (its 12 entries `R`, `t`) with respect to every
 /// parameter against central finite differences. Returns the largest relative error.
-pub fn check_motion_jacobian<M: Manifold>(model: &M, params: &[f64], tol: f64) -> Result<f64, JacobianMismatch> {
+pub fn check_motion_jacobian<M: Manifold>(
+    model: &M,
+    params: &[f64],
+    tol: f64,
+) -> Result<f64, JacobianMismatch> {
     let np = M::PARAMS.len();
     let entries = |p: &Pose<f64>| -> [f64; 12] {
         let mut e = [0.0; 12];
@@ -105,15 +118,16 @@ pub fn check_residual_jacobian<M: Manifold, R: ResidualMetric>(
     tol: f64,
 ) -> Result<f64, JacobianMismatch> {
     let loss = crate::loss_trivial::TrivialLoss;
-    let problem = Problem::new(model, metric, &loss, rig, obs, params).map_err(|e| JacobianMismatch {
-        what: e.to_string(),
-        row: 0,
-        col: 0,
-        ad: f64::NAN,
-        fd: f64::NAN,
-        error: f64::INFINITY,
-        tolerance: tol,
-    })?;
+    let problem =
+        Problem::new(model, metric, &loss, rig, obs, params).map_err(|e| JacobianMismatch {
+            what: e.to_string(),
+            row: 0,
+            col: 0,
+            ad: f64::NAN,
+            fd: f64::NAN,
+            error: f64::INFINITY,
+            tolerance: tol,
+        })?;
     let (_, jac) = problem.residuals_and_jacobian(params);
     let mut worst: f64 = 0.0;
     for col in 0..params.len() {
@@ -133,7 +147,11 @@ pub fn check_residual_jacobian<M: Manifold, R: ResidualMetric>(
 }
 
 /// Checks `ρ'` and `ρ''` of a loss at `s` against central differences of `ρ` and `ρ'`.
-pub fn check_loss_derivatives(loss: &dyn RobustLoss, s: f64, tol: f64) -> Result<f64, JacobianMismatch> {
+pub fn check_loss_derivatives(
+    loss: &dyn RobustLoss,
+    s: f64,
+    tol: f64,
+) -> Result<f64, JacobianMismatch> {
     let h = 1e-6 * s.abs().max(1e-6);
     let [_, d1, d2] = loss.evaluate(s);
     let [ra, da, _] = loss.evaluate(s + h);
@@ -142,7 +160,14 @@ pub fn check_loss_derivatives(loss: &dyn RobustLoss, s: f64, tol: f64) -> Result
     // Relative to the size of ρ' so that tiny-scale losses are judged fairly.
     let e1 = compare("rho'", 0, 0, d1 / scale, (ra - rb) / (2.0 * h) / scale, tol)?;
     let scale2 = d2.abs().max(((da - db) / (2.0 * h)).abs()).max(1e-300);
-    let e2 = compare("rho''", 1, 0, d2 / scale2, (da - db) / (2.0 * h) / scale2, tol)?;
+    let e2 = compare(
+        "rho''",
+        1,
+        0,
+        d2 / scale2,
+        (da - db) / (2.0 * h) / scale2,
+        tol,
+    )?;
     Ok(e1.max(e2))
 }
 

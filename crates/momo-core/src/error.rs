@@ -9,7 +9,9 @@ pub enum CoreError {
     #[error("the rig has no cameras")]
     EmptyRig,
     /// The rotation block of `T_vehicle_camera` is not orthonormal with det +1.
-    #[error("camera {camera}: T_vehicle_camera rotation is not orthonormal (error {error:.3e}, tolerance 1e-6)")]
+    #[error(
+        "camera {camera}: T_vehicle_camera rotation is not orthonormal (error {error:.3e}, tolerance 1e-6)"
+    )]
     NotOrthonormal {
         /// Camera index.
         camera: usize,

@@ -98,8 +98,15 @@ fn run<M: Manifold, R: ResidualMetric>(
     req: &SolveRequest<'_>,
     fixed: &[bool],
 ) -> Result<FrameSolution, CoreError> {
-    let problem = Problem::new(model, metric, req.loss, req.rig, req.observations, req.initial)?
-        .with_fixed(fixed);
+    let problem = Problem::new(
+        model,
+        metric,
+        req.loss,
+        req.rig,
+        req.observations,
+        req.initial,
+    )?
+    .with_fixed(fixed);
     let report = req.solver.solve(&problem, &problem.free_params());
     let params = problem.full_params(&report.x);
     let scale = req.loss.scale();
@@ -163,7 +170,14 @@ impl<M: Manifold, R: ResidualMetric> FrameEstimator for Erased<M, R> {
     }
 
     fn cost(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<f64, CoreError> {
-        let problem = Problem::new(&self.model, &self.metric, req.loss, req.rig, req.observations, params)?;
+        let problem = Problem::new(
+            &self.model,
+            &self.metric,
+            req.loss,
+            req.rig,
+            req.observations,
+            params,
+        )?;
         Ok(problem.cost(&problem.free_params()))
     }
 }

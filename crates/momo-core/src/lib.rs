@@ -54,7 +54,9 @@ pub mod solver;
 
 pub use camera::{Camera, CameraModel, KannalaBrandt, Pinhole};
 pub use error::CoreError;
-pub use estimator::{Erased, FrameEstimator, FrameSolution, MetricSpec, ModelSpec, SolveRequest, erase};
+pub use estimator::{
+    Erased, FrameEstimator, FrameSolution, MetricSpec, ModelSpec, SolveRequest, erase,
+};
 pub use lie::{Pose, hat, so3_exp, so3_log, vee};
 pub use loss::RobustLoss;
 pub use loss_trivial::TrivialLoss;
@@ -64,8 +66,8 @@ pub use problem::{Problem, camera_motion};
 pub use rig::{FrameObservations, Observation, Rig, RigCamera};
 pub use scalar::{Scalar, cosc, sinc};
 pub use solver::{
-    LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec, Solver, SolverReport, Termination,
-    solve_normal_equations,
+    LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec, Solver, SolverReport,
+    Termination, solve_normal_equations,
 };
 
 /// Re-exported so that downstream crates and examples use the matching versions.

@@ -73,7 +73,8 @@ pub fn so3_log<T: Scalar>(r: &Matrix3<T>) -> Vector3<T> {
     } else if cos_theta < T::c(-1.0 + 1e-6) {
         // Near π: sym(R) = cos θ I + (1 - cos θ) n nᵀ; take n from its largest diagonal entry
         // and the sign from the antisymmetric part (sin θ · n).
-        let nn = ((r + r.transpose()) * T::c(0.5) - Matrix3::identity() * cos_theta) / (T::one() - cos_theta);
+        let nn = ((r + r.transpose()) * T::c(0.5) - Matrix3::identity() * cos_theta)
+            / (T::one() - cos_theta);
         let i = if nn[(0, 0)] >= nn[(1, 1)] && nn[(0, 0)] >= nn[(2, 2)] {
             0
         } else if nn[(1, 1)] >= nn[(2, 2)] {
@@ -83,7 +84,11 @@ pub fn so3_log<T: Scalar>(r: &Matrix3<T>) -> Vector3<T> {
         };
         let n = (nn.column(i) / nn[(i, i)].max(T::c(1e-300)).sqrt()).normalize();
         let theta = s.norm().atan2(cos_theta);
-        if n.dot(&s) < T::zero() { n * -theta } else { n * theta }
+        if n.dot(&s) < T::zero() {
+            n * -theta
+        } else {
+            n * theta
+        }
     } else {
         let sn = s.norm();
         s * (sn.atan2(cos_theta) / sn)
@@ -234,10 +239,17 @@ mod tests {
     /// nalgebra's own map gets this wrong on dual numbers; this documents why we have our own.
     #[test]
     fn nalgebra_rotation_new_has_zero_jacobian_at_identity() {
-        let w = Vector3::new(D3::from_re(0.0).derivative(0), D3::from_re(0.0), D3::from_re(0.0));
+        let w = Vector3::new(
+            D3::from_re(0.0).derivative(0),
+            D3::from_re(0.0),
+            D3::from_re(0.0),
+        );
         let r = nalgebra::Rotation3::new(w);
         let eps = r.matrix()[(2, 1)].eps.unwrap_generic(nalgebra::U3, U1);
-        assert_eq!(eps[0], 0.0, "if nalgebra fixed this, our workaround may be retired");
+        assert_eq!(
+            eps[0], 0.0,
+            "if nalgebra fixed this, our workaround may be retired"
+        );
     }
 
     fn vec3(scale: f64) -> impl Strategy<Value = Vector3<f64>> {

@@ -45,7 +45,10 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         params: &[f64],
     ) -> Result<Self, CoreError> {
         let np = M::PARAMS.len();
-        assert!(np <= MAX_PARAMS, "a model may have at most {MAX_PARAMS} parameters");
+        assert!(
+            np <= MAX_PARAMS,
+            "a model may have at most {MAX_PARAMS} parameters"
+        );
         if params.len() != np {
             return Err(CoreError::ParameterCount {
                 expected: np,
@@ -55,11 +58,17 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         for (j, c) in rig.cameras().iter().enumerate() {
             let used = obs.per_camera.get(j).is_some_and(|o| !o.is_empty());
             if used {
-                metric.supports(&c.model).map_err(|reason| CoreError::UnsupportedCamera {
-                    metric: std::any::type_name::<R>().rsplit("::").next().unwrap_or("metric").into(),
-                    camera: j,
-                    reason,
-                })?;
+                metric
+                    .supports(&c.model)
+                    .map_err(|reason| CoreError::UnsupportedCamera {
+                        metric: std::any::type_name::<R>()
+                            .rsplit("::")
+                            .next()
+                            .unwrap_or("metric")
+                            .into(),
+                        camera: j,
+                        reason,
+                    })?;
             }
         }
         let mut full = [0.0; MAX_PARAMS];
@@ -121,7 +130,9 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         let m = self.model.motion(params);
         let mut r = [0.0; MAX_RESIDUALS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
-            let Some(obs) = self.obs.per_camera.get(j) else { continue };
+            let Some(obs) = self.obs.per_camera.get(j) else {
+                continue;
+            };
             if obs.is_empty() {
                 continue;
             }
@@ -129,7 +140,10 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             let prep = self.metric.prepare(&cam.model, &c);
             for o in obs {
                 self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
-                f(j, r[..R::RESIDUALS].iter().map(|v| v * v).sum::<f64>().sqrt());
+                f(
+                    j,
+                    r[..R::RESIDUALS].iter().map(|v| v * v).sum::<f64>().sqrt(),
+                );
             }
         }
     }
@@ -193,7 +207,9 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         let m = self.model.motion(&p[..np]);
         let mut r = [DualSVec64::<N>::from_re(0.0); MAX_RESIDUALS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
-            let Some(obs) = self.obs.per_camera.get(j) else { continue };
+            let Some(obs) = self.obs.per_camera.get(j) else {
+                continue;
+            };
             if obs.is_empty() {
                 continue;
             }

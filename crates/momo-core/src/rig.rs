@@ -34,7 +34,10 @@ impl Rig {
         for (i, c) in cameras.iter().enumerate() {
             let e = c.t_vehicle_camera.orthonormality_error();
             if !(e <= ORTHONORMAL_TOLERANCE) {
-                return Err(CoreError::NotOrthonormal { camera: i, error: e });
+                return Err(CoreError::NotOrthonormal {
+                    camera: i,
+                    error: e,
+                });
             }
         }
         Ok(Self { cameras })

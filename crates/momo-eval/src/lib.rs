@@ -128,13 +128,18 @@ pub fn kitti_errors(ground_truth: &[Pose<f64>], estimate: &[Pose<f64>]) -> Optio
 
 /// The rotation error (degrees) of every frame-to-frame motion: the angle of
 /// `R_gt(k-1,k)ᵀ R_est(k-1,k)` for k = 1..n (poses are absolute, e.g. camera 0 in frame 0).
-pub fn frame_to_frame_rotation_errors(ground_truth: &[Pose<f64>], estimate: &[Pose<f64>]) -> Vec<f64> {
+pub fn frame_to_frame_rotation_errors(
+    ground_truth: &[Pose<f64>],
+    estimate: &[Pose<f64>],
+) -> Vec<f64> {
     let n = ground_truth.len().min(estimate.len());
     (1..n)
         .map(|k| {
             let g = ground_truth[k - 1].inverse().compose(&ground_truth[k]);
             let e = estimate[k - 1].inverse().compose(&estimate[k]);
-            so3_log(&(g.rotation.transpose() * e.rotation)).norm().to_degrees()
+            so3_log(&(g.rotation.transpose() * e.rotation))
+                .norm()
+                .to_degrees()
         })
         .collect()
 }
@@ -171,7 +176,11 @@ impl ErrorSummary {
         };
         Self {
             count: n,
-            mean: if n == 0 { f64::NAN } else { v.iter().sum::<f64>() / n as f64 },
+            mean: if n == 0 {
+                f64::NAN
+            } else {
+                v.iter().sum::<f64>() / n as f64
+            },
             median: if n == 0 {
                 f64::NAN
             } else if n % 2 == 1 {

@@ -17,7 +17,10 @@ fn read_kitti(path: &std::path::Path) -> Vec<Pose<f64>> {
     text.lines()
         .filter(|l| !l.trim().is_empty())
         .map(|l| {
-            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().expect("number")).collect();
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .map(|x| x.parse().expect("number"))
+                .collect();
             assert_eq!(v.len(), 12);
             Pose::new(
                 Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]),
@@ -33,12 +36,26 @@ fn orb_slam2_on_kitti_00_matches_the_published_numbers() {
     let gt = dir.join("kitti_odometry_gt/poses/00.txt");
     let est = dir.join("kitti00_example_estimates_evo/KITTI_00_ORB.txt");
     if !gt.exists() || !est.exists() {
-        eprintln!("SKIPPED: KITTI data not found under {} (set MOMO_DATA)", dir.display());
+        eprintln!(
+            "SKIPPED: KITTI data not found under {} (set MOMO_DATA)",
+            dir.display()
+        );
         return;
     }
     let (gt, est) = (read_kitti(&gt), read_kitti(&est));
     let e = momo_eval::kitti_errors(&gt, &est).expect("same length");
-    eprintln!("ORB-SLAM2 KITTI 00: {:.3} % {:.3} deg/100m", e.t_err_percent, e.r_err_deg_per_100m);
-    assert!((e.t_err_percent - 0.700).abs() < 0.005, "{}", e.t_err_percent);
-    assert!((e.r_err_deg_per_100m - 0.253).abs() < 0.005, "{}", e.r_err_deg_per_100m);
+    eprintln!(
+        "ORB-SLAM2 KITTI 00: {:.3} % {:.3} deg/100m",
+        e.t_err_percent, e.r_err_deg_per_100m
+    );
+    assert!(
+        (e.t_err_percent - 0.700).abs() < 0.005,
+        "{}",
+        e.t_err_percent
+    );
+    assert!(
+        (e.r_err_deg_per_100m - 0.253).abs() < 0.005,
+        "{}",
+        e.r_err_deg_per_100m
+    );
 }

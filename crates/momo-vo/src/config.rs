@@ -125,7 +125,10 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "solver",
         "# Solver: levenberg_marquardt, gauss_newton, dogleg, with their options.",
     ),
-    ("odometry", "# Odometry driver: degenerate frames, scale and restarts."),
+    (
+        "odometry",
+        "# Odometry driver: degenerate frames, scale and restarts.",
+    ),
 ];
 
 impl Config {
@@ -135,7 +138,9 @@ impl Config {
             path: path.display().to_string(),
             source,
         })?;
-        let is_json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let is_json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
         let name = path.display().to_string();
         let config = if is_json {
             Self::from_json_str(&text, &name)?
@@ -209,8 +214,13 @@ impl Config {
              # Every section is tagged by `type`; unknown fields are rejected.\n",
         );
         for line in plain.lines() {
-            let header = line.trim().strip_prefix('[').and_then(|l| l.strip_suffix(']'));
-            if let Some((_, comment)) = header.and_then(|h| SECTION_COMMENTS.iter().find(|(s, _)| *s == h)) {
+            let header = line
+                .trim()
+                .strip_prefix('[')
+                .and_then(|l| l.strip_suffix(']'));
+            if let Some((_, comment)) =
+                header.and_then(|h| SECTION_COMMENTS.iter().find(|(s, _)| *s == h))
+            {
                 out.push('\n');
                 out.push_str(comment);
                 out.push('\n');

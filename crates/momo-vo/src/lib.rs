@@ -22,9 +22,11 @@
 
 pub mod config;
 pub mod odometry;
+pub mod pipeline;
 
 pub use config::{Config, ConfigError, OdometryOptions};
 pub use odometry::{
-    FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError, direction_error_deg,
-    rotation_error_deg,
+    FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
+    direction_error_deg, rotation_error_deg,
 };
+pub use pipeline::{RunError, RunOptions, RunSummary, run_in_memory, run_sequence};

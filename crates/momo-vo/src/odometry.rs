@@ -3,7 +3,8 @@
 
 use crate::config::{Config, ConfigError};
 use momo_core::{
-    CoreError, FrameEstimator, FrameObservations, FrameSolution, Pose, Rig, SolveRequest, Termination,
+    CoreError, FrameEstimator, FrameObservations, FrameSolution, Pose, Rig, SolveRequest,
+    Termination,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -191,7 +192,8 @@ impl Odometry {
             }
             (None, _) => ScaleSource::Estimated,
         };
-        let standstill = arc_index.is_some_and(|i| init[i] < self.config.odometry.standstill_arc_length && fixed[i]);
+        let standstill = arc_index
+            .is_some_and(|i| init[i] < self.config.odometry.standstill_arc_length && fixed[i]);
         if standstill && let Some(i) = arc_index {
             init[i] = 0.0;
         }
@@ -201,7 +203,12 @@ impl Odometry {
             frame: self.frame,
             status: FrameStatus::Estimated,
             scale,
-            param_names: self.estimator.param_names().iter().map(|s| s.to_string()).collect(),
+            param_names: self
+                .estimator
+                .param_names()
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
             params: init.clone(),
             param_sigmas: vec![f64::NAN; n_params],
             covariance: Vec::new(),
@@ -281,7 +288,10 @@ impl Odometry {
             self.previous[i] = l;
         }
         diag.time_us = start.elapsed().as_secs_f64() * 1e6;
-        FrameResult { motion, diagnostics: diag }
+        FrameResult {
+            motion,
+            diagnostics: diag,
+        }
     }
 
     fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
@@ -289,7 +299,9 @@ impl Odometry {
             return false;
         };
         let l = sol.params[arc_index];
-        let Some(cov) = covariance(sol) else { return false };
+        let Some(cov) = covariance(sol) else {
+            return false;
+        };
         let sigma = cov[(k, k)].max(0.0).sqrt();
         l > self.config.odometry.standstill_arc_length
             && l.is_finite()
@@ -337,8 +349,12 @@ impl Odometry {
         let mut best = first;
         for start in self.restart_points(init) {
             diag.restarts += 1;
-            let Some(sol) = self.solve_once(obs, &start, fixed, standstill) else { continue };
-            let better = best.as_ref().is_none_or(|b| sol.report.final_cost < b.report.final_cost * (1.0 - 1e-9));
+            let Some(sol) = self.solve_once(obs, &start, fixed, standstill) else {
+                continue;
+            };
+            let better = best
+                .as_ref()
+                .is_none_or(|b| sol.report.final_cost < b.report.final_cost * (1.0 - 1e-9));
             if better {
                 best = Some(sol);
                 diag.restart_won = true;
@@ -419,7 +435,10 @@ impl Trajectory {
 
     /// Camera 0's current pose in camera 0's frame at frame 0.
     pub fn camera0(&self) -> Pose<f64> {
-        self.t_vehicle_cam0.inverse().compose(&self.vehicle).compose(&self.t_vehicle_cam0)
+        self.t_vehicle_cam0
+            .inverse()
+            .compose(&self.vehicle)
+            .compose(&self.t_vehicle_cam0)
     }
 
     /// The vehicle's current pose in the vehicle frame at frame 0.

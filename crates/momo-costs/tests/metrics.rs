@@ -1,0 +1,309 @@
+//! Residual metrics: zero at the true motion, non-zero elsewhere, AD Jacobians equal finite
+//! differences, degenerate geometry stays finite, serde of the configuration trait objects.
+
+use momo_core::check::check_residual_jacobian;
+use momo_core::num_dual::DualSVec64;
+use momo_core::{
+    Camera, FrameObservations, Manifold, MetricSpec, Observation, Pose, ResidualMetric, Rig,
+    Scalar, camera_motion, so3_exp,
+};
+use momo_costs::{AnglePlane, FocalScaled, GeoLine, Sampson, SampsonPrepared, canned};
+use nalgebra::{Vector2, Vector3};
+use proptest::prelude::*;
+
+/// A full 6-dof test manifold (SE(3) exponential of a twist), independent of momo-models.
+#[derive(Clone, Debug)]
+struct Twist;
+
+impl Manifold for Twist {
+    const PARAMS: &'static [&'static str] = &["rho_x", "rho_y", "rho_z", "w_x", "w_y", "w_z"];
+    const ARC_LENGTH: Option<usize> = None;
+    fn motion<T: Scalar>(&self, p: &[T]) -> Pose<T> {
+        Pose::exp(
+            &Vector3::new(p[0], p[1], p[2]),
+            &Vector3::new(p[3], p[4], p[5]),
+        )
+    }
+}
+
+/// All residuals of all matches of a metric at a vehicle motion.
+fn residuals<R: ResidualMetric>(
+    metric: &R,
+    rig: &Rig,
+    obs: &FrameObservations,
+    m: &Pose<f64>,
+) -> Vec<f64> {
+    let mut all = Vec::new();
+    for (cam, matches) in rig.cameras().iter().zip(&obs.per_camera) {
+        let prep = metric.prepare(&cam.model, &camera_motion(m, &cam.t_vehicle_camera));
+        for o in matches {
+            let mut r = [0.0; 3];
+            metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
+            all.extend_from_slice(&r[..R::RESIDUALS]);
+        }
+    }
+    all
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |a, x| a.max(x.abs()))
+}
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+fn twist() -> impl Strategy<Value = [f64; 6]> {
+    (
+        0.1..3.0f64,
+        -0.3..0.3f64,
+        -0.2..0.2f64,
+        -0.05..0.05f64,
+        -0.3..0.3f64,
+        -0.05..0.05f64,
+    )
+        .prop_map(|(x, y, z, wx, wz, wy)| [x, y, z, wx, wy, wz])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Noise-free matches have residuals below 1e-9 at the true motion, on both rigs, and a
+    /// wrong motion (yaw off by 0.01 rad, or the translation direction off) gives clearly
+    /// non-zero ones.
+    #[test]
+    fn zero_at_truth_nonzero_elsewhere(p in twist()) {
+        let truth = Twist.motion(&p);
+        let wrong_yaw = Pose::new(so3_exp(&Vector3::new(0.0, 0.0, 0.01)) * truth.rotation, truth.translation);
+        let wrong_dir = Pose::new(truth.rotation, truth.translation + Vector3::new(0.0, 0.3, 0.1));
+        let pin = canned::pinhole_rig();
+        let fish = canned::fisheye_rig();
+        let obs_pin = canned::synthetic_observations(&pin, &truth, 30, 0, 11);
+        let obs_fish = canned::synthetic_observations(&fish, &truth, 30, 0, 12);
+        prop_assert_eq!(obs_pin.len(), 30);
+        prop_assert_eq!(obs_fish.len(), 120);
+
+        macro_rules! check {
+            ($metric:expr, $rig:expr, $obs:expr, $zero:expr, $clear:expr) => {{
+                let r0 = residuals(&$metric, $rig, $obs, &truth);
+                prop_assert!(max_abs(&r0) < $zero, "{:?} at truth: {}", $metric, max_abs(&r0));
+                for wrong in [&wrong_yaw, &wrong_dir] {
+                    let r1 = residuals(&$metric, $rig, $obs, wrong);
+                    prop_assert!(rms(&r1) > $clear, "{:?} at a wrong motion: rms {}", $metric, rms(&r1));
+                }
+            }};
+        }
+        // AnglePlane is dimensionless (~ radians); GeoLine and Sampson in pixels.
+        check!(AnglePlane, &pin, &obs_pin, 1e-12, 1e-4);
+        check!(GeoLine, &pin, &obs_pin, 1e-9, 0.1);
+        check!(Sampson, &pin, &obs_pin, 1e-9, 0.1);
+        check!(AnglePlane, &fish, &obs_fish, 1e-12, 1e-4);
+        check!(Sampson, &fish, &obs_fish, 1e-9, 0.05);
+    }
+
+    /// The AD Jacobian of every metric (through the 6-dof twist) equals central finite
+    /// differences within 1e-6, with matches at the true motion and off-epipolar ones. Pixel
+    /// metrics are compared in focal-length units (`FocalScaled`): in pixels the rounding noise
+    /// of the differences alone can reach 1e-6.
+    #[test]
+    fn jacobians_match_finite_differences(p in twist()) {
+        let truth = Twist.motion(&p);
+        let pin = canned::pinhole_rig();
+        let fish = canned::fisheye_rig();
+        let obs_pin = canned::synthetic_observations(&pin, &truth, 10, 5, 21);
+        let obs_fish = canned::synthetic_observations(&fish, &truth, 10, 5, 22);
+        // At the truth and slightly beside it (small enough to keep the epipoles away from the
+        // matches: near an epipole finite differences, not AD, fail).
+        let mut q = p;
+        q[1] += 0.02 * p[0];
+        q[5] += 0.005;
+        for x in [p, q] {
+            for (what, r) in [
+                ("angle_plane pinhole", check_residual_jacobian(&Twist, &AnglePlane, &pin, &obs_pin, &x, 1e-6)),
+                ("geo_line pinhole", check_residual_jacobian(&Twist, &FocalScaled(GeoLine), &pin, &obs_pin, &x, 1e-6)),
+                ("sampson pinhole", check_residual_jacobian(&Twist, &FocalScaled(Sampson), &pin, &obs_pin, &x, 1e-6)),
+                ("angle_plane fisheye", check_residual_jacobian(&Twist, &AnglePlane, &fish, &obs_fish, &x, 1e-6)),
+                ("sampson fisheye", check_residual_jacobian(&Twist, &FocalScaled(Sampson), &fish, &obs_fish, &x, 1e-6)),
+            ] {
+                prop_assert!(r.is_ok(), "{what} at {x:?}: {r:?}");
+            }
+        }
+    }
+}
+
+/// Exactly zero rotation and exactly zero translation components: derivatives stay exact.
+#[test]
+fn jacobians_at_identity_rotation() {
+    let pin = canned::pinhole_rig();
+    let p = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let obs = canned::synthetic_observations(&pin, &Twist.motion(&p), 10, 5, 3);
+    check_residual_jacobian(&Twist, &AnglePlane, &pin, &obs, &p, 1e-6).unwrap();
+    check_residual_jacobian(&Twist, &FocalScaled(GeoLine), &pin, &obs, &p, 1e-6).unwrap();
+    check_residual_jacobian(&Twist, &FocalScaled(Sampson), &pin, &obs, &p, 1e-6).unwrap();
+    // In pixels, at a well-conditioned point, too.
+    check_residual_jacobian(&Twist, &GeoLine, &pin, &obs, &p, 1e-6).unwrap();
+}
+
+/// Off-epipolar matches: GeoLine's two residuals and Sampson are pixel distances of the same
+/// order as the pixel shift, and the tangent-plane Sampson (used for fisheye cameras) agrees
+/// with the pixel one near the principal point.
+#[test]
+fn pixel_metrics_measure_pixels() {
+    let pin = canned::pinhole_rig();
+    let cam = &pin.cameras()[0];
+    let truth = Twist.motion(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.02]);
+    let c = camera_motion(&truth, &cam.t_vehicle_camera);
+    let Camera::Pinhole(k) = cam.model else {
+        unreachable!()
+    };
+    let mut ratios = Vec::new();
+    for (dx, dy) in [(15.0, 10.0), (-12.0, 8.0), (20.0, -15.0), (-10.0, -10.0)] {
+        let x0 = Vector3::new(
+            (k.cx + dx - k.cx) / k.fx * 10.0,
+            (k.cy + dy - k.cy) / k.fy * 10.0,
+            10.0,
+        );
+        let x1 = c.inverse().transform_point(&x0);
+        let px0 = momo_core::CameraModel::project(&cam.model, &x0).unwrap();
+        let px1 =
+            momo_core::CameraModel::project(&cam.model, &x1).unwrap() + Vector2::new(0.0, 3.0);
+        let o = Observation::new(&cam.model, px0, px1).unwrap();
+        let mut g = [0.0; 2];
+        GeoLine.residuals(&GeoLine.prepare(&cam.model, &c), &o, &mut g);
+        let mut s = [0.0];
+        Sampson.residuals(&Sampson.prepare(&cam.model, &c), &o, &mut s);
+        // Sampson on bearings, scaled by the focal length.
+        let mut sb = [0.0];
+        let e = momo_core::essential(&c);
+        Sampson.residuals(
+            &SampsonPrepared::Bearings(e, cam.model.focal_length()),
+            &o,
+            &mut sb,
+        );
+        assert!(g[0].abs() > 0.3 && g[0].abs() < 3.01, "{g:?}");
+        // The symmetric distance in frame k-1 is of the same size (similar views).
+        assert!((g[1] / g[0] - 1.0).abs() < 0.2, "{g:?}");
+        assert!(s[0].abs() > 0.2 && s[0].abs() < 3.01, "{s:?}");
+        // Sampson is about the reprojection error: |s| ≈ |g| / sqrt(2) for equal line slopes.
+        assert!(
+            (s[0].abs() - (g[0] * g[0] + g[1] * g[1]).sqrt() / 2.0).abs() < 0.3 * s[0].abs(),
+            "{s:?} {g:?}"
+        );
+        ratios.push(sb[0] / s[0]);
+    }
+    for r in ratios {
+        assert!(
+            (r - 1.0).abs() < 0.05,
+            "bearing Sampson / pixel Sampson = {r}"
+        );
+    }
+}
+
+/// At a standstill (t = 0) and for a match along the baseline the guards keep values and dual
+/// derivatives finite.
+#[test]
+fn degenerate_geometry_is_finite() {
+    type D = DualSVec64<6>;
+    let cams = [canned::pinhole_rig(), canned::fisheye_rig()];
+    let seed = |v: [f64; 6]| -> [D; 6] { std::array::from_fn(|i| D::from_re(v[i]).derivative(i)) };
+    for (name, params) in [
+        ("standstill", [0.0; 6]),
+        ("forward", [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+    ] {
+        let p = seed(params);
+        let m = Twist.motion(&p);
+        for rig in &cams {
+            for cam in rig.cameras() {
+                let c = camera_motion(&m, &cam.t_vehicle_camera);
+                // f0 along the camera's baseline direction (the epipole), f1 the same.
+                let b = camera_motion(&Twist.motion(&params), &cam.t_vehicle_camera).translation;
+                let dir = b.try_normalize(0.0).unwrap_or(Vector3::z());
+                let o = Observation {
+                    px0: Vector2::new(600.0, 180.0),
+                    px1: Vector2::new(600.0, 180.0),
+                    f0: dir,
+                    f1: dir,
+                };
+                let mut out = [D::from_re(0.0); 3];
+                let finite = |v: &[D]| {
+                    v.iter().all(|x| {
+                        x.re.is_finite() && x.eps.0.is_none_or(|e| e.iter().all(|d| d.is_finite()))
+                    })
+                };
+                AnglePlane.residuals(&AnglePlane.prepare(&cam.model, &c), &o, &mut out[..1]);
+                assert!(finite(&out[..1]), "{name}: angle_plane {:?}", out[0]);
+                Sampson.residuals(&Sampson.prepare(&cam.model, &c), &o, &mut out[..1]);
+                assert!(finite(&out[..1]), "{name}: sampson {:?}", out[0]);
+                if cam.model.as_pinhole().is_some() {
+                    GeoLine.residuals(&GeoLine.prepare(&cam.model, &c), &o, &mut out[..2]);
+                    assert!(finite(&out[..2]), "{name}: geo_line {:?}", &out[..2]);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn geo_line_rejects_fisheye() {
+    let fish = canned::fisheye_rig();
+    let cam = &fish.cameras()[0].model;
+    let reason = GeoLine.supports(cam).unwrap_err();
+    assert!(reason.contains("pinhole"), "{reason}");
+    assert!(AnglePlane.supports(cam).is_ok());
+    assert!(Sampson.supports(cam).is_ok());
+    // Through the problem: a typed error naming the metric and the camera.
+    let m = Twist.motion(&[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let obs = canned::synthetic_observations(&fish, &m, 5, 0, 1);
+    let e = check_residual_jacobian(
+        &Twist,
+        &GeoLine,
+        &fish,
+        &obs,
+        &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        1e-6,
+    )
+    .unwrap_err();
+    assert!(
+        e.what.contains("GeoLine") && e.what.contains("camera 0"),
+        "{}",
+        e.what
+    );
+}
+
+#[test]
+fn metrics_round_trip_as_trait_objects() {
+    let all: Vec<Box<dyn MetricSpec>> =
+        vec![Box::new(AnglePlane), Box::new(GeoLine), Box::new(Sampson)];
+    let names = ["angle_plane", "geo_line", "sampson"];
+    for (m, name) in all.iter().zip(names) {
+        let j = serde_json::to_string(m).unwrap();
+        assert_eq!(j, format!(r#"{{"type":"{name}"}}"#));
+        let back: Box<dyn MetricSpec> = serde_json::from_str(&j).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{m:?}"));
+        let t = toml::to_string(m).unwrap();
+        assert_eq!(t.trim(), format!("type = \"{name}\""));
+        let back: Box<dyn MetricSpec> = toml::from_str(&t).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{m:?}"));
+    }
+    let a: Box<dyn MetricSpec> = toml::from_str("type = \"angle_plane\"").unwrap();
+    assert!(a.as_any().downcast_ref::<AnglePlane>().is_some());
+    // Built-in metrics leave `build_with_model` to the default: the models know them.
+    assert!(a.build_with_model(&NoModel).is_none());
+}
+
+/// A model spec that builds nothing, to call `MetricSpec::build_with_model` with.
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+struct NoModel;
+
+#[typetag::serde(name = "test_no_model")]
+impl momo_core::ModelSpec for NoModel {
+    fn build(
+        &self,
+        _: &dyn MetricSpec,
+    ) -> Result<Box<dyn momo_core::FrameEstimator>, momo_core::CoreError> {
+        Err(momo_core::CoreError::EmptyRig)
+    }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}

@@ -1,0 +1,231 @@
+//! # momo-io
+//!
+//! Reading and writing *sequences* exactly as `FORMAT.md` (the contract between `momo` and the
+//! tools around it) defines them:
+//!
+//! ```text
+//! SEQ/
+//!   rig.json        required  cameras: model, intrinsics, extrinsics      -> read_rig / write_rig
+//!   matches.csv     required  matches between consecutive frames          -> MatchReader / MatchWriter
+//!   odometry.csv    optional  arc length per frame pair                   -> read_odometry / write_odometry
+//!   poses.txt       optional  ground truth, KITTI format                  -> read_poses / write_poses / PoseWriter
+//! ```
+//!
+//! - [`read_sequence`] loads a whole directory into a [`Sequence`]; [`MatchReader`] streams
+//!   `matches.csv` one frame pair at a time (memory bounded by one frame pair).
+//! - Every input error is an [`IoError`] whose `Display` is `path:line: reason` (or
+//!   `path: reason` when no line applies); [`IoErrorKind`] says which rule was broken. Readers
+//!   never panic and never hold more than [`MAX_LINE_BYTES`] of a line in memory.
+//! - Every writer is atomic: it writes a temporary file beside the target and renames it into
+//!   place, so a failed write leaves no partial file ([`AtomicFile`] does this for any file).
+//!   Numbers are printed so that they read back to the same bits.
+//!
+//! ```
+//! use momo_core::{Camera, FrameObservations, Observation, Pinhole, Pose, Rig};
+//! use momo_io::{Sequence, read_sequence, write_sequence};
+//! use nalgebra::{Matrix3, Vector2, Vector3};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let camera = Camera::Pinhole(Pinhole {
+//!     fx: 718.856, fy: 718.856, cx: 607.1928, cy: 185.2157, width: 1241.0, height: 376.0,
+//! });
+//! // FORMAT.md's example mount: 1 m ahead of the motion centre, 1.65 m up, looking forward.
+//! let mount = Pose::new(
+//!     Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
+//!     Vector3::new(1.0, 0.0, 1.65),
+//! );
+//! let rig = Rig::mono(camera, mount)?;
+//! let mut pair = FrameObservations::new(1);
+//! pair.per_camera[0].push(
+//!     Observation::new(&camera, Vector2::new(612.31, 201.77), Vector2::new(615.02, 203.40))
+//!         .expect("inside the image"),
+//! );
+//! let seq = Sequence {
+//!     rig,
+//!     frames: vec![FrameObservations::new(1), pair],
+//!     arc_lengths: Some(vec![None, Some(0.8571)]),
+//!     ground_truth: None,
+//! };
+//!
+//! let dir = tempfile::tempdir()?;
+//! write_sequence(dir.path(), &seq)?;
+//! let back = read_sequence(dir.path())?;
+//! assert_eq!(back, seq);
+//! assert_eq!(back.num_frames(), 2);
+//!
+//! // Errors name file, line and reason.
+//! std::fs::write(dir.path().join("odometry.csv"), "frame,arc_length\n1,-2\n")?;
+//! let err = read_sequence(dir.path()).unwrap_err();
+//! assert!(err.to_string().ends_with("odometry.csv:2: arc_length must be >= 0, found -2"));
+//! # Ok(())
+//! # }
+//! ```
+
+mod atomic;
+pub mod error;
+pub mod matches;
+pub mod odometry;
+pub mod poses;
+pub mod rig;
+mod text;
+
+pub use atomic::AtomicFile;
+pub use error::{IoError, IoErrorKind};
+pub use matches::{
+    MATCHES_HEADER, MAX_FRAME, MatchReader, MatchWriter, PIXEL_MARGIN_FRACTION, write_matches,
+};
+pub use odometry::{ODOMETRY_HEADER, read_odometry, read_odometry_from, write_odometry};
+pub use poses::{POSE_ORTHONORMAL_TOLERANCE, PoseWriter, read_poses, read_poses_from, write_poses};
+pub use rig::{MAX_RIG_BYTES, read_rig, read_rig_from_str, rig_to_json, write_rig};
+pub use text::MAX_LINE_BYTES;
+
+use momo_core::{FrameObservations, Pose, Rig};
+use std::path::Path;
+
+/// File names inside a sequence directory (`FORMAT.md`).
+pub mod files {
+    /// Required: the cameras.
+    pub const RIG: &str = "rig.json";
+    /// Required: the matches.
+    pub const MATCHES: &str = "matches.csv";
+    /// Optional: arc lengths.
+    pub const ODOMETRY: &str = "odometry.csv";
+    /// Optional: ground truth.
+    pub const POSES: &str = "poses.txt";
+}
+
+/// A whole sequence in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sequence {
+    /// The cameras (`rig.json`).
+    pub rig: Rig,
+    /// `frames[k]` holds the matches of frame pair `(k-1, k)`; `frames[0]` is empty. After
+    /// [`read_sequence`] its length is [`num_frames`](Self::num_frames) and each entry has one
+    /// list per camera.
+    pub frames: Vec<FrameObservations>,
+    /// `odometry.csv` if present: `arc_lengths[k]` for frame pair `(k-1, k)`, `None` where no
+    /// row gives it (always at index 0). Padded to `num_frames()` by [`read_sequence`].
+    pub arc_lengths: Option<Vec<Option<f64>>>,
+    /// `poses.txt` if present: `T_cam0(0)_cam0(k)` per line, as read (not padded or truncated).
+    pub ground_truth: Option<Vec<Pose<f64>>>,
+}
+
+impl Sequence {
+    /// Number of frames: `max(last frame in matches.csv, last frame in odometry.csv) + 1`
+    /// (`FORMAT.md`), i.e. the larger of `frames.len()` and `arc_lengths.len()`, at least 1.
+    pub fn num_frames(&self) -> usize {
+        let odo = self.arc_lengths.as_ref().map_or(0, Vec::len);
+        self.frames.len().max(odo).max(1)
+    }
+
+    /// Number of match rows over all frames and cameras.
+    pub fn num_matches(&self) -> usize {
+        self.frames.iter().map(FrameObservations::len).sum()
+    }
+}
+
+/// Opens an optional file: `Ok(None)` if it does not exist.
+fn optional<T>(
+    path: &Path,
+    read: impl FnOnce(&Path) -> Result<T, IoError>,
+) -> Result<Option<T>, IoError> {
+    match read(path) {
+        Ok(v) => Ok(Some(v)),
+        Err(IoError {
+            kind: IoErrorKind::NotFound,
+            line: None,
+            ..
+        }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+/// Loads a sequence directory: `rig.json` and `matches.csv` (required), `odometry.csv` and
+/// `poses.txt` (optional). `frames` and `arc_lengths` are padded to
+/// [`num_frames`](Sequence::num_frames).
+pub fn read_sequence(dir: impl AsRef<Path>) -> Result<Sequence, IoError> {
+    let dir = dir.as_ref();
+    let rig = read_rig(dir.join(files::RIG))?;
+    let n = rig.len();
+    let mut frames = vec![FrameObservations::new(n)];
+    for item in MatchReader::open(dir.join(files::MATCHES), &rig)? {
+        let (_, obs) = item?;
+        frames.push(obs);
+    }
+    let mut arc_lengths = optional(&dir.join(files::ODOMETRY), |p| read_odometry(p))?;
+    let ground_truth = optional(&dir.join(files::POSES), |p| read_poses(p))?;
+    let num = frames
+        .len()
+        .max(arc_lengths.as_ref().map_or(0, Vec::len))
+        .max(1);
+    frames.resize_with(num, || FrameObservations::new(n));
+    if let Some(a) = arc_lengths.as_mut() {
+        a.resize(num, None);
+    }
+    Ok(Sequence {
+        rig,
+        frames,
+        arc_lengths,
+        ground_truth,
+    })
+}
+
+/// Checks matches against the rig as the reader will: camera ids, pixels near the image and
+/// unprojectable.
+fn check_matches(rig: &Rig, frames: &[FrameObservations]) -> Result<(), IoErrorKind> {
+    let cameras = rig.cameras();
+    for (k, frame) in frames.iter().enumerate() {
+        for (j, list) in frame.per_camera.iter().enumerate() {
+            if list.is_empty() {
+                continue;
+            }
+            let Some(cam) = cameras.get(j) else {
+                return Err(IoErrorKind::InvalidData(format!(
+                    "frame {k} has matches of camera {j}, but the rig has {} camera(s)",
+                    cameras.len()
+                )));
+            };
+            let margin = matches::pixel_margin(&cam.model);
+            for o in list {
+                for (field, px) in [("u0,v0", o.px0), ("u1,v1", o.px1)] {
+                    matches::check_pixel(&cam.model, margin, j, field, px)
+                        .map_err(|e| IoErrorKind::InvalidData(format!("frame {k}: {e}")))?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Writes a sequence directory (created if needed), each file atomically. The matches are
+/// first checked against the rig as [`read_sequence`] will check them (camera ids, pixels within
+/// [`PIXEL_MARGIN_FRACTION`] of the image, unprojectable); on failure nothing is written. Optional files that
+/// the sequence does not have (`arc_lengths` or `ground_truth` is `None`) are removed from the
+/// directory if present, so that reading it back gives this sequence.
+///
+/// The format cannot represent trailing frame pairs that have neither a match nor an arc length
+/// (the number of frames is the last frame named in `matches.csv` or `odometry.csv`, plus one):
+/// such a sequence reads back with fewer frames.
+pub fn write_sequence(dir: impl AsRef<Path>, seq: &Sequence) -> Result<(), IoError> {
+    let dir = dir.as_ref();
+    check_matches(&seq.rig, &seq.frames).map_err(|k| IoError::file(dir.join(files::MATCHES), k))?;
+    std::fs::create_dir_all(dir).map_err(|e| IoError::io(dir, e))?;
+    write_rig(dir.join(files::RIG), &seq.rig)?;
+    write_matches(dir.join(files::MATCHES), &seq.frames)?;
+    let remove = |name: &str| {
+        let p = dir.join(name);
+        match std::fs::remove_file(&p) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(IoError::io(&p, e)),
+            _ => Ok(()),
+        }
+    };
+    match &seq.arc_lengths {
+        Some(a) => write_odometry(dir.join(files::ODOMETRY), a)?,
+        None => remove(files::ODOMETRY)?,
+    }
+    match &seq.ground_truth {
+        Some(g) => write_poses(dir.join(files::POSES), g)?,
+        None => remove(files::POSES)?,
+    }
+    Ok(())
+}

@@ -1,0 +1,345 @@
+//! `matches.csv`: sparse optical flow between consecutive frames (`FORMAT.md`, section
+//! "matches.csv"), read as a stream of frame pairs ([`MatchReader`]) and written atomically
+//! ([`MatchWriter`], [`write_matches`]).
+
+use crate::atomic::{AtomicFile, put};
+use crate::error::{IoError, IoErrorKind};
+use crate::text::{Exact, LineReader, is_blank, parse_f64, parse_header, parse_index, split_row};
+use momo_core::{Camera, CameraModel, FrameObservations, Observation, Rig};
+use nalgebra::{Vector2, Vector3};
+use std::fs::File;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+/// The header line of `matches.csv`. Readers accept these names in any order.
+pub const MATCHES_HEADER: &str = "frame,camera,u0,v0,u1,v1";
+const MATCH_COLUMNS: [&str; 6] = ["frame", "camera", "u0", "v0", "u1", "v1"];
+
+/// Pixels more than this fraction of `max(width, height)` outside the image border are rejected
+/// as input errors (a wrong camera id or a mix-up of cameras). Points slightly outside the image
+/// (sub-pixel refinement at the border, undistortion) are accepted.
+pub const PIXEL_MARGIN_FRACTION: f64 = 0.1;
+
+/// Largest frame number accepted in `matches.csv` and `odometry.csv` (10 million frame pairs,
+/// 11.5 days at 10 Hz), so that a typo cannot make a reader produce billions of empty frames.
+pub const MAX_FRAME: usize = 10_000_000;
+
+/// The margin in pixels outside the image within which pixels of `model` are accepted.
+pub(crate) fn pixel_margin(model: &Camera) -> f64 {
+    let (w, h) = model.size();
+    PIXEL_MARGIN_FRACTION * w.max(h)
+}
+
+/// Checks that a pixel lies within `margin` of the image and unprojects it.
+pub(crate) fn check_pixel(
+    model: &Camera,
+    margin: f64,
+    camera: usize,
+    field: &'static str,
+    px: Vector2<f64>,
+) -> Result<Vector3<f64>, IoErrorKind> {
+    let (u, v) = (px.x, px.y);
+    if !model.contains(&px, margin) {
+        let (width, height) = model.size();
+        return Err(IoErrorKind::PixelOutsideImage {
+            field,
+            camera,
+            u,
+            v,
+            margin,
+            width,
+            height,
+        });
+    }
+    model.unproject(&px).ok_or(IoErrorKind::Unprojectable {
+        field,
+        camera,
+        u,
+        v,
+    })
+}
+
+/// One parsed row.
+struct Row {
+    frame: usize,
+    camera: usize,
+    obs: Observation,
+}
+
+/// Reads `matches.csv` one frame pair at a time: yields `(k, FrameObservations)` for every
+/// `k = 1..=last` (contiguous, with empty observations for frame pairs without rows), holding at
+/// most one frame pair in memory. Stops after the first error.
+///
+/// Every row is validated: six fields, finite numbers, `frame >= 1` and non-decreasing, a camera
+/// id of the rig, pixels within [`PIXEL_MARGIN_FRACTION`] of the image and unprojectable by the
+/// camera model.
+pub struct MatchReader<R> {
+    lines: LineReader<R>,
+    path: PathBuf,
+    cameras: Vec<(Camera, f64)>,
+    columns: [usize; 6],
+    next_frame: usize,
+    current: FrameObservations,
+    pending: Option<Row>,
+    last_row_frame: usize,
+    rows: usize,
+    done: bool,
+}
+
+impl MatchReader<BufReader<File>> {
+    /// Opens `path` (errors: [`IoErrorKind::NotFound`], a bad header).
+    pub fn open(path: impl AsRef<Path>, rig: &Rig) -> Result<Self, IoError> {
+        let path = path.as_ref();
+        let file = File::open(path).map_err(|e| IoError::io(path, e))?;
+        Self::new(BufReader::with_capacity(1 << 16, file), rig, path)
+    }
+}
+
+impl<R: BufRead> MatchReader<R> {
+    /// Reads the header from `reader`; `path` only names the source in errors.
+    pub fn new(reader: R, rig: &Rig, path: impl Into<PathBuf>) -> Result<Self, IoError> {
+        let path = path.into();
+        let mut lines = LineReader::new(reader);
+        let columns = loop {
+            match lines.next_line() {
+                Err(k) => return Err(IoError::at(&path, lines.line(), k)),
+                Ok(None) => {
+                    return Err(IoError::file(
+                        &path,
+                        IoErrorKind::MissingHeader {
+                            expected: MATCHES_HEADER,
+                        },
+                    ));
+                }
+                Ok(Some(l)) if is_blank(l) => continue,
+                Ok(Some(l)) => {
+                    break parse_header(l, &MATCH_COLUMNS, MATCHES_HEADER)
+                        .map_err(|k| IoError::at(&path, lines.line(), k))?;
+                }
+            }
+        };
+        let cameras = rig
+            .cameras()
+            .iter()
+            .map(|c| (c.model, pixel_margin(&c.model)))
+            .collect();
+        Ok(Self {
+            lines,
+            path,
+            cameras,
+            columns,
+            next_frame: 1,
+            current: FrameObservations::new(rig.len()),
+            pending: None,
+            last_row_frame: 0,
+            rows: 0,
+            done: false,
+        })
+    }
+
+    /// Number of match rows read so far.
+    pub fn rows_read(&self) -> usize {
+        self.rows
+    }
+
+    /// The next frame number to be yielded (1 before the first).
+    pub fn next_frame(&self) -> usize {
+        self.next_frame
+    }
+
+    /// The source named in errors.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn parse_row(
+        line: &str,
+        c: &[usize; 6],
+        cameras: &[(Camera, f64)],
+        last_row_frame: usize,
+    ) -> Result<Row, IoErrorKind> {
+        let fields: [&str; 6] = split_row(line)?;
+        let frame = parse_index("frame", fields[c[0]])?;
+        let camera = parse_index("camera", fields[c[1]])?;
+        let u0 = parse_f64("u0", fields[c[2]])?;
+        let v0 = parse_f64("v0", fields[c[3]])?;
+        let u1 = parse_f64("u1", fields[c[4]])?;
+        let v1 = parse_f64("v1", fields[c[5]])?;
+        if frame == 0 {
+            return Err(IoErrorKind::FrameZero);
+        }
+        if frame > MAX_FRAME {
+            return Err(IoErrorKind::FrameTooLarge {
+                frame,
+                max: MAX_FRAME,
+            });
+        }
+        if frame < last_row_frame {
+            return Err(IoErrorKind::FramesOutOfOrder {
+                frame,
+                previous: last_row_frame,
+                order: "non-decreasing",
+            });
+        }
+        let Some((model, margin)) = cameras.get(camera) else {
+            return Err(IoErrorKind::UnknownCamera {
+                camera,
+                count: cameras.len(),
+            });
+        };
+        let f0 = check_pixel(model, *margin, camera, "u0,v0", Vector2::new(u0, v0))?;
+        let f1 = check_pixel(model, *margin, camera, "u1,v1", Vector2::new(u1, v1))?;
+        Ok(Row {
+            frame,
+            camera,
+            obs: Observation {
+                px0: Vector2::new(u0, v0),
+                px1: Vector2::new(u1, v1),
+                f0,
+                f1,
+            },
+        })
+    }
+
+    /// The next row, `None` at the end of the file.
+    fn read_row(&mut self) -> Result<Option<Row>, IoError> {
+        loop {
+            let line = match self.lines.next_line() {
+                Ok(Some(l)) => l,
+                Ok(None) => return Ok(None),
+                Err(k) => return Err(IoError::at(&self.path, self.lines.line(), k)),
+            };
+            if is_blank(line) {
+                continue;
+            }
+            let row = Self::parse_row(line, &self.columns, &self.cameras, self.last_row_frame)
+                .map_err(|k| IoError::at(&self.path, self.lines.line(), k))?;
+            self.last_row_frame = row.frame;
+            self.rows += 1;
+            return Ok(Some(row));
+        }
+    }
+
+    fn take_current(&mut self) -> (usize, FrameObservations) {
+        let k = self.next_frame;
+        self.next_frame += 1;
+        let n = self.current.per_camera.len();
+        (
+            k,
+            std::mem::replace(&mut self.current, FrameObservations::new(n)),
+        )
+    }
+}
+
+impl<R: BufRead> Iterator for MatchReader<R> {
+    type Item = Result<(usize, FrameObservations), IoError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        loop {
+            let row = match self.pending.take() {
+                Some(r) => Some(r),
+                None => match self.read_row() {
+                    Ok(r) => r,
+                    Err(e) => {
+                        self.done = true;
+                        return Some(Err(e));
+                    }
+                },
+            };
+            match row {
+                Some(r) if r.frame == self.next_frame => {
+                    self.current.per_camera[r.camera].push(r.obs)
+                }
+                Some(r) => {
+                    // r.frame > next_frame (order is checked while parsing).
+                    self.pending = Some(r);
+                    return Some(Ok(self.take_current()));
+                }
+                None => {
+                    self.done = true;
+                    return (self.next_frame <= self.last_row_frame)
+                        .then(|| Ok(self.take_current()));
+                }
+            }
+        }
+    }
+}
+
+/// Writes `matches.csv` atomically, one frame pair at a time: rows appear only in the file once
+/// [`finish`](Self::finish) renames it into place; dropping the writer without finishing leaves no
+/// file behind.
+pub struct MatchWriter {
+    file: AtomicFile,
+    last_frame: usize,
+}
+
+impl MatchWriter {
+    /// Starts `path` (a temporary file beside it) and writes the header.
+    pub fn create(path: impl AsRef<Path>) -> Result<Self, IoError> {
+        let mut file = AtomicFile::create(path.as_ref())?;
+        put!(&mut file, "{MATCHES_HEADER}\n")?;
+        Ok(Self {
+            file,
+            last_frame: 0,
+        })
+    }
+
+    /// Writes the matches of frame pair `frame` (>= 1, at least the previous frame). Numbers are
+    /// printed so that they parse back to the same bits. Fails on non-finite pixels.
+    pub fn push(&mut self, frame: usize, obs: &FrameObservations) -> Result<(), IoError> {
+        let bad = |f: &AtomicFile, m: String| IoError::file(f.path(), IoErrorKind::InvalidData(m));
+        if obs.is_empty() {
+            return Ok(());
+        }
+        if frame == 0 {
+            return Err(bad(
+                &self.file,
+                "frame 0 has no predecessor; matches start at frame 1".into(),
+            ));
+        }
+        if frame < self.last_frame {
+            return Err(bad(
+                &self.file,
+                format!("frame {frame} after frame {}", self.last_frame),
+            ));
+        }
+        for (camera, list) in obs.per_camera.iter().enumerate() {
+            for o in list {
+                if !(o.px0.iter().chain(o.px1.iter()).all(|v| v.is_finite())) {
+                    return Err(bad(
+                        &self.file,
+                        format!("non-finite pixel in frame {frame}, camera {camera}"),
+                    ));
+                }
+                put!(
+                    &mut self.file,
+                    "{frame},{camera},{},{},{},{}\n",
+                    Exact(o.px0.x),
+                    Exact(o.px0.y),
+                    Exact(o.px1.x),
+                    Exact(o.px1.y)
+                )?;
+            }
+        }
+        self.last_frame = frame;
+        Ok(())
+    }
+
+    /// Flushes and renames the file into place.
+    pub fn finish(self) -> Result<(), IoError> {
+        self.file.commit()
+    }
+}
+
+/// Writes `matches.csv` atomically: `frames[k]` holds frame pair `(k-1, k)`; `frames[0]` must be
+/// empty.
+pub fn write_matches(path: impl AsRef<Path>, frames: &[FrameObservations]) -> Result<(), IoError> {
+    let mut w = MatchWriter::create(path)?;
+    for (k, obs) in frames.iter().enumerate() {
+        w.push(k, obs)?;
+    }
+    w.finish()
+}

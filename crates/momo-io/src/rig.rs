@@ -1,0 +1,289 @@
+//! `rig.json`: the cameras of a sequence (`FORMAT.md`, section "rig.json").
+//!
+//! The structure is parsed with serde (so syntax errors, missing and unknown fields and unknown
+//! `model.type` values come with serde_json's line and column); each camera's `model` and
+//! `T_vehicle_camera` are then checked semantically (positive focal lengths and image sizes, a
+//! 4x4 matrix with bottom row `0 0 0 1` and an orthonormal rotation with determinant +1 within
+//! [`ORTHONORMAL_TOLERANCE`]) and errors point at the line where that value starts.
+
+use crate::atomic::{put, write_atomic};
+use crate::error::{IoError, IoErrorKind};
+use crate::text::Exact;
+use momo_core::rig::ORTHONORMAL_TOLERANCE;
+use momo_core::{Camera, Pose, Rig, RigCamera};
+use nalgebra::Matrix4;
+use serde::Deserialize;
+use serde_json::value::RawValue;
+use std::io::Read;
+use std::path::Path;
+
+/// Largest `rig.json` accepted (16 MiB); a rig is a few hundred bytes per camera.
+pub const MAX_RIG_BYTES: usize = 16 << 20;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RigFile<'a> {
+    #[serde(borrow)]
+    cameras: &'a RawValue,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraFile<'a> {
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(borrow)]
+    model: &'a RawValue,
+    #[serde(borrow, rename = "T_vehicle_camera")]
+    t_vehicle_camera: &'a RawValue,
+}
+
+/// A position in the text: 1-based line and column.
+#[derive(Clone, Copy)]
+struct Pos {
+    line: usize,
+    column: usize,
+}
+
+impl Pos {
+    const START: Pos = Pos { line: 1, column: 1 };
+
+    /// Where `sub` (a slice of `text`) starts.
+    fn of(text: &str, sub: &str) -> Pos {
+        let offset = (sub.as_ptr() as usize)
+            .checked_sub(text.as_ptr() as usize)
+            .filter(|&o| o <= text.len())
+            .unwrap_or(0);
+        let before = text.as_bytes().get(..offset).unwrap_or_default();
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        Pos {
+            line,
+            column: 1 + offset - line_start,
+        }
+    }
+}
+
+/// Parses `sub` (a slice of the file starting at `base`) and maps serde_json's error position to
+/// the file.
+fn parse_at<'a, T: Deserialize<'a>>(sub: &'a str, base: Pos, path: &Path) -> Result<T, IoError> {
+    serde_json::from_str(sub).map_err(|e| {
+        let line = base.line + e.line().saturating_sub(1);
+        let column = if e.line() <= 1 {
+            base.column + e.column().saturating_sub(1)
+        } else {
+            e.column()
+        };
+        let mut message = e.to_string();
+        let suffix = format!(" at line {} column {}", e.line(), e.column());
+        if let Some(m) = message.strip_suffix(&suffix) {
+            message = m.to_owned();
+        }
+        IoError::at(path, line.max(1), IoErrorKind::Json { column, message })
+    })
+}
+
+/// Checks intrinsics: positive finite focal lengths and image size, finite other parameters.
+pub(crate) fn check_camera(model: &Camera) -> Result<(), String> {
+    let (fx, fy, width, height, others): (f64, f64, f64, f64, Vec<(&str, f64)>) = match model {
+        Camera::Pinhole(p) => (
+            p.fx,
+            p.fy,
+            p.width,
+            p.height,
+            vec![("cx", p.cx), ("cy", p.cy)],
+        ),
+        Camera::KannalaBrandt(k) => (
+            k.fx,
+            k.fy,
+            k.width,
+            k.height,
+            vec![
+                ("cx", k.cx),
+                ("cy", k.cy),
+                ("k1", k.k1),
+                ("k2", k.k2),
+                ("k3", k.k3),
+                ("k4", k.k4),
+            ],
+        ),
+    };
+    for (name, v) in [("fx", fx), ("fy", fy), ("width", width), ("height", height)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!("`{name}` must be a positive number, found {v}"));
+        }
+    }
+    for (name, v) in others {
+        if !v.is_finite() {
+            return Err(format!("`{name}` must be finite, found {v}"));
+        }
+    }
+    Ok(())
+}
+
+/// Checks a 4x4 `T_vehicle_camera` (rows of the file) and returns the pose.
+fn extrinsic(rows: &[Vec<f64>], camera: usize) -> Result<Pose<f64>, IoErrorKind> {
+    let bad = |reason: String| IoErrorKind::BadExtrinsic { camera, reason };
+    if rows.len() != 4 {
+        return Err(bad(format!("found {} rows", rows.len())));
+    }
+    let mut m = Matrix4::zeros();
+    for (i, row) in rows.iter().enumerate() {
+        if row.len() != 4 {
+            return Err(bad(format!("row {i} has {} entries", row.len())));
+        }
+        for (j, &v) in row.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(bad(format!("entry ({i}, {j}) is not finite")));
+            }
+            m[(i, j)] = v;
+        }
+    }
+    let bottom = [0.0, 0.0, 0.0, 1.0];
+    if (0..4).any(|j| (m[(3, j)] - bottom[j]).abs() > ORTHONORMAL_TOLERANCE) {
+        return Err(bad(format!(
+            "bottom row is [{}, {}, {}, {}]",
+            m[(3, 0)],
+            m[(3, 1)],
+            m[(3, 2)],
+            m[(3, 3)]
+        )));
+    }
+    let pose = Pose::from_homogeneous(&m);
+    let error = pose.orthonormality_error();
+    if error.is_nan() || error > ORTHONORMAL_TOLERANCE {
+        return Err(IoErrorKind::ExtrinsicNotOrthonormal {
+            camera,
+            error,
+            tolerance: ORTHONORMAL_TOLERANCE,
+        });
+    }
+    Ok(pose)
+}
+
+/// Parses the text of a `rig.json`; `path` only names the file in errors.
+pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoError> {
+    let path = path.as_ref();
+    let file: RigFile = parse_at(text, Pos::START, path)?;
+    let list_pos = Pos::of(text, file.cameras.get());
+    let list: Vec<&RawValue> = parse_at(file.cameras.get(), list_pos, path)?;
+    if list.is_empty() {
+        return Err(IoError::at(path, list_pos.line, IoErrorKind::EmptyRig));
+    }
+    let mut cameras = Vec::with_capacity(list.len());
+    for (i, raw) in list.iter().enumerate() {
+        let raw = raw.get();
+        let cam: CameraFile = parse_at(raw, Pos::of(text, raw), path)?;
+        let model_pos = Pos::of(text, cam.model.get());
+        let model: Camera = parse_at(cam.model.get(), model_pos, path)?;
+        check_camera(&model).map_err(|reason| {
+            IoError::at(
+                path,
+                model_pos.line,
+                IoErrorKind::InvalidCamera { camera: i, reason },
+            )
+        })?;
+        let t_pos = Pos::of(text, cam.t_vehicle_camera.get());
+        let rows: Vec<Vec<f64>> = parse_at(cam.t_vehicle_camera.get(), t_pos, path)?;
+        let t_vehicle_camera = extrinsic(&rows, i).map_err(|k| IoError::at(path, t_pos.line, k))?;
+        cameras.push(RigCamera {
+            name: cam.name.unwrap_or_else(|| format!("cam{i}")),
+            model,
+            t_vehicle_camera,
+        });
+    }
+    Rig::new(cameras).map_err(|e| IoError::file(path, IoErrorKind::Rig(e)))
+}
+
+/// Reads `rig.json` (at most [`MAX_RIG_BYTES`]).
+pub fn read_rig(path: impl AsRef<Path>) -> Result<Rig, IoError> {
+    let path = path.as_ref();
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_RIG_BYTES as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| IoError::io(path, e))?;
+    if bytes.len() > MAX_RIG_BYTES {
+        return Err(IoError::file(
+            path,
+            IoErrorKind::TooLong {
+                limit: MAX_RIG_BYTES,
+            },
+        ));
+    }
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        IoError::at(path, line, IoErrorKind::InvalidUtf8)
+    })?;
+    read_rig_from_str(text, path)
+}
+
+/// The `rig.json` text of a rig, in the layout of `FORMAT.md` (one matrix row per line). Numbers
+/// are printed so that they parse back to the same bits.
+pub fn rig_to_json(rig: &Rig) -> Result<String, IoErrorKind> {
+    use std::fmt::Write as _;
+    let mut s = String::from("{\n  \"cameras\": [\n");
+    for (i, c) in rig.cameras().iter().enumerate() {
+        check_camera(&c.model)
+            .map_err(|reason| IoErrorKind::InvalidCamera { camera: i, reason })?;
+        let m = c.t_vehicle_camera.to_homogeneous();
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(IoErrorKind::BadExtrinsic {
+                camera: i,
+                reason: "not finite".into(),
+            });
+        }
+        let json = |e: serde_json::Error| IoErrorKind::InvalidData(e.to_string());
+        let name = serde_json::to_string(&c.name).map_err(json)?;
+        let model = serde_json::to_string(&c.model).map_err(json)?;
+        let rows: Vec<String> = (0..4)
+            .map(|r| {
+                let v: Vec<String> = (0..4).map(|k| json_number(m[(r, k)])).collect();
+                format!("[{}]", v.join(", "))
+            })
+            .collect();
+        let indent = " ".repeat("      \"T_vehicle_camera\": [".len());
+        // Writing to a String cannot fail.
+        let _ = write!(
+            s,
+            "    {{\n      \"name\": {name},\n      \"model\": {model},\n      \"T_vehicle_camera\": [{}]\n    }}{}\n",
+            rows.join(&format!(",\n{indent}")),
+            if i + 1 < rig.len() { "," } else { "" }
+        );
+    }
+    s.push_str("  ]\n}\n");
+    Ok(s)
+}
+
+/// A JSON number that parses back to the same (finite) `f64`: `Exact` prints forms such as
+/// `1`, `-0`, `12.5`, `1e-7`, all valid JSON.
+fn json_number(v: f64) -> String {
+    Exact(v).to_string()
+}
+
+/// Writes `rig.json` atomically. Fails (writing nothing) on intrinsics or extrinsics that the
+/// reader would reject.
+pub fn write_rig(path: impl AsRef<Path>, rig: &Rig) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let text = rig_to_json(rig).map_err(|k| IoError::file(path, k))?;
+    write_atomic(path, |f| put!(f, "{text}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn positions_map_to_the_file() {
+        let text = "{\n  \"a\": [1,\n 2]\n}";
+        let sub = &text[text.find('[').unwrap()..];
+        let p = Pos::of(text, sub);
+        assert_eq!((p.line, p.column), (2, 8));
+    }
+}

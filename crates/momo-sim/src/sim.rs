@@ -1,0 +1,627 @@
+//! The simulator: a drive ([`generate_drive`]), a scene, and per frame pair and camera a set of
+//! matches with noise, outliers, blinded cameras and an optional independently moving object.
+//!
+//! Per frame pair `k` and camera `j` with extrinsic `P_j` and vehicle motion
+//! `M = T_{k-1,k} = V_{k-1}⁻¹ V_k`, the camera motion is `C_j = P_j⁻¹ M P_j`. A match is made by
+//! sampling a pixel uniformly in the image at frame k-1, unprojecting it, giving it a depth from
+//! the scene ([`SceneConfig`]: the ground plane z = 0 where the ray hits it within
+//! `ground_range`, otherwise a facade or, with probability `far_fraction`, a far point), moving
+//! the point into camera j at frame k (`X_k = C_j⁻¹ X_{k-1}`), and keeping it if it projects into
+//! the image (and, for fisheyes, back onto the same ray). Both pixels then get Gaussian noise of
+//! `pixel_noise` pixels; finally exactly `round(outlier_ratio · n)` of the camera's matches get a
+//! wrong pixel in frame k (within `near_outlier_radius` of the true one with probability
+//! `near_outlier_fraction`, anywhere in the image otherwise).
+//!
+//! Determinism: the drive uses `StdRng::seed_from_u64(seed)`, each (frame pair, camera) its own
+//! `StdRng` seeded from a hash of `(seed, k, j)`. The same configuration gives the same
+//! simulation bit for bit (with the same `rand` version), and a longer simulation starts with the
+//! frames of a shorter one.
+
+use crate::drive::{DriveConfig, generate_drive};
+use crate::rigs::RigPreset;
+use momo_core::{CameraModel, FrameObservations, Observation, Pose, Rig, RigCamera, camera_motion};
+use momo_io::{IoError, MAX_FRAME, Sequence, write_sequence};
+use nalgebra::{Vector2, Vector3};
+use rand::rngs::StdRng;
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
+use rand_distr::StandardNormal;
+use std::ops::Range;
+use std::path::Path;
+use thiserror::Error;
+
+/// Largest `matches_per_camera` accepted.
+pub const MAX_MATCHES_PER_CAMERA: usize = 100_000;
+
+/// An invalid [`SimConfig`].
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SimError {
+    /// A parameter out of range; the message names it.
+    #[error("invalid simulation config: {0}")]
+    InvalidConfig(String),
+}
+
+/// Where scene points lie.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneConfig {
+    /// A ray that hits the ground plane z = 0 within this horizontal distance (metres from the
+    /// camera) sees the ground.
+    pub ground_range: f64,
+    /// Other rays see a facade at a distance uniform in this range (metres along the ray) ...
+    pub facade_range: (f64, f64),
+    /// ... or, with probability [`far_fraction`](Self::far_fraction), a far point in this range.
+    pub far_range: (f64, f64),
+    /// Probability of a far point for rays that miss the ground.
+    pub far_fraction: f64,
+}
+
+impl Default for SceneConfig {
+    fn default() -> Self {
+        Self {
+            ground_range: 80.0,
+            facade_range: (5.0, 40.0),
+            far_range: (50.0, 300.0),
+            far_fraction: 0.15,
+        }
+    }
+}
+
+/// What a blinded camera delivers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlindMode {
+    /// No matches at all (a covered lens, a dropped frame).
+    Absent,
+    /// Only wrong matches: both pixels random (glare, rain on the lens).
+    Outliers,
+}
+
+/// A camera blinded for a range of frame pairs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Blinding {
+    /// Camera id.
+    pub camera: usize,
+    /// Frame pairs `k` (pair `(k-1, k)`) affected.
+    pub frames: Range<usize>,
+    /// Absent or all outliers.
+    pub mode: BlindMode,
+}
+
+/// A rigid object that moves independently of the static scene, seen by one camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovingObject {
+    /// Camera id.
+    pub camera: usize,
+    /// Frame pairs affected.
+    pub frames: Range<usize>,
+    /// Fraction of the camera's matches on the object.
+    pub fraction: f64,
+    /// Image region of the object, fractions of width and height: `[u_min, v_min, u_max, v_max]`.
+    pub region: [f64; 4],
+    /// Distance of the object points along the ray, metres.
+    pub depth_range: (f64, f64),
+    /// Motion of object points per frame pair in vehicle coordinates: a point at `X` in the
+    /// vehicle frame at k-1 is at `relative_motion · X` in the vehicle frame at k. The identity
+    /// is an object moving with the vehicle (zero flow: a truck ahead at the same speed).
+    pub relative_motion: Pose<f64>,
+}
+
+impl MovingObject {
+    /// An object moving with the vehicle (zero flow) covering the centre-bottom of the image.
+    pub fn following(camera: usize, frames: Range<usize>, fraction: f64) -> Self {
+        Self {
+            camera,
+            frames,
+            fraction,
+            region: [0.3, 0.35, 0.75, 0.95],
+            depth_range: (6.0, 15.0),
+            relative_motion: Pose::identity(),
+        }
+    }
+}
+
+/// What a simulated match really is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MatchLabel {
+    /// A static scene point with pixel noise only.
+    Inlier,
+    /// A wrong pixel in frame k.
+    Outlier,
+    /// A point on the [`MovingObject`].
+    MovingObject,
+    /// A random match of a camera blinded with [`BlindMode::Outliers`].
+    Blinded,
+}
+
+/// Everything the simulator needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimConfig {
+    /// Number of frames (poses); the frame pairs are `1..frames`.
+    pub frames: usize,
+    /// Seed of all random choices.
+    pub seed: u64,
+    /// Matches per camera and frame pair (fewer if the scene does not allow them).
+    pub matches_per_camera: usize,
+    /// Standard deviation of the Gaussian noise on each pixel coordinate, pixels.
+    pub pixel_noise: f64,
+    /// Fraction of each camera's matches replaced by outliers, in `[0, 1]`.
+    pub outlier_ratio: f64,
+    /// Fraction of the outliers placed near the true pixel (the rest: anywhere).
+    pub near_outlier_fraction: f64,
+    /// "Near" means within this many pixels in u and v (60 by default).
+    pub near_outlier_radius: f64,
+    /// The rig.
+    pub rig: RigPreset,
+    /// Whether the drive includes stops (standstill frames).
+    pub stops: bool,
+    /// The drive generator.
+    pub drive: DriveConfig,
+    /// The scene.
+    pub scene: SceneConfig,
+    /// Blinded cameras.
+    pub blinded: Vec<Blinding>,
+    /// An optional independently moving object.
+    pub moving_object: Option<MovingObject>,
+    /// Whether the sequence gets `odometry.csv` arc lengths.
+    pub odometry: bool,
+    /// Relative standard deviation of the odometry arc lengths (0: exact).
+    pub odometry_noise: f64,
+}
+
+impl Default for SimConfig {
+    /// 100 frames of the KITTI mono rig, 300 matches, σ = 0.5 px, 10% outliers, no stops,
+    /// exact odometry.
+    fn default() -> Self {
+        Self {
+            frames: 100,
+            seed: 0,
+            matches_per_camera: 300,
+            pixel_noise: 0.5,
+            outlier_ratio: 0.1,
+            near_outlier_fraction: 0.5,
+            near_outlier_radius: 60.0,
+            rig: RigPreset::KittiMono,
+            stops: false,
+            drive: DriveConfig::default(),
+            scene: SceneConfig::default(),
+            blinded: Vec::new(),
+            moving_object: None,
+            odometry: true,
+            odometry_noise: 0.0,
+        }
+    }
+}
+
+impl SimConfig {
+    /// KITTI mono rig, σ = 0.5 px, no outliers.
+    pub fn clean_pinhole() -> Self {
+        Self {
+            outlier_ratio: 0.0,
+            ..Self::default()
+        }
+    }
+
+    /// KITTI mono rig, σ = 1 px, 30% outliers.
+    pub fn outliers() -> Self {
+        Self {
+            pixel_noise: 1.0,
+            outlier_ratio: 0.3,
+            ..Self::default()
+        }
+    }
+
+    /// The four-camera fisheye rig, 200 matches per camera, σ = 0.5 px, 10% outliers, stops,
+    /// and the left camera (id 2) blinded (no matches) for frame pairs 40..70.
+    pub fn fisheye_surround() -> Self {
+        Self {
+            rig: RigPreset::SurroundFisheye,
+            matches_per_camera: 200,
+            stops: true,
+            blinded: vec![Blinding {
+                camera: 2,
+                frames: 40..70,
+                mode: BlindMode::Absent,
+            }],
+            ..Self::default()
+        }
+    }
+
+    /// KITTI mono rig, clean matches, and an object moving with the vehicle (zero flow) that
+    /// covers 45% of the matches in frame pairs 30..60.
+    pub fn moving_object() -> Self {
+        Self {
+            outlier_ratio: 0.0,
+            moving_object: Some(MovingObject::following(0, 30..60, 0.45)),
+            ..Self::default()
+        }
+    }
+
+    /// Checks every parameter; the message names the first bad one.
+    pub fn validate(&self, rig: &Rig) -> Result<(), SimError> {
+        let bad = |m: String| Err(SimError::InvalidConfig(m));
+        if self.frames == 0 || self.frames > MAX_FRAME + 1 {
+            return bad(format!(
+                "frames must be in 1..={}, found {}",
+                MAX_FRAME + 1,
+                self.frames
+            ));
+        }
+        if self.matches_per_camera > MAX_MATCHES_PER_CAMERA {
+            return bad(format!(
+                "matches_per_camera must be at most {MAX_MATCHES_PER_CAMERA}, found {}",
+                self.matches_per_camera
+            ));
+        }
+        if !(self.pixel_noise.is_finite() && self.pixel_noise >= 0.0) {
+            return bad(format!(
+                "pixel_noise must be a non-negative number, found {}",
+                self.pixel_noise
+            ));
+        }
+        for (name, v) in [
+            ("outlier_ratio", self.outlier_ratio),
+            ("near_outlier_fraction", self.near_outlier_fraction),
+            ("scene.far_fraction", self.scene.far_fraction),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return bad(format!("{name} must be in [0, 1], found {v}"));
+            }
+        }
+        if !(self.near_outlier_radius.is_finite() && self.near_outlier_radius > 0.0) {
+            return bad("near_outlier_radius must be a positive number".into());
+        }
+        if !(self.odometry_noise.is_finite() && self.odometry_noise >= 0.0) {
+            return bad("odometry_noise must be a non-negative number".into());
+        }
+        if !(self.scene.ground_range.is_finite() && self.scene.ground_range >= 0.0) {
+            return bad("scene.ground_range must be a non-negative number".into());
+        }
+        for (name, (lo, hi)) in [
+            ("scene.facade_range", self.scene.facade_range),
+            ("scene.far_range", self.scene.far_range),
+        ] {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+                return bad(format!("{name} must be (min, max) with 0 < min <= max"));
+            }
+        }
+        self.drive.validate().map_err(SimError::InvalidConfig)?;
+        for b in &self.blinded {
+            if b.camera >= rig.len() {
+                return bad(format!(
+                    "blinded camera {} does not exist (the rig has {})",
+                    b.camera,
+                    rig.len()
+                ));
+            }
+        }
+        if let Some(o) = &self.moving_object {
+            if o.camera >= rig.len() {
+                return bad(format!(
+                    "moving_object camera {} does not exist (the rig has {})",
+                    o.camera,
+                    rig.len()
+                ));
+            }
+            if !(0.0..=1.0).contains(&o.fraction) {
+                return bad("moving_object.fraction must be in [0, 1]".into());
+            }
+            let [u0, v0, u1, v1] = o.region;
+            if !(0.0 <= u0 && u0 < u1 && u1 <= 1.0 && 0.0 <= v0 && v0 < v1 && v1 <= 1.0) {
+                return bad(
+                    "moving_object.region must be [u_min, v_min, u_max, v_max] within [0, 1]"
+                        .into(),
+                );
+            }
+            let (lo, hi) = o.depth_range;
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+                return bad(
+                    "moving_object.depth_range must be (min, max) with 0 < min <= max".into(),
+                );
+            }
+            let m = o.relative_motion.to_homogeneous();
+            if m.iter().any(|v| !v.is_finite()) || o.relative_motion.orthonormality_error() > 1e-6 {
+                return bad("moving_object.relative_motion must be a finite rigid motion".into());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The result of [`simulate`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Simulation {
+    /// The sequence as `momo` reads it: `arc_lengths` (if `odometry`) and `ground_truth` are
+    /// filled; `ground_truth[k] = T_cam0(0)_cam0(k) = P0⁻¹ V0⁻¹ V_k P0` (identity at k = 0).
+    pub sequence: Sequence,
+    /// Vehicle poses `V_k` in the world frame; `V_0` is the identity.
+    pub vehicle_poses: Vec<Pose<f64>>,
+    /// `vehicle_motions[k] = T_{k-1,k} = V_{k-1}⁻¹ V_k`; index 0 is the identity.
+    pub vehicle_motions: Vec<Pose<f64>>,
+    /// Speed at each frame, m/s.
+    pub speeds: Vec<f64>,
+    /// Exact arc lengths per frame pair (index 0: 0), whatever `odometry_noise` says.
+    pub true_arc_lengths: Vec<f64>,
+    /// `labels[k][j][i]`: what match i of camera j in frame pair k is (parallel to
+    /// `sequence.frames`).
+    pub labels: Vec<Vec<Vec<MatchLabel>>>,
+}
+
+impl Simulation {
+    /// The true camera motion `C_j = P_j⁻¹ T_{k-1,k} P_j` of camera `j` in frame pair `k`
+    /// (identity if either index is out of range).
+    pub fn camera_motion(&self, k: usize, j: usize) -> Pose<f64> {
+        match (
+            self.vehicle_motions.get(k),
+            self.sequence.rig.cameras().get(j),
+        ) {
+            (Some(m), Some(c)) => camera_motion(m, &c.t_vehicle_camera),
+            _ => Pose::identity(),
+        }
+    }
+
+    /// Writes the sequence directory (`FORMAT.md`).
+    pub fn write(&self, dir: impl AsRef<Path>) -> Result<(), IoError> {
+        write_sequence(dir, &self.sequence)
+    }
+}
+
+/// SplitMix64: decorrelates seeds.
+fn mix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+fn uniform(rng: &mut StdRng, (lo, hi): (f64, f64)) -> f64 {
+    lo + (hi - lo) * rng.random::<f64>()
+}
+
+/// A uniformly random pixel inside the image (pixel centres from 0 to size - 1).
+fn random_pixel(rng: &mut StdRng, (w, h): (f64, f64)) -> Vector2<f64> {
+    Vector2::new(
+        rng.random::<f64>() * (w - 1.0).max(0.0),
+        rng.random::<f64>() * (h - 1.0).max(0.0),
+    )
+}
+
+fn gaussian(rng: &mut StdRng, sigma: f64) -> Vector2<f64> {
+    let x: f64 = rng.sample(StandardNormal);
+    let y: f64 = rng.sample(StandardNormal);
+    Vector2::new(x, y) * sigma
+}
+
+/// Distance along the unit ray `b` (camera frame) to the scene.
+fn scene_range(rng: &mut StdRng, scene: &SceneConfig, mount: &Pose<f64>, b: &Vector3<f64>) -> f64 {
+    let origin = mount.translation;
+    let d = mount.rotation * b;
+    if origin.z > 0.0 && d.z < -1e-9 {
+        let lambda = -origin.z / d.z;
+        if lambda * d.xy().norm() <= scene.ground_range {
+            return lambda;
+        }
+    }
+    if rng.random_bool(scene.far_fraction) {
+        uniform(rng, scene.far_range)
+    } else {
+        uniform(rng, scene.facade_range)
+    }
+}
+
+/// One camera of one frame pair.
+struct CameraFrame<'a> {
+    cfg: &'a SimConfig,
+    camera: &'a RigCamera,
+    /// Static points: camera coordinates at k-1 to camera coordinates at k (`C⁻¹`).
+    static_motion: Pose<f64>,
+    /// Object points, if the object is in view: the same for the object, and its region.
+    object: Option<(Pose<f64>, &'a MovingObject)>,
+}
+
+impl CameraFrame<'_> {
+    /// Tries once to make an inlier (or an object point); `None` if the point leaves the image.
+    fn try_match(&self, rng: &mut StdRng, on_object: bool) -> Option<Observation> {
+        let model = &self.camera.model;
+        let (w, h) = model.size();
+        let (px0, x0, motion) = match (on_object, &self.object) {
+            (true, Some((motion, obj))) => {
+                let [u0, v0, u1, v1] = obj.region;
+                let px0 = Vector2::new(
+                    uniform(rng, (u0 * (w - 1.0), u1 * (w - 1.0))),
+                    uniform(rng, (v0 * (h - 1.0), v1 * (h - 1.0))),
+                );
+                let b0 = model.unproject(&px0)?;
+                (px0, b0 * uniform(rng, obj.depth_range), motion)
+            }
+            _ => {
+                let px0 = random_pixel(rng, (w, h));
+                let b0 = model.unproject(&px0)?;
+                let range = scene_range(rng, &self.cfg.scene, &self.camera.t_vehicle_camera, &b0);
+                (px0, b0 * range, &self.static_motion)
+            }
+        };
+        let x1 = motion.transform_point(&x0);
+        if x1.norm() < 0.1 {
+            return None;
+        }
+        let px1 = model.project(&x1)?;
+        if !model.contains(&px1, 0.0) {
+            return None;
+        }
+        // The pixel must map back onto the same ray (fisheye polynomials are not invertible
+        // everywhere).
+        if model.unproject(&px1)?.dot(&x1.normalize()) < 1.0 - 1e-12 {
+            return None;
+        }
+        let px0n = px0 + gaussian(rng, self.cfg.pixel_noise);
+        let px1n = px1 + gaussian(rng, self.cfg.pixel_noise);
+        if !(model.contains(&px0n, 0.0) && model.contains(&px1n, 0.0)) {
+            return None;
+        }
+        Observation::new(model, px0n, px1n)
+    }
+
+    /// A wrong pixel in frame k for `obs` (keeping its pixel in frame k-1).
+    fn outlier(&self, rng: &mut StdRng, obs: &Observation) -> Option<Observation> {
+        let model = &self.camera.model;
+        let size = model.size();
+        let r = self.cfg.near_outlier_radius;
+        let min_offset = 3.0 * self.cfg.pixel_noise + 2.0;
+        if rng.random_bool(self.cfg.near_outlier_fraction) {
+            for _ in 0..20 {
+                let offset = Vector2::new(uniform(rng, (-r, r)), uniform(rng, (-r, r)));
+                let px1 = obs.px1 + offset;
+                if offset.norm() >= min_offset && model.contains(&px1, 0.0) {
+                    if let Some(o) = Observation::new(model, obs.px0, px1) {
+                        return Some(o);
+                    }
+                }
+            }
+        }
+        for _ in 0..20 {
+            let px1 = random_pixel(rng, size);
+            if (px1 - obs.px1).norm() >= min_offset {
+                if let Some(o) = Observation::new(model, obs.px0, px1) {
+                    return Some(o);
+                }
+            }
+        }
+        None
+    }
+
+    fn generate(
+        &self,
+        rng: &mut StdRng,
+        blind: Option<BlindMode>,
+    ) -> (Vec<Observation>, Vec<MatchLabel>) {
+        let n = self.cfg.matches_per_camera;
+        let model = &self.camera.model;
+        match blind {
+            Some(BlindMode::Absent) => return (Vec::new(), Vec::new()),
+            Some(BlindMode::Outliers) => {
+                let obs: Vec<Observation> = (0..n)
+                    .filter_map(|_| {
+                        let size = model.size();
+                        Observation::new(model, random_pixel(rng, size), random_pixel(rng, size))
+                    })
+                    .collect();
+                let labels = vec![MatchLabel::Blinded; obs.len()];
+                return (obs, labels);
+            }
+            None => {}
+        }
+        let n_object = match &self.object {
+            Some((_, o)) => (o.fraction * n as f64).round() as usize,
+            None => 0,
+        };
+        let mut kinds: Vec<bool> = (0..n).map(|i| i < n_object).collect();
+        kinds.shuffle(rng);
+        let mut obs = Vec::with_capacity(n);
+        let mut labels = Vec::with_capacity(n);
+        for on_object in kinds {
+            for _ in 0..100 {
+                if let Some(o) = self.try_match(rng, on_object) {
+                    obs.push(o);
+                    labels.push(if on_object {
+                        MatchLabel::MovingObject
+                    } else {
+                        MatchLabel::Inlier
+                    });
+                    break;
+                }
+            }
+        }
+        let n_out = (self.cfg.outlier_ratio * obs.len() as f64).round() as usize;
+        let chosen = rand::seq::index::sample(rng, obs.len(), n_out.min(obs.len()));
+        let mut drop = Vec::new();
+        for i in chosen.iter() {
+            match self.outlier(rng, &obs[i]) {
+                Some(o) => {
+                    obs[i] = o;
+                    labels[i] = MatchLabel::Outlier;
+                }
+                None => drop.push(i),
+            }
+        }
+        // Matches that could not be turned into outliers (tiny images) are dropped rather than
+        // left as unlabeled inliers.
+        drop.sort_unstable();
+        for i in drop.into_iter().rev() {
+            obs.remove(i);
+            labels.remove(i);
+        }
+        (obs, labels)
+    }
+}
+
+/// Runs the simulator. Fails only on an invalid configuration ([`SimConfig::validate`]).
+pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
+    let rig = cfg.rig.rig();
+    cfg.validate(&rig)?;
+    let n_cams = rig.len();
+    let drive = generate_drive(&cfg.drive, cfg.frames, cfg.stops, cfg.seed);
+    let vehicle_motions: Vec<Pose<f64>> = (0..cfg.frames).map(|k| drive.motion(k)).collect();
+
+    let mut frames = vec![FrameObservations::new(n_cams)];
+    let mut labels = vec![vec![Vec::new(); n_cams]];
+    for k in 1..cfg.frames {
+        let m = &vehicle_motions[k];
+        let mut frame = FrameObservations::new(n_cams);
+        let mut frame_labels = vec![Vec::new(); n_cams];
+        for (j, camera) in rig.cameras().iter().enumerate() {
+            let mut rng = StdRng::seed_from_u64(mix(mix(mix(cfg.seed) ^ k as u64) ^ j as u64));
+            let p = &camera.t_vehicle_camera;
+            let object = cfg
+                .moving_object
+                .as_ref()
+                .filter(|o| o.camera == j && o.frames.contains(&k))
+                .map(|o| (p.inverse().compose(&o.relative_motion.compose(p)), o));
+            let blind = cfg
+                .blinded
+                .iter()
+                .find(|b| b.camera == j && b.frames.contains(&k))
+                .map(|b| b.mode);
+            let cf = CameraFrame {
+                cfg,
+                camera,
+                static_motion: camera_motion(m, p).inverse(),
+                object,
+            };
+            let (obs, lab) = cf.generate(&mut rng, blind);
+            frame.per_camera[j] = obs;
+            frame_labels[j] = lab;
+        }
+        frames.push(frame);
+        labels.push(frame_labels);
+    }
+
+    let arc_lengths = cfg.odometry.then(|| {
+        let mut rng = StdRng::seed_from_u64(mix(cfg.seed ^ 0x0D0_0E7E5));
+        let mut a = vec![None];
+        for &s in &drive.arc_lengths[1..] {
+            let noise: f64 = rng.sample(StandardNormal);
+            a.push(Some((s * (1.0 + cfg.odometry_noise * noise)).max(0.0)));
+        }
+        a
+    });
+    let p0 = rig.cameras()[0].t_vehicle_camera;
+    let v0_inv = drive.poses[0].inverse();
+    let ground_truth = drive
+        .poses
+        .iter()
+        .map(|v| p0.inverse().compose(&v0_inv.compose(v).compose(&p0)))
+        .collect();
+
+    Ok(Simulation {
+        sequence: Sequence {
+            rig,
+            frames,
+            arc_lengths,
+            ground_truth: Some(ground_truth),
+        },
+        vehicle_poses: drive.poses,
+        vehicle_motions,
+        speeds: drive.speeds,
+        true_arc_lengths: drive.arc_lengths,
+        labels,
+    })
+}

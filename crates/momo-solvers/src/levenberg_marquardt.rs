@@ -1,0 +1,198 @@
+//! Levenberg-Marquardt with Marquardt's diagonal scaling and Nielsen's damping update.
+
+use crate::common::{self, Accepted};
+use crate::linalg::solve_damped;
+use momo_core::{LeastSquares, ParamVec, Solver, SolverReport, Termination};
+use serde::{Deserialize, Serialize};
+
+/// Levenberg-Marquardt: the step solves `(H + λ diag H) δ = -g` (Marquardt's scaling, so that λ
+/// does not depend on the parameters' units), the trial point costs one
+/// [`LeastSquares::cost`], and only an accepted step is linearised.
+///
+/// The damping follows Nielsen's rule on the gain ratio `ρ = actual / predicted decrease`: an
+/// accepted step (`ρ > 0`) multiplies λ by `max(1 / lambda_decrease, 1 - (2ρ - 1)³)`, a
+/// rejected one by `ν` (starting at `lambda_increase`, doubling on every consecutive rejection).
+///
+/// One iteration is one trial step, accepted or rejected.
+///
+/// ```
+/// use momo_solvers::LevenbergMarquardt;
+/// let lm = LevenbergMarquardt::default().with_initial_lambda(1e-3).with_max_iterations(20);
+/// assert_eq!(lm.initial_lambda, 1e-3);
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct LevenbergMarquardt {
+    /// Most iterations (trial steps, accepted or rejected).
+    pub max_iterations: usize,
+    /// Stop when an accepted step decreases the cost by at most this fraction of it.
+    pub function_tolerance: f64,
+    /// Stop when the gradient's max-norm is at most this.
+    pub gradient_tolerance: f64,
+    /// Stop when the step is at most `parameter_tolerance · (|x| + parameter_tolerance)`.
+    pub parameter_tolerance: f64,
+    /// Damping λ of the first step, relative to the diagonal of the normal matrix.
+    pub initial_lambda: f64,
+    /// Factor on λ after a rejected step (doubling on each consecutive rejection).
+    pub lambda_increase: f64,
+    /// Largest divisor of λ after a very successful step (3 in Nielsen's rule).
+    pub lambda_decrease: f64,
+    /// Smallest λ.
+    pub min_lambda: f64,
+    /// Largest λ: beyond it no step is possible and the solver stops.
+    pub max_lambda: f64,
+}
+
+impl Default for LevenbergMarquardt {
+    fn default() -> Self {
+        Self {
+            max_iterations: 50,
+            function_tolerance: 1e-6,
+            gradient_tolerance: 1e-10,
+            parameter_tolerance: 1e-8,
+            initial_lambda: 1e-4,
+            lambda_increase: 2.0,
+            lambda_decrease: 3.0,
+            min_lambda: 1e-16,
+            max_lambda: 1e16,
+        }
+    }
+}
+
+impl LevenbergMarquardt {
+    /// Sets [`Self::max_iterations`].
+    pub fn with_max_iterations(mut self, v: usize) -> Self {
+        self.max_iterations = v;
+        self
+    }
+    /// Sets [`Self::function_tolerance`].
+    pub fn with_function_tolerance(mut self, v: f64) -> Self {
+        self.function_tolerance = v;
+        self
+    }
+    /// Sets [`Self::gradient_tolerance`].
+    pub fn with_gradient_tolerance(mut self, v: f64) -> Self {
+        self.gradient_tolerance = v;
+        self
+    }
+    /// Sets [`Self::parameter_tolerance`].
+    pub fn with_parameter_tolerance(mut self, v: f64) -> Self {
+        self.parameter_tolerance = v;
+        self
+    }
+    /// Sets [`Self::initial_lambda`].
+    pub fn with_initial_lambda(mut self, v: f64) -> Self {
+        self.initial_lambda = v;
+        self
+    }
+    /// Sets [`Self::lambda_increase`].
+    pub fn with_lambda_increase(mut self, v: f64) -> Self {
+        self.lambda_increase = v;
+        self
+    }
+    /// Sets [`Self::lambda_decrease`].
+    pub fn with_lambda_decrease(mut self, v: f64) -> Self {
+        self.lambda_decrease = v;
+        self
+    }
+    /// Sets [`Self::min_lambda`].
+    pub fn with_min_lambda(mut self, v: f64) -> Self {
+        self.min_lambda = v;
+        self
+    }
+    /// Sets [`Self::max_lambda`].
+    pub fn with_max_lambda(mut self, v: f64) -> Self {
+        self.max_lambda = v;
+        self
+    }
+}
+
+#[typetag::serde(name = "levenberg_marquardt")]
+impl Solver for LevenbergMarquardt {
+    fn solve(&self, problem: &dyn LeastSquares, x0: &ParamVec) -> SolverReport {
+        let common::Start { mut x, mut lin, n } =
+            match common::start(problem, x0, self.gradient_tolerance, self.max_iterations) {
+                common::Begin::Go(s) => s,
+                common::Begin::Done(report) => return report,
+            };
+        let initial_cost = lin.cost;
+        let increase = self.lambda_increase.max(1.0 + f64::EPSILON);
+        let min_factor = 1.0 / self.lambda_decrease.max(1.0);
+        let mut lambda = self.initial_lambda.max(self.min_lambda).max(0.0);
+        let mut nu = increase;
+        let mut iterations = 0;
+        let termination = 'outer: loop {
+            if iterations >= self.max_iterations {
+                break 'outer Termination::MaxIterations;
+            }
+            iterations += 1;
+            // The block ends only for a rejected trial; it says whether the rejection was
+            // numerical (non-finite cost or linearisation, unsolvable system).
+            let rejected_non_finite = 'trial: {
+                let Some((step, _)) = solve_damped(&lin.hessian, &lin.gradient, n, lambda, true)
+                else {
+                    break 'trial true;
+                };
+                if common::step_is_small(&step, &x, self.parameter_tolerance) {
+                    break 'outer common::take_final_step(problem, &mut x, &mut lin, &step, n);
+                }
+                let trial = x + step;
+                let c = problem.cost(&trial);
+                let predicted = common::predicted_decrease(&lin, &step);
+                if !(c.is_finite() && c < lin.cost) {
+                    if common::at_noise_floor(lin.cost, c, predicted, self.function_tolerance) {
+                        break 'outer Termination::CostConverged;
+                    }
+                    break 'trial !c.is_finite();
+                }
+                let old_cost = lin.cost;
+                match common::relinearize(problem, &trial, n, old_cost) {
+                    Accepted::Moved(new) => {
+                        x = trial;
+                        lin = new;
+                    }
+                    Accepted::NonFinite => {
+                        break 'trial true;
+                    }
+                    Accepted::NotBetter => break 'outer Termination::CostConverged,
+                }
+                let rho = if predicted > 0.0 {
+                    (old_cost - c) / predicted
+                } else {
+                    1.0
+                };
+                let t = 2.0 * rho - 1.0;
+                lambda = (lambda * (1.0 - t * t * t).max(min_factor)).max(self.min_lambda);
+                nu = increase;
+                if let Some(t) = common::converged_after_step(
+                    &lin,
+                    old_cost,
+                    self.gradient_tolerance,
+                    self.function_tolerance,
+                ) {
+                    break 'outer t;
+                }
+                continue 'outer;
+            };
+            // Rejected: more damping.
+            lambda = (lambda * nu).max(self.min_lambda).max(1e-12);
+            nu *= 2.0;
+            if lambda.is_nan() || lambda > self.max_lambda {
+                break 'outer if rejected_non_finite {
+                    Termination::NumericalFailure
+                } else {
+                    Termination::StepConverged
+                };
+            }
+        };
+        common::report(
+            x,
+            n,
+            initial_cost,
+            lin.cost,
+            iterations,
+            termination,
+            lin.hessian,
+        )
+    }
+}

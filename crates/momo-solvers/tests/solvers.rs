@@ -1,0 +1,381 @@
+//! Accuracy, termination reasons and bookkeeping of the three solvers on hand-written problems.
+
+#![allow(clippy::unwrap_used)]
+
+mod common;
+
+use common::*;
+use momo_core::{LeastSquares, MAX_PARAMS, ParamVec, Solver, SolverReport, Termination};
+use momo_solvers::{Dogleg, GaussNewton, LevenbergMarquardt};
+
+fn name(s: &dyn Solver) -> String {
+    format!("{s:?}").split(' ').next().unwrap().to_string()
+}
+
+/// What every report must satisfy.
+fn check_invariants(problem: &dyn LeastSquares, x0: &ParamVec, r: &SolverReport, max_iter: usize) {
+    let n = problem.num_params();
+    assert_eq!(r.num_params, n);
+    assert!(r.x.iter().all(|v| v.is_finite()), "{r:?}");
+    assert!(
+        r.x.rows(n, MAX_PARAMS - n).iter().all(|&v| v == 0.0),
+        "{r:?}"
+    );
+    assert!(r.iterations <= max_iter, "{r:?}");
+    if r.initial_cost.is_finite() {
+        assert!(r.final_cost <= r.initial_cost, "{r:?}");
+        assert_eq!(r.final_cost, problem.linearize(&r.x).cost);
+        // The normal matrix belongs to the final point.
+        assert_eq!(r.normal_matrix, problem.linearize(&r.x).hessian, "{r:?}");
+    } else {
+        assert_eq!(r.x.rows(0, n), x0.rows(0, n));
+    }
+}
+
+fn assert_close(x: &ParamVec, want: &[f64], tol: f64, what: &str) {
+    for (i, w) in want.iter().enumerate() {
+        assert!(
+            (x[i] - w).abs() <= tol,
+            "{what}: x[{i}] = {} want {w} (diff {:e})",
+            x[i],
+            x[i] - w
+        );
+    }
+}
+
+#[test]
+fn exponential_fit_reaches_the_truth() {
+    let p = Fit::new(ExpFit::new());
+    for x0 in [
+        pv(&[1.0, 0.0, 0.0]),
+        pv(&[3.0, -0.5, 1.0]),
+        pv(&[0.5, -3.0, 0.0]),
+    ] {
+        for (solvers, tol) in [(tight(), 1e-10), (defaults(), 1e-8)] {
+            for s in solvers {
+                let r = s.solve(&p, &x0);
+                check_invariants(&p, &x0, &r, 200);
+                assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+                assert_close(&r.x, &EXP_TRUTH, tol, &name(&*s));
+            }
+        }
+    }
+}
+
+#[test]
+fn rosenbrock_reaches_the_minimum() {
+    let p = Fit::new(Rosenbrock);
+    for x0 in [
+        pv(&[-1.2, 1.0]),
+        pv(&[2.0, -1.0]),
+        pv(&[0.0, 0.0]),
+        pv(&[-3.0, 5.0]),
+    ] {
+        for (solvers, tol) in [(tight(), 1e-10), (defaults(), 1e-8)] {
+            for s in solvers {
+                let r = s.solve(&p, &x0);
+                check_invariants(&p, &x0, &r, 200);
+                assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+                assert_close(&r.x, &[1.0, 1.0], tol, &name(&*s));
+            }
+        }
+    }
+}
+
+#[test]
+fn nonzero_residual_fit_reaches_the_least_squares_solution() {
+    let q = Quadratic::new();
+    let want = q.solution();
+    let p = Fit::new(q);
+    let x0 = pv(&[0.0, 0.0, 0.0]);
+    for s in tight() {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 200);
+        assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+        assert_close(&r.x, &want, 1e-10, &name(&*s));
+    }
+    // Gauss-Newton solves a linear problem in one step.
+    let r = GaussNewton::default().solve(&p, &x0);
+    assert_close(&r.x, &want, 1e-10, "gn");
+    assert_eq!(r.termination, Termination::GradientConverged);
+    assert_eq!(r.iterations, 1);
+}
+
+#[test]
+fn default_tolerances_converge_on_the_nonzero_residual_fit() {
+    let q = Quadratic::new();
+    let want = q.solution();
+    let p = Fit::new(q);
+    let x0 = pv(&[0.0, 0.0, 0.0]);
+    for s in defaults() {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 50);
+        assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+        assert_close(&r.x, &want, 1e-6, &name(&*s));
+    }
+}
+
+#[test]
+fn nan_region_is_avoided() {
+    // From x = 10 the Gauss-Newton step of ln x lands at x = -3 (NaN cost).
+    let p = Fit::new(LogSqrt);
+    let want = [std::f64::consts::E, 4.0];
+    for x0 in [pv(&[10.0, 0.5]), pv(&[20.0, 30.0]), pv(&[0.01, 0.01])] {
+        for (solvers, tol) in [(tight(), 1e-10), (defaults(), 1e-8)] {
+            for s in solvers {
+                let r = s.solve(&p, &x0);
+                check_invariants(&p, &x0, &r, 200);
+                assert!(r.termination.is_converged(), "{}: {x0:?} {r:?}", name(&*s));
+                assert_close(&r.x, &want, tol, &name(&*s));
+            }
+        }
+    }
+}
+
+#[test]
+fn robust_fit_rejects_the_outliers() {
+    let p = Fit::cauchy(OutlierLine::new(), 0.05);
+    // Plain least squares is dragged by the outliers; Cauchy's loss is not.
+    let ls = Fit::new(OutlierLine::new());
+    let x0 = pv(&[0.0, 0.0]);
+    let plain = LevenbergMarquardt::default().solve(&ls, &x0);
+    assert!((plain.x[0] - 1.0).abs() > 0.5, "{plain:?}");
+    let x0 = pv(&[0.8, 0.6]);
+    let mut results = Vec::new();
+    for s in tight() {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 200);
+        assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+        assert_close(&r.x, &[1.0, 0.5], 0.01, &name(&*s));
+        // Cauchy's loss has ρ'' < 0, so the normal matrix is that of IRLS and the convergence
+        // linear: the cost stalls at rounding level with a small, not a tiny, gradient.
+        let g = p.linearize(&r.x).gradient;
+        assert!(g.amax() < 1e-7, "{}: gradient {g}", name(&*s));
+        results.push(r.x);
+    }
+    for x in &results[1..] {
+        assert_close(x, &[results[0][0], results[0][1]], 1e-9, "solvers agree");
+    }
+}
+
+#[test]
+fn flat_direction_keeps_its_value() {
+    let p = Fit::new(FlatExp(ExpFit::new()));
+    let x0 = pv(&[1.0, 0.0, 7.0, 0.0]);
+    let want = [EXP_TRUTH[0], EXP_TRUTH[1], 7.0, EXP_TRUTH[2]];
+    for s in tight() {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 200);
+        assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+        assert_close(&r.x, &want, 1e-10, &name(&*s));
+        assert!(r.covariance(1.0).is_none());
+    }
+}
+
+#[test]
+fn dependent_parameters_get_the_minimum_norm_step() {
+    // Only x0 + x1 matters: the solvers fit the sum and leave the difference alone.
+    let p = Fit::new(SumOnly);
+    let x0 = pv(&[1.0, 0.0, 0.0]);
+    for s in defaults() {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 50);
+        assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+        assert!(
+            (r.x[0] + r.x[1] - 3.0).abs() < 1e-10,
+            "{}: {r:?}",
+            name(&*s)
+        );
+        assert!((r.x[2] + 1.0).abs() < 1e-10, "{}: {r:?}", name(&*s));
+        assert!((r.x[0] - r.x[1] - 1.0).abs() < 1e-8, "{}: {r:?}", name(&*s));
+    }
+}
+
+#[test]
+fn one_iteration_hits_the_limit() {
+    let p = Fit::new(Rosenbrock);
+    let x0 = pv(&[-1.2, 1.0]);
+    let solvers: Vec<Box<dyn Solver>> = vec![
+        Box::new(GaussNewton::default().with_max_iterations(1)),
+        Box::new(LevenbergMarquardt::default().with_max_iterations(1)),
+        Box::new(Dogleg::default().with_max_iterations(1)),
+    ];
+    for s in solvers {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 1);
+        assert_eq!(
+            r.termination,
+            Termination::MaxIterations,
+            "{}: {r:?}",
+            name(&*s)
+        );
+        assert_eq!(r.iterations, 1);
+    }
+}
+
+#[test]
+fn zero_iterations_return_the_start() {
+    let p = Fit::new(Rosenbrock);
+    let x0 = pv(&[-1.2, 1.0]);
+    let solvers: Vec<Box<dyn Solver>> = vec![
+        Box::new(GaussNewton::default().with_max_iterations(0)),
+        Box::new(LevenbergMarquardt::default().with_max_iterations(0)),
+        Box::new(Dogleg::default().with_max_iterations(0)),
+    ];
+    for s in solvers {
+        let r = s.solve(&p, &x0);
+        check_invariants(&p, &x0, &r, 0);
+        assert_eq!(r.termination, Termination::MaxIterations);
+        assert_eq!(r.x, x0);
+        assert_eq!(r.final_cost, r.initial_cost);
+    }
+}
+
+#[test]
+fn start_at_the_optimum_converges_on_the_gradient() {
+    let p = Fit::new(Rosenbrock);
+    let x0 = pv(&[1.0, 1.0]);
+    for s in defaults() {
+        p.reset_counts();
+        let r = s.solve(&p, &x0);
+        assert_eq!(
+            r.termination,
+            Termination::GradientConverged,
+            "{}: {r:?}",
+            name(&*s)
+        );
+        assert_eq!(r.iterations, 0);
+        assert_eq!(r.x, x0);
+        assert_eq!(r.final_cost, 0.0);
+        assert_eq!(p.linearizations.get(), 1);
+        assert_eq!(p.costs.get(), 0);
+    }
+}
+
+#[test]
+fn empty_problem_has_no_free_parameters() {
+    let x0 = pv(&[5.0]); // beyond n = 0: ignored
+    for s in defaults() {
+        let r = s.solve(&Empty, &x0);
+        assert_eq!(r.termination, Termination::NoFreeParameters);
+        assert!(r.termination.is_converged());
+        assert_eq!(r.num_params, 0);
+        assert_eq!(r.iterations, 0);
+        assert_eq!(r.initial_cost, 3.0);
+        assert_eq!(r.final_cost, 3.0);
+        assert_eq!(r.x, ParamVec::zeros());
+    }
+}
+
+#[test]
+fn nan_at_the_start_is_a_numerical_failure() {
+    let p = Fit::new(LogSqrt);
+    let x0 = pv(&[-1.0, 2.0]);
+    for s in defaults() {
+        let r = s.solve(&p, &x0);
+        assert_eq!(
+            r.termination,
+            Termination::NumericalFailure,
+            "{}: {r:?}",
+            name(&*s)
+        );
+        assert!(!r.termination.is_converged());
+        assert_eq!(r.iterations, 0);
+        assert_eq!(r.x, x0);
+        assert!(r.initial_cost.is_nan());
+    }
+}
+
+#[test]
+fn nan_everywhere_but_the_start_returns_the_start() {
+    /// Finite cost only at exactly x = 1 (with a pull away from it).
+    struct Island;
+    impl LeastSquares for Island {
+        fn num_params(&self) -> usize {
+            1
+        }
+        fn cost(&self, x: &ParamVec) -> f64 {
+            if x[0] == 1.0 { 1.0 } else { f64::NAN }
+        }
+        fn linearize(&self, x: &ParamVec) -> momo_core::Linearization {
+            let mut lin = momo_core::Linearization {
+                cost: self.cost(x),
+                gradient: ParamVec::zeros(),
+                hessian: momo_core::NormalMatrix::zeros(),
+            };
+            lin.gradient[0] = 1.0;
+            lin.hessian[(0, 0)] = 1.0;
+            lin
+        }
+    }
+    let x0 = pv(&[1.0]);
+    for s in defaults() {
+        let r = s.solve(&Island, &x0);
+        assert_eq!(
+            r.termination,
+            Termination::NumericalFailure,
+            "{}: {r:?}",
+            name(&*s)
+        );
+        assert_eq!(r.x, x0);
+        assert_eq!(r.final_cost, 1.0);
+        assert!(r.iterations <= 50);
+    }
+}
+
+#[test]
+fn a_linearisation_only_after_an_accepted_step() {
+    // Every linearisation but the first follows an accepted step, and every accepted step
+    // took an iteration; trial costs are one per iteration except for the line search.
+    let p = Fit::new(Rosenbrock);
+    let x0 = pv(&[-1.2, 1.0]);
+    for s in defaults() {
+        p.reset_counts();
+        let r = s.solve(&p, &x0);
+        assert!(r.termination.is_converged());
+        assert!(
+            p.linearizations.get() <= r.iterations + 1,
+            "{}: {r:?}",
+            name(&*s)
+        );
+        if name(&*s) != "GaussNewton" {
+            assert_eq!(p.costs.get(), r.iterations, "{}: {r:?}", name(&*s));
+        }
+    }
+}
+
+#[test]
+fn warm_start_converges_in_few_iterations() {
+    let p = Fit::new(ExpFit::new());
+    let x0 = pv(&[2.05, -1.45, 0.48]);
+    for s in defaults() {
+        p.reset_counts();
+        let r = s.solve(&p, &x0);
+        assert!(r.termination.is_converged(), "{}: {r:?}", name(&*s));
+        assert!(r.iterations <= 8, "{}: {r:?}", name(&*s));
+        assert_close(&r.x, &EXP_TRUTH, 1e-8, &name(&*s));
+    }
+}
+
+#[test]
+fn tail_of_x0_is_ignored() {
+    let p = Fit::new(Rosenbrock);
+    let mut x0 = pv(&[-1.2, 1.0]);
+    x0[5] = f64::NAN;
+    for s in defaults() {
+        let r = s.solve(&p, &x0);
+        assert!(r.termination.is_converged());
+        assert_eq!(r.x[5], 0.0);
+        assert_close(&r.x, &[1.0, 1.0], 1e-8, &name(&*s));
+    }
+}
+
+#[test]
+fn covariance_from_the_report() {
+    let q = Quadratic::new();
+    let p = Fit::new(q);
+    let r = LevenbergMarquardt::default().solve(&p, &pv(&[0.0, 0.0, 0.0]));
+    let cov = r.covariance(1.0).unwrap();
+    let h = p.linearize(&r.x).hessian.view((0, 0), (3, 3)).into_owned();
+    assert!((cov * h - nalgebra::DMatrix::<f64>::identity(3, 3)).amax() < 1e-10);
+}

@@ -1,0 +1,254 @@
+//! Running the odometry over a whole `FORMAT.md` sequence directory: matches are streamed one
+//! frame pair at a time (memory does not grow with the sequence), poses and diagnostics are
+//! written atomically (temporary file, then rename: no half-written output on any error).
+
+use crate::config::Config;
+use crate::odometry::{FrameDiagnostics, FrameResult, FrameStatus, Odometry, Trajectory, VoError};
+use momo_core::FrameObservations;
+use momo_io::{AtomicFile, IoError, MatchReader, PoseWriter};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Why a run failed.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The sequence is malformed (`file:line: reason`): exit code 2 in the CLI.
+    #[error(transparent)]
+    Input(IoError),
+    /// An output file could not be written.
+    #[error(transparent)]
+    Output(IoError),
+    /// The configuration does not fit the rig.
+    #[error(transparent)]
+    Vo(#[from] VoError),
+}
+
+/// Where to write.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The KITTI-format camera-0 trajectory, one line per frame.
+    pub output: PathBuf,
+    /// Per-frame diagnostics: CSV if the name ends in `.csv`, JSON lines otherwise.
+    pub diagnostics: Option<PathBuf>,
+}
+
+/// Totals of a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    /// Frames written (poses), including frame 0.
+    pub frames: usize,
+    /// Frame pairs per status: estimated, standstill, no matches, solver failure.
+    pub estimated: usize,
+    /// Standstill frame pairs.
+    pub standstill: usize,
+    /// Frame pairs without enough matches.
+    pub no_matches: usize,
+    /// Frame pairs where the solver failed.
+    pub solver_failures: usize,
+    /// Frame pairs where an extra start won.
+    pub restarts_won: usize,
+    /// Sum of per-frame compute times, seconds.
+    pub compute_seconds: f64,
+}
+
+impl RunSummary {
+    fn add(&mut self, d: &FrameDiagnostics) {
+        match d.status {
+            FrameStatus::Estimated => self.estimated += 1,
+            FrameStatus::Standstill => self.standstill += 1,
+            FrameStatus::NoMatches => self.no_matches += 1,
+            FrameStatus::SolverFailure => self.solver_failures += 1,
+        }
+        self.restarts_won += usize::from(d.restart_won);
+        self.compute_seconds += d.time_us * 1e-6;
+    }
+}
+
+/// Writes diagnostics rows as CSV or JSON lines.
+struct DiagnosticsWriter {
+    file: AtomicFile,
+    csv: bool,
+    header_written: bool,
+}
+
+impl DiagnosticsWriter {
+    fn create(path: &Path) -> Result<Self, IoError> {
+        let csv = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+        Ok(Self {
+            file: AtomicFile::create(path)?,
+            csv,
+            header_written: false,
+        })
+    }
+
+    fn push(&mut self, d: &FrameDiagnostics) -> Result<(), IoError> {
+        let path = self.file.path().to_path_buf();
+        let err = |e: std::io::Error| IoError::io(&path, e);
+        if !self.csv {
+            let line = serde_json::to_string(d).map_err(|e| err(std::io::Error::other(e)))?;
+            return writeln!(self.file.writer(), "{line}").map_err(err);
+        }
+        let w = self.file.writer();
+        if !self.header_written {
+            write!(
+                w,
+                "frame,status,scale,matches,inliers,iterations,termination,initial_cost,final_cost,restarts,restart_won,time_us"
+            )
+            .map_err(err)?;
+            for n in &d.param_names {
+                write!(w, ",{n}").map_err(err)?;
+            }
+            for n in &d.param_names {
+                write!(w, ",sigma_{n}").map_err(err)?;
+            }
+            writeln!(w).map_err(err)?;
+            self.header_written = true;
+        }
+        let term = d
+            .termination
+            .map(|t| {
+                serde_json::to_string(&t)
+                    .unwrap_or_default()
+                    .trim_matches('"')
+                    .to_string()
+            })
+            .unwrap_or_else(|| "none".into());
+        let status = serde_json::to_string(&d.status).unwrap_or_default();
+        let scale = serde_json::to_string(&d.scale).unwrap_or_default();
+        write!(
+            w,
+            "{},{},{},{},{},{},{},{},{},{},{},{:.1}",
+            d.frame,
+            status.trim_matches('"'),
+            scale.trim_matches('"'),
+            d.matches,
+            d.inliers,
+            d.iterations,
+            term,
+            d.initial_cost,
+            d.final_cost,
+            d.restarts,
+            d.restart_won,
+            d.time_us
+        )
+        .map_err(err)?;
+        for v in d.params.iter().chain(&d.param_sigmas) {
+            write!(w, ",{v}").map_err(err)?;
+        }
+        writeln!(w).map_err(err)
+    }
+
+    fn finish(self) -> Result<(), IoError> {
+        self.file.commit()
+    }
+}
+
+/// Runs the odometry over the sequence in `dir` (`rig.json`, `matches.csv`, optional
+/// `odometry.csv`), writing camera 0's trajectory and, if asked, the diagnostics. `on_frame` is
+/// called after every frame pair (progress bars, live plots).
+///
+/// The number of frames is `max(last frame in matches.csv, last frame in odometry.csv) + 1`
+/// (`FORMAT.md`); frame pairs without matches hold the previous motion and say so.
+pub fn run_sequence(
+    dir: &Path,
+    config: Config,
+    options: &RunOptions,
+    mut on_frame: impl FnMut(&FrameResult),
+) -> Result<RunSummary, RunError> {
+    let rig = momo_io::read_rig(dir.join("rig.json")).map_err(RunError::Input)?;
+    let odometry_path = dir.join("odometry.csv");
+    let arc_lengths = if odometry_path.exists() {
+        Some(momo_io::read_odometry(&odometry_path).map_err(RunError::Input)?)
+    } else {
+        None
+    };
+    let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunError::Input)?;
+
+    let mut vo = Odometry::new(rig.clone(), config)?;
+    let mut trajectory = Trajectory::new(&rig);
+    let mut poses = PoseWriter::create(&options.output).map_err(RunError::Output)?;
+    let mut diagnostics = match &options.diagnostics {
+        Some(p) => Some(DiagnosticsWriter::create(p).map_err(RunError::Output)?),
+        None => None,
+    };
+    poses
+        .push(&trajectory.camera0())
+        .map_err(RunError::Output)?;
+    let mut summary = RunSummary {
+        frames: 1,
+        ..Default::default()
+    };
+
+    let arc = |k: usize| {
+        arc_lengths
+            .as_ref()
+            .and_then(|a| a.get(k).copied().flatten())
+    };
+    let mut step =
+        |k: usize, obs: &FrameObservations, summary: &mut RunSummary| -> Result<(), RunError> {
+            let result = vo.process(obs, arc(k));
+            poses
+                .push(&trajectory.push(&result.motion))
+                .map_err(RunError::Output)?;
+            if let Some(d) = diagnostics.as_mut() {
+                d.push(&result.diagnostics).map_err(RunError::Output)?;
+            }
+            summary.add(&result.diagnostics);
+            summary.frames += 1;
+            on_frame(&result);
+            Ok(())
+        };
+
+    let mut last = 0;
+    for item in reader {
+        let (k, obs) = item.map_err(RunError::Input)?;
+        step(k, &obs, &mut summary)?;
+        last = k;
+    }
+    // Frames beyond the last match row but within odometry.csv.
+    let total = arc_lengths
+        .as_ref()
+        .map_or(0, |a| a.len().saturating_sub(1))
+        .max(last);
+    let empty = FrameObservations::new(rig.len());
+    for k in last + 1..=total {
+        step(k, &empty, &mut summary)?;
+    }
+    drop(step);
+    poses.finish().map_err(RunError::Output)?;
+    if let Some(d) = diagnostics {
+        d.finish().map_err(RunError::Output)?;
+    }
+    Ok(summary)
+}
+
+/// Runs the odometry over an in-memory sequence (simulations, tests, `momo demo`); returns
+/// camera 0's trajectory (one pose per frame, identity first) and the per-frame diagnostics.
+pub fn run_in_memory(
+    sequence: &momo_io::Sequence,
+    config: Config,
+    mut on_frame: impl FnMut(&FrameResult),
+) -> Result<(Vec<momo_core::Pose<f64>>, Vec<FrameDiagnostics>), VoError> {
+    let mut vo = Odometry::new(sequence.rig.clone(), config)?;
+    let mut trajectory = Trajectory::new(&sequence.rig);
+    let n = sequence.num_frames();
+    let mut poses = Vec::with_capacity(n);
+    let mut diagnostics = Vec::with_capacity(n);
+    poses.push(trajectory.camera0());
+    let empty = FrameObservations::new(sequence.rig.len());
+    for k in 1..n {
+        let obs = sequence.frames.get(k).unwrap_or(&empty);
+        let arc = sequence
+            .arc_lengths
+            .as_ref()
+            .and_then(|a| a.get(k).copied().flatten());
+        let result = vo.process(obs, arc);
+        poses.push(trajectory.push(&result.motion));
+        on_frame(&result);
+        diagnostics.push(result.diagnostics);
+    }
+    Ok((poses, diagnostics))
+}
