@@ -35,7 +35,7 @@ pub struct JacobianMismatch {
 }
 
 fn step(x: f64) -> f64 {
-    1e-6 * x.abs().max(1.0)
+    6e-6 * x.abs().max(1.0)
 }
 
 fn compare(

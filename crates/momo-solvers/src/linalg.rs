@@ -16,10 +16,17 @@ use faer::{MatMut, MatRef, Par, diag::DiagMut};
 use momo_core::{MAX_PARAMS, NormalMatrix, ParamVec};
 use std::mem::MaybeUninit;
 
-/// Relative rank tolerance: a Cholesky pivot `lᵢᵢ²` below `RANK_TOLERANCE · Aᵢᵢ` (a column that
-/// is a combination of the previous ones up to this relative accuracy) sends the system to the
-/// SVD fallback, which drops singular values of the scaled system below
-/// `RANK_TOLERANCE · σ_max`.
+/// Relative pivot tolerance of the Cholesky path: a pivot `lᵢᵢ² ≤ PIVOT_TOLERANCE · Aᵢᵢ`
+/// means that column `i` is a combination of the previous ones up to a relative residual of
+/// `√PIVOT_TOLERANCE` (1 - R² in the language of regression). Such a system is handed to the
+/// SVD, which decides on the rank with [`RANK_TOLERANCE`]: the pivot is only a cheap, early
+/// hint, because rounding in an ill-conditioned matrix can hide an exact dependence behind a
+/// pivot well above machine precision. The SVD of a system that turns out to have full rank
+/// gives the same solution as the Cholesky factorisation.
+pub const PIVOT_TOLERANCE: f64 = 1e-8;
+
+/// Relative rank tolerance of the SVD fallback: singular values of the Jacobi-scaled system
+/// below `RANK_TOLERANCE · σ_max` are dropped.
 pub const RANK_TOLERANCE: f64 = 1e-12;
 
 /// Bytes of stack scratch for faer's SVD of an `8 x 8` matrix (measured need: well below).
@@ -65,8 +72,9 @@ fn negated_rhs(g: &ParamVec, n: usize) -> ParamVec {
 }
 
 /// Solves `(H + λ D) δ = -g` (see [`momo_core::solve_normal_equations`] for the damping
-/// convention) by Cholesky, falling back to the truncated SVD when the matrix is not positive
-/// definite or is rank-deficient to [`RANK_TOLERANCE`]. Returns the step and the method used,
+/// convention) by Cholesky, falling back to the truncated SVD ([`truncated_svd_solve`] with
+/// [`RANK_TOLERANCE`]) when the matrix is not positive definite or a pivot is below
+/// [`PIVOT_TOLERANCE`]. Returns the step and the method used,
 /// or `None` if neither produced a finite solution. Entries at and beyond `n` are zero.
 pub fn solve_damped(
     h: &NormalMatrix,
@@ -85,14 +93,15 @@ pub fn solve_damped(
 }
 
 /// Solves `A x = b` by the fixed-size Cholesky factorisation, or `None` if `A` is not positive
-/// definite, a pivot is relatively tiny (rank deficiency) or the result is not finite.
+/// definite, a pivot is relatively tiny (a possible rank deficiency, [`PIVOT_TOLERANCE`]) or
+/// the result is not finite.
 fn cholesky_solve(a: &NormalMatrix, b: &ParamVec, n: usize) -> Option<ParamVec> {
     let diag = a.diagonal();
     let chol = a.cholesky()?;
     let l = chol.l_dirty();
     for i in 0..n {
         let p = l[(i, i)];
-        if p.is_nan() || p * p <= RANK_TOLERANCE * diag[i] {
+        if p.is_nan() || p * p <= PIVOT_TOLERANCE * diag[i] {
             return None;
         }
     }
