@@ -46,6 +46,23 @@ enum Command {
     },
     /// Print the default configuration as a commented TOML file.
     Config,
+    /// Write a simulated sequence (FORMAT.md, with poses.txt ground truth) to a directory.
+    Simulate {
+        /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, fisheye_surround.
+        #[arg(long, default_value = "clean_pinhole")]
+        scenario: String,
+        /// Number of frames.
+        #[arg(long, default_value_t = 400)]
+        frames: usize,
+        /// Random seed (the output is deterministic for a seed).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Matches per camera and frame pair (default: the scenario's).
+        #[arg(long)]
+        matches: Option<usize>,
+        /// Output directory (created).
+        out_dir: PathBuf,
+    },
     /// Simulate a drive (no data needed), run the estimator on it and print how close the
     /// result is to the truth.
     Demo {
@@ -131,6 +148,35 @@ fn run(
     Ok(())
 }
 
+fn simulate(
+    scenario: &str,
+    frames: usize,
+    seed: u64,
+    matches: Option<usize>,
+    out_dir: &std::path::Path,
+) -> Result<(), Failure> {
+    use momo_sim::SimConfig;
+    let mut cfg = match scenario {
+        "clean_pinhole" => SimConfig::clean_pinhole(),
+        "outliers" => SimConfig::outliers(),
+        "moving_object" => SimConfig::moving_object(),
+        "fisheye_surround" => SimConfig::fisheye_surround(),
+        other => {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "unknown scenario `{other}` (clean_pinhole, outliers, moving_object, fisheye_surround)"
+            )));
+        }
+    };
+    cfg.frames = frames;
+    cfg.seed = seed;
+    if let Some(m) = matches {
+        cfg.matches_per_camera = m;
+    }
+    let sim = momo_sim::simulate(&cfg).map_err(|e| Failure::Input(e.into()))?;
+    sim.write(out_dir).map_err(|e| Failure::Other(e.into()))?;
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -145,6 +191,13 @@ fn main() -> ExitCode {
             print!("{}", Config::default().to_commented_toml());
             Ok(())
         }
+        Command::Simulate {
+            scenario,
+            frames,
+            seed,
+            matches,
+            out_dir,
+        } => simulate(&scenario, frames, seed, matches, &out_dir),
         Command::Demo {
             frames,
             seed,

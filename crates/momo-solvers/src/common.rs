@@ -167,22 +167,22 @@ pub(crate) fn take_final_step(
     Termination::StepConverged
 }
 
-/// The convergence tests after an accepted step from cost `old_cost` to the linearisation
-/// `lin`: the gradient first, then the relative cost decrease.
+/// The gradient test after a linearisation.
 #[inline]
-pub(crate) fn converged_after_step(
+pub(crate) fn gradient_converged(lin: &Linearization, gradient_tolerance: f64) -> bool {
+    max_norm(&lin.gradient) <= gradient_tolerance
+}
+
+/// The cost test at a linearised point: the Gauss-Newton model predicts that at most
+/// `function_tolerance` of the cost can still be gained, `½ gᵀH⁺g ≤ tol · cost` (half the
+/// squared Newton decrement), with `gauss_newton` the step `-H⁺g`.
+#[inline]
+pub(crate) fn model_converged(
     lin: &Linearization,
-    old_cost: f64,
-    gradient_tolerance: f64,
+    gauss_newton: &ParamVec,
     function_tolerance: f64,
-) -> Option<Termination> {
-    if max_norm(&lin.gradient) <= gradient_tolerance {
-        Some(Termination::GradientConverged)
-    } else if old_cost - lin.cost <= function_tolerance * old_cost {
-        Some(Termination::CostConverged)
-    } else {
-        None
-    }
+) -> bool {
+    predicted_decrease(lin, gauss_newton) <= function_tolerance * lin.cost
 }
 
 /// A rejected trial at the noise floor: both the actual and the predicted change of the cost are

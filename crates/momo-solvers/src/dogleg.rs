@@ -31,11 +31,17 @@ use serde::{Deserialize, Serialize};
 pub struct Dogleg {
     /// Most iterations (trial steps, accepted or rejected).
     pub max_iterations: usize,
-    /// Stop when an accepted step decreases the cost by at most this fraction of it.
+    /// Stop ([`Termination::CostConverged`]) when the Gauss-Newton model predicts that at most
+    /// this fraction of the cost can still be gained: `½ gᵀH⁺g ≤ function_tolerance · cost` at
+    /// a linearised point (half the squared Newton decrement).
+    /// Also when a rejected trial changes the cost by at most this fraction while the model
+    /// predicts no more for it (MINPACK's rule: the rounding floor is reached).
     pub function_tolerance: f64,
-    /// Stop when the gradient's max-norm is at most this.
+    /// Stop ([`Termination::GradientConverged`]) when the gradient's max-norm is at most this.
     pub gradient_tolerance: f64,
-    /// Stop when the step is at most `parameter_tolerance · (|x| + parameter_tolerance)`.
+    /// Stop ([`Termination::StepConverged`]) when the step is at most
+    /// `parameter_tolerance · (|x| + parameter_tolerance)`; the small step is still taken if it
+    /// decreases the cost.
     pub parameter_tolerance: f64,
     /// Trust-region radius of the first step, in the scaled norm `|D δ|`. The large default
     /// lets a warm-started problem take the Gauss-Newton step at once.
@@ -214,7 +220,17 @@ impl Solver for Dogleg {
         let mut radius = self.initial_radius.min(self.max_radius);
         let mut path = Path::new(&lin, n);
         let mut iterations = 0;
+        // True right after a linearisation: the model test is due.
+        let mut fresh = true;
         let termination = loop {
+            if fresh {
+                fresh = false;
+                if let Some(gn) = &path.gauss_newton {
+                    if common::model_converged(&lin, gn, self.function_tolerance) {
+                        break Termination::CostConverged;
+                    }
+                }
+            }
             if iterations >= self.max_iterations {
                 break Termination::MaxIterations;
             }
@@ -269,15 +285,11 @@ impl Solver for Dogleg {
             } else if rho > 0.75 && step_norm >= 0.99 * radius {
                 radius = (3.0 * step_norm).max(radius).min(self.max_radius);
             }
-            if let Some(t) = common::converged_after_step(
-                &lin,
-                old_cost,
-                self.gradient_tolerance,
-                self.function_tolerance,
-            ) {
-                break t;
+            if common::gradient_converged(&lin, self.gradient_tolerance) {
+                break Termination::GradientConverged;
             }
             path = Path::new(&lin, n);
+            fresh = true;
         };
         common::report(
             x,

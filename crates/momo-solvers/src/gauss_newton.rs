@@ -27,11 +27,15 @@ use serde::{Deserialize, Serialize};
 pub struct GaussNewton {
     /// Most iterations (Gauss-Newton steps).
     pub max_iterations: usize,
-    /// Stop when an accepted step decreases the cost by at most this fraction of it.
+    /// Stop ([`Termination::CostConverged`]) when the Gauss-Newton model predicts that at most
+    /// this fraction of the cost can still be gained: `½ gᵀH⁺g ≤ function_tolerance · cost` at
+    /// a linearised point (half the squared Newton decrement).
     pub function_tolerance: f64,
-    /// Stop when the gradient's max-norm is at most this.
+    /// Stop ([`Termination::GradientConverged`]) when the gradient's max-norm is at most this.
     pub gradient_tolerance: f64,
-    /// Stop when the step is at most `parameter_tolerance · (|x| + parameter_tolerance)`.
+    /// Stop ([`Termination::StepConverged`]) when the step is at most
+    /// `parameter_tolerance · (|x| + parameter_tolerance)`; the small step is still taken if it
+    /// decreases the cost.
     pub parameter_tolerance: f64,
     /// Most step-length reductions of the line search per iteration.
     pub max_line_search_steps: usize,
@@ -91,12 +95,15 @@ impl Solver for GaussNewton {
         let initial_cost = lin.cost;
         let mut iterations = 0;
         let termination = loop {
-            if iterations >= self.max_iterations {
-                break Termination::MaxIterations;
-            }
             let Some((step, _)) = solve_damped(&lin.hessian, &lin.gradient, n, 0.0, false) else {
                 break Termination::NumericalFailure;
             };
+            if common::model_converged(&lin, &step, self.function_tolerance) {
+                break Termination::CostConverged;
+            }
+            if iterations >= self.max_iterations {
+                break Termination::MaxIterations;
+            }
             iterations += 1;
             if common::step_is_small(&step, &x, self.parameter_tolerance) {
                 break common::take_final_step(problem, &mut x, &mut lin, &step, n);
@@ -124,13 +131,9 @@ impl Solver for GaussNewton {
                     0.5 * alpha
                 };
             }
+            // No decrease along the step: nothing left to do from here.
             let Some(trial) = found else {
-                let predicted = common::predicted_decrease(&lin, &step);
-                break if predicted <= self.function_tolerance * f0 {
-                    Termination::CostConverged
-                } else {
-                    Termination::NumericalFailure
-                };
+                break Termination::NumericalFailure;
             };
             match common::relinearize(problem, &trial, n, f0) {
                 Accepted::Moved(new) => {
@@ -140,13 +143,8 @@ impl Solver for GaussNewton {
                 Accepted::NonFinite => break Termination::NumericalFailure,
                 Accepted::NotBetter => break Termination::CostConverged,
             }
-            if let Some(t) = common::converged_after_step(
-                &lin,
-                f0,
-                self.gradient_tolerance,
-                self.function_tolerance,
-            ) {
-                break t;
+            if common::gradient_converged(&lin, self.gradient_tolerance) {
+                break Termination::GradientConverged;
             }
         };
         common::report(

@@ -25,11 +25,17 @@ use serde::{Deserialize, Serialize};
 pub struct LevenbergMarquardt {
     /// Most iterations (trial steps, accepted or rejected).
     pub max_iterations: usize,
-    /// Stop when an accepted step decreases the cost by at most this fraction of it.
+    /// Stop ([`Termination::CostConverged`]) when the Gauss-Newton model predicts that at most
+    /// this fraction of the cost can still be gained: `½ gᵀH⁺g ≤ function_tolerance · cost` at
+    /// a linearised point (half the squared Newton decrement).
+    /// Also when a rejected trial changes the cost by at most this fraction while the model
+    /// predicts no more for it (MINPACK's rule: the rounding floor is reached).
     pub function_tolerance: f64,
-    /// Stop when the gradient's max-norm is at most this.
+    /// Stop ([`Termination::GradientConverged`]) when the gradient's max-norm is at most this.
     pub gradient_tolerance: f64,
-    /// Stop when the step is at most `parameter_tolerance · (|x| + parameter_tolerance)`.
+    /// Stop ([`Termination::StepConverged`]) when the step is at most
+    /// `parameter_tolerance · (|x| + parameter_tolerance)`; the small step is still taken if it
+    /// decreases the cost.
     pub parameter_tolerance: f64,
     /// Damping λ of the first step, relative to the diagonal of the normal matrix.
     pub initial_lambda: f64,
@@ -121,7 +127,18 @@ impl Solver for LevenbergMarquardt {
         let mut lambda = self.initial_lambda.max(self.min_lambda).max(0.0);
         let mut nu = increase;
         let mut iterations = 0;
+        // True right after a linearisation: the model test is due.
+        let mut fresh = true;
         let termination = 'outer: loop {
+            if fresh {
+                fresh = false;
+                // The undamped (Gauss-Newton) step only serves the model test: one small solve.
+                if let Some((gn, _)) = solve_damped(&lin.hessian, &lin.gradient, n, 0.0, false) {
+                    if common::model_converged(&lin, &gn, self.function_tolerance) {
+                        break 'outer Termination::CostConverged;
+                    }
+                }
+            }
             if iterations >= self.max_iterations {
                 break 'outer Termination::MaxIterations;
             }
@@ -164,14 +181,10 @@ impl Solver for LevenbergMarquardt {
                 let t = 2.0 * rho - 1.0;
                 lambda = (lambda * (1.0 - t * t * t).max(min_factor)).max(self.min_lambda);
                 nu = increase;
-                if let Some(t) = common::converged_after_step(
-                    &lin,
-                    old_cost,
-                    self.gradient_tolerance,
-                    self.function_tolerance,
-                ) {
-                    break 'outer t;
+                if common::gradient_converged(&lin, self.gradient_tolerance) {
+                    break 'outer Termination::GradientConverged;
                 }
+                fresh = true;
                 continue 'outer;
             };
             // Rejected: more damping.

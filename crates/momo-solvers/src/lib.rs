@@ -13,29 +13,57 @@
 //! as `"gauss_newton"`, `"levenberg_marquardt"` and `"dogleg"`, so a configuration can name it:
 //! `{"type": "levenberg_marquardt", "max_iterations": 20}`.
 //!
+//! ## Choosing a solver
+//!
+//! From a warm start (the previous frame's motion) all three take the same Gauss-Newton steps
+//! and converge in a few iterations; Gauss-Newton and the dogleg (whose large default radius
+//! admits the Gauss-Newton step at once) are then step for step identical. They differ from a
+//! bad start: Gauss-Newton backtracks along its step, Levenberg-Marquardt damps it (and spends
+//! rejected trials while it learns the damping), the dogleg bends it towards steepest descent
+//! within a trust region. With a robust loss whose `ρ'' ≤ 0` (Cauchy), the problem's normal
+//! matrix is that of iteratively reweighted least squares, so convergence near the end is
+//! linear rather than quadratic for every solver.
+//!
 //! ## What the solvers promise
 //!
 //! - The robust loss is already folded into the linearisation by the problem (Triggs
 //!   correction), so a solver minimises the given cost with the given gradient and normal
 //!   matrix.
-//! - Stopping reasons are a [`Termination`](momo_core::Termination): the relative cost decrease
-//!   of an accepted step (`function_tolerance`), the gradient's max-norm (`gradient_tolerance`),
-//!   the step relative to the parameters (`parameter_tolerance`, Ceres' rule
-//!   `|δ| ≤ tol (|x| + tol)`), the iteration limit, a numerical failure (non-finite cost at the
-//!   start, or no step possible), or an empty problem.
+//! - Every stop has a reason, a [`Termination`](momo_core::Termination):
+//!   - `CostConverged`: at a linearised point the Gauss-Newton model predicts that at most
+//!     `function_tolerance` of the cost can still be gained (`½ gᵀH⁺g ≤ tol · cost`, half the
+//!     squared Newton decrement). This is checked *before* a step is tried, so a converged
+//!     solve does not pay for one more trial and linearisation, and a big step that happens to
+//!     land at about the same cost (a jump across a valley) is not mistaken for convergence.
+//!     LM and dogleg also stop here when a rejected trial changes the cost by at most that
+//!     fraction while the model predicts no more (MINPACK's rule for the rounding floor);
+//!   - `GradientConverged`: the gradient's max-norm is at most `gradient_tolerance` (checked
+//!     at the start and after every accepted step);
+//!   - `StepConverged`: the step is at most `parameter_tolerance · (|x| + parameter_tolerance)`
+//!     (Ceres' rule); the small step is still taken if it decreases the cost;
+//!   - `MaxIterations`; `NumericalFailure` (non-finite cost or linearisation at the start, no
+//!     finite point with a lower cost along the step, an unsolvable system);
+//!     `NoFreeParameters` (`n = 0`: the cost is evaluated once and returned).
 //! - The result is never worse than `x0` and never contains NaN: only steps that decrease the
-//!   cost are taken, and a failure returns the last good point.
+//!   cost are taken, and a failure returns the last good point (entries beyond `n` are zero).
 //! - `normal_matrix` in the report is the problem's normal matrix at the final `x` (every
-//!   accepted point is linearised, so it always matches), for a covariance.
-//! - An iteration is one step computed from a linearisation and tried (accepted or rejected);
-//!   `iterations ≤ max_iterations`.
+//!   accepted point is linearised, so it always matches), for a covariance; `final_cost` is
+//!   the cost of that linearisation.
+//! - An iteration is one step computed from a linearisation and tried (accepted or rejected;
+//!   for Gauss-Newton one line search); `iterations ≤ max_iterations`. Convergence is checked
+//!   before the iteration limit, so a solve that converges on its last allowed step says so.
 //!
 //! ## Cost of a solve
 //!
 //! Evaluating the problem is what costs: a trial step costs one [`LeastSquares::cost`], and
 //! only an accepted step is linearised ([`LeastSquares::linearize`]), so a solve of `k` accepted
-//! steps costs `k + 1` linearisations. Nothing is allocated on the heap: vectors and matrices
-//! are fixed-size (`8` entries, leading `n x n` block used).
+//! steps costs `k + 1` linearisations. Solving the small normal equations is noise next to
+//! that (LM solves the undamped system once per linearisation for the convergence test).
+//! Nothing is allocated on the heap: vectors and matrices are fixed-size (`8` entries, leading
+//! `n x n` block used), and so are the buffers of the SVD fallback.
+//!
+//! [`LeastSquares::cost`]: momo_core::LeastSquares::cost
+//! [`LeastSquares::linearize`]: momo_core::LeastSquares::linearize
 //!
 //! ## nalgebra and faer
 //!
