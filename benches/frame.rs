@@ -88,7 +88,7 @@ fn solve(
 
 fn benches(c: &mut Criterion) {
     let rig = kitti_rig();
-    let model = momo_models::SingleTrack2d::default();
+    let model = momo_models::SingleTrack2d;
     let truth = [2.0_f64.to_radians(), 1.0];
     let motion = momo_core::Manifold::motion(&model, &truth);
     let obs = frame(&rig, &motion, 300, 7);

@@ -86,8 +86,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         solution.inliers(),
         frame.len()
     );
-    assert!((solution.params[0] - truth[0]).abs() < 1e-6);
-    assert!((solution.params[2] - truth[2]).abs() < 1e-6);
+    // 40 of 240 matches per camera are off their epipolar lines by 3-30 px: Cauchy keeps the
+    // estimate within a few hundredths of a degree.
+    assert!((solution.params[0] - truth[0]).abs() < 5e-4);
+    assert!((solution.params[2] - truth[2]).abs() < 5e-4);
 
     // 4b. The registered model is a configuration value like the built-in ones.
     let config = momo::vo::Config::from_toml_str(
@@ -101,6 +103,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "odometry with side_slip from TOML: {:?}, params {:?}",
         result.diagnostics.status, result.diagnostics.params
     );
-    assert!((result.diagnostics.params[0] - truth[0]).abs() < 1e-6);
+    assert!((result.diagnostics.params[0] - truth[0]).abs() < 5e-4);
     Ok(())
 }

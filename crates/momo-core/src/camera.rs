@@ -251,7 +251,7 @@ mod tests {
 
         /// Includes angles beyond 90 degrees (points behind the image plane), up to 110 degrees.
         #[test]
-        fn fisheye_roundtrip(theta in 0.0..1.92f64, phi in -3.14..3.14f64, depth in 0.5..50.0f64) {
+        fn fisheye_roundtrip(theta in 0.0..1.92f64, phi in -std::f64::consts::PI..std::f64::consts::PI, depth in 0.5..50.0f64) {
             let c = fisheye();
             let p = Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()) * depth;
             let px = c.project(&p).expect("fisheye projects everything but the centre");

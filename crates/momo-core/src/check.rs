@@ -35,7 +35,7 @@ pub struct JacobianMismatch {
 }
 
 fn step(x: f64) -> f64 {
-    6e-6 * x.abs().max(1.0)
+    1e-6 * x.abs().max(1.0)
 }
 
 fn compare(

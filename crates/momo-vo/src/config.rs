@@ -93,7 +93,7 @@ pub struct Config {
 impl Default for Config {
     fn default() -> Self {
         Self {
-            model: Box::new(momo_models::Se3::default()),
+            model: Box::new(momo_models::Se3),
             metric: Box::new(momo_costs::AnglePlane),
             loss: Box::new(momo_costs::Cauchy::new(0.002)),
             solver: Box::new(momo_solvers::LevenbergMarquardt::default()),

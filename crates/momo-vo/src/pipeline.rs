@@ -217,7 +217,6 @@ pub fn run_sequence(
     for k in last + 1..=total {
         step(k, &empty, &mut summary)?;
     }
-    drop(step);
     poses.finish().map_err(RunError::Output)?;
     if let Some(d) = diagnostics {
         d.finish().map_err(RunError::Output)?;
