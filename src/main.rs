@@ -3,9 +3,11 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use momo_eval::{ErrorSummary, frame_to_frame_rotation_errors, kitti_errors};
+use momo_io::kitti::{KittiImport, import_l1avgvo};
 use momo_vo::{Config, RunError, RunOptions};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 mod demo;
@@ -62,6 +64,38 @@ enum Command {
         matches: Option<usize>,
         /// Output directory (created).
         out_dir: PathBuf,
+    },
+    /// Import the real KITTI 00 stereo matches of the `l1avgvo` demo (calib.txt, poses*.txt,
+    /// a folder of `i_to_{i+1}.txt` files) as a sequence directory (FORMAT.md, with poses.txt
+    /// ground truth and odometry.csv arc lengths from it).
+    ImportKitti {
+        /// The data folder (holding calib.txt).
+        dir: PathBuf,
+        /// Output sequence directory (created).
+        out_dir: PathBuf,
+        /// A stereo rig (left = camera 0, right = camera 1) instead of the left camera only.
+        #[arg(long)]
+        stereo: bool,
+        /// Keep at most this many matches per frame pair and camera, spread over the image
+        /// (default: all).
+        #[arg(long)]
+        matches: Option<usize>,
+        /// Seed of the sub-sampling (the output is deterministic for a seed).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Score estimated trajectories against ground truth (KITTI pose files, camera 0): KITTI
+    /// devkit t_err / r_err and the frame-to-frame rotation errors.
+    Eval {
+        /// Ground-truth poses (KITTI format).
+        #[arg(long)]
+        gt: PathBuf,
+        /// Estimated poses (KITTI format, as many lines as the ground truth); repeat for several.
+        #[arg(long = "est", required = true)]
+        est: Vec<PathBuf>,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
     },
     /// Simulate a drive (no data needed), run the estimator on it and print how close the
     /// result is to the truth.
@@ -177,6 +211,151 @@ fn simulate(
     Ok(())
 }
 
+fn import_kitti(
+    dir: &Path,
+    out_dir: &Path,
+    stereo: bool,
+    matches: Option<usize>,
+    seed: u64,
+) -> Result<(), Failure> {
+    if matches == Some(0) {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--matches must be at least 1"
+        )));
+    }
+    let options = KittiImport {
+        stereo,
+        matches_per_frame: matches,
+        seed,
+    };
+    let seq = import_l1avgvo(dir, &options).map_err(|e| Failure::Input(e.into()))?;
+    momo_io::write_sequence(out_dir, &seq).map_err(|e| Failure::Other(e.into()))?;
+    eprintln!(
+        "momo: imported {} frames, {} camera(s), {} matches{}; wrote {}",
+        seq.num_frames(),
+        seq.rig.len(),
+        seq.num_matches(),
+        if seq.ground_truth.is_some() {
+            " with ground truth and arc lengths"
+        } else {
+            ""
+        },
+        out_dir.display()
+    );
+    Ok(())
+}
+
+/// The scores of one estimate (`momo eval`).
+struct EvalRow {
+    path: PathBuf,
+    /// KITTI devkit t_err %, r_err deg/100 m; `None` if the path is shorter than 100 m.
+    kitti: Option<(f64, f64)>,
+    rotation: ErrorSummary,
+}
+
+impl EvalRow {
+    fn json(&self) -> String {
+        let (t, r) = self.kitti.unzip();
+        let s = &self.rotation;
+        format!(
+            "{{\"path\":{},\"t_err_percent\":{},\"r_err_deg_per_100m\":{},\"rotation_deg\":{{\"count\":{},\"mean\":{},\"median\":{},\"p95\":{},\"max\":{},\"above_one\":{}}}}}",
+            json_string(&self.path.display().to_string()),
+            json_number(t),
+            json_number(r),
+            s.count,
+            json_number(Some(s.mean)),
+            json_number(Some(s.median)),
+            json_number(Some(s.p95)),
+            json_number(Some(s.max)),
+            s.above_one
+        )
+    }
+}
+
+/// A JSON number, `null` for a missing or non-finite value.
+fn json_number(v: Option<f64>) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x}"),
+        _ => "null".into(),
+    }
+}
+
+/// A JSON string literal.
+fn json_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if u32::from(c) < 0x20 => out.push_str(&format!("\\u{:04x}", u32::from(c))),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+fn eval(gt: &Path, estimates: &[PathBuf], json: bool) -> Result<(), Failure> {
+    let ground_truth = momo_io::read_poses(gt).map_err(|e| Failure::Input(e.into()))?;
+    let mut rows = Vec::with_capacity(estimates.len());
+    for path in estimates {
+        let est = momo_io::read_poses(path).map_err(|e| Failure::Input(e.into()))?;
+        if est.len() != ground_truth.len() {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "{}: {} poses, but the ground truth {} has {}",
+                path.display(),
+                est.len(),
+                gt.display(),
+                ground_truth.len()
+            )));
+        }
+        rows.push(EvalRow {
+            path: path.clone(),
+            kitti: kitti_errors(&ground_truth, &est)
+                .map(|k| (k.t_err_percent, k.r_err_deg_per_100m)),
+            rotation: ErrorSummary::from_values(&frame_to_frame_rotation_errors(
+                &ground_truth,
+                &est,
+            )),
+        });
+    }
+    if json {
+        let rows: Vec<String> = rows.iter().map(EvalRow::json).collect();
+        println!(
+            "{{\"ground_truth\":{},\"frames\":{},\"estimates\":[{}]}}",
+            json_string(&gt.display().to_string()),
+            ground_truth.len(),
+            rows.join(",")
+        );
+        return Ok(());
+    }
+    println!(
+        "{} frames; frame-to-frame rotation errors in degrees; KITTI devkit t_err in %, r_err in deg/100 m (\"-\": path shorter than 100 m)",
+        ground_truth.len()
+    );
+    println!(
+        "{:>8} {:>8} {:>8} {:>8} {:>8} {:>5}  estimate",
+        "t_err", "r_err", "median", "p95", "max", ">1deg"
+    );
+    for row in &rows {
+        let (t, r) = match row.kitti {
+            Some((t, r)) => (format!("{t:.3}"), format!("{r:.3}")),
+            None => ("-".into(), "-".into()),
+        };
+        let s = &row.rotation;
+        println!(
+            "{t:>8} {r:>8} {:>8.4} {:>8.4} {:>8.4} {:>5}  {}",
+            s.median,
+            s.p95,
+            s.max,
+            s.above_one,
+            row.path.display()
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -198,6 +377,14 @@ fn main() -> ExitCode {
             matches,
             out_dir,
         } => simulate(&scenario, frames, seed, matches, &out_dir),
+        Command::ImportKitti {
+            dir,
+            out_dir,
+            stereo,
+            matches,
+            seed,
+        } => import_kitti(&dir, &out_dir, stereo, matches, seed),
+        Command::Eval { gt, est, json } => eval(&gt, &est, json),
         Command::Demo {
             frames,
             seed,

@@ -64,7 +64,7 @@ pub use manifold::Manifold;
 pub use metric::{MAX_RESIDUALS, ResidualMetric, RotationOnly, essential};
 pub use problem::{Problem, camera_motion};
 pub use rig::{FrameObservations, Observation, Rig, RigCamera};
-pub use scalar::{Scalar, cosc, sinc};
+pub use scalar::{Scalar, cosc, dot_const, mul_const, sinc, tr_mul_const};
 pub use solver::{
     LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec, Solver, SolverReport,
     Termination, solve_normal_equations,

@@ -11,6 +11,13 @@ pub trait RobustLoss: Debug + Send + Sync {
     /// `[ρ(s), ρ'(s), ρ''(s)]`.
     fn evaluate(&self, s: f64) -> [f64; 3];
 
+    /// `[ρ'(s), ρ''(s)]` only: what the normal equations need. Override it where `ρ` itself is
+    /// expensive (Cauchy's logarithm); the default calls [`evaluate`](Self::evaluate).
+    fn weights(&self, s: f64) -> [f64; 2] {
+        let [_, d1, d2] = self.evaluate(s);
+        [d1, d2]
+    }
+
     /// The residual magnitude that separates inliers from outliers (`|r| <= scale`), in the
     /// metric's units; `f64::INFINITY` for a non-robust loss.
     fn scale(&self) -> f64;

@@ -57,11 +57,11 @@ impl ResidualMetric for RotationOnly {
 
     #[inline]
     fn residuals<T: Scalar>(&self, r: &Self::Prepared<T>, obs: &Observation, out: &mut [T]) {
-        let f0 = obs.f0.map(T::c);
-        let rf1 = r * obs.f1.map(T::c);
-        let c = f0.cross(&rf1);
-        out[0] = c.x;
-        out[1] = c.y;
-        out[2] = c.z;
+        let f0 = &obs.f0;
+        let rf1 = crate::scalar::mul_const(r, &obs.f1);
+        // f0 × (R f1) with f0 constant.
+        out[0] = rf1.z * f0.y - rf1.y * f0.z;
+        out[1] = rf1.x * f0.z - rf1.z * f0.x;
+        out[2] = rf1.y * f0.x - rf1.x * f0.y;
     }
 }

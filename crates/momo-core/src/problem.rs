@@ -222,8 +222,9 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         }
     }
 
-    /// Robustified normal equations with `N` free parameters.
-    fn linearize_n<const N: usize>(&self, x: &ParamVec) -> Linearization {
+    /// Robustified normal equations with `N` free parameters; with `known_cost` the loss is
+    /// asked only for its weights (no `ρ`), and the cost is taken as given.
+    fn linearize_n<const N: usize>(&self, x: &ParamVec, known_cost: Option<f64>) -> Linearization {
         let mut h = SMatrix::<f64, N, N>::zeros();
         let mut g = SVector::<f64, N>::zeros();
         let mut cost = 0.0;
@@ -233,8 +234,13 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             for v in r {
                 s += v.re * v.re;
             }
-            let [rho, rho1, rho2] = loss.evaluate(s);
-            cost += 0.5 * rho;
+            let [rho1, rho2] = if known_cost.is_some() {
+                loss.weights(s)
+            } else {
+                let [rho, rho1, rho2] = loss.evaluate(s);
+                cost += 0.5 * rho;
+                [rho1, rho2]
+            };
             if rho1 <= 0.0 {
                 return; // Tukey beyond its scale: no pull, no curvature.
             }
@@ -264,7 +270,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             }
         });
         let mut out = Linearization {
-            cost,
+            cost: known_cost.unwrap_or(cost),
             gradient: ParamVec::zeros(),
             hessian: NormalMatrix::zeros(),
         };
@@ -284,28 +290,54 @@ impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
         for k in 0..self.n_free {
             p[self.free[k]] = x[k];
         }
+        let np = M::PARAMS.len();
+        let m = self.model.motion(&p[..np]);
+        let mut r = [0.0; MAX_RESIDUALS];
         let mut cost = 0.0;
-        self.for_each_residual_norm(&p[..M::PARAMS.len()], |_, n| {
-            cost += 0.5 * self.loss.evaluate(n * n)[0];
-        });
+        for (j, cam) in self.rig.cameras().iter().enumerate() {
+            let Some(obs) = self.obs.per_camera.get(j) else {
+                continue;
+            };
+            if obs.is_empty() {
+                continue;
+            }
+            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            let prep = self.metric.prepare(&cam.model, &c);
+            for o in obs {
+                self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
+                let s: f64 = r[..R::RESIDUALS].iter().map(|v| v * v).sum();
+                cost += 0.5 * self.loss.evaluate(s)[0];
+            }
+        }
         cost
     }
 
     fn linearize(&self, x: &ParamVec) -> Linearization {
+        self.linearize_dispatch(x, None)
+    }
+
+    fn linearize_known_cost(&self, x: &ParamVec, cost: f64) -> Linearization {
+        self.linearize_dispatch(x, Some(cost))
+    }
+}
+
+impl<M: Manifold, R: ResidualMetric> Problem<'_, M, R> {
+    /// Monomorphises the linearisation for the number of free parameters.
+    fn linearize_dispatch(&self, x: &ParamVec, known_cost: Option<f64>) -> Linearization {
         match self.n_free {
             0 => Linearization {
-                cost: self.cost(x),
+                cost: known_cost.unwrap_or_else(|| self.cost(x)),
                 gradient: ParamVec::zeros(),
                 hessian: NormalMatrix::zeros(),
             },
-            1 => self.linearize_n::<1>(x),
-            2 => self.linearize_n::<2>(x),
-            3 => self.linearize_n::<3>(x),
-            4 => self.linearize_n::<4>(x),
-            5 => self.linearize_n::<5>(x),
-            6 => self.linearize_n::<6>(x),
-            7 => self.linearize_n::<7>(x),
-            _ => self.linearize_n::<8>(x),
+            1 => self.linearize_n::<1>(x, known_cost),
+            2 => self.linearize_n::<2>(x, known_cost),
+            3 => self.linearize_n::<3>(x, known_cost),
+            4 => self.linearize_n::<4>(x, known_cost),
+            5 => self.linearize_n::<5>(x, known_cost),
+            6 => self.linearize_n::<6>(x, known_cost),
+            7 => self.linearize_n::<7>(x, known_cost),
+            _ => self.linearize_n::<8>(x, known_cost),
         }
     }
 }

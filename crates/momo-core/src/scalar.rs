@@ -1,14 +1,16 @@
 //! The scalar abstraction: everything differentiable is written once over [`Scalar`] and runs on
 //! `f64` and on num-dual's fixed-size dual numbers ([`num_dual::DualSVec64`]).
 
-use nalgebra::RealField;
+use nalgebra::{Matrix3, RealField, Vector3};
+use std::ops::Mul;
 
 /// A real scalar that the motion models and residual metrics are generic over.
 ///
-/// Implemented for every `T: RealField + Copy`, in particular `f64` and
-/// `num_dual::DualSVec64<N>`. Comparisons (`<`, `>`) on dual numbers look at the real part only,
+/// Implemented for every `T: RealField + Copy + Mul<f64>`, in particular `f64` and
+/// `num_dual::DualSVec64<N>`. Multiplying by a plain `f64` ([`mul_const`], [`dot_const`]) is
+/// much cheaper on dual numbers than lifting the constant first: use it in per-match code. Comparisons (`<`, `>`) on dual numbers look at the real part only,
 /// which is what branches of series expansions need.
-pub trait Scalar: RealField + Copy {
+pub trait Scalar: RealField + Copy + Mul<f64, Output = Self> {
     /// Lifts a constant into the scalar type (a dual number with zero derivative).
     #[inline(always)]
     fn c(x: f64) -> Self {
@@ -16,7 +18,33 @@ pub trait Scalar: RealField + Copy {
     }
 }
 
-impl<T: RealField + Copy> Scalar for T {}
+impl<T: RealField + Copy + Mul<f64, Output = T>> Scalar for T {}
+
+/// `m v` for a matrix of scalars and a constant vector, without lifting the constants.
+#[inline(always)]
+pub fn mul_const<T: Scalar>(m: &Matrix3<T>, v: &Vector3<f64>) -> Vector3<T> {
+    Vector3::new(
+        m[(0, 0)] * v.x + m[(0, 1)] * v.y + m[(0, 2)] * v.z,
+        m[(1, 0)] * v.x + m[(1, 1)] * v.y + m[(1, 2)] * v.z,
+        m[(2, 0)] * v.x + m[(2, 1)] * v.y + m[(2, 2)] * v.z,
+    )
+}
+
+/// `mᵀ v` for a matrix of scalars and a constant vector, without lifting the constants.
+#[inline(always)]
+pub fn tr_mul_const<T: Scalar>(m: &Matrix3<T>, v: &Vector3<f64>) -> Vector3<T> {
+    Vector3::new(
+        m[(0, 0)] * v.x + m[(1, 0)] * v.y + m[(2, 0)] * v.z,
+        m[(0, 1)] * v.x + m[(1, 1)] * v.y + m[(2, 1)] * v.z,
+        m[(0, 2)] * v.x + m[(1, 2)] * v.y + m[(2, 2)] * v.z,
+    )
+}
+
+/// `a · b` for a vector of scalars and a constant vector.
+#[inline(always)]
+pub fn dot_const<T: Scalar>(a: &Vector3<T>, b: &Vector3<f64>) -> T {
+    a.x * b.x + a.y * b.y + a.z * b.z
+}
 
 /// `sin(x) / x`, exact in value and derivative at `x = 0` (Taylor series for `|x| < 1e-3`).
 #[inline]

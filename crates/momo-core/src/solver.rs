@@ -35,6 +35,13 @@ pub trait LeastSquares {
     fn cost(&self, x: &ParamVec) -> f64;
     /// Cost, gradient and normal matrix at `x`.
     fn linearize(&self, x: &ParamVec) -> Linearization;
+    /// Like [`linearize`](Self::linearize) where the solver already evaluated `cost(x)` (an
+    /// accepted trial step): the problem may skip evaluating `ρ` itself. The default ignores
+    /// the hint.
+    fn linearize_known_cost(&self, x: &ParamVec, cost: f64) -> Linearization {
+        let _ = cost;
+        self.linearize(x)
+    }
 }
 
 /// Why a solver stopped.

@@ -1,7 +1,9 @@
 //! [`AnglePlane`]: the paper's metric, valid for every central camera.
 
 use crate::NORM_EPS_SQ;
-use momo_core::{Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, essential};
+use momo_core::{
+    Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::any::Any;
@@ -51,10 +53,9 @@ impl ResidualMetric for AnglePlane {
 
     #[inline]
     fn residuals<T: Scalar>(&self, e: &Matrix3<T>, obs: &Observation, out: &mut [T]) {
-        let f0 = obs.f0.map(T::c);
-        let f1 = obs.f1.map(T::c);
-        let n = e * f0;
-        out[0] = f1.dot(&n) / (n.norm_squared() + T::c(NORM_EPS_SQ)).sqrt();
+        // Constants stay f64: dual x f64 products are cheap (the per-match hot path).
+        let n = mul_const(e, &obs.f0);
+        out[0] = dot_const(&n, &obs.f1) / (n.norm_squared() + T::c(NORM_EPS_SQ)).sqrt();
     }
 }
 

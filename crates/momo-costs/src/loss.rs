@@ -83,6 +83,12 @@ impl RobustLoss for Cauchy {
         [b2 * (s / b2).ln_1p(), d1, -d1 * d1 / b2]
     }
 
+    fn weights(&self, s: f64) -> [f64; 2] {
+        let b2 = self.scale * self.scale;
+        let d1 = b2 / (b2 + s);
+        [d1, -d1 * d1 / b2]
+    }
+
     fn scale(&self) -> f64 {
         self.scale
     }

@@ -63,6 +63,7 @@
 
 mod atomic;
 pub mod error;
+pub mod kitti;
 pub mod matches;
 pub mod odometry;
 pub mod poses;

@@ -130,8 +130,9 @@ pub(crate) fn relinearize(
     x: &ParamVec,
     n: usize,
     current_cost: f64,
+    trial_cost: f64,
 ) -> Accepted {
-    let lin = sanitize(problem.linearize(x), n);
+    let lin = sanitize(problem.linearize_known_cost(x, trial_cost), n);
     if !is_finite(&lin) {
         Accepted::NonFinite
     } else if lin.cost > current_cost {
@@ -159,7 +160,7 @@ pub(crate) fn take_final_step(
         return Termination::NumericalFailure;
     }
     if c < lin.cost {
-        if let Accepted::Moved(new) = relinearize(problem, &trial, n, lin.cost) {
+        if let Accepted::Moved(new) = relinearize(problem, &trial, n, lin.cost, c) {
             *x = trial;
             *lin = new;
         }

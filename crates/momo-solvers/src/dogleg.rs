@@ -261,7 +261,7 @@ impl Solver for Dogleg {
                 continue;
             }
             let old_cost = lin.cost;
-            match common::relinearize(problem, &trial, n, old_cost) {
+            match common::relinearize(problem, &trial, n, old_cost, c) {
                 Accepted::Moved(new) => {
                     x = trial;
                     lin = new;

@@ -120,7 +120,7 @@ impl Solver for GaussNewton {
                 let trial = x + step * alpha;
                 let c = problem.cost(&trial);
                 if c.is_finite() && c < f0 && c <= f0 + ARMIJO * alpha * slope {
-                    found = Some(trial);
+                    found = Some((trial, c));
                     break;
                 }
                 // Minimiser of the quadratic through f0, slope and c, kept in [0.1, 0.5] α.
@@ -132,10 +132,10 @@ impl Solver for GaussNewton {
                 };
             }
             // No decrease along the step: nothing left to do from here.
-            let Some(trial) = found else {
+            let Some((trial, c)) = found else {
                 break Termination::NumericalFailure;
             };
-            match common::relinearize(problem, &trial, n, f0) {
+            match common::relinearize(problem, &trial, n, f0, c) {
                 Accepted::Moved(new) => {
                     x = trial;
                     lin = new;

@@ -163,7 +163,7 @@ impl Solver for LevenbergMarquardt {
                     break 'trial !c.is_finite();
                 }
                 let old_cost = lin.cost;
-                match common::relinearize(problem, &trial, n, old_cost) {
+                match common::relinearize(problem, &trial, n, old_cost, c) {
                     Accepted::Moved(new) => {
                         x = trial;
                         lin = new;

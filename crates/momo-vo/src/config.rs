@@ -53,7 +53,8 @@ pub struct OdometryOptions {
     /// An estimated arc length is accepted if its standard deviation is below this fraction of
     /// its value; otherwise the last value is held.
     pub max_relative_scale_sigma: f64,
-    /// Try more starts when the inlier ratio falls below this value.
+    /// Try more starts when a frame's inlier ratio falls below this fraction of the running
+    /// average inlier ratio of the recent frames (a result that "looks bad").
     pub restart_inlier_ratio: f64,
     /// Yaw offsets (radians) of the extra starts around the previous motion.
     pub restart_yaw_offsets: Vec<f64>,
@@ -67,7 +68,7 @@ impl Default for OdometryOptions {
             initial_arc_length: 1.0,
             estimate_scale: true,
             max_relative_scale_sigma: 0.2,
-            restart_inlier_ratio: 0.5,
+            restart_inlier_ratio: 0.7,
             restart_yaw_offsets: vec![-0.1, -0.03, 0.03, 0.1],
         }
     }

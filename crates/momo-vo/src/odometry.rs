@@ -108,7 +108,8 @@ pub struct FrameResult {
 /// - solver failure: the previous motion is held, status [`FrameStatus::SolverFailure`];
 /// - a camera whose matches are all outliers is down-weighted by the robust loss, the others
 ///   carry the estimate (visible in `inliers_per_camera`);
-/// - an inlier ratio below `restart_inlier_ratio` triggers extra starts (yaw offsets around the
+/// - an inlier ratio below `restart_inlier_ratio` times the running average triggers extra
+///   starts (yaw offsets around the
 ///   previous motion, and straight ahead); the lowest cost wins.
 #[derive(Debug)]
 pub struct Odometry {
@@ -119,6 +120,8 @@ pub struct Odometry {
     last_arc_length: Option<f64>,
     scale_observable: bool,
     frame: usize,
+    /// Running average of the inlier ratio of estimated frames (`None` before the first).
+    inlier_ratio_average: Option<f64>,
 }
 
 impl Odometry {
@@ -137,6 +140,7 @@ impl Odometry {
             last_arc_length: None,
             scale_observable,
             frame: 0,
+            inlier_ratio_average: None,
         })
     }
 
@@ -255,6 +259,11 @@ impl Odometry {
                     }
                 }
                 self.fill_diagnostics(&sol, &mut diag);
+                let ratio = sol.inliers() as f64 / matches.max(1) as f64;
+                self.inlier_ratio_average = Some(match self.inlier_ratio_average {
+                    Some(a) => 0.9 * a + 0.1 * ratio,
+                    None => ratio,
+                });
                 sol.params
             }
             None => {
@@ -341,7 +350,8 @@ impl Odometry {
     ) -> Option<FrameSolution> {
         let first = self.solve_once(obs, init, fixed, standstill);
         let ratio = |s: &FrameSolution| s.inliers() as f64 / obs.len().max(1) as f64;
-        let threshold = self.config.odometry.restart_inlier_ratio;
+        let threshold =
+            self.config.odometry.restart_inlier_ratio * self.inlier_ratio_average.unwrap_or(0.0);
         if first.as_ref().is_some_and(|s| ratio(s) >= threshold) {
             return first;
         }

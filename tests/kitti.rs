@@ -1,0 +1,98 @@
+//! End to end on the real KITTI 00 matches (if the shared data folder is present): `momo
+//! import-kitti`, `momo run` with the default configuration, `momo eval --json`.
+//!
+//! The data folder is `$MOMO_DATA/kitti00_stereo_matches_l1avgvo`, with `MOMO_DATA` defaulting to
+//! `../shared/data` beside the workspace; without it the test prints SKIPPED and passes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn momo(args: &[&std::ffi::OsStr]) -> Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_momo"))
+        .args(args)
+        .output()
+        .expect("momo starts");
+    assert!(
+        o.status.success(),
+        "momo {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn data_dir() -> Option<PathBuf> {
+    let base = std::env::var_os("MOMO_DATA").map_or_else(
+        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
+        PathBuf::from,
+    );
+    let dir = base.join("kitti00_stereo_matches_l1avgvo");
+    dir.join("calib.txt").is_file().then_some(dir)
+}
+
+#[test]
+fn kitti00_import_run_eval() {
+    let Some(data) = data_dir() else {
+        eprintln!("SKIPPED: KITTI 00 l1avgvo matches not found (set MOMO_DATA)");
+        return;
+    };
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    let est = tmp.path().join("est.txt");
+    momo(&[
+        "import-kitti".as_ref(),
+        data.as_os_str(),
+        seq.as_os_str(),
+        "--matches".as_ref(),
+        "100".as_ref(),
+    ]);
+    for f in ["rig.json", "matches.csv", "odometry.csv", "poses.txt"] {
+        assert!(seq.join(f).is_file(), "{f} written");
+    }
+    momo(&[
+        "run".as_ref(),
+        seq.as_os_str(),
+        "--output".as_ref(),
+        est.as_os_str(),
+        "--quiet".as_ref(),
+    ]);
+    let gt = seq.join("poses.txt");
+    let o = momo(&[
+        "eval".as_ref(),
+        "--gt".as_ref(),
+        gt.as_os_str(),
+        "--est".as_ref(),
+        est.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("eval prints JSON");
+    assert_eq!(v["frames"], 301);
+    let e = &v["estimates"][0];
+    let r = &e["rotation_deg"];
+    let median = r["median"].as_f64().expect("median");
+    let p95 = r["p95"].as_f64().expect("p95");
+    let max = r["max"].as_f64().expect("max");
+    let t_err = e["t_err_percent"]
+        .as_f64()
+        .expect("KITTI 00 frames 0-300 exceed 100 m");
+    eprintln!(
+        "KITTI 00, 100 matches/frame, default config: rotation median {median:.4} p95 {p95:.4} max {max:.4} deg, above 1 deg {}, t_err {t_err:.3} %, r_err {} deg/100m",
+        r["above_one"], e["r_err_deg_per_100m"]
+    );
+    assert_eq!(r["count"], 300);
+    assert!(median < 0.1, "median {median}");
+    assert!(t_err < 5.0, "t_err {t_err}");
+
+    // Different lengths are an input error (exit code 2).
+    let short = tmp.path().join("short.txt");
+    let text = std::fs::read_to_string(&est).expect("estimate");
+    std::fs::write(&short, text.lines().take(10).collect::<Vec<_>>().join("\n")).expect("write");
+    let o = Command::new(env!("CARGO_BIN_EXE_momo"))
+        .arg("eval")
+        .arg("--gt")
+        .arg(&gt)
+        .arg("--est")
+        .arg(&short)
+        .output()
+        .expect("momo starts");
+    assert_eq!(o.status.code(), Some(2));
+}
