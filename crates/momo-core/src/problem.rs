@@ -127,6 +127,11 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
 
     /// Calls `f(camera, residual norm)` for every match at the full parameters `params`.
     pub fn for_each_residual_norm(&self, params: &[f64], mut f: impl FnMut(usize, f64)) {
+        self.for_each_squared_norm(params, |j, s| f(j, s.sqrt()));
+    }
+
+    /// Calls `f(camera, |r|²)` for every match at the full parameters `params` (plain `f64`).
+    fn for_each_squared_norm(&self, params: &[f64], mut f: impl FnMut(usize, f64)) {
         let m = self.model.motion(params);
         let mut r = [0.0; MAX_RESIDUALS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
@@ -140,10 +145,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             let prep = self.metric.prepare(&cam.model, &c);
             for o in obs {
                 self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
-                f(
-                    j,
-                    r[..R::RESIDUALS].iter().map(|v| v * v).sum::<f64>().sqrt(),
-                );
+                f(j, r[..R::RESIDUALS].iter().map(|v| v * v).sum::<f64>());
             }
         }
     }
@@ -290,25 +292,10 @@ impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
         for k in 0..self.n_free {
             p[self.free[k]] = x[k];
         }
-        let np = M::PARAMS.len();
-        let m = self.model.motion(&p[..np]);
-        let mut r = [0.0; MAX_RESIDUALS];
         let mut cost = 0.0;
-        for (j, cam) in self.rig.cameras().iter().enumerate() {
-            let Some(obs) = self.obs.per_camera.get(j) else {
-                continue;
-            };
-            if obs.is_empty() {
-                continue;
-            }
-            let c = camera_motion(&m, &cam.t_vehicle_camera);
-            let prep = self.metric.prepare(&cam.model, &c);
-            for o in obs {
-                self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
-                let s: f64 = r[..R::RESIDUALS].iter().map(|v| v * v).sum();
-                cost += 0.5 * self.loss.evaluate(s)[0];
-            }
-        }
+        self.for_each_squared_norm(&p[..M::PARAMS.len()], |_, s| {
+            cost += 0.5 * self.loss.evaluate(s)[0];
+        });
         cost
     }
 

@@ -1,7 +1,10 @@
 //! [`GeoLine`]: the symmetric distance of the pixels to their epipolar lines (pinhole only).
 
 use crate::NORM_EPS_SQ;
-use momo_core::{Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, essential};
+use momo_core::{
+    Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+    tr_mul_const,
+};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::any::Any;
@@ -68,11 +71,12 @@ impl ResidualMetric for GeoLine {
 
     #[inline]
     fn residuals<T: Scalar>(&self, f: &Matrix3<T>, obs: &Observation, out: &mut [T]) {
-        let x0 = homogeneous::<T>(&obs.px0);
-        let x1 = homogeneous::<T>(&obs.px1);
-        let l1 = f * x0; // epipolar line of x0 in image k
-        let l0 = f.tr_mul(&x1); // epipolar line of x1 in image k-1
-        let num = x1.dot(&l1);
+        // Pixels stay f64: dual x f64 products are cheap (the per-match hot path).
+        let x0 = homogeneous::<f64>(&obs.px0);
+        let x1 = homogeneous::<f64>(&obs.px1);
+        let l1 = mul_const(f, &x0); // epipolar line of x0 in image k
+        let l0 = tr_mul_const(f, &x1); // epipolar line of x1 in image k-1
+        let num = dot_const(&l1, &x1);
         let eps = T::c(NORM_EPS_SQ);
         out[0] = num / (l1.x * l1.x + l1.y * l1.y + eps).sqrt();
         out[1] = num / (l0.x * l0.x + l0.y * l0.y + eps).sqrt();

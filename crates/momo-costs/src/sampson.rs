@@ -2,7 +2,10 @@
 
 use crate::NORM_EPS_SQ;
 use crate::geo_line::{fundamental, homogeneous};
-use momo_core::{Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, essential};
+use momo_core::{
+    Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+    tr_mul_const,
+};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::any::Any;
@@ -54,21 +57,20 @@ impl ResidualMetric for Sampson {
         let eps = T::c(NORM_EPS_SQ);
         out[0] = match prep {
             SampsonPrepared::Pixels(f) => {
-                let x0 = homogeneous::<T>(&obs.px0);
-                let x1 = homogeneous::<T>(&obs.px1);
-                let a = f * x0;
-                let b = f.tr_mul(&x1);
-                x1.dot(&a) / (a.x * a.x + a.y * a.y + b.x * b.x + b.y * b.y + eps).sqrt()
+                let x0 = homogeneous::<f64>(&obs.px0);
+                let x1 = homogeneous::<f64>(&obs.px1);
+                let a = mul_const(f, &x0);
+                let b = tr_mul_const(f, &x1);
+                dot_const(&a, &x1) / (a.x * a.x + a.y * a.y + b.x * b.x + b.y * b.y + eps).sqrt()
             }
             SampsonPrepared::Bearings(e, focal) => {
-                let f0 = obs.f0.map(T::c);
-                let f1 = obs.f1.map(T::c);
-                let a = e * f0; // gradient with respect to f1
-                let b = e.tr_mul(&f1); // gradient with respect to f0
-                let num = f1.dot(&a);
+                let (f0, f1) = (&obs.f0, &obs.f1);
+                let a = mul_const(e, f0); // gradient with respect to f1
+                let b = tr_mul_const(e, f1); // gradient with respect to f0
+                let num = dot_const(&a, f1);
                 // Tangent-plane projections: (I - f fᵀ) g = g - f (f · g), and f1 · a = f0 · b = num.
-                let ga = a - f1 * num;
-                let gb = b - f0 * num;
+                let ga = a - f1.map(|v| num * v);
+                let gb = b - f0.map(|v| num * v);
                 T::c(*focal) * num / (ga.norm_squared() + gb.norm_squared() + eps).sqrt()
             }
         };

@@ -80,6 +80,14 @@ impl AtomicFile {
             .writer
             .into_inner()
             .map_err(|e| IoError::file(&path, IoErrorKind::Io(e.into_error())))?;
+        // Temporary files are created 0600; a finished output gets ordinary permissions.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            tmp.as_file()
+                .set_permissions(std::fs::Permissions::from_mode(0o644))
+                .map_err(|e| IoError::file(&path, IoErrorKind::Io(e)))?;
+        }
         tmp.as_file()
             .sync_all()
             .map_err(|e| IoError::file(&path, IoErrorKind::Io(e)))?;
