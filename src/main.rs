@@ -3,7 +3,6 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use momo_eval::{ErrorSummary, frame_to_frame_rotation_errors, kitti_errors};
 use momo_io::kitti::{KittiImport, import_l1avgvo};
 use momo_vo::{Config, RunError, RunOptions};
 use std::io::IsTerminal;
@@ -245,55 +244,12 @@ fn import_kitti(
     Ok(())
 }
 
-/// The scores of one estimate (`momo eval`).
+/// The scores of one estimate (`momo eval --json`).
+#[derive(serde::Serialize)]
 struct EvalRow {
     path: PathBuf,
-    /// KITTI devkit t_err %, r_err deg/100 m; `None` if the path is shorter than 100 m.
-    kitti: Option<(f64, f64)>,
-    rotation: ErrorSummary,
-}
-
-impl EvalRow {
-    fn json(&self) -> String {
-        let (t, r) = self.kitti.unzip();
-        let s = &self.rotation;
-        format!(
-            "{{\"path\":{},\"t_err_percent\":{},\"r_err_deg_per_100m\":{},\"rotation_deg\":{{\"count\":{},\"mean\":{},\"median\":{},\"p95\":{},\"max\":{},\"above_one\":{}}}}}",
-            json_string(&self.path.display().to_string()),
-            json_number(t),
-            json_number(r),
-            s.count,
-            json_number(Some(s.mean)),
-            json_number(Some(s.median)),
-            json_number(Some(s.p95)),
-            json_number(Some(s.max)),
-            s.above_one
-        )
-    }
-}
-
-/// A JSON number, `null` for a missing or non-finite value.
-fn json_number(v: Option<f64>) -> String {
-    match v {
-        Some(x) if x.is_finite() => format!("{x}"),
-        _ => "null".into(),
-    }
-}
-
-/// A JSON string literal.
-fn json_string(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if u32::from(c) < 0x20 => out.push_str(&format!("\\u{:04x}", u32::from(c))),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
+    #[serde(flatten)]
+    scores: momo_eval::Evaluation,
 }
 
 fn eval(gt: &Path, estimates: &[PathBuf], json: bool) -> Result<(), Failure> {
@@ -312,22 +268,16 @@ fn eval(gt: &Path, estimates: &[PathBuf], json: bool) -> Result<(), Failure> {
         }
         rows.push(EvalRow {
             path: path.clone(),
-            kitti: kitti_errors(&ground_truth, &est)
-                .map(|k| (k.t_err_percent, k.r_err_deg_per_100m)),
-            rotation: ErrorSummary::from_values(&frame_to_frame_rotation_errors(
-                &ground_truth,
-                &est,
-            )),
+            scores: momo_eval::evaluate(&ground_truth, &est),
         });
     }
     if json {
-        let rows: Vec<String> = rows.iter().map(EvalRow::json).collect();
-        println!(
-            "{{\"ground_truth\":{},\"frames\":{},\"estimates\":[{}]}}",
-            json_string(&gt.display().to_string()),
-            ground_truth.len(),
-            rows.join(",")
-        );
+        let doc = serde_json::json!({
+            "ground_truth": gt,
+            "frames": ground_truth.len(),
+            "estimates": rows,
+        });
+        println!("{doc}");
         return Ok(());
     }
     println!(
@@ -339,11 +289,12 @@ fn eval(gt: &Path, estimates: &[PathBuf], json: bool) -> Result<(), Failure> {
         "t_err", "r_err", "median", "p95", "max", ">1deg"
     );
     for row in &rows {
-        let (t, r) = match row.kitti {
-            Some((t, r)) => (format!("{t:.3}"), format!("{r:.3}")),
-            None => ("-".into(), "-".into()),
-        };
-        let s = &row.rotation;
+        let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+        let (t, r) = (
+            fmt(row.scores.t_err_percent),
+            fmt(row.scores.r_err_deg_per_100m),
+        );
+        let s = &row.scores.rotation_deg;
         println!(
             "{t:>8} {r:>8} {:>8.4} {:>8.4} {:>8.4} {:>5}  {}",
             s.median,

@@ -195,6 +195,30 @@ impl ErrorSummary {
     }
 }
 
+/// The scores of one estimate against ground truth (what `momo eval` prints).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Evaluation {
+    /// KITTI devkit translational error in percent (`None`: path shorter than 100 m).
+    pub t_err_percent: Option<f64>,
+    /// KITTI devkit rotational error in degrees per 100 m (`None`: path shorter than 100 m).
+    pub r_err_deg_per_100m: Option<f64>,
+    /// Frame-to-frame rotation errors in degrees.
+    pub rotation_deg: ErrorSummary,
+}
+
+/// Scores `estimate` against `ground_truth` (same length, camera-0 poses).
+pub fn evaluate(ground_truth: &[Pose<f64>], estimate: &[Pose<f64>]) -> Evaluation {
+    let kitti = kitti_errors(ground_truth, estimate);
+    Evaluation {
+        t_err_percent: kitti.as_ref().map(|k| k.t_err_percent),
+        r_err_deg_per_100m: kitti.as_ref().map(|k| k.r_err_deg_per_100m),
+        rotation_deg: ErrorSummary::from_values(&frame_to_frame_rotation_errors(
+            ground_truth,
+            estimate,
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
