@@ -4,7 +4,7 @@
 use indicatif::{ProgressBar, ProgressStyle};
 use momo_eval::{ErrorSummary, frame_to_frame_rotation_errors, kitti_errors};
 use momo_sim::{SimConfig, simulate};
-use momo_vo::{Config, FrameStatus};
+use momo_vo::{Config, EstimatorKind, FrameStatus};
 use std::io::IsTerminal;
 
 /// Runs the demo scenarios.
@@ -22,7 +22,7 @@ pub fn demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
         "momo demo: {frames} frames per scenario, seed {seed}, default configuration (momo config)"
     );
     println!(
-        "{:<32} {:>9} {:>9} {:>9} {:>6} {:>9} {:>11} {:>9}",
+        "{:<42} {:>9} {:>9} {:>9} {:>6} {:>9} {:>11} {:>9}",
         "scenario", "rot med", "rot p95", "rot max", ">1deg", "t_err %", "r_err d/100m", "us/frame"
     );
     for (name, mut sim) in scenarios {
@@ -33,45 +33,52 @@ pub fn demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
         let bar = if quiet || !std::io::stderr().is_terminal() {
             ProgressBar::hidden()
         } else {
-            ProgressBar::new(seq.num_frames().saturating_sub(1) as u64).with_style(
+            ProgressBar::new(2 * seq.num_frames().saturating_sub(1) as u64).with_style(
                 ProgressStyle::with_template("{msg:>32} {bar:40} {pos}/{len} {per_sec}")
                     .unwrap_or_else(|_| ProgressStyle::default_bar()),
             )
         };
         bar.set_message(name);
-        let (poses, diags) = momo_vo::run_in_memory(seq, Config::default(), |_| bar.inc(1))?;
-        bar.finish_and_clear();
         let gt = seq
             .ground_truth
             .as_ref()
             .ok_or_else(|| anyhow::anyhow!("the simulation has no ground truth"))?;
-        let rot = ErrorSummary::from_values(&frame_to_frame_rotation_errors(gt, &poses));
-        let kitti = kitti_errors(gt, &poses);
-        let us = diags.iter().map(|d| d.time_us).sum::<f64>() / diags.len().max(1) as f64;
-        let held = diags
-            .iter()
-            .filter(|d| d.status == FrameStatus::NoMatches)
-            .count();
-        println!(
-            "{:<32} {:>9.4} {:>9.4} {:>9.4} {:>6} {:>9} {:>11} {:>9.1}{}",
-            name,
-            rot.median,
-            rot.p95,
-            rot.max,
-            rot.above_one,
-            kitti
-                .as_ref()
-                .map_or("-".into(), |k| format!("{:.3}", k.t_err_percent)),
-            kitti
-                .as_ref()
-                .map_or("-".into(), |k| format!("{:.4}", k.r_err_deg_per_100m)),
-            us,
-            if held > 0 {
-                format!("  ({held} frames held)")
-            } else {
-                String::new()
-            }
-        );
+        for (label, kind) in [
+            ("momo", EstimatorKind::Momo),
+            ("5-point", EstimatorKind::FivePoint),
+        ] {
+            let (poses, diags) =
+                momo_vo::run_in_memory(seq, kind, Config::default(), |_| bar.inc(1))?;
+            let name = format!("{name} [{label}]");
+            let rot = ErrorSummary::from_values(&frame_to_frame_rotation_errors(gt, &poses));
+            let kitti = kitti_errors(gt, &poses);
+            let us = diags.iter().map(|d| d.time_us).sum::<f64>() / diags.len().max(1) as f64;
+            let held = diags
+                .iter()
+                .filter(|d| d.status == FrameStatus::NoMatches)
+                .count();
+            println!(
+                "{:<42} {:>9.4} {:>9.4} {:>9.4} {:>6} {:>9} {:>11} {:>9.1}{}",
+                name,
+                rot.median,
+                rot.p95,
+                rot.max,
+                rot.above_one,
+                kitti
+                    .as_ref()
+                    .map_or("-".into(), |k| format!("{:.3}", k.t_err_percent)),
+                kitti
+                    .as_ref()
+                    .map_or("-".into(), |k| format!("{:.4}", k.r_err_deg_per_100m)),
+                us,
+                if held > 0 {
+                    format!("  ({held} frames held)")
+                } else {
+                    String::new()
+                }
+            );
+        }
+        bar.finish_and_clear();
     }
     println!(
         "rot: frame-to-frame rotation error of camera 0 in degrees; t_err, r_err: KITTI devkit metric."

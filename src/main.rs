@@ -44,14 +44,24 @@ enum Command {
         /// No progress bar and no summary on stderr.
         #[arg(short, long)]
         quiet: bool,
+        /// The estimator: `momo` (robust least squares on the configured motion manifold) or
+        /// `five-point` (the 5-point RANSAC baseline, OpenCV style, scaled by odometry).
+        #[arg(long, value_enum, default_value_t = EstimatorArg::Momo)]
+        estimator: EstimatorArg,
     },
     /// Print the default configuration as a commented TOML file.
     Config,
     /// Write a simulated sequence (FORMAT.md, with poses.txt ground truth) to a directory.
     Simulate {
-        /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, fisheye_surround.
+        /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, fisheye_surround,
+        /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s).
         #[arg(long, default_value = "clean_pinhole")]
         scenario: String,
+        /// Drive along the camera-0 poses of this KITTI poses file (e.g. a KITTI ground truth)
+        /// instead of a generated drive; the vehicle poses are P0 · C_k · P0⁻¹ with P0 the
+        /// scenario rig's camera 0. At most --frames frames.
+        #[arg(long)]
+        trajectory: Option<PathBuf>,
         /// Number of frames.
         #[arg(long, default_value_t = 400)]
         frames: usize,
@@ -96,6 +106,12 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Draw figures as PNG or SVG (chosen by the output file's extension): trajectories,
+    /// frame-to-frame rotation errors, the cost landscape of a frame.
+    Plot {
+        #[command(subcommand)]
+        figure: PlotCommand,
+    },
     /// Simulate a drive (no data needed), run the estimator on it and print how close the
     /// result is to the truth.
     Demo {
@@ -109,6 +125,83 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+}
+
+/// The figures of `momo plot`.
+#[derive(Subcommand, Debug)]
+enum PlotCommand {
+    /// Trajectories seen from above (x against z of camera 0's position): the ground truth and
+    /// each estimate, named by file in the legend.
+    Trajectory {
+        /// Ground-truth poses (KITTI format).
+        #[arg(long)]
+        gt: PathBuf,
+        /// Estimated poses (KITTI format); repeat for several.
+        #[arg(long = "est")]
+        est: Vec<PathBuf>,
+        /// Output image: .png or .svg (written atomically).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// The frame-to-frame rotation error (degrees) of each estimate over the path length along
+    /// the ground truth (upper panel) and over the speed (lower panel).
+    Errors {
+        /// Ground-truth poses (KITTI format).
+        #[arg(long)]
+        gt: PathBuf,
+        /// Estimated poses (KITTI format, as many lines as the ground truth); repeat for several.
+        #[arg(long = "est", required = true)]
+        est: Vec<PathBuf>,
+        /// Output image: .png or .svg (written atomically).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Frame rate in Hz (speed = displacement per frame × frame rate).
+        #[arg(long, default_value_t = 10.0)]
+        frame_rate: f64,
+    },
+    /// The cost of one frame pair over a grid of yaw × arc length around its estimate, as a
+    /// heat map with the minimum marked. Uses the configuration's model if it has `yaw` and
+    /// `arc_length` parameters, `single_track_2d` otherwise.
+    Landscape {
+        /// The sequence directory.
+        seq: PathBuf,
+        /// The frame pair k = (k-1, k) (the odometry runs over frames 1..=k first).
+        #[arg(long)]
+        frame: usize,
+        /// Output image: .png or .svg (written atomically).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Estimator configuration (TOML, or JSON if the name ends in .json); see `momo config`.
+        #[arg(short, long)]
+        config: Option<PathBuf>,
+        /// Half-width of the yaw axis around the estimate, degrees.
+        #[arg(long, default_value_t = 2.0)]
+        range_yaw: f64,
+        /// Half-width of the arc-length axis around the estimate, metres.
+        #[arg(long, default_value_t = 0.5)]
+        range_arc: f64,
+        /// Grid points per axis.
+        #[arg(long, default_value_t = 81)]
+        steps: usize,
+    },
+}
+
+/// The `--estimator` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum EstimatorArg {
+    /// Robust least squares on the configured motion manifold.
+    Momo,
+    /// The 5-point RANSAC baseline.
+    FivePoint,
+}
+
+impl From<EstimatorArg> for momo_vo::EstimatorKind {
+    fn from(e: EstimatorArg) -> Self {
+        match e {
+            EstimatorArg::Momo => momo_vo::EstimatorKind::Momo,
+            EstimatorArg::FivePoint => momo_vo::EstimatorKind::FivePoint,
+        }
+    }
 }
 
 /// Input errors exit with 2, everything else with 1.
@@ -145,6 +238,7 @@ fn run(
     config: Option<PathBuf>,
     diagnostics: Option<PathBuf>,
     quiet: bool,
+    estimator: momo_vo::EstimatorKind,
 ) -> Result<(), Failure> {
     let config = match &config {
         Some(p) => Config::from_file(p).map_err(|e| Failure::Input(e.into()))?,
@@ -152,6 +246,7 @@ fn run(
     };
     let bar = progress_bar(quiet, None);
     let options = RunOptions {
+        estimator,
         output,
         diagnostics,
     };
@@ -183,23 +278,29 @@ fn run(
 
 fn simulate(
     scenario: &str,
+    trajectory: Option<&Path>,
     frames: usize,
     seed: u64,
     matches: Option<usize>,
     out_dir: &std::path::Path,
 ) -> Result<(), Failure> {
     use momo_sim::SimConfig;
-    let mut cfg = match scenario {
-        "clean_pinhole" => SimConfig::clean_pinhole(),
-        "outliers" => SimConfig::outliers(),
-        "moving_object" => SimConfig::moving_object(),
-        "fisheye_surround" => SimConfig::fisheye_surround(),
-        other => {
+    let Some(mut cfg) = SimConfig::scenario(scenario) else {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "unknown scenario `{scenario}` ({})",
+            SimConfig::SCENARIOS.join(", ")
+        )));
+    };
+    if let Some(path) = trajectory {
+        let poses = momo_io::read_poses(path).map_err(|e| Failure::Input(e.into()))?;
+        if poses.is_empty() {
             return Err(Failure::Input(anyhow::anyhow!(
-                "unknown scenario `{other}` (clean_pinhole, outliers, moving_object, fisheye_surround)"
+                "{}: no poses",
+                path.display()
             )));
         }
-    };
+        cfg.camera_trajectory = Some(poses);
+    }
     cfg.frames = frames;
     cfg.seed = seed;
     if let Some(m) = matches {
@@ -307,6 +408,120 @@ fn eval(gt: &Path, estimates: &[PathBuf], json: bool) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Maps a plotting error: bad data or options are input errors, drawing and writing are not.
+fn plot_failure(e: momo_plot::PlotError) -> Failure {
+    use momo_plot::PlotError;
+    match e {
+        PlotError::Format(_) | PlotError::Input(_) | PlotError::Vo(_) | PlotError::Core(_) => {
+            Failure::Input(e.into())
+        }
+        PlotError::Draw(_) | PlotError::Io(_) => Failure::Other(e.into()),
+    }
+}
+
+/// An estimate's file name and its poses.
+type NamedPoses = (String, Vec<momo_core::Pose<f64>>);
+
+/// Reads the ground truth and the estimates; with `same_length`, every estimate must have as
+/// many poses as the ground truth.
+fn read_trajectories(
+    gt: &Path,
+    est: &[PathBuf],
+    same_length: bool,
+) -> Result<(Vec<momo_core::Pose<f64>>, Vec<NamedPoses>), Failure> {
+    let ground_truth = momo_io::read_poses(gt).map_err(|e| Failure::Input(e.into()))?;
+    let mut estimates = Vec::with_capacity(est.len());
+    for path in est {
+        let poses = momo_io::read_poses(path).map_err(|e| Failure::Input(e.into()))?;
+        if same_length && poses.len() != ground_truth.len() {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "{}: {} poses, but the ground truth {} has {}",
+                path.display(),
+                poses.len(),
+                gt.display(),
+                ground_truth.len()
+            )));
+        }
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        estimates.push((name, poses));
+    }
+    Ok((ground_truth, estimates))
+}
+
+fn plot(figure: PlotCommand) -> Result<(), Failure> {
+    // The format is checked before any input is read.
+    let output = match &figure {
+        PlotCommand::Trajectory { output, .. }
+        | PlotCommand::Errors { output, .. }
+        | PlotCommand::Landscape { output, .. } => output.clone(),
+    };
+    momo_plot::Format::from_path(&output).map_err(plot_failure)?;
+    match figure {
+        PlotCommand::Trajectory { gt, est, output } => {
+            let (ground_truth, estimates) = read_trajectories(&gt, &est, false)?;
+            let named: Vec<(&str, &[momo_core::Pose<f64>])> = estimates
+                .iter()
+                .map(|(n, p)| (n.as_str(), p.as_slice()))
+                .collect();
+            momo_plot::plot_trajectories(&ground_truth, &named, &output).map_err(plot_failure)?;
+        }
+        PlotCommand::Errors {
+            gt,
+            est,
+            output,
+            frame_rate,
+        } => {
+            let (ground_truth, estimates) = read_trajectories(&gt, &est, true)?;
+            let named: Vec<(&str, &[momo_core::Pose<f64>])> = estimates
+                .iter()
+                .map(|(n, p)| (n.as_str(), p.as_slice()))
+                .collect();
+            momo_plot::plot_rotation_errors(&ground_truth, &named, frame_rate, &output)
+                .map_err(plot_failure)?;
+        }
+        PlotCommand::Landscape {
+            seq,
+            frame,
+            output,
+            config,
+            range_yaw,
+            range_arc,
+            steps,
+        } => {
+            let config = match &config {
+                Some(p) => Config::from_file(p).map_err(|e| Failure::Input(e.into()))?,
+                None => Config::default(),
+            };
+            let sequence = momo_io::read_sequence(&seq).map_err(|e| Failure::Input(e.into()))?;
+            let options = momo_plot::LandscapeOptions {
+                frame,
+                range_yaw_deg: range_yaw,
+                range_arc,
+                steps,
+            };
+            let landscape =
+                momo_plot::compute_landscape(&sequence, config, &options).map_err(plot_failure)?;
+            momo_plot::plot_landscape(&landscape, &output).map_err(plot_failure)?;
+            if let Some((yaw, arc, cost)) = landscape.minimum() {
+                let (ey, ea) = landscape.estimate_point();
+                eprintln!(
+                    "momo: frame {frame}: estimate yaw {ey:.4} deg, arc length {ea:.4} m; grid minimum yaw {yaw:.4} deg, arc length {arc:.4} m, cost {cost:.6e}"
+                );
+            }
+        }
+    }
+    if !momo_plot::font_available() {
+        eprintln!(
+            "momo: warning: no TrueType font found (set MOMO_PLOT_FONT to a .ttf file): drew without text"
+        );
+    }
+    eprintln!("momo: wrote {}", output.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -316,18 +531,27 @@ fn main() -> ExitCode {
             config,
             diagnostics,
             quiet,
-        } => run(seq, output, config, diagnostics, quiet),
+            estimator,
+        } => run(seq, output, config, diagnostics, quiet, estimator.into()),
         Command::Config => {
             print!("{}", Config::default().to_commented_toml());
             Ok(())
         }
         Command::Simulate {
             scenario,
+            trajectory,
             frames,
             seed,
             matches,
             out_dir,
-        } => simulate(&scenario, frames, seed, matches, &out_dir),
+        } => simulate(
+            &scenario,
+            trajectory.as_deref(),
+            frames,
+            seed,
+            matches,
+            &out_dir,
+        ),
         Command::ImportKitti {
             dir,
             out_dir,
@@ -336,6 +560,7 @@ fn main() -> ExitCode {
             seed,
         } => import_kitti(&dir, &out_dir, stereo, matches, seed),
         Command::Eval { gt, est, json } => eval(&gt, &est, json),
+        Command::Plot { figure } => plot(figure),
         Command::Demo {
             frames,
             seed,

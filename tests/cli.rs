@@ -287,3 +287,22 @@ fn help_explains_every_option() {
         assert!(text.contains(opt), "{opt} missing from help");
     }
 }
+
+#[test]
+fn five_point_baseline_runs_behind_the_same_interface() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    let mut cfg = SimConfig::outliers();
+    cfg.frames = 20;
+    cfg.seed = 5;
+    let sim = write_sim(&seq, &cfg);
+    let out = tmp.path().join("poses.txt");
+    let o = run(&seq, &out, &["--estimator", "five-point"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let est = momo::io::read_poses(&out).expect("poses");
+    let gt = sim.sequence.ground_truth.as_ref().expect("truth");
+    assert_eq!(est.len(), 20);
+    let s = ErrorSummary::from_values(&frame_to_frame_rotation_errors(gt, &est));
+    eprintln!("five-point: median {:.4} max {:.4}", s.median, s.max);
+    assert!(s.median < 0.5 && s.above_one == 0, "{s:?}");
+}

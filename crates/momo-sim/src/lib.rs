@@ -9,6 +9,9 @@
 //! - Drives ([`drive`]): 10 Hz single-track kinematics with smooth speed (0 to 30 m/s) and
 //!   curvature profiles, yaw-rate and lateral-acceleration limits, optional stops, small pitch and
 //!   roll oscillations, optional side slip.
+//! - Or a drive along real camera poses ([`SimConfig::camera_trajectory`], e.g. a KITTI
+//!   ground-truth file; [`vehicle_poses_from_camera_poses`]).
+//! - Presets by name: [`SimConfig::SCENARIOS`], [`SimConfig::scenario`].
 //! - Matches ([`sim`]): uniform pixels, depths from a ground plane / facade / far-point scene,
 //!   Gaussian pixel noise, outliers, blinded cameras, an independently moving object; every match
 //!   carries a [`MatchLabel`].
@@ -53,5 +56,6 @@ pub use rigs::{
 };
 pub use sim::{
     BlindMode, Blinding, MAX_MATCHES_PER_CAMERA, MatchLabel, MovingObject, SceneConfig, SimConfig,
-    SimError, Simulation, simulate,
+    SimError, Simulation, camera_poses_from_vehicle_poses, simulate,
+    vehicle_poses_from_camera_poses,
 };

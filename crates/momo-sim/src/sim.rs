@@ -17,7 +17,7 @@
 //! simulation bit for bit (with the same `rand` version), and a longer simulation starts with the
 //! frames of a shorter one.
 
-use crate::drive::{DriveConfig, generate_drive};
+use crate::drive::{Drive, DriveConfig, generate_drive};
 use crate::rigs::RigPreset;
 use momo_core::{CameraModel, FrameObservations, Observation, Pose, Rig, RigCamera, camera_motion};
 use momo_io::{IoError, MAX_FRAME, Sequence, write_sequence};
@@ -165,6 +165,12 @@ pub struct SimConfig {
     pub odometry: bool,
     /// Relative standard deviation of the odometry arc lengths (0: exact).
     pub odometry_noise: f64,
+    /// Drive along these camera-0 poses (KITTI camera poses `T_cam0(0)_cam0(k)`, e.g. a KITTI
+    /// ground-truth file) instead of a generated drive: the vehicle poses are
+    /// `V_k = P0 · C_k · P0⁻¹` ([`vehicle_poses_from_camera_poses`]) with `P0` the rig's
+    /// camera 0, relative to the first; `drive` then only gives the frame rate (speeds), and
+    /// `stops` is ignored. The simulation has `min(frames, len)` frames.
+    pub camera_trajectory: Option<Vec<Pose<f64>>>,
 }
 
 impl Default for SimConfig {
@@ -187,11 +193,48 @@ impl Default for SimConfig {
             moving_object: None,
             odometry: true,
             odometry_noise: 0.0,
+            camera_trajectory: None,
         }
     }
 }
 
 impl SimConfig {
+    /// The names of all presets, as [`SimConfig::scenario`] and `momo simulate --scenario`
+    /// take them.
+    pub const SCENARIOS: &[&str] = &[
+        "clean_pinhole",
+        "outliers",
+        "moving_object",
+        "fisheye_surround",
+        "sparse_outliers",
+        "very_sparse",
+        "highway",
+    ];
+
+    /// The preset of a name in [`SimConfig::SCENARIOS`]; `None` for any other name.
+    ///
+    /// ```
+    /// use momo_sim::SimConfig;
+    ///
+    /// for name in SimConfig::SCENARIOS {
+    ///     assert!(SimConfig::scenario(name).is_some());
+    /// }
+    /// assert_eq!(SimConfig::scenario("highway"), Some(SimConfig::highway()));
+    /// assert_eq!(SimConfig::scenario("moon_landing"), None);
+    /// ```
+    pub fn scenario(name: &str) -> Option<Self> {
+        Some(match name {
+            "clean_pinhole" => Self::clean_pinhole(),
+            "outliers" => Self::outliers(),
+            "moving_object" => Self::moving_object(),
+            "fisheye_surround" => Self::fisheye_surround(),
+            "sparse_outliers" => Self::sparse_outliers(),
+            "very_sparse" => Self::very_sparse(),
+            "highway" => Self::highway(),
+            _ => return None,
+        })
+    }
+
     /// KITTI mono rig, σ = 0.5 px, no outliers.
     pub fn clean_pinhole() -> Self {
         Self {
@@ -231,6 +274,51 @@ impl SimConfig {
         Self {
             outlier_ratio: 0.0,
             moving_object: Some(MovingObject::following(0, 30..60, 0.45)),
+            ..Self::default()
+        }
+    }
+
+    /// KITTI mono rig, only 100 matches per frame pair, σ = 1 px, 30% outliers.
+    pub fn sparse_outliers() -> Self {
+        Self {
+            matches_per_camera: 100,
+            pixel_noise: 1.0,
+            outlier_ratio: 0.3,
+            ..Self::default()
+        }
+    }
+
+    /// KITTI mono rig, only 40 matches per frame pair, σ = 0.5 px, 10% outliers.
+    pub fn very_sparse() -> Self {
+        Self {
+            matches_per_camera: 40,
+            ..Self::default()
+        }
+    }
+
+    /// KITTI mono rig on a motorway: 25 to 30 m/s (2.5 to 3 m per frame), gentle curves
+    /// (lateral acceleration at most 1 m/s², radii of 600 m and more at speed), no stops; the
+    /// scene is open (facades 10 to 80 m away, more far points). σ = 0.5 px, 10% outliers.
+    pub fn highway() -> Self {
+        Self {
+            drive: DriveConfig {
+                initial_speed: 27.0,
+                min_cruise_speed: 25.0,
+                max_speed: 30.0,
+                max_acceleration: 1.0,
+                max_deceleration: 1.5,
+                max_jerk: 1.0,
+                max_yaw_rate: 0.05,
+                max_lateral_acceleration: 1.0,
+                curvature_rate: 0.001,
+                ..DriveConfig::default()
+            },
+            scene: SceneConfig {
+                ground_range: 80.0,
+                facade_range: (10.0, 80.0),
+                far_range: (80.0, 400.0),
+                far_fraction: 0.3,
+            },
             ..Self::default()
         }
     }
@@ -284,6 +372,18 @@ impl SimConfig {
             }
         }
         self.drive.validate().map_err(SimError::InvalidConfig)?;
+        if let Some(t) = &self.camera_trajectory {
+            if t.is_empty() {
+                return bad("camera_trajectory must hold at least one pose".into());
+            }
+            if let Some(k) = t.iter().position(|p| {
+                p.to_homogeneous().iter().any(|v| !v.is_finite()) || p.orthonormality_error() > 1e-6
+            }) {
+                return bad(format!(
+                    "camera_trajectory pose {k} is not a finite rigid motion"
+                ));
+            }
+        }
         for b in &self.blinded {
             if b.camera >= rig.len() {
                 return bad(format!(
@@ -558,12 +658,17 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     let rig = cfg.rig.rig();
     cfg.validate(&rig)?;
     let n_cams = rig.len();
-    let drive = generate_drive(&cfg.drive, cfg.frames, cfg.stops, cfg.seed);
-    let vehicle_motions: Vec<Pose<f64>> = (0..cfg.frames).map(|k| drive.motion(k)).collect();
+    let p0 = rig.cameras()[0].t_vehicle_camera;
+    let drive = match &cfg.camera_trajectory {
+        Some(t) => drive_along(&t[..cfg.frames.min(t.len())], &p0, cfg.drive.frame_rate),
+        None => generate_drive(&cfg.drive, cfg.frames, cfg.stops, cfg.seed),
+    };
+    let n_frames = drive.poses.len();
+    let vehicle_motions: Vec<Pose<f64>> = (0..n_frames).map(|k| drive.motion(k)).collect();
 
     let mut frames = vec![FrameObservations::new(n_cams)];
     let mut labels = vec![vec![Vec::new(); n_cams]];
-    for k in 1..cfg.frames {
+    for k in 1..n_frames {
         let m = &vehicle_motions[k];
         let mut frame = FrameObservations::new(n_cams);
         let mut frame_labels = vec![Vec::new(); n_cams];
@@ -603,7 +708,6 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
         }
         a
     });
-    let p0 = rig.cameras()[0].t_vehicle_camera;
     let v0_inv = drive.poses[0].inverse();
     let ground_truth = drive
         .poses
@@ -624,4 +728,64 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
         true_arc_lengths: drive.arc_lengths,
         labels,
     })
+}
+
+/// The vehicle poses of camera-0 poses: `V_k = P0 · C_k · P0⁻¹` with `P0 = T_vehicle_camera` of
+/// camera 0 (the inverse of the ground truth's `C_k = P0⁻¹ V_k P0`).
+///
+/// ```
+/// use momo_core::Pose;
+/// use momo_sim::{camera_poses_from_vehicle_poses, kitti_mono, vehicle_poses_from_camera_poses};
+/// use nalgebra::{Matrix3, Vector3};
+///
+/// let p0 = kitti_mono().cameras()[0].t_vehicle_camera;
+/// // Camera 0 one metre forward along its optical axis (z): the vehicle one metre along x.
+/// let c = [Pose::identity(), Pose::new(Matrix3::identity(), Vector3::new(0.0, 0.0, 1.0))];
+/// let v = vehicle_poses_from_camera_poses(&c, &p0);
+/// assert!((v[1].translation - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12);
+/// let back = camera_poses_from_vehicle_poses(&v, &p0);
+/// assert!((back[1].translation - c[1].translation).norm() < 1e-12);
+/// ```
+pub fn vehicle_poses_from_camera_poses(
+    camera_poses: &[Pose<f64>],
+    t_vehicle_camera0: &Pose<f64>,
+) -> Vec<Pose<f64>> {
+    let p0_inv = t_vehicle_camera0.inverse();
+    camera_poses
+        .iter()
+        .map(|c| t_vehicle_camera0.compose(&c.compose(&p0_inv)))
+        .collect()
+}
+
+/// The camera-0 poses of vehicle poses: `C_k = P0⁻¹ · V_k · P0` (the inverse of
+/// [`vehicle_poses_from_camera_poses`]).
+pub fn camera_poses_from_vehicle_poses(
+    vehicle_poses: &[Pose<f64>],
+    t_vehicle_camera0: &Pose<f64>,
+) -> Vec<Pose<f64>> {
+    let p0_inv = t_vehicle_camera0.inverse();
+    vehicle_poses
+        .iter()
+        .map(|v| p0_inv.compose(&v.compose(t_vehicle_camera0)))
+        .collect()
+}
+
+/// A drive along given camera-0 poses: vehicle poses relative to the first, arc lengths the
+/// distances between consecutive motion centres (chords), speeds those times the frame rate.
+fn drive_along(camera_poses: &[Pose<f64>], p0: &Pose<f64>, frame_rate: f64) -> Drive {
+    let vehicle = vehicle_poses_from_camera_poses(camera_poses, p0);
+    let v0_inv = vehicle.first().map_or_else(Pose::identity, Pose::inverse);
+    let poses: Vec<Pose<f64>> = vehicle.iter().map(|v| v0_inv.compose(v)).collect();
+    let mut arc_lengths = vec![0.0];
+    arc_lengths.extend(
+        poses
+            .windows(2)
+            .map(|w| (w[1].translation - w[0].translation).norm()),
+    );
+    let speeds = arc_lengths.iter().map(|s| s * frame_rate).collect();
+    Drive {
+        poses,
+        arc_lengths,
+        speeds,
+    }
 }

@@ -11,6 +11,9 @@ fn presets() -> Vec<(&'static str, SimConfig)> {
         ("outliers", SimConfig::outliers()),
         ("fisheye_surround", SimConfig::fisheye_surround()),
         ("moving_object", SimConfig::moving_object()),
+        ("sparse_outliers", SimConfig::sparse_outliers()),
+        ("very_sparse", SimConfig::very_sparse()),
+        ("highway", SimConfig::highway()),
         (
             "stereo",
             SimConfig {

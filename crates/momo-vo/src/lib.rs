@@ -20,13 +20,17 @@
 //! assert!((r.motion.translation.x - 0.8).abs() < 1e-9);
 //! ```
 
+pub mod baseline;
 pub mod config;
 pub mod odometry;
 pub mod pipeline;
 
+pub use baseline::{FivePointBaseline, MotionDriver};
 pub use config::{Config, ConfigError, OdometryOptions};
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
     direction_error_deg, rotation_error_deg,
 };
-pub use pipeline::{RunError, RunOptions, RunSummary, run_in_memory, run_sequence};
+pub use pipeline::{
+    EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_sequence,
+};

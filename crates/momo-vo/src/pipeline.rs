@@ -2,9 +2,12 @@
 //! frame pair at a time (memory does not grow with the sequence), poses and diagnostics are
 //! written atomically (temporary file, then rename: no half-written output on any error).
 
+use crate::baseline::{FivePointBaseline, MotionDriver};
 use crate::config::Config;
 use crate::odometry::{FrameDiagnostics, FrameResult, FrameStatus, Odometry, Trajectory, VoError};
 use momo_core::FrameObservations;
+use momo_core::Rig;
+use momo_fivepoint::FivePointRansac;
 use momo_io::{AtomicFile, IoError, MatchReader, PoseWriter};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -24,9 +27,36 @@ pub enum RunError {
     Vo(#[from] VoError),
 }
 
+/// Which estimator runs the sequence.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EstimatorKind {
+    /// momo: robust least squares on the configured motion manifold.
+    #[default]
+    Momo,
+    /// The 5-point RANSAC baseline (OpenCV-style findEssentialMat + recoverPose).
+    FivePoint,
+}
+
+/// Builds the driver of an estimator kind.
+pub fn driver(
+    kind: EstimatorKind,
+    rig: &Rig,
+    config: Config,
+) -> Result<Box<dyn MotionDriver>, VoError> {
+    Ok(match kind {
+        EstimatorKind::Momo => Box::new(Odometry::new(rig.clone(), config)?),
+        EstimatorKind::FivePoint => Box::new(FivePointBaseline::new(
+            rig.clone(),
+            FivePointRansac::default(),
+        )),
+    })
+}
+
 /// Where to write.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
+    /// The estimator.
+    pub estimator: EstimatorKind,
     /// The KITTI-format camera-0 trajectory, one line per frame.
     pub output: PathBuf,
     /// Per-frame diagnostics: CSV if the name ends in `.csv`, JSON lines otherwise.
@@ -167,7 +197,7 @@ pub fn run_sequence(
     };
     let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunError::Input)?;
 
-    let mut vo = Odometry::new(rig.clone(), config)?;
+    let mut vo = driver(options.estimator, &rig, config)?;
     let mut trajectory = Trajectory::new(&rig);
     let mut poses = PoseWriter::create(&options.output).map_err(RunError::Output)?;
     let mut diagnostics = match &options.diagnostics {
@@ -228,10 +258,11 @@ pub fn run_sequence(
 /// camera 0's trajectory (one pose per frame, identity first) and the per-frame diagnostics.
 pub fn run_in_memory(
     sequence: &momo_io::Sequence,
+    estimator: EstimatorKind,
     config: Config,
     mut on_frame: impl FnMut(&FrameResult),
 ) -> Result<(Vec<momo_core::Pose<f64>>, Vec<FrameDiagnostics>), VoError> {
-    let mut vo = Odometry::new(sequence.rig.clone(), config)?;
+    let mut vo = driver(estimator, &sequence.rig, config)?;
     let mut trajectory = Trajectory::new(&sequence.rig);
     let n = sequence.num_frames();
     let mut poses = Vec::with_capacity(n);
