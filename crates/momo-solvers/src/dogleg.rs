@@ -66,43 +66,15 @@ impl Default for Dogleg {
     }
 }
 
-impl Dogleg {
-    /// Sets [`Self::max_iterations`].
-    pub fn with_max_iterations(mut self, v: usize) -> Self {
-        self.max_iterations = v;
-        self
-    }
-    /// Sets [`Self::function_tolerance`].
-    pub fn with_function_tolerance(mut self, v: f64) -> Self {
-        self.function_tolerance = v;
-        self
-    }
-    /// Sets [`Self::gradient_tolerance`].
-    pub fn with_gradient_tolerance(mut self, v: f64) -> Self {
-        self.gradient_tolerance = v;
-        self
-    }
-    /// Sets [`Self::parameter_tolerance`].
-    pub fn with_parameter_tolerance(mut self, v: f64) -> Self {
-        self.parameter_tolerance = v;
-        self
-    }
-    /// Sets [`Self::initial_radius`].
-    pub fn with_initial_radius(mut self, v: f64) -> Self {
-        self.initial_radius = v;
-        self
-    }
-    /// Sets [`Self::max_radius`].
-    pub fn with_max_radius(mut self, v: f64) -> Self {
-        self.max_radius = v;
-        self
-    }
-    /// Sets [`Self::min_radius`].
-    pub fn with_min_radius(mut self, v: f64) -> Self {
-        self.min_radius = v;
-        self
-    }
-}
+with_setters!(Dogleg {
+    with_max_iterations => max_iterations: usize,
+    with_function_tolerance => function_tolerance: f64,
+    with_gradient_tolerance => gradient_tolerance: f64,
+    with_parameter_tolerance => parameter_tolerance: f64,
+    with_initial_radius => initial_radius: f64,
+    with_max_radius => max_radius: f64,
+    with_min_radius => min_radius: f64,
+});
 
 /// The two ends of the dogleg path at one linearisation.
 struct Path {

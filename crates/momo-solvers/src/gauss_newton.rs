@@ -53,33 +53,13 @@ impl Default for GaussNewton {
     }
 }
 
-impl GaussNewton {
-    /// Sets [`Self::max_iterations`].
-    pub fn with_max_iterations(mut self, v: usize) -> Self {
-        self.max_iterations = v;
-        self
-    }
-    /// Sets [`Self::function_tolerance`].
-    pub fn with_function_tolerance(mut self, v: f64) -> Self {
-        self.function_tolerance = v;
-        self
-    }
-    /// Sets [`Self::gradient_tolerance`].
-    pub fn with_gradient_tolerance(mut self, v: f64) -> Self {
-        self.gradient_tolerance = v;
-        self
-    }
-    /// Sets [`Self::parameter_tolerance`].
-    pub fn with_parameter_tolerance(mut self, v: f64) -> Self {
-        self.parameter_tolerance = v;
-        self
-    }
-    /// Sets [`Self::max_line_search_steps`].
-    pub fn with_max_line_search_steps(mut self, v: usize) -> Self {
-        self.max_line_search_steps = v;
-        self
-    }
-}
+with_setters!(GaussNewton {
+    with_max_iterations => max_iterations: usize,
+    with_function_tolerance => function_tolerance: f64,
+    with_gradient_tolerance => gradient_tolerance: f64,
+    with_parameter_tolerance => parameter_tolerance: f64,
+    with_max_line_search_steps => max_line_search_steps: usize,
+});
 
 /// Armijo's sufficient-decrease constant.
 const ARMIJO: f64 = 1e-4;

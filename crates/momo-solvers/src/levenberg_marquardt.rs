@@ -65,53 +65,17 @@ impl Default for LevenbergMarquardt {
     }
 }
 
-impl LevenbergMarquardt {
-    /// Sets [`Self::max_iterations`].
-    pub fn with_max_iterations(mut self, v: usize) -> Self {
-        self.max_iterations = v;
-        self
-    }
-    /// Sets [`Self::function_tolerance`].
-    pub fn with_function_tolerance(mut self, v: f64) -> Self {
-        self.function_tolerance = v;
-        self
-    }
-    /// Sets [`Self::gradient_tolerance`].
-    pub fn with_gradient_tolerance(mut self, v: f64) -> Self {
-        self.gradient_tolerance = v;
-        self
-    }
-    /// Sets [`Self::parameter_tolerance`].
-    pub fn with_parameter_tolerance(mut self, v: f64) -> Self {
-        self.parameter_tolerance = v;
-        self
-    }
-    /// Sets [`Self::initial_lambda`].
-    pub fn with_initial_lambda(mut self, v: f64) -> Self {
-        self.initial_lambda = v;
-        self
-    }
-    /// Sets [`Self::lambda_increase`].
-    pub fn with_lambda_increase(mut self, v: f64) -> Self {
-        self.lambda_increase = v;
-        self
-    }
-    /// Sets [`Self::lambda_decrease`].
-    pub fn with_lambda_decrease(mut self, v: f64) -> Self {
-        self.lambda_decrease = v;
-        self
-    }
-    /// Sets [`Self::min_lambda`].
-    pub fn with_min_lambda(mut self, v: f64) -> Self {
-        self.min_lambda = v;
-        self
-    }
-    /// Sets [`Self::max_lambda`].
-    pub fn with_max_lambda(mut self, v: f64) -> Self {
-        self.max_lambda = v;
-        self
-    }
-}
+with_setters!(LevenbergMarquardt {
+    with_max_iterations => max_iterations: usize,
+    with_function_tolerance => function_tolerance: f64,
+    with_gradient_tolerance => gradient_tolerance: f64,
+    with_parameter_tolerance => parameter_tolerance: f64,
+    with_initial_lambda => initial_lambda: f64,
+    with_lambda_increase => lambda_increase: f64,
+    with_lambda_decrease => lambda_decrease: f64,
+    with_min_lambda => min_lambda: f64,
+    with_max_lambda => max_lambda: f64,
+});
 
 #[typetag::serde(name = "levenberg_marquardt")]
 impl Solver for LevenbergMarquardt {

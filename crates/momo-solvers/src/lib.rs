@@ -139,6 +139,21 @@
 //! assert_eq!(solver.solve(&problem, &x0).termination, Termination::MaxIterations);
 //! ```
 
+/// Generates the builder-style `with_*` setters of a solver's options.
+macro_rules! with_setters {
+    ($ty:ident { $($setter:ident => $field:ident: $t:ty),* $(,)? }) => {
+        impl $ty {
+            $(
+                #[doc = concat!("Sets [`Self::", stringify!($field), "`].")]
+                pub fn $setter(mut self, v: $t) -> Self {
+                    self.$field = v;
+                    self
+                }
+            )*
+        }
+    };
+}
+
 mod common;
 mod dogleg;
 mod gauss_newton;
