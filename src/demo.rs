@@ -2,7 +2,6 @@
 //! and print how close the result is to the truth. Needs no data.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use momo_eval::{ErrorSummary, frame_to_frame_rotation_errors, kitti_errors};
 use momo_sim::{SimConfig, simulate};
 use momo_vo::{Config, EstimatorKind, FrameStatus};
 use std::io::IsTerminal;
@@ -50,8 +49,8 @@ pub fn demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
             let (poses, diags) =
                 momo_vo::run_in_memory(seq, kind, Config::default(), |_| bar.inc(1))?;
             let name = format!("{name} [{label}]");
-            let rot = ErrorSummary::from_values(&frame_to_frame_rotation_errors(gt, &poses));
-            let kitti = kitti_errors(gt, &poses);
+            let scores = momo_eval::evaluate(gt, &poses);
+            let rot = scores.rotation_deg;
             let us = diags.iter().map(|d| d.time_us).sum::<f64>() / diags.len().max(1) as f64;
             let held = diags
                 .iter()
@@ -64,12 +63,12 @@ pub fn demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
                 rot.p95,
                 rot.max,
                 rot.above_one,
-                kitti
-                    .as_ref()
-                    .map_or("-".into(), |k| format!("{:.3}", k.t_err_percent)),
-                kitti
-                    .as_ref()
-                    .map_or("-".into(), |k| format!("{:.4}", k.r_err_deg_per_100m)),
+                scores
+                    .t_err_percent
+                    .map_or("-".into(), |t| format!("{t:.3}")),
+                scores
+                    .r_err_deg_per_100m
+                    .map_or("-".into(), |r| format!("{r:.4}")),
                 us,
                 if held > 0 {
                     format!("  ({held} frames held)")

@@ -29,7 +29,6 @@ pub use baseline::{FivePointBaseline, MotionDriver};
 pub use config::{Config, ConfigError, OdometryOptions};
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
-    direction_error_deg, rotation_error_deg,
 };
 pub use pipeline::{
     EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_sequence,

@@ -6,7 +6,7 @@ use momo_core::{
     CoreError, FrameEstimator, FrameObservations, FrameSolution, Pose, Rig, SolveRequest,
     Termination,
 };
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 use thiserror::Error;
@@ -455,18 +455,4 @@ impl Trajectory {
     pub fn vehicle(&self) -> Pose<f64> {
         self.vehicle
     }
-}
-
-/// Rotation angle between two rotations, in degrees.
-pub fn rotation_error_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
-    momo_core::so3_log(&(a.transpose() * b)).norm().to_degrees()
-}
-
-/// Angle between two translation directions in degrees (NaN if either is ~zero).
-pub fn direction_error_deg(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
-    let (na, nb) = (a.norm(), b.norm());
-    if na < 1e-12 || nb < 1e-12 {
-        return f64::NAN;
-    }
-    (a.dot(b) / (na * nb)).clamp(-1.0, 1.0).acos().to_degrees()
 }
