@@ -175,12 +175,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             };
         }
         match self.n_free {
-            0 => me.visit::<0>(&x, |r: &[DualSVec64<0>]| {
-                for v in r {
-                    res.push(v.re);
-                    rows.push([0.0; MAX_PARAMS]);
-                }
-            }),
+            0 => go!(0),
             1 => go!(1),
             2 => go!(2),
             3 => go!(3),

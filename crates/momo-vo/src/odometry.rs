@@ -439,7 +439,8 @@ impl Trajectory {
     /// Appends a vehicle motion `T_{k-1,k}` and returns camera 0's pose at k.
     pub fn push(&mut self, motion: &Pose<f64>) -> Pose<f64> {
         self.vehicle = self.vehicle.compose(motion);
-        // Re-orthonormalise now and then is unnecessary over a few thousand frames (errors ~1e-13).
+        // No re-orthonormalisation: over 4,541 frames the output still passes FORMAT.md's 1e-6
+        // orthonormality check when read back (`momo eval` reads it through `read_poses`).
         self.camera0()
     }
 
