@@ -45,6 +45,7 @@ pub fn demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
         for (label, kind) in [
             ("momo", EstimatorKind::Momo),
             ("5-point", EstimatorKind::FivePoint),
+            ("5-point LO", EstimatorKind::FivePointRefined),
         ] {
             let (poses, diags) =
                 momo_vo::run_in_memory(seq, kind, Config::default(), |_| bar.inc(1))?;

@@ -44,8 +44,10 @@ enum Command {
         /// No progress bar and no summary on stderr.
         #[arg(short, long)]
         quiet: bool,
-        /// The estimator: `momo` (robust least squares on the configured motion manifold) or
-        /// `five-point` (the 5-point RANSAC baseline, OpenCV style, scaled by odometry).
+        /// The estimator: `momo` (robust least squares on the configured motion manifold),
+        /// `five-point` (the 5-point RANSAC baseline, OpenCV style, scaled by odometry; options
+        /// in the configuration's `[five_point]`) or `five-point-refined` (the same with
+        /// LO-RANSAC-style refinement, PoseLib style).
         #[arg(long, value_enum, default_value_t = EstimatorArg::Momo)]
         estimator: EstimatorArg,
     },
@@ -193,6 +195,8 @@ enum EstimatorArg {
     Momo,
     /// The 5-point RANSAC baseline.
     FivePoint,
+    /// The 5-point RANSAC baseline with LO-RANSAC-style refinement of the final hypothesis.
+    FivePointRefined,
 }
 
 impl From<EstimatorArg> for momo_vo::EstimatorKind {
@@ -200,6 +204,7 @@ impl From<EstimatorArg> for momo_vo::EstimatorKind {
         match e {
             EstimatorArg::Momo => momo_vo::EstimatorKind::Momo,
             EstimatorArg::FivePoint => momo_vo::EstimatorKind::FivePoint,
+            EstimatorArg::FivePointRefined => momo_vo::EstimatorKind::FivePointRefined,
         }
     }
 }

@@ -74,6 +74,55 @@ impl Default for OdometryOptions {
     }
 }
 
+/// Options of the 5-point RANSAC baseline (`momo run --estimator five-point`); the fields of
+/// [`momo_fivepoint::FivePointRansac`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FivePointOptions {
+    /// Inlier threshold on the angular Sampson error, radians (1e-3 ~ 0.7 px at f = 718 px;
+    /// OpenCV's usual 1 px is 1.4e-3 there).
+    pub threshold: f64,
+    /// Probability that at least one all-inlier sample is drawn (adaptive stopping).
+    pub confidence: f64,
+    /// Upper bound on the number of RANSAC samples.
+    pub max_iterations: usize,
+    /// Seed of the random sampling (runs are deterministic for a seed).
+    pub seed: u64,
+    /// Refine the final hypothesis by robust least squares on its inliers (PoseLib's LO-RANSAC
+    /// does; OpenCV's findEssentialMat + recoverPose does not).
+    pub refine: bool,
+}
+
+impl Default for FivePointOptions {
+    fn default() -> Self {
+        Self::from(&momo_fivepoint::FivePointRansac::default())
+    }
+}
+
+impl From<&momo_fivepoint::FivePointRansac> for FivePointOptions {
+    fn from(r: &momo_fivepoint::FivePointRansac) -> Self {
+        Self {
+            threshold: r.threshold,
+            confidence: r.confidence,
+            max_iterations: r.max_iterations,
+            seed: r.seed,
+            refine: r.refine,
+        }
+    }
+}
+
+impl From<&FivePointOptions> for momo_fivepoint::FivePointRansac {
+    fn from(o: &FivePointOptions) -> Self {
+        Self {
+            threshold: o.threshold,
+            confidence: o.confidence,
+            max_iterations: o.max_iterations,
+            seed: o.seed,
+            refine: o.refine,
+        }
+    }
+}
+
 /// The whole configuration of an estimator.
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -89,6 +138,9 @@ pub struct Config {
     /// The odometry driver's options.
     #[serde(default)]
     pub odometry: OdometryOptions,
+    /// The 5-point RANSAC baseline's options (used only by `--estimator five-point`).
+    #[serde(default)]
+    pub five_point: FivePointOptions,
 }
 
 /// The default: `Se3` with the arc length from odometry, `AnglePlane`, Cauchy with scale 0.001
@@ -112,6 +164,7 @@ impl Default for Config {
             loss: Box::new(momo_costs::Cauchy::new(0.001)),
             solver: Box::new(momo_solvers::LevenbergMarquardt::default()),
             odometry: OdometryOptions::default(),
+            five_point: FivePointOptions::default(),
         }
     }
 }
@@ -142,6 +195,12 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
     (
         "odometry",
         "# Odometry driver: degenerate frames, scale and restarts.",
+    ),
+    (
+        "five_point",
+        "# The 5-point RANSAC baseline (`momo run --estimator five-point`), not used by momo.\n\
+         # threshold in radians of angular Sampson error; refine = LO-RANSAC-style refinement\n\
+         # (`--estimator five-point-refined` sets it).",
     ),
 ];
 
@@ -216,6 +275,16 @@ impl Config {
         }
         if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
             return bad("odometry.restart_yaw_offsets must be finite".into());
+        }
+        let f = &self.five_point;
+        if !(f.threshold > 0.0 && f.threshold.is_finite()) {
+            return bad("five_point.threshold must be finite and > 0".into());
+        }
+        if !(f.confidence > 0.0 && f.confidence < 1.0) {
+            return bad("five_point.confidence must be within (0, 1)".into());
+        }
+        if f.max_iterations == 0 {
+            return bad("five_point.max_iterations must be at least 1".into());
         }
         Ok(())
     }

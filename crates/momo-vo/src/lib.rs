@@ -26,7 +26,7 @@ pub mod odometry;
 pub mod pipeline;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
-pub use config::{Config, ConfigError, OdometryOptions};
+pub use config::{Config, ConfigError, FivePointOptions, OdometryOptions};
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };

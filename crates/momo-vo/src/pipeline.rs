@@ -33,8 +33,12 @@ pub enum EstimatorKind {
     /// momo: robust least squares on the configured motion manifold.
     #[default]
     Momo,
-    /// The 5-point RANSAC baseline (OpenCV-style findEssentialMat + recoverPose).
+    /// The 5-point RANSAC baseline (OpenCV-style findEssentialMat + recoverPose), with the
+    /// configuration's `[five_point]` options.
     FivePoint,
+    /// The 5-point RANSAC baseline with the LO-RANSAC-style refinement on, whatever the
+    /// configuration's `five_point.refine` says (PoseLib's way).
+    FivePointRefined,
 }
 
 /// Builds the driver of an estimator kind.
@@ -47,7 +51,14 @@ pub fn driver(
         EstimatorKind::Momo => Box::new(Odometry::new(rig.clone(), config)?),
         EstimatorKind::FivePoint => Box::new(FivePointBaseline::new(
             rig.clone(),
-            FivePointRansac::default(),
+            FivePointRansac::from(&config.five_point),
+        )),
+        EstimatorKind::FivePointRefined => Box::new(FivePointBaseline::new(
+            rig.clone(),
+            FivePointRansac {
+                refine: true,
+                ..FivePointRansac::from(&config.five_point)
+            },
         )),
     })
 }
