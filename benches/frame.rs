@@ -82,6 +82,7 @@ fn solve(
         initial: init,
         fixed,
         rotation_only: false,
+        motion_prior: None,
     };
     est.solve(&req).expect("solvable").params[0]
 }

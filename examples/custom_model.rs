@@ -74,6 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         initial: &[0.0, 1.2, 0.0],
         fixed: &[false, true, false],
         rotation_only: false,
+        motion_prior: None,
     })?;
     println!(
         "truth yaw {:.5} slip {:.5}; estimate yaw {:.5} slip {:.5} ({} iterations, {:?}, {} of {} inliers)",

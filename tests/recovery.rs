@@ -66,6 +66,7 @@ fn solve(
         initial: init,
         fixed: &fixed,
         rotation_only: false,
+        motion_prior: None,
     })
     .expect("solvable")
     .params

@@ -107,6 +107,52 @@ pub fn check_motion_jacobian<M: Manifold>(
     Ok(worst)
 }
 
+/// Checks the Jacobian of a soft manifold's prior residuals ([`Manifold::prior_residuals`])
+/// with respect to every parameter against central finite differences. Returns the largest
+/// relative error (0 for a hard manifold, which has none).
+pub fn check_prior_jacobian<M: Manifold>(
+    model: &M,
+    params: &[f64],
+    tol: f64,
+) -> Result<f64, JacobianMismatch> {
+    use crate::manifold::MAX_PRIOR_RESIDUALS;
+    let nq = M::PRIOR_RESIDUALS;
+    let mut worst: f64 = 0.0;
+    if nq == 0 {
+        return Ok(worst);
+    }
+    let plain = |p: &[f64]| {
+        let mut q = [0.0; MAX_PRIOR_RESIDUALS];
+        model.prior_residuals(p, &mut q[..nq]);
+        q
+    };
+    for col in 0..M::PARAMS.len() {
+        let p: Vec<DualSVec64<1>> = params
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let d = DualSVec64::from_re(v);
+                if i == col { d.derivative(0) } else { d }
+            })
+            .collect();
+        let mut q = [DualSVec64::<1>::from_re(0.0); MAX_PRIOR_RESIDUALS];
+        model.prior_residuals(&p, &mut q[..nq]);
+        let h = step(params[col]);
+        let mut a = params.to_vec();
+        let mut b = params.to_vec();
+        a[col] += h;
+        b[col] -= h;
+        let (qa, qb) = (plain(&a), plain(&b));
+        for row in 0..nq {
+            let ad = q[row].eps.0.map_or(0.0, |e| e[0]);
+            let fd = (qa[row] - qb[row]) / (2.0 * h);
+            let what = format!("prior residual {row} / {}", M::PARAMS[col]);
+            worst = worst.max(compare(&what, row, col, ad, fd, tol)?);
+        }
+    }
+    Ok(worst)
+}
+
 /// Checks the Jacobian of every residual of `obs` (model, metric, rig together) with respect to
 /// every parameter against central finite differences. Returns the largest relative error.
 pub fn check_residual_jacobian<M: Manifold, R: ResidualMetric>(

@@ -10,7 +10,7 @@
 use crate::error::CoreError;
 use crate::lie::Pose;
 use crate::loss::RobustLoss;
-use crate::manifold::Manifold;
+use crate::manifold::{Manifold, MotionPrior};
 use crate::metric::{ResidualMetric, RotationOnly};
 use crate::problem::Problem;
 use crate::rig::{FrameObservations, Rig};
@@ -36,6 +36,8 @@ pub struct SolveRequest<'a> {
     /// Use the rotation-only residual (standstill): parameters that do not move the rotation
     /// are held fixed automatically.
     pub rotation_only: bool,
+    /// A prior on the change of motion (usually centred on the previous frame's parameters).
+    pub motion_prior: Option<&'a MotionPrior>,
 }
 
 /// The result of one solve.
@@ -106,7 +108,8 @@ fn run<M: Manifold, R: ResidualMetric>(
         req.observations,
         req.initial,
     )?
-    .with_fixed(fixed);
+    .with_fixed(fixed)
+    .with_motion_prior(req.motion_prior);
     let report = req.solver.solve(&problem, &problem.free_params());
     let params = problem.full_params(&report.x);
     let scale = req.loss.scale();
@@ -177,7 +180,8 @@ impl<M: Manifold, R: ResidualMetric> FrameEstimator for Erased<M, R> {
             req.rig,
             req.observations,
             params,
-        )?;
+        )?
+        .with_motion_prior(req.motion_prior);
         Ok(problem.cost(&problem.free_params()))
     }
 }

@@ -5,6 +5,29 @@ use crate::rig::Rig;
 use crate::scalar::Scalar;
 use std::fmt::Debug;
 
+/// The most prior residuals a [`Manifold`] may have.
+pub const MAX_PRIOR_RESIDUALS: usize = 8;
+
+/// A Gaussian prior on the change of the motion between consecutive frames (vehicle dynamics):
+/// `½ Σ_i (s · (p_i − center_i) · inv_sigma_i)²` over the free parameters, with `s` the loss
+/// scale (the data's noise unit). `center` is usually the previous frame's parameters and
+/// `inv_sigma_i = 1 / σ_i` the inverse of how much parameter i may change from frame to frame
+/// (0: no prior on it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MotionPrior {
+    /// The expected parameters (full vector of the model).
+    pub center: Vec<f64>,
+    /// Inverse standard deviations per parameter (full vector; 0 for none).
+    pub inv_sigma: Vec<f64>,
+}
+
+impl MotionPrior {
+    /// Whether the prior constrains anything.
+    pub fn is_active(&self) -> bool {
+        self.inv_sigma.iter().any(|w| *w != 0.0)
+    }
+}
+
 /// A motion manifold (motion model): the vehicle motion `M = T_{k-1,k}` as a function of a few
 /// parameters, written once over the scalar so that num-dual differentiates it.
 ///
@@ -40,6 +63,18 @@ pub trait Manifold: Clone + Debug + Send + Sync + 'static {
 
     /// The vehicle motion `T_{k-1,k}` for parameters `p` (`p.len() == Self::PARAMS.len()`).
     fn motion<T: Scalar>(&self, p: &[T]) -> Pose<T>;
+
+    /// Number of prior residuals of a *soft* manifold ([`Manifold::prior_residuals`]); 0 (the
+    /// default) for a hard manifold. At most [`MAX_PRIOR_RESIDUALS`].
+    const PRIOR_RESIDUALS: usize = 0;
+
+    /// The prior residuals of a soft manifold at parameters `p`: deviations from the motion
+    /// the model prefers, each divided by its standard deviation (dimensionless), written to
+    /// `out` (`out.len() == Self::PRIOR_RESIDUALS`). The problem adds them to the cost as
+    /// `½ Σ (s · out_k)²` with `s` the loss scale (the data's noise unit), not robustified:
+    /// a soft constraint instead of a hard one (a model that is a prior, not a manifold).
+    /// Written once over the scalar, like [`Manifold::motion`], so num-dual differentiates it.
+    fn prior_residuals<T: Scalar>(&self, _p: &[T], _out: &mut [T]) {}
 
     /// A neutral start: straight ahead with the given arc length (all other parameters zero).
     fn initial_params(&self, arc_length: f64) -> Vec<f64> {

@@ -4,7 +4,7 @@
 use crate::error::CoreError;
 use crate::lie::Pose;
 use crate::loss::RobustLoss;
-use crate::manifold::Manifold;
+use crate::manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior};
 use crate::metric::{MAX_RESIDUALS, ResidualMetric};
 use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
@@ -14,7 +14,10 @@ use num_dual::DualSVec64;
 
 /// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
 ///
-/// `min_p ½ Σ_j Σ_i ρ(|r(C_j(p), x_ij)|²)`, with camera motion `C_j = P_j⁻¹ M(p) P_j`.
+/// `min_p ½ Σ_j Σ_i ρ(|r(C_j(p), x_ij)|²)`, with camera motion `C_j = P_j⁻¹ M(p) P_j`,
+/// plus, not robustified and in the loss scale's units `s`, the soft manifold's prior
+/// residuals `½ Σ_k (s · q_k(p))²` ([`Manifold::prior_residuals`]) and an optional
+/// [`MotionPrior`] on the change of motion `½ Σ_i (s · (p_i − c_i) / σ_i)²`.
 ///
 /// Some parameters may be held fixed (the arc length from odometry); the solver sees only the
 /// free ones. Residuals and Jacobians are evaluated with fixed-size dual numbers whose width is
@@ -32,6 +35,8 @@ pub struct Problem<'a, M: Manifold, R: ResidualMetric> {
     /// Indices (into the full vector) of the free parameters.
     free: [usize; MAX_PARAMS],
     n_free: usize,
+    /// The prior on the change of motion, if any.
+    motion_prior: Option<&'a MotionPrior>,
 }
 
 impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
@@ -86,7 +91,89 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             full,
             free,
             n_free: np,
+            motion_prior: None,
         })
+    }
+
+    /// Adds a prior on the change of motion (ignored if it does not constrain anything or its
+    /// vectors do not have the model's length).
+    pub fn with_motion_prior(mut self, prior: Option<&'a MotionPrior>) -> Self {
+        let np = M::PARAMS.len();
+        self.motion_prior =
+            prior.filter(|p| p.is_active() && p.center.len() == np && p.inv_sigma.len() == np);
+        self
+    }
+
+    /// Whether the problem has terms besides the matches (soft manifold, motion prior).
+    fn has_prior(&self) -> bool {
+        M::PRIOR_RESIDUALS > 0 || self.motion_prior.is_some()
+    }
+
+    /// The prior terms' cost `½ Σ (s q)²` at the full parameters `params` (plain `f64`).
+    pub fn prior_cost(&self, params: &[f64]) -> f64 {
+        if !self.has_prior() {
+            return 0.0;
+        }
+        let s = self.loss.scale();
+        let mut cost = 0.0;
+        if M::PRIOR_RESIDUALS > 0 {
+            let mut q = [0.0; MAX_PRIOR_RESIDUALS];
+            self.model
+                .prior_residuals(params, &mut q[..M::PRIOR_RESIDUALS]);
+            cost += q[..M::PRIOR_RESIDUALS]
+                .iter()
+                .map(|v| 0.5 * (s * v) * (s * v))
+                .sum::<f64>();
+        }
+        if let Some(mp) = self.motion_prior {
+            for i in 0..M::PARAMS.len() {
+                let r = s * (params[i] - mp.center[i]) * mp.inv_sigma[i];
+                cost += 0.5 * r * r;
+            }
+        }
+        cost
+    }
+
+    /// Adds the prior terms' Gauss-Newton normal equations (they are plain least squares) for
+    /// `N` free parameters; returns their cost.
+    fn linearize_prior_n<const N: usize>(
+        &self,
+        x: &ParamVec,
+        h: &mut SMatrix<f64, N, N>,
+        g: &mut SVector<f64, N>,
+    ) -> f64 {
+        let s = self.loss.scale();
+        let mut cost = 0.0;
+        if M::PRIOR_RESIDUALS > 0 {
+            let p = self.seeded::<N>(x);
+            let mut q = [DualSVec64::<N>::from_re(0.0); MAX_PRIOR_RESIDUALS];
+            self.model
+                .prior_residuals(&p[..M::PARAMS.len()], &mut q[..M::PRIOR_RESIDUALS]);
+            for v in &q[..M::PRIOR_RESIDUALS] {
+                let r = s * v.re;
+                cost += 0.5 * r * r;
+                if let Some(e) = &v.eps.0 {
+                    let j = e * s;
+                    *h += j * j.transpose();
+                    *g += j * r;
+                }
+            }
+        }
+        if let Some(mp) = self.motion_prior {
+            let p = self.full_params(x);
+            for i in 0..M::PARAMS.len() {
+                let w = s * mp.inv_sigma[i];
+                let r = w * (p[i] - mp.center[i]);
+                cost += 0.5 * r * r;
+                if let Some(k) = self.free[..self.n_free].iter().position(|&f| f == i) {
+                    if k < N {
+                        h[(k, k)] += w * w;
+                        g[k] += w * r;
+                    }
+                }
+            }
+        }
+        cost
     }
 
     /// Holds the parameters with `fixed[i] == true` at their current values.
@@ -194,13 +281,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     #[inline(always)]
     fn visit<const N: usize>(&self, x: &ParamVec, mut f: impl FnMut(&[DualSVec64<N>])) {
         let np = M::PARAMS.len();
-        let mut p = [DualSVec64::<N>::from_re(0.0); MAX_PARAMS];
-        for i in 0..np {
-            p[i] = DualSVec64::from_re(self.full[i]);
-        }
-        for k in 0..self.n_free.min(N) {
-            p[self.free[k]] = DualSVec64::from_re(x[k]).derivative(k);
-        }
+        let p = self.seeded::<N>(x);
         let m = self.model.motion(&p[..np]);
         let mut r = [DualSVec64::<N>::from_re(0.0); MAX_RESIDUALS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
@@ -217,6 +298,21 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
                 f(&r[..R::RESIDUALS]);
             }
         }
+    }
+
+    /// The full parameter vector in dual numbers, the free entries seeded with their unit
+    /// derivatives.
+    #[inline(always)]
+    fn seeded<const N: usize>(&self, x: &ParamVec) -> [DualSVec64<N>; MAX_PARAMS] {
+        let np = M::PARAMS.len();
+        let mut p = [DualSVec64::<N>::from_re(0.0); MAX_PARAMS];
+        for i in 0..np {
+            p[i] = DualSVec64::from_re(self.full[i]);
+        }
+        for k in 0..self.n_free.min(N) {
+            p[self.free[k]] = DualSVec64::from_re(x[k]).derivative(k);
+        }
+        p
     }
 
     /// Robustified normal equations with `N` free parameters; with `known_cost` the loss is
@@ -266,6 +362,10 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
                 g += jt * (residual_scaling * v.re);
             }
         });
+        if self.has_prior() {
+            let prior_cost = self.linearize_prior_n::<N>(x, &mut h, &mut g);
+            cost += prior_cost;
+        }
         let mut out = Linearization {
             cost: known_cost.unwrap_or(cost),
             gradient: ParamVec::zeros(),
@@ -291,7 +391,7 @@ impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
         self.for_each_squared_norm(&p[..M::PARAMS.len()], |_, s| {
             cost += 0.5 * self.loss.evaluate(s)[0];
         });
-        cost
+        cost + self.prior_cost(&p[..M::PARAMS.len()])
     }
 
     fn linearize(&self, x: &ParamVec) -> Linearization {

@@ -28,7 +28,8 @@ fn worst<M: Manifold, R: ResidualMetric>(
 
 /// Checks a motion model's automatic derivatives against central finite differences at
 /// `params`, in one call: the Jacobian of the motion itself
-/// ([`momo_core::check::check_motion_jacobian`]) and the Jacobians of the residuals of every
+/// ([`momo_core::check::check_motion_jacobian`]), of a soft manifold's prior residuals
+/// ([`momo_core::check::check_prior_jacobian`]) and the Jacobians of the residuals of every
 /// built-in metric ([`momo_core::check::check_residual_jacobian`]) on two canned rigs
 /// ([`momo_costs::canned`]): a pinhole camera ([`AnglePlane`], [`GeoLine`], [`Sampson`]) and a
 /// four-camera Kannala-Brandt rig ([`AnglePlane`], [`Sampson`] in tangent planes; [`GeoLine`] is
@@ -70,6 +71,7 @@ pub fn check_model<M: Manifold>(
         });
     }
     let mut acc = check_motion_jacobian(model, params, tol)?;
+    acc = acc.max(momo_core::check::check_prior_jacobian(model, params, tol)?);
     let motion = model.motion(params);
 
     let pinhole = canned::pinhole_rig();

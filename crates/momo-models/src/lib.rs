@@ -45,12 +45,14 @@ mod registry;
 mod rotation;
 mod se3;
 mod single_track;
+mod soft;
 
 pub use check::{CHECK_INLIERS, CHECK_OFF_EPIPOLAR, check_model};
 pub use registry::{build_with_builtin_metrics, build_with_builtin_models, unregistered};
 pub use rotation::{arc_chord, arc_length_from_chord, half_angle_sinc, rot_x, rot_y, rot_z};
 pub use se3::Se3;
 pub use single_track::{SingleTrack2d, SingleTrack3d, TiltTranslation};
+pub use soft::SoftSingleTrack;
 
 /// Re-exported so that a crate defining its own model or metric needs only `momo-models`.
 pub use momo_core;

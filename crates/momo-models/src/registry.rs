@@ -1,6 +1,6 @@
 //! Building type-erased estimators from configuration types, and the registration macros.
 
-use crate::{Se3, SingleTrack2d, SingleTrack3d};
+use crate::{Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack};
 use momo_core::{
     CoreError, FrameEstimator, Manifold, MetricSpec, ModelSpec, ResidualMetric, erase,
 };
@@ -59,6 +59,9 @@ pub fn build_with_builtin_models<R: ResidualMetric>(
         return Some(erase(*m, metric));
     }
     if let Some(m) = any.downcast_ref::<Se3>() {
+        return Some(erase(*m, metric));
+    }
+    if let Some(m) = any.downcast_ref::<SoftSingleTrack>() {
         return Some(erase(*m, metric));
     }
     None
@@ -200,3 +203,4 @@ macro_rules! register_metric {
 crate::register_model!(SingleTrack2d, "single_track_2d");
 crate::register_model!(SingleTrack3d, "single_track_3d");
 crate::register_model!(Se3, "se3");
+crate::register_model!(SoftSingleTrack, "soft_single_track");

@@ -2,7 +2,9 @@
 //! 1e-6) through `check_model`, at random parameters, at zero yaw and at exactly zero rotation.
 
 use momo_core::Manifold;
-use momo_models::{Se3, SingleTrack2d, SingleTrack3d, TiltTranslation, check_model};
+use momo_models::{
+    Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack, TiltTranslation, check_model,
+};
 use proptest::prelude::*;
 
 const TOL: f64 = 1e-6;
@@ -45,6 +47,40 @@ proptest! {
         assert_ok(&Se3, &[0.0, 0.0, 0.0, heading, climb, l])?;
         assert_ok(&Se3, &[1e-4 * rx, 1e-4 * ry, 1e-4 * rz, heading, climb, l])?;
     }
+
+    #[test]
+    fn soft_single_track(
+        rx in -0.3..0.3f64, ry in -0.3..0.3f64, rz in -0.3..0.3f64,
+        heading in -0.3..0.3f64, climb in -0.3..0.3f64, l in 0.1..3.0f64,
+        sigma in 0.001..0.1f64,
+    ) {
+        let m = SoftSingleTrack { side_slip_sigma: sigma, climb_sigma: 2.0 * sigma };
+        assert_ok(&m, &[rx, ry, rz, heading, climb, l])?;
+        assert_ok(&m, &[0.0, 0.0, 0.0, heading, climb, l])?;
+    }
+}
+
+/// A soft manifold whose prior residual has a wrong derivative at zero is caught.
+#[test]
+fn a_broken_prior_is_caught() {
+    use momo_core::{Pose, Scalar};
+
+    #[derive(Clone, Debug)]
+    struct BrokenPrior;
+    impl Manifold for BrokenPrior {
+        const PARAMS: &'static [&'static str] = Se3::PARAMS;
+        const ARC_LENGTH: Option<usize> = Se3::ARC_LENGTH;
+        const PRIOR_RESIDUALS: usize = 1;
+        fn motion<T: Scalar>(&self, p: &[T]) -> Pose<T> {
+            Se3.motion(p)
+        }
+        fn prior_residuals<T: Scalar>(&self, p: &[T], out: &mut [T]) {
+            // |heading| via sqrt(heading²): derivative NaN at 0 on duals.
+            out[0] = (p[3] * p[3]).sqrt();
+        }
+    }
+    assert!(check_model(&BrokenPrior, &[0.0, 0.0, 0.1, 0.0, 0.0, 1.0], TOL).is_err());
+    assert!(check_model(&BrokenPrior, &[0.0, 0.0, 0.1, 0.05, 0.0, 1.0], TOL).is_ok());
 }
 
 #[test]

@@ -177,6 +177,7 @@ fn built_estimators_solve_noise_free_frames() {
                     initial: &start,
                     fixed: &fixed,
                     rotation_only: false,
+                    motion_prior: None,
                 };
                 let is_fisheye = rig.cameras()[0].model.as_pinhole().is_none();
                 if is_fisheye && r.as_any().is::<GeoLine>() {
@@ -216,6 +217,7 @@ fn built_estimators_solve_noise_free_frames() {
         initial: &[0.0, 1.2],
         fixed: &[false, true],
         rotation_only: false,
+        motion_prior: None,
     };
     assert!((e.solve(&req).unwrap().params[0] - 0.05).abs() < 1e-9);
 }

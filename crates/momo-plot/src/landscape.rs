@@ -175,6 +175,7 @@ pub fn compute_landscape(
         initial: &estimate,
         fixed: &fixed,
         rotation_only: false,
+        motion_prior: None,
     };
     let mut cost = Vec::with_capacity(yaw_deg.len() * arc_length.len());
     let mut params = estimate.clone();

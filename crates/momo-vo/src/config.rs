@@ -3,6 +3,7 @@
 
 use momo_core::{MetricSpec, ModelSpec, RobustLoss, Solver};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 use thiserror::Error;
 
@@ -58,6 +59,11 @@ pub struct OdometryOptions {
     pub restart_inlier_ratio: f64,
     /// Yaw offsets (radians) of the extra starts around the previous motion.
     pub restart_yaw_offsets: Vec<f64>,
+    /// The motion prior (vehicle dynamics): for each named model parameter, the standard
+    /// deviation of its change from one frame to the next (radians or metres per frame), as a
+    /// Gaussian cost term centred on the previous frame's motion ([`momo_core::MotionPrior`]).
+    /// Empty (the default): no prior, the previous motion is only the start.
+    pub motion_prior_sigmas: BTreeMap<String, f64>,
 }
 
 impl Default for OdometryOptions {
@@ -70,6 +76,7 @@ impl Default for OdometryOptions {
             max_relative_scale_sigma: 0.2,
             restart_inlier_ratio: 0.7,
             restart_yaw_offsets: vec![-0.1, -0.03, 0.03, 0.1],
+            motion_prior_sigmas: BTreeMap::new(),
         }
     }
 }
@@ -275,6 +282,15 @@ impl Config {
         }
         if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
             return bad("odometry.restart_yaw_offsets must be finite".into());
+        }
+        if let Some((name, s)) = o
+            .motion_prior_sigmas
+            .iter()
+            .find(|(_, s)| !(s.is_finite() && **s > 0.0))
+        {
+            return bad(format!(
+                "odometry.motion_prior_sigmas.{name} must be finite and > 0, got {s}"
+            ));
         }
         let f = &self.five_point;
         if !(f.threshold > 0.0 && f.threshold.is_finite()) {

@@ -3,8 +3,8 @@
 
 use crate::config::{Config, ConfigError};
 use momo_core::{
-    CoreError, FrameEstimator, FrameObservations, FrameSolution, Pose, Rig, SolveRequest,
-    Termination,
+    CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, Rig,
+    SolveRequest, Termination,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -46,6 +46,11 @@ pub enum ScaleSource {
     Estimated,
     /// Not observable in this frame: the last value was held.
     Held,
+    /// No odometry, and the rig can never observe scale (every camera in the motion centre,
+    /// [`Odometry::scale_observable`] is false): the arc length is
+    /// `odometry.initial_arc_length` or the last value odometry gave, so the trajectory's scale
+    /// is arbitrary.
+    Unobservable,
 }
 
 /// Per-frame diagnostics (one row of `--diagnostics`).
@@ -122,6 +127,9 @@ pub struct Odometry {
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
     inlier_ratio_average: Option<f64>,
+    /// The prior on the change of motion (centred on the previous frame before each solve),
+    /// if the configuration has one (`odometry.motion_prior_sigmas`).
+    motion_prior: Option<MotionPrior>,
 }
 
 impl Odometry {
@@ -132,6 +140,25 @@ impl Odometry {
         let observable = estimator.observable(&rig);
         let scale_observable = estimator.arc_length_index().is_some_and(|i| observable[i]);
         let previous = estimator.initial_params(config.odometry.initial_arc_length);
+        let names = estimator.param_names();
+        let mut inv_sigma = vec![0.0; names.len()];
+        for (name, sigma) in &config.odometry.motion_prior_sigmas {
+            let Some(i) = names.iter().position(|n| n == name) else {
+                return Err(VoError::Config(ConfigError::Invalid {
+                    path: "<config>".into(),
+                    reason: format!(
+                        "odometry.motion_prior_sigmas: the model has no parameter `{name}` \
+                         (it has {})",
+                        names.join(", ")
+                    ),
+                }));
+            };
+            inv_sigma[i] = 1.0 / sigma;
+        }
+        let motion_prior = inv_sigma.iter().any(|w| *w != 0.0).then(|| MotionPrior {
+            center: previous.clone(),
+            inv_sigma,
+        });
         Ok(Self {
             rig,
             config,
@@ -141,6 +168,7 @@ impl Odometry {
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
+            motion_prior,
         })
     }
 
@@ -187,7 +215,10 @@ impl Odometry {
                 ScaleSource::Odometry
             }
             (Some(i), None) => {
-                if !(self.config.odometry.estimate_scale && self.scale_observable) {
+                if !self.scale_observable {
+                    fixed[i] = true;
+                    ScaleSource::Unobservable
+                } else if !self.config.odometry.estimate_scale {
                     fixed[i] = true;
                     ScaleSource::Held
                 } else {
@@ -229,6 +260,9 @@ impl Odometry {
             time_us: 0.0,
         };
 
+        if let Some(prior) = &mut self.motion_prior {
+            prior.center.clone_from(&init);
+        }
         let result = if matches < self.config.odometry.min_matches.max(1) {
             diag.status = FrameStatus::NoMatches;
             None
@@ -332,6 +366,7 @@ impl Odometry {
             initial: init,
             fixed,
             rotation_only,
+            motion_prior: self.motion_prior.as_ref(),
         };
         let sol = self.estimator.solve(&req).ok()?;
         let ok = sol.report.termination != Termination::NumericalFailure

@@ -1,0 +1,86 @@
+//! The soft single-track manifold and the motion prior, end to end through the odometry.
+
+use momo_core::{FrameObservations, Manifold};
+use momo_costs::canned;
+use momo_models::{Se3, SoftSingleTrack};
+use momo_vo::{Config, Odometry};
+
+fn obs_of(params: &[f64], seed: u64) -> FrameObservations {
+    canned::synthetic_observations(&canned::pinhole_rig(), &Se3.motion(params), 150, 0, seed)
+}
+
+fn heading_of(config: Config, truth: &[f64]) -> f64 {
+    let mut vo = Odometry::new(canned::pinhole_rig(), config).unwrap();
+    let r = vo.process(&obs_of(truth, 11), Some(truth[5]));
+    r.diagnostics.params[3]
+}
+
+/// With a wide prior the soft model finds a side-slipping motion like `Se3`; with a narrow one
+/// it pulls the direction of travel onto the single-track chord (heading = yaw / 2).
+#[test]
+fn the_side_slip_prior_trades_data_against_the_model() {
+    // 0.6 degrees of side slip: heading = yaw/2 + 0.0105.
+    let truth = [0.0, 0.0, 0.02, 0.01 + 0.0105, 0.0, 1.0];
+    let soft = |sigma: f64| Config {
+        model: Box::new(SoftSingleTrack {
+            side_slip_sigma: sigma,
+            climb_sigma: sigma,
+        }),
+        ..Config::default()
+    };
+    let free = heading_of(Config::default(), &truth);
+    let wide = heading_of(soft(1.0), &truth);
+    let narrow = heading_of(soft(1e-5), &truth);
+    assert!((free - truth[3]).abs() < 1e-3, "se3: {free}");
+    assert!((wide - truth[3]).abs() < 1e-3, "wide prior: {wide}");
+    assert!((narrow - 0.01).abs() < 1e-3, "narrow prior: {narrow}");
+}
+
+/// A narrow motion prior holds the yaw near the previous frame's when the next frame turns.
+#[test]
+fn the_motion_prior_resists_a_change_of_motion() {
+    let straight = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+    let turn = [0.0, 0.0, 0.02, 0.01, 0.0, 1.0];
+    let run = |sigma: Option<f64>| {
+        let mut config = Config::default();
+        if let Some(s) = sigma {
+            config
+                .odometry
+                .motion_prior_sigmas
+                .insert("rot_z".into(), s);
+        }
+        let mut vo = Odometry::new(canned::pinhole_rig(), config).unwrap();
+        vo.process(&obs_of(&straight, 1), Some(1.0));
+        vo.process(&obs_of(&turn, 2), Some(1.0)).diagnostics.params[2]
+    };
+    let none = run(None);
+    let narrow = run(Some(1e-6));
+    assert!((none - 0.02).abs() < 1e-3, "no prior: {none}");
+    assert!(narrow.abs() < 1e-3, "narrow prior: {narrow}");
+}
+
+/// Misconfigured priors are errors naming the field, not panics.
+#[test]
+fn bad_prior_configurations_are_errors() {
+    let mut config = Config::default();
+    config
+        .odometry
+        .motion_prior_sigmas
+        .insert("yaw".into(), 0.01);
+    let e = Odometry::new(canned::pinhole_rig(), config).unwrap_err();
+    assert!(e.to_string().contains("yaw"), "{e}");
+
+    let mut config = Config::default();
+    config
+        .odometry
+        .motion_prior_sigmas
+        .insert("rot_z".into(), 0.0);
+    let e = Odometry::new(canned::pinhole_rig(), config).unwrap_err();
+    assert!(e.to_string().contains("rot_z"), "{e}");
+
+    let text = "[model]\ntype = \"soft_single_track\"\nside_slip_sigma = -1.0\n\
+                [metric]\ntype = \"angle_plane\"\n[loss]\ntype = \"cauchy\"\nscale = 0.001\n\
+                [solver]\ntype = \"levenberg_marquardt\"\n";
+    let e = Config::from_toml_str(text, "bad.toml").unwrap_err();
+    assert!(e.to_string().contains("side_slip_sigma"), "{e}");
+}
