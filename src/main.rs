@@ -114,6 +114,61 @@ enum Command {
         #[command(subcommand)]
         figure: PlotCommand,
     },
+    /// Run every combination of a grid (models x metrics x losses x scales x solvers x matches)
+    /// on every sequence in parallel, score each against the ground truth and write
+    /// results.csv and summary.md; `--shard I/N` runs one slice, `momo sweep merge` joins them.
+    Sweep(momo_sweep::cli::SweepArgs),
+    /// Detect and match features in image sequences (PNG/JPEG, one folder per camera in the
+    /// rig's order, files in name order) and write a sequence directory: matches.csv
+    /// (FORMAT.md), a copy of the rig file as rig.json, and with --odometry a copy of it as
+    /// odometry.csv, so that `momo run SEQ_DIR` follows.
+    Match {
+        /// Image folders, one per camera of the rig.
+        #[arg(required = true)]
+        images: Vec<PathBuf>,
+        /// The rig (rig.json of FORMAT.md); image sizes must match its cameras.
+        #[arg(long)]
+        rig: PathBuf,
+        /// odometry.csv (arc lengths) to copy into the sequence directory.
+        #[arg(long)]
+        odometry: Option<PathBuf>,
+        /// Output sequence directory (created).
+        #[arg(short, long)]
+        output: PathBuf,
+        #[command(flatten)]
+        front: FrontEndArgs,
+        /// No progress bar and no summary on stderr.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Visual odometry from images in one streaming pass: match consecutive frames and
+    /// estimate the motion frame by frame; writes camera 0's trajectory (KITTI format, one line
+    /// per image frame).
+    Vo {
+        /// Image folders, one per camera of the rig.
+        #[arg(required = true)]
+        images: Vec<PathBuf>,
+        /// The rig (rig.json of FORMAT.md); image sizes must match its cameras.
+        #[arg(long)]
+        rig: PathBuf,
+        /// Arc lengths per frame pair (odometry.csv of FORMAT.md): fixes the scale.
+        #[arg(long)]
+        odometry: Option<PathBuf>,
+        /// Output trajectory (KITTI format), written atomically.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Estimator configuration (TOML, or JSON if the name ends in .json); see `momo config`.
+        #[arg(short, long)]
+        config: Option<PathBuf>,
+        /// The estimator (as for `momo run`).
+        #[arg(long, value_enum, default_value_t = EstimatorArg::Momo)]
+        estimator: EstimatorArg,
+        #[command(flatten)]
+        front: FrontEndArgs,
+        /// No progress bar and no summary on stderr.
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Simulate a drive (no data needed), run the estimator on it and print how close the
     /// result is to the truth.
     Demo {
@@ -186,6 +241,123 @@ enum PlotCommand {
         #[arg(long, default_value_t = 81)]
         steps: usize,
     },
+}
+
+/// Options of the feature front end (`momo match`, `momo vo`).
+#[derive(clap::Args, Debug, Clone, Copy)]
+struct FrontEndArgs {
+    /// Matches per frame pair and camera, spread over the image by bucketing.
+    #[arg(long, default_value_t = 200)]
+    matches: usize,
+    /// Gamma correction of every image (out = 255 (in/255)^(1/gamma)); none by default.
+    #[arg(long)]
+    gamma: Option<f64>,
+    /// Largest horizontal flow searched, pixels.
+    #[arg(long, default_value_t = 200)]
+    max_flow_u: u32,
+    /// Largest vertical flow searched, pixels.
+    #[arg(long, default_value_t = 100)]
+    max_flow_v: u32,
+    /// Non-maximum suppression radius of the blob and corner detector, pixels.
+    #[arg(long, default_value_t = 5)]
+    nms_radius: usize,
+    /// Minimum filter response of a feature.
+    #[arg(long, default_value_t = 50)]
+    threshold: i32,
+}
+
+impl From<FrontEndArgs> for momo_match::FrontEndOptions {
+    fn from(a: FrontEndArgs) -> Self {
+        let d = momo_match::MatchOptions::default();
+        Self {
+            matching: momo_match::MatchOptions {
+                matches_per_frame: a.matches,
+                max_flow_u: a.max_flow_u,
+                max_flow_v: a.max_flow_v,
+                detector: momo_match::DetectorOptions {
+                    nms_radius: a.nms_radius,
+                    threshold: a.threshold,
+                },
+                ..d
+            },
+            gamma: a.gamma,
+        }
+    }
+}
+
+/// Maps a front-end error: bad input exits with 2, failed writes with 1.
+fn match_failure(e: momo_match::MatchError) -> Failure {
+    if e.is_input() {
+        Failure::Input(e.into())
+    } else {
+        Failure::Other(e.into())
+    }
+}
+
+/// `momo match`.
+fn match_cmd(
+    images: &[PathBuf],
+    rig: &Path,
+    odometry: Option<&Path>,
+    output: &Path,
+    front: FrontEndArgs,
+    quiet: bool,
+) -> Result<(), Failure> {
+    let bar = progress_bar(quiet, None);
+    let started = std::time::Instant::now();
+    let stats =
+        momo_match::match_to_sequence(images, rig, output, odometry, &front.into(), |_| bar.inc(1))
+            .map_err(match_failure)?;
+    bar.finish_and_clear();
+    if !quiet {
+        eprintln!(
+            "momo: {} frames, {} matches in {:.2} s ({:.1} ms/frame matching, {:.1} ms/frame decoding); wrote {}",
+            stats.frames,
+            stats.matches,
+            started.elapsed().as_secs_f64(),
+            stats.match_ms_per_frame(),
+            stats.decode_ms_per_frame(),
+            output.display()
+        );
+    }
+    Ok(())
+}
+
+/// `momo vo`.
+fn vo_cmd(
+    run: momo_match::VoRun,
+    config: Option<PathBuf>,
+    front: FrontEndArgs,
+    quiet: bool,
+) -> Result<(), Failure> {
+    let config = match &config {
+        Some(p) => Config::from_file(p).map_err(|e| Failure::Input(e.into()))?,
+        None => Config::default(),
+    };
+    let frames = momo_match::ImageSequence::open(&run.folders)
+        .map_err(match_failure)?
+        .len();
+    let bar = progress_bar(quiet, Some(frames.saturating_sub(1) as u64));
+    let started = std::time::Instant::now();
+    let summary = momo_match::vo_from_images(&run, config, &front.into(), |_| bar.inc(1))
+        .map_err(match_failure)?;
+    bar.finish_and_clear();
+    if !quiet {
+        let f = summary.front_end;
+        eprintln!(
+            "momo: {} frames in {:.2} s ({:.1} ms/frame matching, {:.1} ms/frame decoding, {:.1} µs/frame estimating): {} estimated, {} not; {} matches; wrote {}",
+            summary.poses,
+            started.elapsed().as_secs_f64(),
+            f.match_ms_per_frame(),
+            f.decode_ms_per_frame(),
+            1e6 * summary.estimate_seconds / (summary.poses.max(2) - 1) as f64,
+            summary.estimated,
+            summary.not_estimated,
+            f.matches,
+            run.output.display()
+        );
+    }
+    Ok(())
 }
 
 /// The `--estimator` choices.
@@ -566,6 +738,42 @@ fn main() -> ExitCode {
         } => import_kitti(&dir, &out_dir, stereo, matches, seed),
         Command::Eval { gt, est, json } => eval(&gt, &est, json),
         Command::Plot { figure } => plot(figure),
+        Command::Sweep(args) => momo_sweep::cli::main(args).map_err(|e| {
+            if e.is_input() {
+                Failure::Input(e.into())
+            } else {
+                Failure::Other(e.into())
+            }
+        }),
+        Command::Match {
+            images,
+            rig,
+            odometry,
+            output,
+            front,
+            quiet,
+        } => match_cmd(&images, &rig, odometry.as_deref(), &output, front, quiet),
+        Command::Vo {
+            images,
+            rig,
+            odometry,
+            output,
+            config,
+            estimator,
+            front,
+            quiet,
+        } => vo_cmd(
+            momo_match::VoRun {
+                folders: images,
+                rig,
+                odometry,
+                output,
+                estimator: estimator.into(),
+            },
+            config,
+            front,
+            quiet,
+        ),
         Command::Demo {
             frames,
             seed,

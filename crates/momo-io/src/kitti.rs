@@ -440,6 +440,29 @@ fn frame_seed(seed: u64, k: usize) -> u64 {
     SplitMix64(seed ^ (k as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)).next_u64()
 }
 
+/// Sub-samples frame pair `k`'s matches to at most `n` per camera, spread over each camera's
+/// image by [`select_spread`] on the pixels in frame `k-1`, deterministically from `seed` and
+/// `k` (cameras beyond `rig` keep their matches). Camera 0 is chosen exactly as
+/// [`import_l1avgvo`] chooses with [`KittiImport::matches_per_frame`] and the same seed, so
+/// sub-sampling a mono import of all matches gives the matches of an import with `n`.
+pub fn subsample_frame(
+    frame: &FrameObservations,
+    rig: &Rig,
+    n: usize,
+    seed: u64,
+    k: usize,
+) -> FrameObservations {
+    let mut out = frame.clone();
+    for (j, (list, cam)) in out.per_camera.iter_mut().zip(rig.cameras()).enumerate() {
+        let (width, height) = cam.model.size();
+        let px: Vec<Vector2<f64>> = list.iter().map(|o| o.px0).collect();
+        let camera_seed = seed.wrapping_add((j as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let chosen = select_spread(&px, n, width, height, frame_seed(camera_seed, k));
+        *list = chosen.into_iter().map(|i| list[i]).collect();
+    }
+    out
+}
+
 /// Imports an `l1avgvo` data folder (see the [module docs](self)) as a sequence: rig,
 /// matches (sub-sampled per [`KittiImport`]), and, if the folder has a ground-truth file, the
 /// ground truth (camera 0) and the arc lengths of the motion centre. Errors name the file (and

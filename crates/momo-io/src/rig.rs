@@ -7,7 +7,7 @@
 //! [`ORTHONORMAL_TOLERANCE`]) and errors point at the line where that value starts.
 
 use crate::atomic::{put, write_atomic};
-use crate::error::{IoError, IoErrorKind};
+use crate::error::{IoError, IoErrorKind, quote};
 use crate::text::Exact;
 use momo_core::rig::ORTHONORMAL_TOLERANCE;
 use momo_core::{Camera, Pose, Rig, RigCamera};
@@ -82,8 +82,40 @@ fn parse_at<'a, T: Deserialize<'a>>(sub: &'a str, base: Pos, path: &Path) -> Res
         if let Some(m) = message.strip_suffix(&suffix) {
             message = m.to_owned();
         }
+        let message = shorten_quoted(&message);
         IoError::at(path, line.max(1), IoErrorKind::Json { column, message })
     })
+}
+
+/// Longest serde_json message kept in an error (characters); the rest is cut.
+const MAX_JSON_MESSAGE_CHARS: usize = 300;
+
+/// Shortens the file's text that serde_json quotes in a message (`` `name` `` and `"value"`)
+/// to 40 characters each, and the whole message to [`MAX_JSON_MESSAGE_CHARS`], so that a huge
+/// key or string gives a short error (found by fuzzing: an unknown field of 2,000 characters
+/// was echoed whole; a key that itself holds backticks defeats the quote matching, hence the
+/// overall cut).
+fn shorten_quoted(message: &str) -> String {
+    let mut out = message.to_owned();
+    for delimiter in ['`', '"'] {
+        out = out
+            .split(delimiter)
+            .enumerate()
+            .map(|(i, part)| {
+                if i % 2 == 1 {
+                    quote(part)
+                } else {
+                    part.to_owned()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(&delimiter.to_string());
+    }
+    if out.chars().count() > MAX_JSON_MESSAGE_CHARS {
+        out = out.chars().take(MAX_JSON_MESSAGE_CHARS).collect();
+        out.push('…');
+    }
+    out
 }
 
 /// Checks intrinsics: positive finite focal lengths and image size, finite other parameters.
@@ -278,6 +310,27 @@ pub fn write_rig(path: impl AsRef<Path>, rig: &Rig) -> Result<(), IoError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quoted_text_in_messages_is_shortened() {
+        let long = "x".repeat(100);
+        let m = shorten_quoted(&format!("unknown field `{long}`, expected `cameras`"));
+        assert_eq!(
+            m,
+            format!("unknown field `{}…`, expected `cameras`", "x".repeat(40))
+        );
+        let m = shorten_quoted(&format!("invalid type: string \"{long}\", expected f64"));
+        assert_eq!(
+            m,
+            format!("invalid type: string \"{}…\", expected f64", "x".repeat(40))
+        );
+        assert_eq!(shorten_quoted("no quotes"), "no quotes");
+        // Quotes inside the quoted text: still short.
+        let m = shorten_quoted(&format!(
+            "unknown field `a{long}`b`{long}`, expected `cameras`"
+        ));
+        assert!(m.chars().count() <= MAX_JSON_MESSAGE_CHARS + 1, "{m}");
+    }
 
     #[test]
     fn positions_map_to_the_file() {

@@ -204,6 +204,11 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "# Odometry driver: degenerate frames, scale and restarts.",
     ),
     (
+        "odometry.motion_prior_sigmas",
+        "# Motion prior (vehicle dynamics): the standard deviation of each model parameter's change\n\
+         # from one frame to the next, e.g. rot_z = 0.002 (radians per frame). Empty: no prior.",
+    ),
+    (
         "five_point",
         "# The 5-point RANSAC baseline (`momo run --estimator five-point`), not used by momo.\n\
          # threshold in radians of angular Sampson error; refine = LO-RANSAC-style refinement\n\

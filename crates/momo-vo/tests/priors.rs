@@ -10,7 +10,7 @@ fn obs_of(params: &[f64], seed: u64) -> FrameObservations {
 }
 
 fn heading_of(config: Config, truth: &[f64]) -> f64 {
-    let mut vo = Odometry::new(canned::pinhole_rig(), config).unwrap();
+    let mut vo = Odometry::new(canned::pinhole_rig(), config).expect("valid config");
     let r = vo.process(&obs_of(truth, 11), Some(truth[5]));
     r.diagnostics.params[3]
 }
@@ -49,7 +49,7 @@ fn the_motion_prior_resists_a_change_of_motion() {
                 .motion_prior_sigmas
                 .insert("rot_z".into(), s);
         }
-        let mut vo = Odometry::new(canned::pinhole_rig(), config).unwrap();
+        let mut vo = Odometry::new(canned::pinhole_rig(), config).expect("valid config");
         vo.process(&obs_of(&straight, 1), Some(1.0));
         vo.process(&obs_of(&turn, 2), Some(1.0)).diagnostics.params[2]
     };

@@ -1,0 +1,362 @@
+//! Matching features between consecutive frames of one camera, and the streaming
+//! [`FrameMatcher`] over a multi-camera sequence.
+//!
+//! For each frame pair `(k-1, k)` and camera:
+//! 1. *Candidates*: the image is cut into a grid of about `matches_per_frame` cells; in each
+//!    cell the `candidates_per_cell` strongest features of each class in frame `k-1` are
+//!    matched (so that effort goes where the output will come from, spread over the image).
+//! 2. *Forward*: the feature of the same class in frame `k` with the smallest SAD inside the
+//!    search window (`max_flow_u` x `max_flow_v` pixels around the candidate's position).
+//! 3. *Backward (circular check)*: from that feature, the best feature of frame `k-1` in the
+//!    same window must be the candidate itself; otherwise the match is dropped.
+//!    Before that, the forward match must be unique: its SAD at most `uniqueness` times the
+//!    second best in the window.
+//! 4. *Sub-pixel*: both positions are the vertices of the parabolas through the filter response
+//!    around the detected pixels (per axis), so a feature moves with the image content.
+//! 5. *Bucketing*: each grid cell gives at most one match per round, best SAD first, rounds
+//!    repeat until `matches_per_frame` matches are chosen or none are left.
+
+use crate::error::MatchError;
+use crate::features::{CLASSES, DetectorOptions, FrameFeatures, MIN_SIDE};
+use image::GrayImage;
+use rayon::prelude::*;
+
+/// Options of the matcher.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchOptions {
+    /// Matches per frame pair and camera after bucketing (the paper: 100-300).
+    pub matches_per_frame: usize,
+    /// Candidates per grid cell and feature class matched in each frame pair.
+    pub candidates_per_cell: usize,
+    /// Half-width of the search window in u, pixels (the largest horizontal flow).
+    pub max_flow_u: u32,
+    /// Half-height of the search window in v, pixels (the largest vertical flow).
+    pub max_flow_v: u32,
+    /// Largest accepted SAD of two 32-byte descriptors.
+    pub max_sad: u32,
+    /// Uniqueness: the best SAD must be at most this fraction of the second best in the
+    /// search window (1 disables the test).
+    pub uniqueness: f64,
+    /// Sub-pixel positions: both pixels at the vertex of the parabola through their filter
+    /// response (else the integer pixels of the detector).
+    pub subpixel: bool,
+    /// The detector.
+    pub detector: DetectorOptions,
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        Self {
+            matches_per_frame: 200,
+            candidates_per_cell: 2,
+            max_flow_u: 200,
+            max_flow_v: 100,
+            max_sad: 32 * 40,
+            uniqueness: 0.8,
+            subpixel: true,
+            detector: DetectorOptions::default(),
+        }
+    }
+}
+
+impl MatchOptions {
+    /// Checks the ranges: at least one match and one candidate per cell, a non-zero window.
+    pub fn validate(&self) -> Result<(), MatchError> {
+        if self.matches_per_frame == 0 {
+            return Err(MatchError::Option(
+                "matches per frame must be at least 1".into(),
+            ));
+        }
+        if self.candidates_per_cell == 0 {
+            return Err(MatchError::Option(
+                "candidates per cell must be at least 1".into(),
+            ));
+        }
+        if self.max_flow_u == 0 || self.max_flow_v == 0 {
+            return Err(MatchError::Option(
+                "the search window (max flow) must be at least 1 pixel".into(),
+            ));
+        }
+        if !(self.uniqueness > 0.0 && self.uniqueness <= 1.0) {
+            return Err(MatchError::Option(format!(
+                "uniqueness must be in (0, 1], found {}",
+                self.uniqueness
+            )));
+        }
+        if self.detector.nms_radius == 0 || self.detector.nms_radius > 20 {
+            return Err(MatchError::Option(format!(
+                "the non-maximum suppression radius must be in 1..=20, found {}",
+                self.detector.nms_radius
+            )));
+        }
+        if self.detector.threshold <= 0 {
+            return Err(MatchError::Option(format!(
+                "the detector threshold must be positive, found {}",
+                self.detector.threshold
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// One match: pixel in frame k-1, pixel in frame k, descriptor SAD.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Match {
+    /// Column in frame k-1.
+    pub u0: f64,
+    /// Row in frame k-1.
+    pub v0: f64,
+    /// Column in frame k.
+    pub u1: f64,
+    /// Row in frame k.
+    pub v1: f64,
+    /// SAD of the descriptors (lower is better).
+    pub sad: u32,
+}
+
+/// The bucketing grid: about `n` square cells over a `w x h` image.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    cell: f64,
+    cols: usize,
+    rows: usize,
+}
+
+impl Grid {
+    fn new(w: usize, h: usize, n: usize) -> Self {
+        let cell = ((w * h) as f64 / n.max(1) as f64).sqrt().max(1.0);
+        Self {
+            cell,
+            cols: ((w as f64 / cell).ceil() as usize).max(1),
+            rows: ((h as f64 / cell).ceil() as usize).max(1),
+        }
+    }
+
+    fn of(&self, u: f64, v: f64) -> usize {
+        let c = ((u / self.cell) as usize).min(self.cols - 1);
+        let r = ((v / self.cell) as usize).min(self.rows - 1);
+        r * self.cols + c
+    }
+
+    fn len(&self) -> usize {
+        self.cols * self.rows
+    }
+}
+
+/// Matches the features of two frames of one camera (the steps of the module documentation).
+/// Both frames must have the same size.
+pub fn match_features(
+    prev: &FrameFeatures,
+    cur: &FrameFeatures,
+    options: &MatchOptions,
+) -> Vec<Match> {
+    let (w, h) = (prev.width, prev.height);
+    if w != cur.width || h != cur.height || w < MIN_SIDE || h < MIN_SIDE {
+        return Vec::new();
+    }
+    let grid = Grid::new(w, h, options.matches_per_frame);
+
+    // 1. Candidates: the strongest features per cell and class.
+    let mut candidates: Vec<(usize, usize)> = Vec::new();
+    for class in 0..CLASSES {
+        let points = &prev.classes[class].points;
+        let mut keyed: Vec<(usize, i32, usize)> = points
+            .iter()
+            .enumerate()
+            .map(|(i, f)| {
+                (
+                    grid.of(f64::from(f.u), f64::from(f.v)),
+                    -i32::from(f.response).abs(),
+                    i,
+                )
+            })
+            .collect();
+        keyed.sort_unstable();
+        let mut last_cell = usize::MAX;
+        let mut taken = 0;
+        for (cell, _, i) in keyed {
+            if cell != last_cell {
+                last_cell = cell;
+                taken = 0;
+            }
+            if taken < options.candidates_per_cell {
+                candidates.push((class, i));
+                taken += 1;
+            }
+        }
+    }
+
+    // 2.-4. Forward, backward, sub-pixel.
+    let (ru, rv) = (options.max_flow_u as i32, options.max_flow_v as i32);
+    let matches: Vec<Match> = candidates
+        .par_iter()
+        .filter_map(|&(class, i)| {
+            let f = &prev.classes[class].points[i];
+            let (u0, v0) = (i32::from(f.u), i32::from(f.v));
+            let (j, s, second) = cur.classes[class].best_in_window(&f.desc, u0, v0, ru, rv)?;
+            if s > options.max_sad || f64::from(s) > options.uniqueness * f64::from(second) {
+                return None;
+            }
+            let g = &cur.classes[class].points[j];
+            let (u1, v1) = (i32::from(g.u), i32::from(g.v));
+            let (back, _, _) = prev.classes[class].best_in_window(&g.desc, u1, v1, ru, rv)?;
+            if back != i {
+                return None;
+            }
+            Some(if options.subpixel {
+                Match {
+                    u0: f64::from(f.x),
+                    v0: f64::from(f.y),
+                    u1: f64::from(g.x),
+                    v1: f64::from(g.y),
+                    sad: s,
+                }
+            } else {
+                Match {
+                    u0: f64::from(u0),
+                    v0: f64::from(v0),
+                    u1: f64::from(u1),
+                    v1: f64::from(v1),
+                    sad: s,
+                }
+            })
+        })
+        .collect();
+
+    // 5. Bucketing.
+    bucket(matches, &grid, options.matches_per_frame)
+}
+
+/// At most `n` matches, spread over the grid: one per cell and round, best SAD first; in the last
+/// round the cells' best matches compete by SAD.
+fn bucket(mut matches: Vec<Match>, grid: &Grid, n: usize) -> Vec<Match> {
+    if matches.len() <= n {
+        return matches;
+    }
+    matches.sort_by_key(|m| (m.sad, m.v0 as u32, m.u0 as u32));
+    let mut cells: Vec<Vec<Match>> = vec![Vec::new(); grid.len()];
+    for m in matches.into_iter().rev() {
+        cells[grid.of(m.u0, m.v0)].push(m); // reversed: best at the end, popped first
+    }
+    let mut out = Vec::with_capacity(n);
+    loop {
+        let mut round: Vec<Match> = cells.iter_mut().filter_map(Vec::pop).collect();
+        if round.is_empty() {
+            break;
+        }
+        if out.len() + round.len() > n {
+            round.sort_by_key(|m| m.sad);
+            round.truncate(n - out.len());
+        }
+        out.extend(round);
+        if out.len() >= n {
+            break;
+        }
+    }
+    out
+}
+
+/// Matches two images directly (tests, one-off use): detects in both and matches `img0` to
+/// `img1`. Fails if the sizes differ.
+pub fn match_images(
+    img0: &GrayImage,
+    img1: &GrayImage,
+    options: &MatchOptions,
+) -> Result<Vec<Match>, MatchError> {
+    options.validate()?;
+    if img0.dimensions() != img1.dimensions() {
+        return Err(MatchError::Option(format!(
+            "images of different sizes: {:?} and {:?}",
+            img0.dimensions(),
+            img1.dimensions()
+        )));
+    }
+    let (mut f0, mut f1) = (FrameFeatures::default(), FrameFeatures::default());
+    rayon::join(
+        || f0.extract(img0, &options.detector),
+        || f1.extract(img1, &options.detector),
+    );
+    Ok(match_features(&f0, &f1, options))
+}
+
+/// Streaming matcher of a multi-camera sequence: [`push`](Self::push) the images of frame k (one
+/// per camera) and get the matches of the pair `(k-1, k)` per camera. Only the previous frame's
+/// features are kept, so memory does not grow with the sequence. Cameras are processed in
+/// parallel (rayon).
+#[derive(Debug)]
+pub struct FrameMatcher {
+    options: MatchOptions,
+    prev: Vec<Option<FrameFeatures>>,
+    spare: Vec<FrameFeatures>,
+    frames: usize,
+}
+
+impl FrameMatcher {
+    /// A matcher for `cameras` cameras. Fails on invalid options.
+    pub fn new(cameras: usize, options: MatchOptions) -> Result<Self, MatchError> {
+        options.validate()?;
+        Ok(Self {
+            options,
+            prev: vec![None; cameras],
+            spare: vec![FrameFeatures::default(); cameras],
+            frames: 0,
+        })
+    }
+
+    /// The options.
+    pub fn options(&self) -> &MatchOptions {
+        &self.options
+    }
+
+    /// Frames pushed so far.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Adds frame k (one image per camera, each camera's size fixed over the sequence). Returns
+    /// `None` for the first frame, else the matches of `(k-1, k)`, `result[camera]`.
+    pub fn push(&mut self, images: &[GrayImage]) -> Result<Option<Vec<Vec<Match>>>, MatchError> {
+        if images.len() != self.prev.len() {
+            return Err(MatchError::Option(format!(
+                "{} images for {} cameras",
+                images.len(),
+                self.prev.len()
+            )));
+        }
+        for (j, (img, prev)) in images.iter().zip(&self.prev).enumerate() {
+            if let Some(p) = prev {
+                if (p.width, p.height) != (img.width() as usize, img.height() as usize) {
+                    return Err(MatchError::Option(format!(
+                        "camera {j}: image size changed from {}x{} to {}x{}",
+                        p.width,
+                        p.height,
+                        img.width(),
+                        img.height()
+                    )));
+                }
+            }
+        }
+        let options = self.options;
+        let results: Vec<Option<Vec<Match>>> = images
+            .par_iter()
+            .zip(self.prev.par_iter_mut())
+            .zip(self.spare.par_iter_mut())
+            .map(|((img, prev), spare)| {
+                spare.extract(img, &options.detector);
+                let matches = prev.as_ref().map(|p| match_features(p, spare, &options));
+                // The current frame becomes the previous one; the old buffers are reused.
+                let old = prev.replace(std::mem::take(spare));
+                if let Some(old) = old {
+                    *spare = old;
+                }
+                matches
+            })
+            .collect();
+        self.frames += 1;
+        Ok(if self.frames == 1 {
+            None
+        } else {
+            Some(results.into_iter().map(Option::unwrap_or_default).collect())
+        })
+    }
+}

@@ -1,0 +1,616 @@
+//! Hostile geometry: inputs that are valid by `FORMAT.md` but give the estimator little or
+//! misleading information. Each test states the documented behaviour (`docs/GUARANTEES.md`) and
+//! asserts it: a bounded error, a status or scale flag, or what the diagnostics reveal. The
+//! cases of `degenerate.rs` (no matches in one frame, standstill with a small rotation, a
+//! blinded camera, a solver failure, a sharp turn, scale with and without a lever arm) are not
+//! repeated here.
+
+use momo_core::{
+    Camera, CameraModel, FrameObservations, Observation, Pose, Rig, RigCamera, camera_motion,
+    so3_exp, so3_log,
+};
+use momo_costs::canned;
+use momo_vo::{Config, EstimatorKind, FrameStatus, Odometry, ScaleSource};
+use nalgebra::{Vector2, Vector3};
+
+/// SplitMix64 with uniform and Gaussian draws: deterministic test data without dependencies.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+    }
+
+    fn gauss(&mut self) -> f64 {
+        let u = self.uniform(1e-12, 1.0);
+        let v = self.uniform(0.0, std::f64::consts::TAU);
+        (-2.0 * u.ln()).sqrt() * v.cos()
+    }
+}
+
+/// Matches of camera `j` of `rig` under the vehicle motion `motion`, as a reader delivers them:
+/// a bearing drawn by `bearing` (camera frame k-1) at a depth in `depth`, projected into both
+/// frames, both pixels inside the image and within `accept`, Gaussian pixel noise `noise`,
+/// bearings unprojected from the noisy pixels.
+fn matches(
+    rig: &Rig,
+    j: usize,
+    motion: &Pose<f64>,
+    n: usize,
+    noise: f64,
+    rng: &mut Rng,
+    mut bearing: impl FnMut(&mut Rng) -> Vector3<f64>,
+    depth: (f64, f64),
+    accept: impl Fn(&Vector2<f64>) -> bool,
+) -> Vec<Observation> {
+    let cam = &rig.cameras()[j];
+    let model = cam.model;
+    let c = camera_motion(motion, &cam.t_vehicle_camera);
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..200 * n {
+        if out.len() == n {
+            break;
+        }
+        let x0 = bearing(rng).normalize() * rng.uniform(depth.0, depth.1);
+        let x1 = c.inverse().transform_point(&x0);
+        let (Some(p0), Some(p1)) = (model.project(&x0), model.project(&x1)) else {
+            continue;
+        };
+        if x1.norm() < 0.5 || !(model.contains(&p0, 0.0) && model.contains(&p1, 0.0)) {
+            continue;
+        }
+        if !(accept(&p0) && accept(&p1)) {
+            continue;
+        }
+        let p0 = p0 + Vector2::new(rng.gauss(), rng.gauss()) * noise;
+        let p1 = p1 + Vector2::new(rng.gauss(), rng.gauss()) * noise;
+        if let Some(o) = Observation::new(&model, p0, p1) {
+            out.push(o);
+        }
+    }
+    assert_eq!(out.len(), n, "the scene allows {n} matches");
+    out
+}
+
+/// A bearing through a uniformly drawn pixel of `model`.
+fn through_pixel(model: Camera) -> impl FnMut(&mut Rng) -> Vector3<f64> {
+    move |rng| {
+        let (w, h) = model.size();
+        let px = Vector2::new(rng.uniform(0.0, w - 1.0), rng.uniform(0.0, h - 1.0));
+        model.unproject(&px).unwrap_or_else(Vector3::z)
+    }
+}
+
+fn anywhere(_: &Vector2<f64>) -> bool {
+    true
+}
+
+/// Matches spread over the whole image of every camera.
+fn frame(rig: &Rig, motion: &Pose<f64>, n: usize, noise: f64, rng: &mut Rng) -> FrameObservations {
+    let mut obs = FrameObservations::new(rig.len());
+    for j in 0..rig.len() {
+        let model = rig.cameras()[j].model;
+        obs.per_camera[j] = matches(
+            rig,
+            j,
+            motion,
+            n,
+            noise,
+            rng,
+            through_pixel(model),
+            (4.0, 40.0),
+            anywhere,
+        );
+    }
+    obs
+}
+
+/// A planar vehicle motion: yaw and arc length (the single-track model).
+fn drive(yaw: f64, l: f64) -> Pose<f64> {
+    use momo_core::Manifold;
+    momo_models::SingleTrack2d.motion(&[yaw, l])
+}
+
+fn rot_err_deg(a: &Pose<f64>, b: &Pose<f64>) -> f64 {
+    so3_log(&(a.rotation.transpose() * b.rotation))
+        .norm()
+        .to_degrees()
+}
+
+fn assert_finite_orthonormal(m: &Pose<f64>) {
+    assert!(
+        m.rotation
+            .iter()
+            .chain(m.translation.iter())
+            .all(|v| v.is_finite())
+    );
+    assert!(m.orthonormality_error() < 1e-9, "{m:?}");
+}
+
+/// The default estimator, warmed up on `frames` ordinary frames of `warm_motion`.
+fn warmed_up(rig: &Rig, warm_motion: &Pose<f64>, frames: usize, rng: &mut Rng) -> Odometry {
+    let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+    for _ in 0..frames {
+        let r = vo.process(&frame(rig, warm_motion, 150, 0.5, rng), Some(1.0));
+        assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+    }
+    vo
+}
+
+// ------------------------------------------------------------------------------ pure rotation
+
+/// Pure rotation (the camera turns about its centre, no translation) while odometry reports
+/// 1 m: every translation fits the matches, so only the rotation is determined. It is recovered
+/// to noise level; the translation's length is the odometry's, but its direction is not
+/// determined by the matches and comes out arbitrary (measured: heading 8.6, climb -7.7
+/// degrees; the truth is a sideways swing of the motion centre, heading 91 degrees). The
+/// diagnostics hint at it only weakly: the standard deviations of `heading` and `climb` are
+/// 2.6x and 8x those of an ordinary frame.
+/// A known limitation: without a prior on the direction of travel (DESIGN.md: keep it near the
+/// vehicle's forward axis) a pose prior from such a frame has a wrong translation direction.
+#[test]
+fn pure_rotation_recovers_the_rotation_and_takes_translation_from_the_priors() {
+    let mut rng = Rng(1);
+    let rig = canned::pinhole_rig();
+    let mut vo = warmed_up(&rig, &drive(0.0, 1.0), 3, &mut rng);
+    let ordinary = vo.process(
+        &frame(&rig, &drive(0.0, 1.0), 200, 0.5, &mut rng),
+        Some(1.0),
+    );
+    // 3 degrees of yaw and 0.5 of pitch about the camera centre: the vehicle motion that
+    // leaves camera 0's centre in place.
+    let p = rig.cameras()[0].t_vehicle_camera;
+    let cam_rot = Pose::new(
+        so3_exp(&Vector3::new(
+            0.0,
+            0.5_f64.to_radians(),
+            3.0_f64.to_radians(),
+        )),
+        Vector3::zeros(),
+    );
+    let truth = p.compose(&cam_rot).compose(&p.inverse());
+    let obs = frame(&rig, &truth, 200, 0.5, &mut rng);
+    let r = vo.process(&obs, Some(1.0));
+    assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+    assert_finite_orthonormal(&r.motion);
+    let err = rot_err_deg(&r.motion, &truth);
+    let (t, tt) = (r.motion.translation, truth.translation);
+    eprintln!(
+        "pure rotation: rotation error {err:.4} deg, heading {:.2} climb {:.2} deg (truth {:.2} {:.2})",
+        t.y.atan2(t.x).to_degrees(),
+        t.z.atan2(t.x.hypot(t.y)).to_degrees(),
+        tt.y.atan2(tt.x).to_degrees(),
+        tt.z.atan2(tt.x.hypot(tt.y)).to_degrees(),
+    );
+    assert!(err < 0.05, "rotation error {err} deg");
+    // The length is the odometry's (Se3: |t| = l sinc(θ/2), θ ≈ 3°).
+    let n = r.motion.translation.norm();
+    assert!((n - 1.0).abs() < 1e-3, "|t| = {n}");
+    // heading and climb (parameters 3 and 4) are not determined by the matches.
+    let (s, s0) = (
+        &r.diagnostics.param_sigmas,
+        &ordinary.diagnostics.param_sigmas,
+    );
+    eprintln!(
+        "pure rotation: sigma heading {:.2e} climb {:.2e} (ordinary frame {:.2e} {:.2e})",
+        s[3], s[4], s0[3], s0[4]
+    );
+    assert!(s[3] > 2.0 * s0[3] && s[4] > 2.0 * s0[4], "{s:?} vs {s0:?}");
+}
+
+// --------------------------------------------------------------------------------- standstill
+
+/// Standstill without odometry: the matches do not move (zero flow plus noise). Zero flow fits
+/// any translation (points at infinity), so the matches cannot tell "standing" from "driving";
+/// the rotation is recovered (identity), the arc length cannot be estimated (scale `held`) and
+/// the last arc length is kept. With odometry (arc length 0) the frame is `standstill` (see
+/// `degenerate.rs`).
+#[test]
+fn standstill_without_odometry_gets_the_rotation_and_holds_the_scale() {
+    let mut rng = Rng(2);
+    let rig = canned::pinhole_rig();
+    let mut vo = warmed_up(&rig, &drive(0.01, 1.0), 3, &mut rng);
+    let still = Pose::identity();
+    for _ in 0..5 {
+        let obs = frame(&rig, &still, 150, 0.5, &mut rng);
+        let r = vo.process(&obs, None);
+        assert_finite_orthonormal(&r.motion);
+        let err = rot_err_deg(&r.motion, &still);
+        eprintln!(
+            "standstill, no odometry: rotation error {err:.4} deg, arc length {:.3}, scale {:?}, status {:?}",
+            r.diagnostics.params[5], r.diagnostics.scale, r.diagnostics.status
+        );
+        assert!(err < 0.05, "rotation error {err} deg");
+        assert_eq!(r.diagnostics.scale, ScaleSource::Held);
+        assert!((r.diagnostics.params[5] - 1.0).abs() < 1e-9);
+    }
+}
+
+// ------------------------------------------------------------------- one moving object only
+
+/// Every match lies on one object that moves on its own (a lorry filling the view, turning by
+/// 2 degrees and moving 0.3 m per frame relative to the scene). No estimator can tell this from
+/// ego-motion within one frame: momo returns the camera's motion *relative to the object*
+/// (within noise), flags nothing, and the error against the true ego-motion is the object's
+/// own motion. Documented as a limitation; the defence is more than one rigid structure in
+/// view (see `degenerate.rs` and the simulator's moving-object scenario).
+#[test]
+fn all_matches_on_one_moving_object_give_the_motion_relative_to_the_object() {
+    let mut rng = Rng(3);
+    let rig = canned::pinhole_rig();
+    let ego = drive(0.0, 1.0);
+    let mut vo = warmed_up(&rig, &ego, 3, &mut rng);
+    // Object motion in the vehicle frame at k-1: a point X goes to O X.
+    let object = Pose::new(
+        so3_exp(&Vector3::new(0.0, 0.0, 2.0_f64.to_radians())),
+        Vector3::new(0.3, 0.1, 0.0),
+    );
+    // In the vehicle frame at k the point is at M⁻¹ O X: the scene looks as if the vehicle
+    // moved by O⁻¹ M.
+    let apparent = object.inverse().compose(&ego);
+    let obs = frame(&rig, &apparent, 200, 0.5, &mut rng);
+    let r = vo.process(&obs, Some(1.0));
+    assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+    assert_finite_orthonormal(&r.motion);
+    let to_apparent = rot_err_deg(&r.motion, &apparent);
+    let to_ego = rot_err_deg(&r.motion, &ego);
+    eprintln!(
+        "moving object: error {to_apparent:.4} deg to the relative motion, {to_ego:.3} deg to the ego-motion"
+    );
+    assert!(to_apparent < 0.05, "{to_apparent}");
+    assert!(to_ego > 1.9, "{to_ego}");
+}
+
+// ----------------------------------------------------------------------------- 90% outliers
+
+/// 90% outliers (270 of 300 matches random pixels, 30 true matches), warm-started: the
+/// rotation error stays below 1 degree (measured: 0.06-0.46 deg over these 10 frames, against
+/// ~0.02 deg without outliers), and the diagnostics reveal the situation: the inlier ratio
+/// (`inliers / matches`) drops below 0.15, where an ordinary frame shows more than 0.5, and the
+/// extra starts were tried (`restarts`).
+#[test]
+fn ninety_percent_outliers_keep_the_error_bounded_and_show_in_the_inlier_ratio() {
+    let mut rng = Rng(4);
+    let rig = canned::pinhole_rig();
+    let mut vo = warmed_up(&rig, &drive(0.01, 1.0), 3, &mut rng);
+    let ordinary = vo.process(
+        &frame(&rig, &drive(0.01, 1.0), 300, 0.5, &mut rng),
+        Some(1.0),
+    );
+    let ordinary_ratio = ordinary.diagnostics.inliers as f64 / 300.0;
+    eprintln!("ordinary frame: inlier ratio {ordinary_ratio:.2}");
+    assert!(ordinary_ratio > 0.5);
+    let model = rig.cameras()[0].model;
+    let (w, h) = model.size();
+    let mut worst: f64 = 0.0;
+    for k in 0..10 {
+        let truth = drive(0.01 + 0.004 * (k % 3) as f64, 1.0);
+        let mut obs = frame(&rig, &truth, 30, 0.5, &mut rng);
+        for _ in 0..270 {
+            let p0 = Vector2::new(rng.uniform(0.0, w - 1.0), rng.uniform(0.0, h - 1.0));
+            let p1 = Vector2::new(rng.uniform(0.0, w - 1.0), rng.uniform(0.0, h - 1.0));
+            obs.per_camera[0].extend(Observation::new(&model, p0, p1));
+        }
+        let r = vo.process(&obs, Some(1.0));
+        assert_finite_orthonormal(&r.motion);
+        let err = rot_err_deg(&r.motion, &truth);
+        let ratio = r.diagnostics.inliers as f64 / r.diagnostics.matches as f64;
+        eprintln!(
+            "90% outliers, frame {k}: rotation error {err:.4} deg, inlier ratio {ratio:.2}, restarts {}",
+            r.diagnostics.restarts
+        );
+        assert!(ratio < 0.15, "inlier ratio {ratio}");
+        assert!(r.diagnostics.restarts > 0);
+        worst = worst.max(err);
+    }
+    assert!(worst < 1.0, "worst rotation error {worst} deg");
+}
+
+// ------------------------------------------------------------------ all matches in a corner
+
+/// All matches in one image corner (the top-left 12% x 25% of a KITTI image, a field of view of
+/// about 12 x 7 degrees): the geometry is weak and the rotation error grows to degrees in some
+/// frames (measured 0.06-5.9 deg over these 5 frames, against ~0.02 with the matches spread),
+/// but the diagnostics say so: the reported standard deviation of the yaw is 5-280 times that of
+/// a spread frame, and the error stays within 4 reported standard deviations of the rotation.
+#[test]
+fn matches_in_one_corner_give_larger_reported_uncertainty_and_bounded_error() {
+    let mut rng = Rng(5);
+    let rig = canned::pinhole_rig();
+    let truth = drive(0.02, 1.0);
+    let model = rig.cameras()[0].model;
+    let (w, h) = model.size();
+    let corner = move |p: &Vector2<f64>| p.x < 0.12 * w && p.y < 0.25 * h;
+    let mut spread_vo = warmed_up(&rig, &truth, 2, &mut Rng(50));
+    let mut corner_vo = warmed_up(&rig, &truth, 2, &mut Rng(50));
+    let (mut worst, mut sigma_ratio_min) = (0.0_f64, f64::INFINITY);
+    for _ in 0..5 {
+        let spread = frame(&rig, &truth, 100, 0.5, &mut rng);
+        let mut crowded = FrameObservations::new(1);
+        crowded.per_camera[0] = matches(
+            &rig,
+            0,
+            &truth,
+            100,
+            0.5,
+            &mut rng,
+            move |r| {
+                let px = Vector2::new(r.uniform(0.0, 0.12 * w), r.uniform(0.0, 0.25 * h));
+                model.unproject(&px).unwrap_or_else(Vector3::z)
+            },
+            (4.0, 40.0),
+            corner,
+        );
+        let a = spread_vo.process(&spread, Some(1.0));
+        let b = corner_vo.process(&crowded, Some(1.0));
+        assert_eq!(b.diagnostics.status, FrameStatus::Estimated);
+        assert_finite_orthonormal(&b.motion);
+        let err = rot_err_deg(&b.motion, &truth);
+        // Standard deviation of the yaw (rot_z).
+        let (sa, sb) = (a.diagnostics.param_sigmas[2], b.diagnostics.param_sigmas[2]);
+        let sigma_rot = b.diagnostics.param_sigmas[..3]
+            .iter()
+            .map(|s| s * s)
+            .sum::<f64>()
+            .sqrt();
+        let normalized = err.to_radians() / sigma_rot;
+        eprintln!(
+            "corner: rotation error {err:.4} deg (spread {:.4}), yaw sigma {sb:.2e} vs {sa:.2e} spread, error / sigma {normalized:.2}",
+            rot_err_deg(&a.motion, &truth),
+        );
+        assert!(normalized < 4.0, "error {err} deg, sigma {sigma_rot} rad");
+        worst = worst.max(err);
+        sigma_ratio_min = sigma_ratio_min.min(sb / sa);
+    }
+    assert!(worst < 10.0, "worst rotation error {worst} deg");
+    assert!(
+        sigma_ratio_min > 2.0,
+        "the corner's yaw sigma is not clearly larger: ratio {sigma_ratio_min}"
+    );
+}
+
+// -------------------------------------------------------- fisheye border beyond 90 degrees
+
+/// A fisheye sees points more than 90 degrees off its axis (behind the image plane, `z < 0`).
+/// Matches only there (between 92 and 100 degrees off-axis, the left and right borders of the
+/// image) are read, unprojected behind the camera and used like any other: noise-free they give
+/// the exact rotation; with 0.5 px noise the error is that of the fisheye's coarse angular
+/// resolution at its border (~350 px/rad, 0.16 deg per pixel; measured 0.19 deg with 150 matches,
+/// 0.04 deg with the same number between 0 and 80 degrees off-axis).
+#[test]
+fn fisheye_matches_beyond_ninety_degrees_are_used() {
+    let cam = Camera::KannalaBrandt(canned::fisheye());
+    let mount = Pose::new(canned::forward_looking(), Vector3::new(2.0, 0.0, 1.0));
+    let rig = Rig::mono(cam, mount).expect("valid");
+    let truth = drive(0.03, 1.0);
+    let border = |r: &mut Rng| {
+        let theta = r.uniform(92.0_f64.to_radians(), 100.0_f64.to_radians());
+        let phi = if r.uniform(0.0, 1.0) < 0.5 {
+            0.0
+        } else {
+            std::f64::consts::PI
+        } + r.uniform(-0.6, 0.6);
+        Vector3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        )
+    };
+    let inside = |r: &mut Rng| {
+        let theta = r.uniform(0.0, 80.0_f64.to_radians());
+        let phi = r.uniform(-std::f64::consts::PI, std::f64::consts::PI);
+        Vector3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        )
+    };
+    let solve = |obs: &FrameObservations| {
+        let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+        let r = vo.process(obs, Some(1.0));
+        assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+        rot_err_deg(&r.motion, &truth)
+    };
+    let one = |noise: f64, bearing: &dyn Fn(&mut Rng) -> Vector3<f64>, seed: u64| {
+        let mut obs = FrameObservations::new(1);
+        obs.per_camera[0] = matches(
+            &rig,
+            0,
+            &truth,
+            150,
+            noise,
+            &mut Rng(seed),
+            bearing,
+            (4.0, 40.0),
+            anywhere,
+        );
+        obs
+    };
+    let exact = one(0.0, &border, 6);
+    assert!(
+        exact.per_camera[0]
+            .iter()
+            .all(|o| o.f0.z < 0.0 && o.f1.z < 0.0)
+    );
+    let err_exact = solve(&exact);
+    let inside_err = solve(&one(0.5, &inside, 6));
+    let obs = one(0.5, &border, 6);
+    assert!(
+        obs.per_camera[0]
+            .iter()
+            .all(|o| o.f0.z < 0.0 && o.f1.z < 0.0)
+    );
+    // The reader accepts them too.
+    let dir = tempfile_dir();
+    let seq = momo_io::Sequence {
+        rig: rig.clone(),
+        frames: vec![FrameObservations::new(1), obs.clone()],
+        arc_lengths: Some(vec![None, Some(1.0)]),
+        ground_truth: None,
+    };
+    momo_io::write_sequence(&dir, &seq).expect("writes");
+    let back = momo_io::read_sequence(&dir).expect("the reader accepts pixels beyond 90 degrees");
+    std::fs::remove_dir_all(&dir).ok();
+    let err = solve(&back.frames[1]);
+    eprintln!(
+        "fisheye beyond 90 deg: rotation error {err:.4} deg ({err_exact:.2e} noise-free; {inside_err:.4} within 80 deg)"
+    );
+    assert!(err_exact < 1e-6, "noise-free error {err_exact} deg");
+    assert!(err < 0.5, "rotation error {err} deg");
+}
+
+fn tempfile_dir() -> std::path::PathBuf {
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let d = std::env::temp_dir().join(format!(
+        "momo-hostile-{}-{}",
+        std::process::id(),
+        N.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+// ------------------------------------------------------- a camera without matches, 100 frames
+
+/// One camera of a mono rig delivers nothing for 100 frame pairs: each of them is
+/// `no_matches`, holds the previous rotation, takes its arc length from odometry, and the
+/// estimate resumes correctly afterwards. On a four-camera fisheye rig the other cameras (25
+/// matches each, 0.5 px noise) carry every frame: `estimated`, the silent camera with zero
+/// inliers, rotation error below 0.3 deg (measured worst 0.12 deg over the 100 frames).
+#[test]
+fn a_camera_without_matches_for_100_frames() {
+    let mut rng = Rng(7);
+    let rig = canned::pinhole_rig();
+    let turn = drive(0.02, 1.0);
+    let mut vo = warmed_up(&rig, &turn, 3, &mut rng);
+    let before = vo.process(&frame(&rig, &turn, 150, 0.5, &mut rng), Some(1.0));
+    for k in 0..100 {
+        let l = 0.5 + 0.01 * k as f64;
+        let r = vo.process(&FrameObservations::new(1), Some(l));
+        assert_eq!(r.diagnostics.status, FrameStatus::NoMatches);
+        assert!(
+            rot_err_deg(&r.motion, &before.motion) < 1e-9,
+            "rotation held"
+        );
+        assert!(
+            (r.diagnostics.params[5] - l).abs() < 1e-12,
+            "odometry arc length"
+        );
+    }
+    let truth = drive(-0.03, 1.0);
+    let r = vo.process(&frame(&rig, &truth, 150, 0.5, &mut rng), Some(1.0));
+    assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+    assert!(rot_err_deg(&r.motion, &truth) < 0.05);
+
+    // Four fisheye cameras, camera 1 silent for 100 frames.
+    let rig = canned::fisheye_rig();
+    let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+    let mut worst: f64 = 0.0;
+    for k in 0..100 {
+        let truth = drive(0.02 * ((k / 20) % 3) as f64 - 0.02, 1.0);
+        let mut obs = frame(&rig, &truth, 25, 0.5, &mut rng);
+        obs.per_camera[1].clear();
+        let r = vo.process(&obs, Some(1.0));
+        assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+        assert_eq!(r.diagnostics.inliers_per_camera[1], 0);
+        worst = worst.max(rot_err_deg(&r.motion, &truth));
+    }
+    eprintln!("fisheye rig, camera 1 silent for 100 frames: worst rotation error {worst:.4} deg");
+    assert!(worst < 0.3, "worst rotation error {worst} deg");
+}
+
+// -------------------------------------------------------------------------- duplicated matches
+
+/// Every match given five times: the estimate is the same as from the matches once (the robust
+/// cost is scaled, its minimum does not move), but the reported standard deviations shrink by
+/// about √5: duplicates make the covariance over-confident. Documented; momo does not
+/// deduplicate (identical rows are legal in `matches.csv`).
+#[test]
+fn duplicated_matches_do_not_move_the_estimate_but_shrink_the_reported_sigma() {
+    let mut rng = Rng(8);
+    let rig = canned::pinhole_rig();
+    let truth = drive(0.02, 1.0);
+    let once = frame(&rig, &truth, 120, 0.5, &mut rng);
+    let mut five = once.clone();
+    five.per_camera[0] = once.per_camera[0]
+        .iter()
+        .flat_map(|o| std::iter::repeat_n(*o, 5))
+        .collect();
+    let a = Odometry::new(rig.clone(), Config::default())
+        .expect("valid")
+        .process(&once, Some(1.0));
+    let b = Odometry::new(rig.clone(), Config::default())
+        .expect("valid")
+        .process(&five, Some(1.0));
+    assert_eq!(b.diagnostics.matches, 600);
+    let diff = a
+        .diagnostics
+        .params
+        .iter()
+        .zip(&b.diagnostics.params)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    let ratio = a.diagnostics.param_sigmas[2] / b.diagnostics.param_sigmas[2];
+    eprintln!("duplicates x5: parameter difference {diff:.2e}, yaw sigma ratio {ratio:.3}");
+    assert!(diff < 1e-6, "parameters moved by {diff}");
+    assert!(
+        (ratio - 5f64.sqrt()).abs() < 0.1 * 5f64.sqrt(),
+        "sigma ratio {ratio}"
+    );
+}
+
+// -------------------------------------------- every camera in the motion centre, no odometry
+
+/// A rig whose cameras all sit in the motion centre cannot observe scale, and without
+/// odometry nothing else gives it: the driver says so up front (`scale_observable() == false`)
+/// and in every frame's diagnostics (scale `unobservable`), keeps the arc length at
+/// `odometry.initial_arc_length`, and still recovers the rotation. With odometry the same rig
+/// is fine (scale `odometry`).
+#[test]
+fn a_rig_with_every_camera_in_the_motion_centre_says_scale_is_unobservable() {
+    let mut rng = Rng(9);
+    let model = Camera::Pinhole(canned::kitti_pinhole());
+    let yaw = |a: f64| so3_exp(&Vector3::new(0.0, 0.0, a)) * canned::forward_looking();
+    let rig = Rig::new(
+        [0.0, 1.2, -1.2]
+            .iter()
+            .enumerate()
+            .map(|(i, &a)| RigCamera {
+                name: format!("c{i}"),
+                model,
+                t_vehicle_camera: Pose::new(yaw(a), Vector3::zeros()),
+            })
+            .collect(),
+    )
+    .expect("valid");
+    let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+    assert!(!vo.scale_observable());
+    for k in 0..6 {
+        let truth = drive(0.1 * (k % 2) as f64, 1.7);
+        let r = vo.process(&frame(&rig, &truth, 80, 0.5, &mut rng), None);
+        assert_eq!(r.diagnostics.scale, ScaleSource::Unobservable);
+        assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+        assert!(
+            (r.diagnostics.params[5] - 1.0).abs() < 1e-12,
+            "initial arc length kept"
+        );
+        assert!(rot_err_deg(&r.motion, &truth) < 0.05);
+    }
+    let truth = drive(0.05, 1.7);
+    let r = vo.process(&frame(&rig, &truth, 80, 0.5, &mut rng), Some(1.7));
+    assert_eq!(r.diagnostics.scale, ScaleSource::Odometry);
+    assert!((r.motion.translation - truth.translation).norm() < 0.02);
+
+    // The 5-point baseline cannot observe scale on any rig: it says `held`.
+    let mut fp = momo_vo::driver(EstimatorKind::FivePoint, &rig, Config::default()).expect("valid");
+    let r = fp.process(&frame(&rig, &drive(0.05, 1.7), 80, 0.5, &mut rng), None);
+    assert_eq!(r.diagnostics.scale, ScaleSource::Held);
+}
