@@ -15,13 +15,15 @@
 #   peers   scripts/peers_eval.sh     OpenCV and PoseLib from PyPI on the same sequences
 #   sweep   scripts/sweep_eval.sh     `momo sweep` over models x metrics x losses x solvers
 #   images  scripts/images_eval.sh    `momo match` / `momo vo` on real KITTI images
+#   calibrate scripts/calibrate_eval.sh `momo calibrate` (camera mount) on KITTI 00
+#   speed   scripts/speed_eval.sh     criterion targets and floor, whole-process time per frame
 set -uo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 abs() { case "$1" in /*) printf '%s\n' "$1" ;; *) printf '%s\n' "$PWD/$1" ;; esac; }
 data="$(abs "${1:-$root/../shared/data}")"
 out="$(abs "${2:-$root/target/results}")"
-parts="${PARTS:-kitti sim peers sweep images}"
+parts="${PARTS:-kitti sim peers sweep images calibrate speed}"
 mkdir -p "$out" "$root/docs/img"
 (cd "$root" && cargo build --release) || exit 1
 
@@ -43,9 +45,12 @@ part() { # NAME SCRIPT ARGS...: runs a part unless it is not wanted; failures ar
 part kitti kitti00_eval.sh "$data" "$out/kitti" &&
     { [[ ! -f "$out/kitti/kitti00.md" ]] || cp "$out/kitti/kitti00.md" "$out/kitti.md"; }
 part sim sim_eval.sh "$out/sim" "$out/sim.md" "$root/docs/img"
-part peers peers_eval.sh "$data" "$out/peers" "$out/peers.md"
+# The peers keep their venv in target/peers (installing the wheels again is slow).
+part peers peers_eval.sh "$data" "${PEERS_DIR:-$root/target/peers}" "$out/peers.md"
 part sweep sweep_eval.sh "$data" "$out/sweep" "$out/sweep.md"
 part images images_eval.sh "$data" "$out/images" "$out/images.md"
+part calibrate calibrate_eval.sh "$data" "$out/calibrate" "$out/calibrate.md"
+part speed speed_eval.sh "$out/speed" "$out/speed.md"
 
 section() { # FILE: prints a section, demoting its top-level heading
     if [[ -f "$1" ]]; then
@@ -79,5 +84,11 @@ section() { # FILE: prints a section, demoting its top-level heading
     echo "# 5. From images: momo match and momo vo"
     echo
     section "$out/images.md"
+    echo "# 6. Mount self-calibration"
+    echo
+    section "$out/calibrate.md"
+    echo "# 7. Speed"
+    echo
+    section "$out/speed.md"
 } >"$root/docs/RESULTS.md"
 echo "results: wrote docs/RESULTS.md" >&2

@@ -50,6 +50,44 @@ enum Command {
         /// LO-RANSAC-style refinement, PoseLib style).
         #[arg(long, value_enum, default_value_t = EstimatorArg::Momo)]
         estimator: EstimatorArg,
+        /// Calibrate the rig's mount rotation on the sequence first (as `momo calibrate`),
+        /// then run with the corrected rig: two passes over the sequence, not online filtering.
+        /// Reads the whole sequence into memory; --diagnostics is then written as JSON lines.
+        #[arg(long)]
+        calibrate_mount: bool,
+        /// The model of the mount calibration (with --calibrate-mount).
+        #[arg(long, value_enum, default_value_t = MountModelArg::SingleTrack3d)]
+        mount_model: MountModelArg,
+        /// Calibrate on the first N frame pairs only (with --calibrate-mount; default: all).
+        #[arg(long)]
+        mount_frames: Option<usize>,
+    },
+    /// Estimate the rig's mount rotation relative to the vehicle jointly over the frame pairs
+    /// of a sequence (robust Levenberg-Marquardt on a single-track model, Schur complement over
+    /// the shared mount) and write the corrected rig.json.
+    Calibrate {
+        /// The sequence directory (FORMAT.md; odometry.csv recommended: arc lengths are held).
+        seq: PathBuf,
+        /// Output rig file (rig.json of FORMAT.md), written atomically.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Estimator configuration (loss, metric, solver of the per-frame starts, degenerate
+        /// frame thresholds); see `momo config`. Its model is not used: see --model.
+        #[arg(short, long)]
+        config: Option<PathBuf>,
+        /// The motion model of the calibration.
+        #[arg(long, value_enum, default_value_t = MountModelArg::SingleTrack3d)]
+        model: MountModelArg,
+        /// Use the first N frame pairs only (default: all).
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Estimate the mount's roll even with single_track_3d (which observes it poorly:
+        /// by default it is held at zero there and estimated with single_track_2d).
+        #[arg(long)]
+        estimate_roll: bool,
+        /// Print nothing but errors.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Print the default configuration as a commented TOML file.
     Config,
@@ -381,6 +419,26 @@ impl From<EstimatorArg> for momo_vo::EstimatorKind {
     }
 }
 
+/// The `--model` choices of the mount calibration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum MountModelArg {
+    /// The single-track model on a tilted plane (yaw, arc length, pitch, roll).
+    #[value(name = "single_track_3d")]
+    SingleTrack3d,
+    /// The planar single-track model (yaw, arc length).
+    #[value(name = "single_track_2d")]
+    SingleTrack2d,
+}
+
+impl From<MountModelArg> for momo_vo::MountModel {
+    fn from(m: MountModelArg) -> Self {
+        match m {
+            MountModelArg::SingleTrack3d => momo_vo::MountModel::default(),
+            MountModelArg::SingleTrack2d => momo_vo::MountModel::SingleTrack2d,
+        }
+    }
+}
+
 /// Input errors exit with 2, everything else with 1.
 enum Failure {
     Input(anyhow::Error),
@@ -409,6 +467,154 @@ fn progress_bar(quiet: bool, len: Option<u64>) -> ProgressBar {
     }
 }
 
+/// Reads a configuration file, or the default.
+fn load_config(config: Option<&Path>) -> Result<Config, Failure> {
+    match config {
+        Some(p) => Config::from_file(p).map_err(|e| Failure::Input(e.into())),
+        None => Ok(Config::default()),
+    }
+}
+
+/// Calibrates the mount of a sequence in memory; prints the estimate unless `quiet`.
+fn calibrate_mount(
+    sequence: &momo_io::Sequence,
+    config: &Config,
+    options: &momo_vo::MountCalibration,
+    quiet: bool,
+) -> Result<momo_vo::MountEstimate, Failure> {
+    let started = std::time::Instant::now();
+    // Every calibration error is about the input (sequence, configuration, options).
+    let est = momo_vo::calibrate_sequence(sequence, config, options)
+        .map_err(|e| Failure::Input(e.into()))?;
+    if !quiet {
+        print_mount_estimate(&est, started.elapsed().as_secs_f64());
+    }
+    Ok(est)
+}
+
+/// Prints a mount estimate: a summary on stderr, the angles on stdout.
+fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) {
+    let term = serde_json::to_string(&est.termination).unwrap_or_default();
+    eprintln!(
+        "momo: mount calibration with {} over {} frame pairs ({} skipped: {} without matches, {} standstill, {} failed) in {:.2} s: {} iterations ({}), cost {:.6e} -> {:.6e}",
+        est.model.name(),
+        est.frames_used,
+        est.skipped.total(),
+        est.skipped.no_matches,
+        est.skipped.standstill,
+        est.skipped.failed,
+        seconds,
+        est.iterations,
+        term.trim_matches('"'),
+        est.cost_before,
+        est.cost_after
+    );
+    let d = est.delta.map(f64::to_degrees);
+    let s = est.sigma.map(f64::to_degrees);
+    let (left, up) = est.travel_direction_deg();
+    let held = if est.roll_estimated { "" } else { " (held)" };
+    println!(
+        "mount correction, degrees (rotation of the rig about camera 0, vehicle frame x forward, y left, z up; \u{b1} 1 sigma):"
+    );
+    println!("  roll  (about x) {:+.4} \u{b1} {:.4}{held}", d.x, s.x);
+    println!(
+        "  pitch (about y) {:+.4} \u{b1} {:.4}  (positive: cameras nose down)",
+        d.y, s.y
+    );
+    println!(
+        "  yaw   (about z) {:+.4} \u{b1} {:.4}  (positive: cameras turned left)",
+        d.z, s.z
+    );
+    println!(
+        "the direction of travel lies {:.4} deg {} and {:.4} deg {} of where the nominal rig puts it",
+        left.abs(),
+        if left >= 0.0 { "left" } else { "right" },
+        up.abs(),
+        if up >= 0.0 { "above" } else { "below" }
+    );
+    println!(
+        "delta_deg {:.6} {:.6} {:.6} sigma_deg {:.6} {:.6} {:.6}",
+        d.x, d.y, d.z, s.x, s.y, s.z
+    );
+}
+
+/// `momo calibrate`.
+fn calibrate(
+    seq: &Path,
+    output: &Path,
+    config: Option<&Path>,
+    options: &momo_vo::MountCalibration,
+    quiet: bool,
+) -> Result<(), Failure> {
+    let config = load_config(config)?;
+    let sequence = momo_io::read_sequence(seq).map_err(|e| Failure::Input(e.into()))?;
+    let est = calibrate_mount(&sequence, &config, options, quiet)?;
+    momo_io::write_rig(output, &est.corrected_rig).map_err(|e| Failure::Other(e.into()))?;
+    if !quiet {
+        eprintln!("momo: wrote {}", output.display());
+    }
+    Ok(())
+}
+
+/// `momo run --calibrate-mount`: calibrate on the sequence, then run it with the corrected rig
+/// (in memory: the calibration needs every frame anyway).
+fn run_calibrated(
+    seq: &Path,
+    output: &Path,
+    config: Config,
+    diagnostics: Option<&Path>,
+    quiet: bool,
+    estimator: momo_vo::EstimatorKind,
+    options: &momo_vo::MountCalibration,
+) -> Result<(), Failure> {
+    if let Some(d) = diagnostics
+        && d.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "{}: with --calibrate-mount the diagnostics are written as JSON lines; give a name not ending in .csv",
+            d.display()
+        )));
+    }
+    let mut sequence = momo_io::read_sequence(seq).map_err(|e| Failure::Input(e.into()))?;
+    let est = calibrate_mount(&sequence, &config, options, quiet)?;
+    sequence.rig = est.corrected_rig;
+    let bar = progress_bar(quiet, Some(sequence.num_frames().saturating_sub(1) as u64));
+    let started = std::time::Instant::now();
+    let (poses, diags) = momo_vo::run_in_memory(&sequence, estimator, config, |_| bar.inc(1))
+        .map_err(|e| Failure::Input(e.into()))?;
+    bar.finish_and_clear();
+    momo_io::write_poses(output, &poses).map_err(|e| Failure::Other(e.into()))?;
+    if let Some(path) = diagnostics {
+        let mut text = String::new();
+        for d in &diags {
+            let line = serde_json::to_string(d).map_err(|e| Failure::Other(e.into()))?;
+            text.push_str(&line);
+            text.push('\n');
+        }
+        let mut file = momo_io::AtomicFile::create(path).map_err(|e| Failure::Other(e.into()))?;
+        std::io::Write::write_all(file.writer(), text.as_bytes())
+            .map_err(|e| Failure::Other(file.err(e).into()))?;
+        file.commit().map_err(|e| Failure::Other(e.into()))?;
+    }
+    if !quiet {
+        let count = |s: momo_vo::FrameStatus| diags.iter().filter(|d| d.status == s).count();
+        let compute: f64 = diags.iter().map(|d| d.time_us).sum();
+        eprintln!(
+            "momo: {} frames in {:.2} s ({:.1} µs/frame estimating) with the calibrated rig: {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
+            poses.len(),
+            started.elapsed().as_secs_f64(),
+            compute / diags.len().max(1) as f64,
+            count(momo_vo::FrameStatus::Estimated),
+            count(momo_vo::FrameStatus::Standstill),
+            count(momo_vo::FrameStatus::NoMatches),
+            count(momo_vo::FrameStatus::SolverFailure),
+            diags.iter().filter(|d| d.restart_won).count(),
+            output.display()
+        );
+    }
+    Ok(())
+}
+
 fn run(
     seq: PathBuf,
     output: PathBuf,
@@ -416,11 +622,20 @@ fn run(
     diagnostics: Option<PathBuf>,
     quiet: bool,
     estimator: momo_vo::EstimatorKind,
+    mount: Option<momo_vo::MountCalibration>,
 ) -> Result<(), Failure> {
-    let config = match &config {
-        Some(p) => Config::from_file(p).map_err(|e| Failure::Input(e.into()))?,
-        None => Config::default(),
-    };
+    let config = load_config(config.as_deref())?;
+    if let Some(options) = mount {
+        return run_calibrated(
+            &seq,
+            &output,
+            config,
+            diagnostics.as_deref(),
+            quiet,
+            estimator,
+            &options,
+        );
+    }
     let bar = progress_bar(quiet, None);
     let options = RunOptions {
         estimator,
@@ -709,7 +924,40 @@ fn main() -> ExitCode {
             diagnostics,
             quiet,
             estimator,
-        } => run(seq, output, config, diagnostics, quiet, estimator.into()),
+            calibrate_mount,
+            mount_model,
+            mount_frames,
+        } => run(
+            seq,
+            output,
+            config,
+            diagnostics,
+            quiet,
+            estimator.into(),
+            calibrate_mount.then(|| {
+                momo_vo::MountCalibration::default()
+                    .with_model(Some(mount_model.into()))
+                    .with_frames(mount_frames)
+            }),
+        ),
+        Command::Calibrate {
+            seq,
+            output,
+            config,
+            model,
+            frames,
+            estimate_roll,
+            quiet,
+        } => calibrate(
+            &seq,
+            &output,
+            config.as_deref(),
+            &momo_vo::MountCalibration::default()
+                .with_model(Some(model.into()))
+                .with_frames(frames)
+                .with_roll(estimate_roll.then_some(true)),
+            quiet,
+        ),
         Command::Config => {
             print!("{}", Config::default().to_commented_toml());
             Ok(())

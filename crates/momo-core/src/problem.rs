@@ -338,7 +338,9 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
                 return; // Tukey beyond its scale: no pull, no curvature.
             }
             let sqrt_rho1 = rho1.sqrt();
-            // Ceres' Corrector (Triggs et al.): with rho'' > 0 add the curvature term.
+            // Ceres' Corrector (Triggs et al.): with rho'' > 0 add the curvature term; with
+            // rho'' <= 0 drop it (iteratively re-weighted least squares; keeping a clamped
+            // negative curvature was tried and took more iterations on KITTI 00: 13 vs 7.75).
             let (residual_scaling, alpha_sq_norm) = if s == 0.0 || rho2 <= 0.0 {
                 (sqrt_rho1, 0.0)
             } else {
@@ -346,22 +348,40 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
                 let alpha = 1.0 - d.sqrt();
                 (sqrt_rho1 / (1.0 - alpha), alpha / s)
             };
-            // rᵀJ (for the correction), then accumulate J̃ᵀJ̃ and J̃ᵀr̃.
-            let mut rtj = SVector::<f64, N>::zeros();
+            // rᵀJ (for the correction), then accumulate J̃ᵀJ̃ (upper triangle, mirrored below)
+            // and J̃ᵀr̃, with plain loops over the N free parameters (the hot path).
+            let mut rtj = [0.0; N];
             if alpha_sq_norm != 0.0 {
                 for v in r {
                     if let Some(e) = &v.eps.0 {
-                        rtj += e * v.re;
+                        for k in 0..N {
+                            rtj[k] += e[k] * v.re;
+                        }
                     }
                 }
             }
             for v in r {
                 let Some(e) = &v.eps.0 else { continue };
-                let jt = (e - rtj * (alpha_sq_norm * v.re)) * sqrt_rho1;
-                h += jt * jt.transpose();
-                g += jt * (residual_scaling * v.re);
+                let c = alpha_sq_norm * v.re;
+                let mut jt = [0.0; N];
+                for k in 0..N {
+                    jt[k] = (e[k] - rtj[k] * c) * sqrt_rho1;
+                }
+                let gr = residual_scaling * v.re;
+                for a in 0..N {
+                    let ja = jt[a];
+                    g[a] += ja * gr;
+                    for b in a..N {
+                        h[(a, b)] += ja * jt[b];
+                    }
+                }
             }
         });
+        for a in 0..N {
+            for b in 0..a {
+                h[(a, b)] = h[(b, a)];
+            }
+        }
         if self.has_prior() {
             let prior_cost = self.linearize_prior_n::<N>(x, &mut h, &mut g);
             cost += prior_cost;

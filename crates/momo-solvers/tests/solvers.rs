@@ -324,9 +324,11 @@ fn nan_everywhere_but_the_start_returns_the_start() {
 }
 
 #[test]
-fn a_linearisation_only_after_an_accepted_step() {
-    // Every linearisation but the first follows an accepted step, and every accepted step
-    // took an iteration; trial costs are one per iteration except for the line search.
+fn one_pass_over_the_data_per_iteration() {
+    // At most one linearisation per iteration (plus the first). Dogleg evaluates each trial's
+    // cost and linearises only after an accepted step; Levenberg-Marquardt linearises every
+    // trial right away (its cost comes with it), so it evaluates a cost alone at most once (a
+    // final step below the parameter tolerance); Gauss-Newton's line search may take more.
     let p = Fit::new(Rosenbrock);
     let x0 = pv(&[-1.2, 1.0]);
     for s in defaults() {
@@ -338,8 +340,10 @@ fn a_linearisation_only_after_an_accepted_step() {
             "{}: {r:?}",
             name(&*s)
         );
-        if name(&*s) != "GaussNewton" {
-            assert_eq!(p.costs.get(), r.iterations, "{}: {r:?}", name(&*s));
+        match name(&*s).as_str() {
+            "Dogleg" => assert_eq!(p.costs.get(), r.iterations, "{r:?}"),
+            "LevenbergMarquardt" => assert!(p.costs.get() <= 1, "{r:?}"),
+            _ => {}
         }
     }
 }

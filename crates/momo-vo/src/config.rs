@@ -52,8 +52,11 @@ pub struct OdometryOptions {
     /// Estimate the arc length where the rig makes it observable and odometry is absent.
     pub estimate_scale: bool,
     /// An estimated arc length is accepted if its standard deviation is below this fraction of
-    /// its value; otherwise the last value is held.
+    /// its value (and it passes `max_arc_length_ratio`); otherwise the last value is held.
     pub max_relative_scale_sigma: f64,
+    /// An estimated arc length more than this factor above or below the last one is not
+    /// accepted (vehicle dynamics; the last value is held). Applies once an arc length is known.
+    pub max_arc_length_ratio: f64,
     /// Try more starts when a frame's inlier ratio falls below this fraction of the running
     /// average inlier ratio of the recent frames (a result that "looks bad").
     pub restart_inlier_ratio: f64,
@@ -74,6 +77,7 @@ impl Default for OdometryOptions {
             initial_arc_length: 1.0,
             estimate_scale: true,
             max_relative_scale_sigma: 0.2,
+            max_arc_length_ratio: 3.0,
             restart_inlier_ratio: 0.7,
             restart_yaw_offsets: vec![-0.1, -0.03, 0.03, 0.1],
             motion_prior_sigmas: BTreeMap::new(),
@@ -148,6 +152,11 @@ pub struct Config {
     /// The 5-point RANSAC baseline's options (used only by `--estimator five-point`).
     #[serde(default)]
     pub five_point: FivePointOptions,
+    /// A second loss to refine each frame's solution with, started from it (none by default).
+    /// With a redescending loss (`tukey`) the outliers lose all pull once the first, softer
+    /// loss has brought the estimate near the answer: graduated non-convexity in two steps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refine_loss: Option<Box<dyn RobustLoss>>,
 }
 
 /// The default: `Se3` with the arc length from odometry, `AnglePlane`, Cauchy with scale 0.001
@@ -172,6 +181,7 @@ impl Default for Config {
             solver: Box::new(momo_solvers::LevenbergMarquardt::default()),
             odometry: OdometryOptions::default(),
             five_point: FivePointOptions::default(),
+            refine_loss: None,
         }
     }
 }
@@ -281,6 +291,9 @@ impl Config {
         }
         if !(o.initial_arc_length > 0.0 && o.initial_arc_length.is_finite()) {
             return bad("odometry.initial_arc_length must be finite and > 0".into());
+        }
+        if !(o.max_arc_length_ratio > 1.0) {
+            return bad("odometry.max_arc_length_ratio must be above 1".into());
         }
         if !(0.0..=1.0).contains(&o.restart_inlier_ratio) {
             return bad("odometry.restart_inlier_ratio must be within 0..=1".into());

@@ -21,11 +21,16 @@
 //! ```
 
 pub mod baseline;
+pub mod calibrate;
 pub mod config;
 pub mod odometry;
 pub mod pipeline;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
+pub use calibrate::{
+    CalibrationError, MountCalibration, MountEstimate, MountModel, Mounted, SkippedFrames,
+    calibrate_mount, calibrate_sequence,
+};
 pub use config::{Config, ConfigError, FivePointOptions, OdometryOptions};
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,

@@ -346,8 +346,16 @@ impl Odometry {
             return false;
         };
         let sigma = cov[(k, k)].max(0.0).sqrt();
+        // Vehicle dynamics: the arc length cannot jump by more than a factor from one frame to
+        // the next. Zero flow fits any translation, and an estimate that ran off along that
+        // valley (100 m per frame at a standstill) can come with a small formal sigma.
+        let ratio = self.config.odometry.max_arc_length_ratio;
+        let plausible = self
+            .last_arc_length
+            .is_none_or(|last| l <= ratio * last && l * ratio >= last);
         l > self.config.odometry.standstill_arc_length
             && l.is_finite()
+            && plausible
             && sigma <= self.config.odometry.max_relative_scale_sigma * l
     }
 
@@ -368,11 +376,30 @@ impl Odometry {
             rotation_only,
             motion_prior: self.motion_prior.as_ref(),
         };
-        let sol = self.estimator.solve(&req).ok()?;
-        let ok = sol.report.termination != Termination::NumericalFailure
-            && sol.params.iter().all(|p| p.is_finite())
-            && sol.report.final_cost.is_finite();
-        ok.then_some(sol)
+        let usable = |sol: &FrameSolution| {
+            sol.report.termination != Termination::NumericalFailure
+                && sol.params.iter().all(|p| p.is_finite())
+                && sol.report.final_cost.is_finite()
+        };
+        let sol = self.estimator.solve(&req).ok().filter(usable)?;
+        let Some(refine) = self.config.refine_loss.as_deref() else {
+            return Some(sol);
+        };
+        // The second stage: the refinement loss, started at the first stage's solution (costs
+        // and inliers are then the refinement loss's); the first stage's answer is kept only
+        // if the refinement fails.
+        let req = SolveRequest {
+            loss: refine,
+            initial: &sol.params,
+            ..req
+        };
+        match self.estimator.solve(&req).ok().filter(usable) {
+            Some(mut refined) => {
+                refined.report.iterations += sol.report.iterations;
+                Some(refined)
+            }
+            None => Some(sol),
+        }
     }
 
     fn solve_with_restarts(

@@ -225,8 +225,11 @@ fn standstill_without_odometry_gets_the_rotation_and_holds_the_scale() {
         assert_finite_orthonormal(&r.motion);
         let err = rot_err_deg(&r.motion, &still);
         eprintln!(
-            "standstill, no odometry: rotation error {err:.4} deg, arc length {:.3}, scale {:?}, status {:?}",
-            r.diagnostics.params[5], r.diagnostics.scale, r.diagnostics.status
+            "standstill, no odometry: rotation error {err:.4} deg, arc length {:.3} (sigma {:.3}), scale {:?}, status {:?}",
+            r.diagnostics.params[5],
+            r.diagnostics.param_sigmas[5],
+            r.diagnostics.scale,
+            r.diagnostics.status
         );
         assert!(err < 0.05, "rotation error {err} deg");
         assert_eq!(r.diagnostics.scale, ScaleSource::Held);

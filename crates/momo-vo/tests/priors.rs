@@ -84,3 +84,36 @@ fn bad_prior_configurations_are_errors() {
     let e = Config::from_toml_str(text, "bad.toml").unwrap_err();
     assert!(e.to_string().contains("side_slip_sigma"), "{e}");
 }
+
+/// `[refine_loss]`: a second, redescending stage removes the pull the Cauchy loss leaves to
+/// outliers; it is read from TOML, and a bad one is an error naming the field.
+#[test]
+fn a_tukey_refinement_removes_the_outliers_pull() {
+    let truth = [0.001, -0.002, 0.03, 0.015, 0.001, 1.0];
+    let obs =
+        canned::synthetic_observations(&canned::pinhole_rig(), &Se3.motion(&truth), 120, 80, 5);
+    let error = |config: Config| {
+        let mut vo = Odometry::new(canned::pinhole_rig(), config).expect("valid config");
+        let r = vo.process(&obs, Some(truth[5]));
+        let p = &r.diagnostics.params;
+        (0..5).map(|i| (p[i] - truth[i]).abs()).fold(0.0, f64::max)
+    };
+    let base = error(Config::default());
+    let text = format!(
+        "{}\n[refine_loss]\ntype = \"tukey\"\nscale = 0.001\n",
+        Config::default().to_commented_toml()
+    );
+    let refined = error(Config::from_toml_str(&text, "refine.toml").expect("valid"));
+    // Noise-free inliers: the outliers' pull is all the error there is. (A Tukey scale above
+    // the outliers' residuals would keep them: 0.0075 gives 5e-3 here.)
+    assert!(
+        refined < 0.1 * base,
+        "default {base:e}, refined {refined:e}"
+    );
+
+    let bad = format!(
+        "{}\n[refine_loss]\ntype = \"tukey\"\nscale = -1.0\n",
+        Config::default().to_commented_toml()
+    );
+    assert!(Config::from_toml_str(&bad, "bad.toml").is_err());
+}

@@ -1,0 +1,728 @@
+//! Mount self-calibration: the rotation of the whole rig relative to the vehicle, estimated
+//! jointly over many frame pairs (`momo calibrate`, `momo run --calibrate-mount`).
+//!
+//! A small error in the camera-to-vehicle rotation moves the direction of travel in the image
+//! by a constant angle. A single-track model cannot follow it (it has no side slip or climb),
+//! so every frame pays for the bias. The correction is a rotation `δ ∈ R³` (axis-angle, vehicle
+//! frame) of the rig about a pivot `c` (camera 0's centre):
+//!
+//! `Q(δ) = T(c) · Rot(exp(δ)) · T(−c)`, corrected extrinsics `P_j' = Q P_j`,
+//!
+//! so the camera motions are `C_j' = P_j⁻¹ Q⁻¹ M Q P_j`. [`Mounted`] wraps a motion model so
+//! that its motion is `Q(δ)⁻¹ M(p) Q(δ)` with `δ` three extra parameters: the existing
+//! [`momo_core::Problem`] then differentiates with respect to the mount too.
+//!
+//! The joint problem over K frame pairs has per-frame parameters `p_k` (arc length held at the
+//! odometry value) and the shared `δ`:
+//!
+//! `min_{p_1..p_K, δ} Σ_k ½ Σ_i ρ(|r_ki(p_k, δ)|²)`.
+//!
+//! It is solved by Levenberg-Marquardt on the Schur complement (the bundle-adjustment
+//! "reduced camera system" with the roles swapped): each frame's robustified normal equations
+//! `[H_pp H_pδ; H_δp H_δδ]`, `[g_p; g_δ]` are reduced to
+//! `S = Σ_k (H_δδ − H_δp H_pp⁻¹ H_pδ)`, `b = Σ_k (g_δ − H_δp H_pp⁻¹ g_p)`; the 3x3 damped system
+//! gives `Δδ`, and each frame's step follows by back-substitution
+//! `Δp_k = −H_pp⁻¹ (g_p + H_pδ Δδ)`. The frames are linearised in parallel (rayon).
+//! The covariance of `δ` is the Gauss-Newton one, `σ² S⁻¹` at the solution, with `σ²` from the
+//! final cost as the odometry's (`2 cost / (m − n)`, m inliers, n free parameters).
+//!
+//! This is a batch (two-pass) calibration: `momo run --calibrate-mount` calibrates on the
+//! sequence first, then runs the odometry with the corrected rig. It is not online filtering.
+
+use crate::config::Config;
+use momo_core::{
+    CoreError, FrameObservations, LeastSquares, Manifold, MetricSpec, ModelSpec, Pose, Problem,
+    ResidualMetric, Rig, RigCamera, Scalar, Termination, so3_exp,
+};
+use momo_costs::{AnglePlane, GeoLine, Sampson};
+use momo_models::{SingleTrack2d, SingleTrack3d};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use rayon::prelude::*;
+use thiserror::Error;
+
+/// Why a mount calibration failed.
+#[derive(Debug, Error)]
+pub enum CalibrationError {
+    /// No frame pairs were given.
+    #[error("mount calibration: no frame pairs")]
+    NoFrames,
+    /// The motion model cannot calibrate the mount.
+    #[error("mount calibration: model `{model}` cannot be used: {reason}")]
+    UnsupportedModel {
+        /// The model's type tag.
+        model: String,
+        /// Why not.
+        reason: String,
+    },
+    /// The residual metric is not one of the built-in ones.
+    #[error(
+        "mount calibration: metric `{metric}` is not supported (angle_plane, geo_line, sampson)"
+    )]
+    UnsupportedMetric {
+        /// The metric's type tag.
+        metric: String,
+    },
+    /// Every frame pair was skipped.
+    #[error(
+        "mount calibration: no usable frame pairs ({} without enough matches, {} at standstill, \
+         {} whose start solve failed)",
+        skipped.no_matches, skipped.standstill, skipped.failed
+    )]
+    NoUsableFrames {
+        /// How many were skipped, and why.
+        skipped: SkippedFrames,
+    },
+    /// The rig, model and metric do not fit (e.g. a metric that does not support a camera).
+    #[error(transparent)]
+    Core(#[from] CoreError),
+}
+
+/// A motion model the mount can be calibrated with: its parameters plus three mount angles
+/// must fit [`momo_core::MAX_PARAMS`], and the model must constrain the direction of travel
+/// (a model that expresses every rigid motion, like `se3`, cannot see the mount).
+pub trait MountableModel: Manifold {
+    /// [`Manifold::PARAMS`] followed by `mount_x`, `mount_y`, `mount_z`.
+    const MOUNTED_PARAMS: &'static [&'static str];
+}
+
+impl MountableModel for SingleTrack2d {
+    const MOUNTED_PARAMS: &'static [&'static str] =
+        &["yaw", "arc_length", "mount_x", "mount_y", "mount_z"];
+}
+
+impl MountableModel for SingleTrack3d {
+    const MOUNTED_PARAMS: &'static [&'static str] = &[
+        "yaw",
+        "arc_length",
+        "pitch",
+        "roll",
+        "mount_x",
+        "mount_y",
+        "mount_z",
+    ];
+}
+
+/// The rig correction `Q(δ) = T(c) · Rot(exp(δ)) · T(−c)`: a rotation by the axis-angle `δ`
+/// (vehicle frame) about the pivot `c`; as a pose `[exp(δ) | c − exp(δ) c]`.
+pub fn mount_correction<T: Scalar>(delta: &Vector3<T>, pivot: &Vector3<f64>) -> Pose<T> {
+    let r = so3_exp(delta);
+    let c = pivot.map(T::c);
+    let t = c - r * c;
+    Pose::new(r, t)
+}
+
+/// A motion model with the mount correction as three extra parameters:
+/// `motion(p, δ) = Q(δ)⁻¹ · M(p) · Q(δ)` ([`mount_correction`]), so that with the nominal rig
+/// `P_j` the camera motions are those of the corrected rig `Q(δ) P_j`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mounted<M> {
+    /// The vehicle motion model.
+    pub model: M,
+    /// The pivot `c` of the correction (camera 0's centre in the vehicle frame).
+    pub pivot: Vector3<f64>,
+}
+
+impl<M: MountableModel> Manifold for Mounted<M> {
+    const PARAMS: &'static [&'static str] = M::MOUNTED_PARAMS;
+    const ARC_LENGTH: Option<usize> = M::ARC_LENGTH;
+    const PRIOR_RESIDUALS: usize = M::PRIOR_RESIDUALS;
+
+    #[inline]
+    fn motion<T: Scalar>(&self, p: &[T]) -> Pose<T> {
+        let n = M::PARAMS.len();
+        let m = self.model.motion(&p[..n]);
+        let q = mount_correction(&Vector3::new(p[n], p[n + 1], p[n + 2]), &self.pivot);
+        q.inverse().compose(&m.compose(&q))
+    }
+
+    fn prior_residuals<T: Scalar>(&self, p: &[T], out: &mut [T]) {
+        self.model.prior_residuals(&p[..M::PARAMS.len()], out);
+    }
+
+    fn observable(&self, rig: &Rig) -> Vec<bool> {
+        let mut o = self.model.observable(rig);
+        o.extend([true; 3]);
+        o
+    }
+}
+
+/// The model the mount is calibrated with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MountModel {
+    /// The planar single-track model (yaw, arc length).
+    SingleTrack2d,
+    /// The single-track model on a tilted plane (yaw, arc length, pitch, roll), the default.
+    SingleTrack3d(SingleTrack3d),
+}
+
+impl Default for MountModel {
+    fn default() -> Self {
+        MountModel::SingleTrack3d(SingleTrack3d::default())
+    }
+}
+
+impl MountModel {
+    /// The model of a configuration's `[model]`, if it can calibrate the mount
+    /// (`single_track_2d`, `single_track_3d`); a [`CalibrationError::UnsupportedModel`]
+    /// otherwise.
+    pub fn from_spec(spec: &dyn ModelSpec) -> Result<Self, CalibrationError> {
+        let any = spec.as_any();
+        if any.downcast_ref::<SingleTrack2d>().is_some() {
+            return Ok(MountModel::SingleTrack2d);
+        }
+        if let Some(m) = any.downcast_ref::<SingleTrack3d>() {
+            return Ok(MountModel::SingleTrack3d(*m));
+        }
+        let name = spec.typetag_name();
+        let reason = match name {
+            "se3" => "it expresses every rigid motion, so a rotated mount fits as well as the \
+                      true one (the mount is not observable); use single_track_3d or \
+                      single_track_2d"
+                .to_string(),
+            _ => format!(
+                "only single_track_2d and single_track_3d can calibrate the mount (its parameters \
+                 plus 3 mount angles must fit {} and it must constrain the direction of travel)",
+                momo_core::MAX_PARAMS
+            ),
+        };
+        Err(CalibrationError::UnsupportedModel {
+            model: name.into(),
+            reason,
+        })
+    }
+
+    /// Whether the model observes the mount's roll well enough to estimate it by default.
+    ///
+    /// `single_track_2d` does: a rolled mount tilts the yaw axis, which the planar model cannot
+    /// follow. `single_track_3d` does not: its per-frame pitch change absorbs the tilt
+    /// (pitch ≈ yaw · roll), so the roll's standard deviation is about 1.5° on 80 simulated
+    /// frames against 0.03-0.05° for yaw and pitch; the roll is then held at zero.
+    pub fn observes_roll(&self) -> bool {
+        matches!(self, MountModel::SingleTrack2d)
+    }
+
+    /// The model's type tag.
+    pub fn name(&self) -> &'static str {
+        match self {
+            MountModel::SingleTrack2d => "single_track_2d",
+            MountModel::SingleTrack3d(_) => "single_track_3d",
+        }
+    }
+}
+
+/// Options of the mount calibration (the loss, metric, solver and degenerate-frame thresholds
+/// come from the momo [`Config`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MountCalibration {
+    /// The model; `None`: the configuration's model (which must be a single-track model).
+    pub model: Option<MountModel>,
+    /// Use only the first this many frame pairs (`None`: all).
+    pub frames: Option<usize>,
+    /// Most Levenberg-Marquardt iterations of the joint solve (accepted or rejected steps).
+    pub max_iterations: usize,
+    /// Stop when the relative cost decrease of an accepted step is below this.
+    pub cost_tolerance: f64,
+    /// Stop when the mount step's largest component is below this (radians).
+    pub step_tolerance: f64,
+    /// Estimate the mount's roll (about the vehicle's x axis)? `None`: the model's default
+    /// ([`MountModel::observes_roll`]); otherwise the roll correction is held at zero.
+    pub estimate_roll: Option<bool>,
+}
+
+impl Default for MountCalibration {
+    fn default() -> Self {
+        Self {
+            model: Some(MountModel::default()),
+            frames: None,
+            max_iterations: 50,
+            cost_tolerance: 1e-10,
+            step_tolerance: 1e-9,
+            estimate_roll: None,
+        }
+    }
+}
+
+impl MountCalibration {
+    /// Sets the model.
+    pub fn with_model(mut self, model: Option<MountModel>) -> Self {
+        self.model = model;
+        self
+    }
+
+    /// Uses only the first `frames` frame pairs.
+    pub fn with_frames(mut self, frames: Option<usize>) -> Self {
+        self.frames = frames;
+        self
+    }
+
+    /// Estimates the roll of the mount (`Some(true)`), holds it at zero (`Some(false)`) or does
+    /// what the model observes (`None`).
+    pub fn with_roll(mut self, estimate_roll: Option<bool>) -> Self {
+        self.estimate_roll = estimate_roll;
+        self
+    }
+
+    /// Sets the iteration limit.
+    pub fn with_max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+}
+
+/// Frame pairs left out of the calibration, by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SkippedFrames {
+    /// Fewer matches than `odometry.min_matches`.
+    pub no_matches: usize,
+    /// Arc length below `odometry.standstill_arc_length` (the direction of travel is undefined).
+    pub standstill: usize,
+    /// The per-frame start solve failed (non-finite cost or parameters).
+    pub failed: usize,
+}
+
+impl SkippedFrames {
+    /// All skipped frame pairs.
+    pub fn total(&self) -> usize {
+        self.no_matches + self.standstill + self.failed
+    }
+}
+
+/// The result of a mount calibration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MountEstimate {
+    /// The model used.
+    pub model: MountModel,
+    /// The correction `δ` (axis-angle in the vehicle frame, radians): the corrected extrinsics
+    /// are `Q(δ) P_j` ([`mount_correction`]).
+    pub delta: Vector3<f64>,
+    /// Standard deviations of `δ` (radians), from [`Self::covariance`]; 0 for a component held
+    /// at zero (the roll, see [`MountCalibration::estimate_roll`]).
+    pub sigma: Vector3<f64>,
+    /// The Gauss-Newton covariance `σ² S⁻¹` of `δ` (zero rows and columns for held components,
+    /// NaN if `S` is singular).
+    pub covariance: Matrix3<f64>,
+    /// Whether the roll `δ_x` was estimated (otherwise it is held at zero).
+    pub roll_estimated: bool,
+    /// The pivot `c` (camera 0's centre in the vehicle frame).
+    pub pivot: Vector3<f64>,
+    /// The rig with corrected extrinsics.
+    pub corrected_rig: Rig,
+    /// Levenberg-Marquardt iterations of the joint solve.
+    pub iterations: usize,
+    /// Why the joint solve stopped.
+    pub termination: Termination,
+    /// Total cost with the nominal rig (each frame solved on its own).
+    pub cost_before: f64,
+    /// Total cost at the joint solution.
+    pub cost_after: f64,
+    /// Frame pairs used.
+    pub frames_used: usize,
+    /// Frame pairs skipped, by reason.
+    pub skipped: SkippedFrames,
+}
+
+impl MountEstimate {
+    /// Where the direction of travel (the vehicle's x axis) lies in the *nominal* vehicle frame,
+    /// `exp(δ)ᵀ x̂`, as (left, up) angles in degrees: what the nominal rig got wrong.
+    pub fn travel_direction_deg(&self) -> (f64, f64) {
+        let d = so3_exp(&self.delta).transpose() * Vector3::x();
+        (
+            d.y.atan2(d.x).to_degrees(),
+            d.z.atan2(d.x.hypot(d.y)).to_degrees(),
+        )
+    }
+}
+
+/// The rig with every extrinsic corrected: `P_j' = Q(δ) P_j` about camera 0's centre.
+pub fn corrected_rig(rig: &Rig, delta: &Vector3<f64>) -> Result<Rig, CoreError> {
+    let pivot = rig.cameras()[0].t_vehicle_camera.translation;
+    let q = mount_correction(delta, &pivot);
+    Rig::new(
+        rig.cameras()
+            .iter()
+            .map(|c| RigCamera {
+                t_vehicle_camera: q.compose(&c.t_vehicle_camera),
+                ..c.clone()
+            })
+            .collect(),
+    )
+}
+
+/// Calibrates the mount of a sequence's rig over its frame pairs (`sequence.frames[1..]`).
+pub fn calibrate_sequence(
+    sequence: &momo_io::Sequence,
+    config: &Config,
+    options: &MountCalibration,
+) -> Result<MountEstimate, CalibrationError> {
+    let frames = sequence.frames.get(1..).unwrap_or_default();
+    let arcs = sequence
+        .arc_lengths
+        .as_ref()
+        .map(|a| a.get(1..).unwrap_or_default());
+    calibrate_mount(&sequence.rig, frames, arcs, config, options)
+}
+
+/// Calibrates the rig's mount rotation jointly over frame pairs.
+///
+/// `frames[i]` are the matches of one frame pair and `arc_lengths[i]` its odometry arc length
+/// (held fixed; without one the previous frame's, or `odometry.initial_arc_length`, is held).
+/// Frame pairs with fewer than `odometry.min_matches` matches, at standstill, or whose start
+/// solve fails are skipped and counted. Loss, metric and solver (for the per-frame starts) come
+/// from `config`.
+pub fn calibrate_mount(
+    rig: &Rig,
+    frames: &[FrameObservations],
+    arc_lengths: Option<&[Option<f64>]>,
+    config: &Config,
+    options: &MountCalibration,
+) -> Result<MountEstimate, CalibrationError> {
+    if frames.is_empty() {
+        return Err(CalibrationError::NoFrames);
+    }
+    let model = match options.model {
+        Some(m) => m,
+        None => MountModel::from_spec(config.model.as_ref())?,
+    };
+    let metric: &dyn MetricSpec = config.metric.as_ref();
+    let any = metric.as_any();
+    macro_rules! with_metric {
+        ($m:expr) => {
+            if let Some(r) = any.downcast_ref::<AnglePlane>() {
+                calibrate_generic($m, r, rig, frames, arc_lengths, config, options, model)
+            } else if let Some(r) = any.downcast_ref::<GeoLine>() {
+                calibrate_generic($m, r, rig, frames, arc_lengths, config, options, model)
+            } else if let Some(r) = any.downcast_ref::<Sampson>() {
+                calibrate_generic($m, r, rig, frames, arc_lengths, config, options, model)
+            } else {
+                Err(CalibrationError::UnsupportedMetric {
+                    metric: metric.typetag_name().into(),
+                })
+            }
+        };
+    }
+    match model {
+        MountModel::SingleTrack2d => with_metric!(SingleTrack2d),
+        MountModel::SingleTrack3d(m) => with_metric!(m),
+    }
+}
+
+/// One frame pair of the joint problem.
+struct FrameState<'a> {
+    obs: &'a FrameObservations,
+    /// The model's full parameter vector.
+    params: Vec<f64>,
+    /// Fixed flags of the mounted model's full vector (the mount is always free).
+    fixed: Vec<bool>,
+}
+
+/// One frame's normal equations split into model and mount blocks (model's free parameters
+/// first, then the free mount angles).
+struct FrameBlocks {
+    cost: f64,
+    h_pp: DMatrix<f64>,
+    h_pd: DMatrix<f64>,
+    h_dd: DMatrix<f64>,
+    g_p: DVector<f64>,
+    g_d: DVector<f64>,
+}
+
+/// The per-frame part of the elimination at damping `lambda`: `Y = A⁻¹ H_pδ`, `z = A⁻¹ g_p`
+/// with `A = H_pp + λ diag(H_pp)`.
+struct Eliminated {
+    y: DMatrix<f64>,
+    z: DVector<f64>,
+}
+
+fn full_vector(params: &[f64], delta: &Vector3<f64>) -> Vec<f64> {
+    let mut p = params.to_vec();
+    p.extend(delta.iter());
+    p
+}
+
+#[allow(clippy::too_many_arguments)]
+fn calibrate_generic<M: MountableModel, R: ResidualMetric>(
+    model: M,
+    metric: &R,
+    rig: &Rig,
+    frames: &[FrameObservations],
+    arc_lengths: Option<&[Option<f64>]>,
+    config: &Config,
+    options: &MountCalibration,
+    which: MountModel,
+) -> Result<MountEstimate, CalibrationError> {
+    let roll = options.estimate_roll.unwrap_or(which.observes_roll());
+    // Free mount components (indices into δ) and their count.
+    let mount_free: Vec<usize> = if roll { vec![0, 1, 2] } else { vec![1, 2] };
+    let nd = mount_free.len();
+    let loss = config.loss.as_ref();
+    let odo = &config.odometry;
+    let np = M::PARAMS.len();
+    let arc_index = M::ARC_LENGTH;
+    let limit = options.frames.unwrap_or(frames.len()).min(frames.len());
+    if limit == 0 {
+        return Err(CalibrationError::NoFrames);
+    }
+
+    // --- per-frame starts with the nominal rig (warm-started like the odometry) -------------
+    let mut skipped = SkippedFrames::default();
+    let mut states: Vec<FrameState<'_>> = Vec::new();
+    let mut previous = model.initial_params(odo.initial_arc_length);
+    let mut cost_before = 0.0;
+    for (i, obs) in frames[..limit].iter().enumerate() {
+        let arc = arc_lengths
+            .and_then(|a| a.get(i).copied().flatten())
+            .filter(|l| l.is_finite() && *l >= 0.0);
+        if obs.len() < odo.min_matches.max(1) {
+            skipped.no_matches += 1;
+            continue;
+        }
+        let mut fixed = vec![false; np];
+        let mut init = previous.clone();
+        if let Some(a) = arc_index {
+            fixed[a] = true;
+            let l = arc.unwrap_or(init[a]);
+            if l < odo.standstill_arc_length {
+                skipped.standstill += 1;
+                continue;
+            }
+            init[a] = l;
+        }
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        let mut starts = vec![init.clone()];
+        let straight = arc_index.map_or_else(
+            || model.initial_params(odo.initial_arc_length),
+            |a| model.initial_params(init[a]),
+        );
+        if straight != init {
+            starts.push(straight);
+        }
+        for start in starts {
+            let p0 = Problem::new(&model, metric, loss, rig, obs, &start)?.with_fixed(&fixed);
+            let report = config.solver.solve(&p0, &p0.free_params());
+            let params = p0.full_params(&report.x);
+            let ok = report.termination != Termination::NumericalFailure
+                && report.final_cost.is_finite()
+                && params.iter().all(|v| v.is_finite());
+            if ok && best.as_ref().is_none_or(|(c, _)| report.final_cost < *c) {
+                best = Some((report.final_cost, params));
+            }
+        }
+        let Some((cost, params)) = best else {
+            skipped.failed += 1;
+            continue;
+        };
+        cost_before += cost;
+        previous.clone_from(&params);
+        let mut mounted_fixed = fixed;
+        mounted_fixed.extend([!roll, false, false]);
+        states.push(FrameState {
+            obs,
+            params,
+            fixed: mounted_fixed,
+        });
+    }
+    if states.is_empty() {
+        return Err(CalibrationError::NoUsableFrames { skipped });
+    }
+
+    // --- joint Levenberg-Marquardt on the Schur complement ----------------------------------
+    let pivot = rig.cameras()[0].t_vehicle_camera.translation;
+    let mounted = Mounted { model, pivot };
+    let linearize = |s: &FrameState<'_>, delta: &Vector3<f64>| -> Result<FrameBlocks, CoreError> {
+        let full = full_vector(&s.params, delta);
+        let problem = Problem::new(&mounted, metric, loss, rig, s.obs, &full)?.with_fixed(&s.fixed);
+        let lin = problem.linearize(&problem.free_params());
+        let n = problem.num_params();
+        let m = n - nd;
+        let h = &lin.hessian;
+        Ok(FrameBlocks {
+            cost: lin.cost,
+            h_pp: DMatrix::from_fn(m, m, |r, c| h[(r, c)]),
+            h_pd: DMatrix::from_fn(m, nd, |r, c| h[(r, m + c)]),
+            h_dd: DMatrix::from_fn(nd, nd, |r, c| h[(m + r, m + c)]),
+            g_p: DVector::from_fn(m, |r, _| lin.gradient[r]),
+            g_d: DVector::from_fn(nd, |r, _| lin.gradient[m + r]),
+        })
+    };
+    let frame_cost =
+        |s: &FrameState<'_>, params: &[f64], delta: &Vector3<f64>| -> Result<f64, CoreError> {
+            let full = full_vector(params, delta);
+            let problem =
+                Problem::new(&mounted, metric, loss, rig, s.obs, &full)?.with_fixed(&s.fixed);
+            Ok(problem.cost(&problem.free_params()))
+        };
+    let linearize_all = |states: &[FrameState<'_>], delta: &Vector3<f64>| {
+        states
+            .par_iter()
+            .map(|s| linearize(s, delta))
+            .collect::<Result<Vec<_>, _>>()
+    };
+
+    let mut delta = Vector3::zeros();
+    let mut blocks = linearize_all(&states, &delta)?;
+    let mut cost: f64 = blocks.iter().map(|b| b.cost).sum();
+    let mut lambda = 1e-4;
+    let mut iterations = 0;
+    let mut termination = Termination::MaxIterations;
+    while iterations < options.max_iterations {
+        iterations += 1;
+        let Some((step_free, steps_p)) = schur_step(&blocks, nd, lambda) else {
+            lambda *= 10.0;
+            if lambda > 1e12 {
+                termination = Termination::NumericalFailure;
+                break;
+            }
+            continue;
+        };
+        let mut step_d = Vector3::zeros();
+        for (k, &i) in mount_free.iter().enumerate() {
+            step_d[i] = step_free[k];
+        }
+        let trial_delta = delta + step_d;
+        let trial: Vec<Vec<f64>> = states
+            .iter()
+            .zip(&steps_p)
+            .map(|(s, dp)| {
+                let mut p = s.params.clone();
+                let free = s.fixed[..np].iter().enumerate().filter(|(_, f)| !**f);
+                for ((i, _), d) in free.zip(dp.iter()) {
+                    p[i] += d;
+                }
+                p
+            })
+            .collect();
+        let trial_cost: f64 = states
+            .par_iter()
+            .zip(trial.par_iter())
+            .map(|(s, p)| frame_cost(s, p, &trial_delta))
+            .collect::<Result<Vec<_>, _>>()?
+            .iter()
+            .sum();
+        if trial_cost.is_finite() && trial_cost < cost {
+            let decrease = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
+            delta = trial_delta;
+            for (s, p) in states.iter_mut().zip(trial) {
+                s.params = p;
+            }
+            cost = trial_cost;
+            blocks = linearize_all(&states, &delta)?;
+            lambda = (lambda / 3.0).max(1e-12);
+            if decrease < options.cost_tolerance {
+                termination = Termination::CostConverged;
+                break;
+            }
+            if step_d.amax() < options.step_tolerance {
+                termination = Termination::StepConverged;
+                break;
+            }
+        } else {
+            lambda *= 4.0;
+            if lambda > 1e12 {
+                // No step of any length lowers the cost: a minimum to numerical precision.
+                termination = Termination::StepConverged;
+                break;
+            }
+        }
+    }
+
+    // --- covariance of δ: σ² S⁻¹ (undamped) ------------------------------------------------
+    let scale = loss.scale();
+    let mut inliers = 0usize;
+    let mut free_total = nd;
+    for s in &states {
+        let full = full_vector(&s.params, &delta);
+        let problem = Problem::new(&mounted, metric, loss, rig, s.obs, &full)?.with_fixed(&s.fixed);
+        problem.for_each_residual_norm(&full, |_, n| {
+            if n <= scale {
+                inliers += 1;
+            }
+        });
+        free_total += problem.num_params() - nd;
+    }
+    let dof = inliers.saturating_sub(free_total).max(1);
+    let sigma2 = 2.0 * cost / dof as f64;
+    let mut covariance = Matrix3::zeros();
+    match reduced_system(&blocks, nd, 0.0).and_then(|(s, _, _)| s.try_inverse()) {
+        Some(inv) => {
+            for (a, &i) in mount_free.iter().enumerate() {
+                for (b, &j) in mount_free.iter().enumerate() {
+                    covariance[(i, j)] = inv[(a, b)] * sigma2;
+                }
+            }
+        }
+        None => covariance.fill(f64::NAN),
+    }
+    let sigma = Vector3::from_fn(|i, _| covariance[(i, i)].max(0.0).sqrt());
+
+    Ok(MountEstimate {
+        model: which,
+        delta,
+        sigma,
+        covariance,
+        roll_estimated: roll,
+        pivot,
+        corrected_rig: corrected_rig(rig, &delta)?,
+        iterations,
+        termination,
+        cost_before,
+        cost_after: cost,
+        frames_used: states.len(),
+        skipped,
+    })
+}
+
+/// The reduced (Schur complement) system at damping `lambda`: `S`, `b` and each frame's
+/// eliminated blocks; `None` if a frame's block is not positive definite.
+fn reduced_system(
+    blocks: &[FrameBlocks],
+    nd: usize,
+    lambda: f64,
+) -> Option<(DMatrix<f64>, DVector<f64>, Vec<Eliminated>)> {
+    let mut s = DMatrix::zeros(nd, nd);
+    let mut b = DVector::zeros(nd);
+    let mut elim = Vec::with_capacity(blocks.len());
+    for f in blocks {
+        let m = f.h_pp.nrows();
+        let mut a = f.h_pp.clone();
+        for i in 0..m {
+            a[(i, i)] += lambda * a[(i, i)].max(1e-12) + 1e-30;
+        }
+        let chol = a.cholesky()?;
+        let y = chol.solve(&f.h_pd);
+        let z = chol.solve(&f.g_p);
+        let hdp = f.h_pd.transpose();
+        s += &f.h_dd - &hdp * &y;
+        b += &f.g_d - &hdp * &z;
+        elim.push(Eliminated { y, z });
+    }
+    Some((s, b, elim))
+}
+
+/// One damped Levenberg-Marquardt step of the joint problem: the mount step and each frame's
+/// step (over its free model parameters).
+fn schur_step(
+    blocks: &[FrameBlocks],
+    nd: usize,
+    lambda: f64,
+) -> Option<(DVector<f64>, Vec<DVector<f64>>)> {
+    let (mut s, b, elim) = reduced_system(blocks, nd, lambda)?;
+    let mut diag = DVector::zeros(nd);
+    for f in blocks {
+        diag += f.h_dd.diagonal();
+    }
+    for i in 0..nd {
+        s[(i, i)] += lambda * diag[i].max(1e-12);
+    }
+    let step_d = -s.cholesky()?.solve(&b);
+    if !step_d.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let steps = elim
+        .iter()
+        .map(|e| -(&e.z + &e.y * &step_d))
+        .collect::<Vec<_>>();
+    steps
+        .iter()
+        .all(|d| d.iter().all(|v| v.is_finite()))
+        .then_some((step_d, steps))
+}

@@ -1,0 +1,332 @@
+//! Mount self-calibration on simulated frames with a known mount error.
+
+use momo_core::{Camera, CameraModel, FrameObservations, Manifold, Pose, Rig};
+use momo_costs::canned;
+use momo_models::{Se3, SingleTrack2d, SingleTrack3d};
+use momo_vo::calibrate::corrected_rig;
+use momo_vo::{
+    CalibrationError, Config, MountCalibration, MountEstimate, MountModel, Trajectory,
+    calibrate_mount, run_in_memory,
+};
+use nalgebra::{Vector2, Vector3};
+
+/// A tiny deterministic generator (SplitMix64) for pixel noise.
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Approximately normal with standard deviation `sigma` (sum of 12 uniforms).
+    fn normal(&mut self, sigma: f64) -> f64 {
+        ((0..12).map(|_| self.uniform()).sum::<f64>() - 6.0) * sigma
+    }
+}
+
+/// A simulated sequence: the true rig, the vehicle motions, per-frame matches (with pixel noise
+/// and 10 % off-epipolar outliers) and arc lengths.
+struct Sim {
+    rig: Rig,
+    motions: Vec<Pose<f64>>,
+    frames: Vec<FrameObservations>,
+    arcs: Vec<Option<f64>>,
+}
+
+/// `n` frame pairs of single-track motion through left and right curves (yaw up to ±0.05 rad
+/// per frame), with small pitch and roll changes unless `planar`.
+fn simulate(n: usize, planar: bool, seed: u64) -> Sim {
+    let rig = canned::pinhole_rig();
+    let mut rng = Rng(seed);
+    let mut motions = Vec::new();
+    let mut frames = Vec::new();
+    let mut arcs = Vec::new();
+    for k in 0..n {
+        let t = k as f64;
+        let yaw = 0.05 * (std::f64::consts::TAU * t / 30.0).sin();
+        let arc = 1.0 + 0.3 * (t / 7.0).cos();
+        let (pitch, roll) = if planar {
+            (0.0, 0.0)
+        } else {
+            (0.002 * (t / 3.0).sin(), 0.002 * (t / 5.0).cos())
+        };
+        let m = SingleTrack3d::default().motion(&[yaw, arc, pitch, roll]);
+        let mut obs = canned::synthetic_observations(&rig, &m, 135, 15, seed * 1000 + k as u64);
+        for (cam, list) in rig.cameras().iter().zip(obs.per_camera.iter_mut()) {
+            for o in list.iter_mut() {
+                let px1 = o.px1 + Vector2::new(rng.normal(0.5), rng.normal(0.5));
+                let px0 = o.px0 + Vector2::new(rng.normal(0.5), rng.normal(0.5));
+                if let (Some(f0), Some(f1)) = (cam.model.unproject(&px0), cam.model.unproject(&px1))
+                {
+                    *o = momo_core::Observation { px0, px1, f0, f1 };
+                }
+            }
+        }
+        motions.push(m);
+        frames.push(obs);
+        arcs.push(Some(arc));
+    }
+    Sim {
+        rig,
+        motions,
+        frames,
+        arcs,
+    }
+}
+
+/// The mount error of the tests: (0.3°, −0.5°, 0.2°) about the vehicle's x, y, z.
+fn mount_error() -> Vector3<f64> {
+    Vector3::new(0.3, -0.5, 0.2).map(f64::to_radians)
+}
+
+/// The rig the calibration is given: the true one rotated back by `delta` about camera 0
+/// (so that the correction to find is `delta`).
+fn nominal(rig: &Rig, delta: &Vector3<f64>) -> Rig {
+    corrected_rig(rig, &(-delta)).expect("a valid rig")
+}
+
+fn calibrate(sim: &Sim, rig: &Rig, model: MountModel) -> MountEstimate {
+    calibrate_mount(
+        rig,
+        &sim.frames,
+        Some(&sim.arcs),
+        &Config::default(),
+        &MountCalibration::default().with_model(Some(model)),
+    )
+    .expect("calibration succeeds")
+}
+
+fn deg(v: &Vector3<f64>) -> Vector3<f64> {
+    v.map(f64::to_degrees)
+}
+
+#[test]
+fn the_correction_maps_the_nominal_rig_back_to_the_true_one() {
+    let rig = canned::pinhole_rig();
+    let delta = mount_error();
+    let back = corrected_rig(&nominal(&rig, &delta), &delta).expect("a valid rig");
+    let (a, b) = (
+        rig.cameras()[0].t_vehicle_camera,
+        back.cameras()[0].t_vehicle_camera,
+    );
+    assert!((a.rotation - b.rotation).amax() < 1e-12);
+    assert!((a.translation - b.translation).amax() < 1e-12);
+    // The pivot is camera 0's centre: the nominal rig's camera sits where the true one does.
+    let n = nominal(&rig, &delta).cameras()[0].t_vehicle_camera;
+    assert!((n.translation - a.translation).amax() < 1e-12);
+    assert!((n.rotation - a.rotation).amax() > 1e-3);
+}
+
+#[test]
+fn recovers_a_known_mount_error_with_single_track_3d() {
+    let sim = simulate(80, false, 3);
+    let truth = mount_error();
+    let est = calibrate(&sim, &nominal(&sim.rig, &truth), MountModel::default());
+    let err = deg(&(est.delta - truth));
+    let sigma = deg(&est.sigma);
+    eprintln!(
+        "single_track_3d: delta {:?} deg, error {:?} deg, sigma {:?} deg, {} iterations, {:?}, cost {} -> {}",
+        deg(&est.delta),
+        err,
+        sigma,
+        est.iterations,
+        est.termination,
+        est.cost_before,
+        est.cost_after
+    );
+    assert!(est.termination.is_converged(), "{:?}", est.termination);
+    assert_eq!(est.frames_used, 80);
+    assert!(est.cost_after < est.cost_before);
+    // single_track_3d holds the roll (it cannot see it, below); yaw and pitch of the mount
+    // are recovered within 0.08 deg and 4 sigma.
+    assert!(!est.roll_estimated);
+    assert_eq!(est.delta.x, 0.0);
+    assert_eq!(est.sigma.x, 0.0);
+    for i in 1..3 {
+        assert!(sigma[i] > 0.0 && sigma[i] < 0.1, "sigma {sigma:?}");
+        assert!(err[i].abs() < 0.08, "error {err:?}");
+        assert!(
+            err[i].abs() < 4.0 * sigma[i],
+            "error {err:?}, sigma {sigma:?}"
+        );
+    }
+    // Asked to, it estimates the roll too, with a much larger standard deviation.
+    let with_roll = calibrate_mount(
+        &nominal(&sim.rig, &truth),
+        &sim.frames,
+        Some(&sim.arcs),
+        &Config::default(),
+        &MountCalibration::default().with_roll(Some(true)),
+    )
+    .expect("calibration succeeds");
+    assert!(with_roll.roll_estimated);
+    assert!(
+        with_roll.sigma.x > 5.0 * with_roll.sigma.y,
+        "roll sigma {:?}",
+        deg(&with_roll.sigma)
+    );
+}
+
+#[test]
+fn recovers_a_known_mount_error_with_single_track_2d() {
+    let sim = simulate(60, true, 5);
+    let truth = mount_error();
+    let est = calibrate(&sim, &nominal(&sim.rig, &truth), MountModel::SingleTrack2d);
+    let err = deg(&(est.delta - truth));
+    eprintln!(
+        "single_track_2d: error {:?} deg, sigma {:?} deg",
+        err,
+        deg(&est.sigma)
+    );
+    assert!(est.termination.is_converged(), "{:?}", est.termination);
+    // single_track_2d sees the roll as well: all three within 0.05 deg and 4 sigma.
+    assert!(est.roll_estimated);
+    for i in 0..3 {
+        assert!(err[i].abs() < 0.05, "error {err:?}");
+        assert!(
+            err[i].abs() < 4.0 * est.sigma[i].to_degrees(),
+            "error {err:?}"
+        );
+    }
+}
+
+#[test]
+fn no_mount_error_gives_a_zero_correction() {
+    for seed in [1, 2, 4] {
+        let sim = simulate(40, false, seed);
+        let est = calibrate(&sim, &sim.rig, MountModel::default());
+        let d = deg(&est.delta);
+        let sigma = deg(&est.sigma);
+        for i in 1..3 {
+            assert!(
+                d[i].abs() < 4.0 * sigma[i],
+                "seed {seed}: delta {d:?}, sigma {sigma:?}"
+            );
+        }
+        assert!(d.amax() < 0.08, "seed {seed}: delta {d:?}");
+    }
+}
+
+/// Camera 0's ground-truth trajectory of the simulation.
+fn ground_truth(sim: &Sim) -> Vec<Pose<f64>> {
+    let mut t = Trajectory::new(&sim.rig);
+    let mut poses = vec![t.camera0()];
+    poses.extend(sim.motions.iter().map(|m| t.push(m)));
+    poses
+}
+
+fn rotation_error_median(sim: &Sim, rig: &Rig) -> f64 {
+    let mut frames = vec![FrameObservations::new(rig.len())];
+    frames.extend(sim.frames.iter().cloned());
+    let mut arcs = vec![None];
+    arcs.extend(sim.arcs.iter().copied());
+    let sequence = momo_io::Sequence {
+        rig: rig.clone(),
+        frames,
+        arc_lengths: Some(arcs),
+        ground_truth: None,
+    };
+    let config = Config {
+        model: Box::new(SingleTrack3d::default()),
+        ..Config::default()
+    };
+    let (poses, _) = run_in_memory(&sequence, momo_vo::EstimatorKind::Momo, config, |_| {})
+        .expect("the run succeeds");
+    momo_eval::evaluate(&ground_truth(sim), &poses)
+        .rotation_deg
+        .median
+}
+
+#[test]
+fn the_corrected_rig_lowers_the_rotation_error() {
+    let sim = simulate(60, false, 7);
+    let rig = nominal(&sim.rig, &mount_error());
+    let est = calibrate(&sim, &rig, MountModel::default());
+    let before = rotation_error_median(&sim, &rig);
+    let after = rotation_error_median(&sim, &est.corrected_rig);
+    eprintln!("frame-to-frame rotation error median: nominal {before} deg, corrected {after} deg");
+    assert!(after < 0.5 * before, "nominal {before}, corrected {after}");
+}
+
+#[test]
+fn typed_errors_and_skipped_frames() {
+    let sim = simulate(20, false, 9);
+    let config = Config::default();
+    let options = MountCalibration::default();
+    // No frames at all.
+    let e = calibrate_mount(&sim.rig, &[], None, &config, &options);
+    assert!(matches!(e, Err(CalibrationError::NoFrames)), "{e:?}");
+    // The configuration's model (se3) cannot see the mount.
+    let e = calibrate_mount(
+        &sim.rig,
+        &sim.frames,
+        Some(&sim.arcs),
+        &Config {
+            model: Box::new(Se3),
+            ..Config::default()
+        },
+        &options.clone().with_model(None),
+    );
+    match e {
+        Err(CalibrationError::UnsupportedModel { model, .. }) => assert_eq!(model, "se3"),
+        other => panic!("expected UnsupportedModel, got {other:?}"),
+    }
+    // ... but single_track_2d from the configuration is fine.
+    let cfg2d = Config {
+        model: Box::new(SingleTrack2d),
+        ..Config::default()
+    };
+    let est = calibrate_mount(
+        &sim.rig,
+        &sim.frames,
+        Some(&sim.arcs),
+        &cfg2d,
+        &options.clone().with_model(None),
+    )
+    .expect("single_track_2d calibrates");
+    assert_eq!(est.model, MountModel::SingleTrack2d);
+    // Frames without matches and at standstill are skipped and counted.
+    let mut frames = sim.frames.clone();
+    let mut arcs = sim.arcs.clone();
+    frames[3] = FrameObservations::new(1);
+    frames[7] = FrameObservations::new(1);
+    arcs[11] = Some(0.0);
+    let est = calibrate_mount(&sim.rig, &frames, Some(&arcs), &config, &options)
+        .expect("calibration succeeds");
+    assert_eq!(est.skipped.no_matches, 2);
+    assert_eq!(est.skipped.standstill, 1);
+    assert_eq!(est.frames_used, 17);
+    // Only the first N frames with `frames`.
+    let est = calibrate_mount(
+        &sim.rig,
+        &frames,
+        Some(&arcs),
+        &config,
+        &options.clone().with_frames(Some(5)),
+    )
+    .expect("calibration succeeds");
+    assert_eq!(est.frames_used + est.skipped.total(), 5);
+    // Nothing usable.
+    let empty = vec![FrameObservations::new(1); 4];
+    let e = calibrate_mount(&sim.rig, &empty, None, &config, &options);
+    match e {
+        Err(CalibrationError::NoUsableFrames { skipped }) => assert_eq!(skipped.no_matches, 4),
+        other => panic!("expected NoUsableFrames, got {other:?}"),
+    }
+    // A metric that does not support the camera is a typed error too (geo_line on a fisheye).
+    let fisheye = Rig::mono(
+        Camera::KannalaBrandt(canned::fisheye()),
+        sim.rig.cameras()[0].t_vehicle_camera,
+    )
+    .expect("a valid rig");
+    let geo = Config {
+        metric: Box::new(momo_costs::GeoLine),
+        ..Config::default()
+    };
+    let e = calibrate_mount(&fisheye, &sim.frames, Some(&sim.arcs), &geo, &options);
+    assert!(matches!(e, Err(CalibrationError::Core(_))), "{e:?}");
+}
