@@ -92,14 +92,23 @@ pub struct Feature {
 }
 
 /// Features of one class with a grid index for window queries.
+///
+/// The index keeps the features' positions and descriptors a second time, sorted by grid cell
+/// (row-major), in flat arrays: a window query walks a few contiguous runs of memory.
 #[derive(Clone, Debug, Default)]
 pub struct ClassFeatures {
     /// The features.
     pub points: Vec<Feature>,
-    /// `cell_start[c]..cell_start[c + 1]` indexes `order` for grid cell `c`.
+    /// `cell_start[c]..cell_start[c + 1]` are the slots of grid cell `c`.
     cell_start: Vec<u32>,
-    /// Feature indices sorted by grid cell.
+    /// The feature index of each slot.
     order: Vec<u32>,
+    /// The slot of each feature (inverse of `order`).
+    slot_of: Vec<u32>,
+    /// `(u, v)` of each slot.
+    pos: Vec<[i16; 2]>,
+    /// The descriptor of each slot.
+    descs: Vec<Descriptor>,
     cols: usize,
     rows: usize,
 }
@@ -107,33 +116,128 @@ pub struct ClassFeatures {
 /// Side of the grid cells of the window index, pixels.
 const INDEX_CELL: usize = 32;
 
+/// A search window: centre `(cu, cv)`, half-width `ru`, half-height `rv`.
+#[derive(Clone, Copy, Debug)]
+struct Window {
+    cu: i32,
+    cv: i32,
+    ru: i32,
+    rv: i32,
+}
+
+impl Window {
+    #[inline]
+    fn contains(&self, p: [i16; 2]) -> bool {
+        (i32::from(p[0]) - self.cu).abs() <= self.ru && (i32::from(p[1]) - self.cv).abs() <= self.rv
+    }
+}
+
 impl ClassFeatures {
     fn build_index(&mut self, width: usize, height: usize) {
         self.cols = width.div_ceil(INDEX_CELL).max(1);
         self.rows = height.div_ceil(INDEX_CELL).max(1);
         let cells = self.cols * self.rows;
+        let cols = self.cols;
         let cell_of =
-            |f: &Feature| usize::from(f.v) / INDEX_CELL * self.cols + usize::from(f.u) / INDEX_CELL;
-        let mut count = vec![0u32; cells + 1];
+            |f: &Feature| usize::from(f.v) / INDEX_CELL * cols + usize::from(f.u) / INDEX_CELL;
+        self.cell_start.clear();
+        self.cell_start.resize(cells + 1, 0);
         for f in &self.points {
-            count[cell_of(f) + 1] += 1;
+            self.cell_start[cell_of(f) + 1] += 1;
         }
         for c in 0..cells {
-            count[c + 1] += count[c];
+            self.cell_start[c + 1] += self.cell_start[c];
         }
-        let mut fill = count.clone();
-        let mut order = vec![0u32; self.points.len()];
+        let n = self.points.len();
+        self.order.clear();
+        self.order.resize(n, 0);
+        self.slot_of.clear();
+        self.slot_of.resize(n, 0);
+        self.pos.clear();
+        self.pos.resize(n, [0, 0]);
+        self.descs.clear();
+        self.descs.resize(n, [0; 32]);
+        // Stable within a cell: slots follow the feature order.
+        let mut fill: Vec<u32> = self.cell_start[..cells].to_vec();
         for (i, f) in self.points.iter().enumerate() {
             let c = cell_of(f);
-            order[fill[c] as usize] = i as u32;
+            let slot = fill[c] as usize;
             fill[c] += 1;
+            self.order[slot] = i as u32;
+            self.slot_of[i] = slot as u32;
+            self.pos[slot] = [f.u as i16, f.v as i16];
+            self.descs[slot] = f.desc;
         }
-        self.cell_start = count;
-        self.order = order;
+    }
+
+    /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
+    /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false.
+    #[inline]
+    fn scan(
+        &self,
+        desc: &Descriptor,
+        win: Window,
+        mut visit: impl FnMut(usize, u32) -> bool,
+    ) -> bool {
+        let cell = INDEX_CELL as i32;
+        let (lo_u, hi_u) = (win.cu - win.ru, win.cu + win.ru);
+        let (lo_v, hi_v) = (win.cv - win.rv, win.cv + win.rv);
+        if hi_u < 0 || hi_v < 0 {
+            return true;
+        }
+        let c0 = (lo_u.max(0) / cell) as usize;
+        let c1 = ((hi_u / cell) as usize).min(self.cols - 1);
+        let r0 = (lo_v.max(0) / cell) as usize;
+        let r1 = ((hi_v / cell) as usize).min(self.rows - 1);
+        if c0 > c1 || r0 > r1 {
+            return true;
+        }
+        // Cells wholly inside the window in u: c0 < c < c1 always are (the window spans them).
+        let inside_v = |r: usize| {
+            let top = (r * INDEX_CELL) as i32;
+            top >= lo_v && top + cell - 1 <= hi_v
+        };
+        for r in r0..=r1 {
+            let base = r * self.cols;
+            let start = |c: usize| self.cell_start[base + c] as usize;
+            let runs: [(usize, usize, bool); 3] = if c0 == c1 {
+                [
+                    (start(c0), start(c0 + 1), true),
+                    (0, 0, false),
+                    (0, 0, false),
+                ]
+            } else {
+                [
+                    (start(c0), start(c0 + 1), true),
+                    (start(c0 + 1), start(c1), false),
+                    (start(c1), start(c1 + 1), true),
+                ]
+            };
+            let check_v = !inside_v(r);
+            for (a, b, check_u) in runs {
+                let pos = &self.pos[a..b];
+                let descs = &self.descs[a..b];
+                if check_u || check_v {
+                    for (k, (p, d)) in pos.iter().zip(descs).enumerate() {
+                        if win.contains(*p) && !visit(a + k, sad(desc, d)) {
+                            return false;
+                        }
+                    }
+                } else {
+                    for (k, d) in descs.iter().enumerate() {
+                        if !visit(a + k, sad(desc, d)) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// The feature with the smallest SAD to `desc` inside the window `|u - cu| <= ru`,
-    /// `|v - cv| <= rv`: `(index, sad, second smallest sad)` (`u32::MAX` if it is alone).
+    /// `|v - cv| <= rv`: `(index, sad, second smallest sad)` (`u32::MAX` if it is alone). Of
+    /// equal SADs the first in the index's order wins.
     pub fn best_in_window(
         &self,
         desc: &Descriptor,
@@ -145,43 +249,54 @@ impl ClassFeatures {
         if self.points.is_empty() {
             return None;
         }
-        let cell = INDEX_CELL as i32;
-        let c0 = ((cu - ru).max(0) / cell) as usize;
-        let c1 = (((cu + ru).max(0) / cell) as usize).min(self.cols - 1);
-        let r0 = ((cv - rv).max(0) / cell) as usize;
-        let r1 = (((cv + rv).max(0) / cell) as usize).min(self.rows - 1);
-        let mut best: Option<(usize, u32)> = None;
+        let mut best = u32::MAX;
+        let mut best_slot = usize::MAX;
         let mut second = u32::MAX;
-        for r in r0..=r1 {
-            let a = self.cell_start[r * self.cols + c0] as usize;
-            let b = self.cell_start[r * self.cols + c1 + 1] as usize;
-            for &i in &self.order[a..b] {
-                let f = &self.points[i as usize];
-                if (i32::from(f.u) - cu).abs() > ru || (i32::from(f.v) - cv).abs() > rv {
-                    continue;
-                }
-                let s = sad(desc, &f.desc);
-                match best {
-                    Some((_, b)) if s >= b => second = second.min(s),
-                    Some((_, b)) => {
-                        second = b;
-                        best = Some((i as usize, s));
-                    }
-                    None => best = Some((i as usize, s)),
-                }
+        self.scan(desc, Window { cu, cv, ru, rv }, |slot, s| {
+            if s < best {
+                second = best;
+                best = s;
+                best_slot = slot;
+            } else if s < second {
+                second = s;
             }
-        }
-        best.map(|(i, s)| (i, s, second))
+            true
+        });
+        (best_slot != usize::MAX).then(|| (self.order[best_slot] as usize, best, second))
+    }
+
+    /// True if feature `index`, at SAD `sad` from `desc` and inside the window, is what
+    /// [`best_in_window`](Self::best_in_window) would return for `desc` and this window (the
+    /// circular check). Stops at the first feature that beats it.
+    pub fn is_best_in_window(
+        &self,
+        desc: &Descriptor,
+        cu: i32,
+        cv: i32,
+        ru: i32,
+        rv: i32,
+        index: usize,
+        sad: u32,
+    ) -> bool {
+        let Some(&target) = self.slot_of.get(index) else {
+            return false;
+        };
+        let target = target as usize;
+        self.scan(desc, Window { cu, cv, ru, rv }, |slot, s| {
+            s > sad || (s == sad && slot >= target)
+        })
     }
 }
 
-/// The sum of absolute differences of two descriptors.
-#[inline]
+/// The sum of absolute differences of two descriptors (written so that the compiler uses the
+/// SAD instruction of the target, `psadbw` on x86-64).
+#[inline(always)]
 pub fn sad(a: &Descriptor, b: &Descriptor) -> u32 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| u32::from(x.abs_diff(*y)))
-        .sum()
+    let mut s = 0u32;
+    for k in 0..32 {
+        s += (i32::from(a[k]) - i32::from(b[k])).unsigned_abs();
+    }
+    s
 }
 
 /// The features of one image, plus its Sobel images (kept for sub-pixel refinement).
@@ -220,25 +335,25 @@ impl FrameFeatures {
         self.dv.resize(w * h, 128);
         self.blob.resize(w * h, 0);
         self.corner.resize(w * h, 0);
-        sobel(px, w, h, &mut self.du, &mut self.dv);
-        filters(px, w, h, &mut self.blob, &mut self.corner);
+        responses(
+            px,
+            w,
+            h,
+            &mut self.du,
+            &mut self.dv,
+            &mut self.blob,
+            &mut self.corner,
+        );
         self.non_maximum_suppression(options);
-        for c in &mut self.classes {
-            c.build_index(w, h);
-        }
+        self.classes
+            .par_iter_mut()
+            .for_each(|c| c.build_index(w, h));
     }
 
     /// The descriptor at an integer pixel at least 5 pixels (6 with refinement) inside.
     #[inline]
     pub fn descriptor_at(&self, u: usize, v: usize) -> Descriptor {
-        let mut d = [0u8; 32];
-        let w = self.width;
-        for (k, (dx, dy)) in PATTERN.iter().enumerate() {
-            let i = ((v as i32 + dy) as usize) * w + (u as i32 + dx) as usize;
-            d[k] = self.du[i];
-            d[16 + k] = self.dv[i];
-        }
-        d
+        descriptor(&self.du, &self.dv, self.width, u, v)
     }
 
     /// Total number of features.
@@ -251,84 +366,192 @@ impl FrameFeatures {
         self.len() == 0
     }
 
+    /// Block-wise non-maximum suppression (libviso2): the image inside the border is cut into
+    /// `(n+1) x (n+1)` blocks; per block and class the extremum (the first in row-major order)
+    /// is the only candidate, kept if it is strong enough and the strict extremum of its
+    /// `(2n+1)^2` window (ties go to the earlier pixel). Two passes over rows of blocks, each in
+    /// parallel: (1) the strong extrema of every block, from column-wise extremes (vectorised);
+    /// (2) per candidate, a quick rejection by the extrema of the 8 neighbouring blocks, then the
+    /// full window check; survivors are described and refined. The feature order is that of a
+    /// serial scan (block rows, then blocks).
     fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
         let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
-        let tau = options.threshold.max(1);
+        let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
         let step = n + 1;
-        let (blob, corner) = (&self.blob, &self.corner);
-        let rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
-        let found: Vec<Vec<(usize, usize, usize, i16)>> = rows
+        let (blob, corner, du, dv) = (&self.blob, &self.corner, &self.du, &self.dv);
+        let inner = w - 2 * BORDER;
+        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
+        let img_of = |class: usize| if class < 2 { blob } else { corner };
+
+        // Pass 1: per block row, per block, the strong extremum of each class.
+        let extrema: Vec<Vec<[Extremum; CLASSES]>> = block_rows
             .par_iter()
-            .map(|&v0| {
-                let mut out = Vec::new();
-                let v1 = (v0 + step).min(h - BORDER);
-                let mut u0 = BORDER;
-                while u0 < w - BORDER {
-                    let u1 = (u0 + step).min(w - BORDER);
-                    // (value, index) of blob max, blob min, corner max, corner min.
-                    let mut ext = [
-                        (i16::MIN, 0usize),
-                        (i16::MAX, 0),
-                        (i16::MIN, 0),
-                        (i16::MAX, 0),
-                    ];
+            .map_init(
+                || [(); CLASSES].map(|()| vec![0i16; inner]),
+                |cols, &v0| {
+                    let v1 = (v0 + step).min(h - BORDER);
+                    let [bmax, bmin, cmax, cmin] = cols;
+                    let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
+                    let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
+                    bmax.fill(i16::MIN);
+                    bmin.fill(i16::MAX);
+                    cmax.fill(i16::MIN);
+                    cmin.fill(i16::MAX);
                     for v in v0..v1 {
-                        for u in u0..u1 {
-                            let i = v * w + u;
-                            let (b, c) = (blob[i], corner[i]);
-                            if b > ext[0].0 {
-                                ext[0] = (b, i);
-                            }
-                            if b < ext[1].0 {
-                                ext[1] = (b, i);
-                            }
-                            if c > ext[2].0 {
-                                ext[2] = (c, i);
-                            }
-                            if c < ext[3].0 {
-                                ext[3] = (c, i);
-                            }
+                        let rb = &blob[v * w + BORDER..v * w + BORDER + inner];
+                        let rc = &corner[v * w + BORDER..v * w + BORDER + inner];
+                        for x in 0..inner {
+                            bmax[x] = bmax[x].max(rb[x]);
+                            bmin[x] = bmin[x].min(rb[x]);
+                            cmax[x] = cmax[x].max(rc[x]);
+                            cmin[x] = cmin[x].min(rc[x]);
                         }
                     }
-                    for (class, &(val, i)) in ext.iter().enumerate() {
-                        let maximum = class % 2 == 0;
-                        let strong = if maximum {
-                            i32::from(val) >= tau
-                        } else {
-                            i32::from(val) <= -tau
-                        };
-                        if !strong {
+                    let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
+                    (0..inner.div_ceil(step))
+                        .map(|blk| {
+                            let u0 = BORDER + blk * step;
+                            let u1 = (u0 + step).min(w - BORDER);
+                            let mut out = [Extremum::NONE; CLASSES];
+                            for (class, col) in columns.iter().enumerate() {
+                                let part = &col[u0 - BORDER..u1 - BORDER];
+                                let maximum = class % 2 == 0;
+                                let (val, strong) = if maximum {
+                                    let m = part.iter().copied().fold(i16::MIN, i16::max);
+                                    (m, m >= tau)
+                                } else {
+                                    let m = part.iter().copied().fold(i16::MAX, i16::min);
+                                    (m, m <= -tau)
+                                };
+                                if !strong {
+                                    continue;
+                                }
+                                let img = img_of(class);
+                                // The first pixel of the block holding the extremum.
+                                if let Some((u, v)) = (v0..v1).find_map(|v| {
+                                    img[v * w + u0..v * w + u1]
+                                        .iter()
+                                        .position(|&x| x == val)
+                                        .map(|k| (u0 + k, v))
+                                }) {
+                                    out[class] = Extremum {
+                                        val,
+                                        u: u as u16,
+                                        v: v as u16,
+                                    };
+                                }
+                            }
+                            out
+                        })
+                        .collect()
+                },
+            )
+            .collect();
+
+        // Pass 2: the window check of every strong block extremum.
+        let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
+            .into_par_iter()
+            .map(|by| {
+                let mut out: [Vec<Feature>; CLASSES] = Default::default();
+                for (bx, ext) in extrema[by].iter().enumerate() {
+                    for (class, e) in ext.iter().enumerate() {
+                        if e.is_none() {
                             continue;
                         }
-                        let img = if class < 2 { blob } else { corner };
-                        let (u, v) = (i % w, i / w);
-                        if is_extremum(img, w, h, u, v, n, val, maximum) {
-                            out.push((class, u, v, val));
+                        let maximum = class % 2 == 0;
+                        let (u, v) = (usize::from(e.u), usize::from(e.v));
+                        // Quick rejection: a neighbouring block's extremum inside the window
+                        // that beats this one.
+                        let beaten = (by.saturating_sub(1)..(by + 2).min(extrema.len()))
+                            .flat_map(|y| {
+                                let row = &extrema[y];
+                                row[bx.saturating_sub(1)..(bx + 2).min(row.len())].iter()
+                            })
+                            .map(|o| o[class])
+                            .any(|o| {
+                                !o.is_none()
+                                    && (o.u, o.v) != (e.u, e.v)
+                                    && usize::from(o.u).abs_diff(u) <= n
+                                    && usize::from(o.v).abs_diff(v) <= n
+                                    && o.beats(e, maximum)
+                            });
+                        if beaten {
+                            continue;
                         }
+
+                        let img = img_of(class);
+                        let keep = if maximum {
+                            is_extremum::<true>(img, w, h, u, v, n, e.val)
+                        } else {
+                            is_extremum::<false>(img, w, h, u, v, n, e.val)
+                        };
+                        if !keep {
+                            continue;
+                        }
+                        let r = |x: usize, y: usize| f64::from(img[y * w + x]);
+                        let c = r(u, v);
+                        let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
+                        let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
+                        out[class].push(Feature {
+                            u: e.u,
+                            v: e.v,
+                            x: x as f32,
+                            y: y as f32,
+                            response: e.val,
+                            desc: descriptor(du, dv, w, u, v),
+                        });
                     }
-                    u0 = u1;
                 }
                 out
             })
             .collect();
-        for (class, u, v, val) in found.into_iter().flatten() {
-            let desc = self.descriptor_at(u, v);
-            let img = if class < 2 { &self.blob } else { &self.corner };
-            let r = |x: usize, y: usize| f64::from(img[y * w + x]);
-            let c = r(u, v);
-            let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
-            let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
-            self.classes[class].points.push(Feature {
-                u: u as u16,
-                v: v as u16,
-                x: x as f32,
-                y: y as f32,
-                response: val,
-                desc,
-            });
+        for row in found {
+            for (class, points) in row.into_iter().enumerate() {
+                self.classes[class].points.extend(points);
+            }
         }
     }
+}
+
+/// The strong extremum of one block and class (`u == 0`: none; features are inside the
+/// border).
+#[derive(Clone, Copy, Debug)]
+struct Extremum {
+    val: i16,
+    u: u16,
+    v: u16,
+}
+
+impl Extremum {
+    const NONE: Self = Self { val: 0, u: 0, v: 0 };
+
+    fn is_none(&self) -> bool {
+        self.u == 0
+    }
+
+    /// True if `self` beats `other` in `other`'s window check: strictly better, or equal and
+    /// earlier in row-major order.
+    fn beats(&self, other: &Self, maximum: bool) -> bool {
+        let better = if maximum {
+            self.val > other.val
+        } else {
+            self.val < other.val
+        };
+        better || (self.val == other.val && (self.v, self.u) < (other.v, other.u))
+    }
+}
+
+/// The descriptor at `(u, v)` from the Sobel images.
+#[inline]
+fn descriptor(du: &[u8], dv: &[u8], w: usize, u: usize, v: usize) -> Descriptor {
+    let mut d = [0u8; 32];
+    for (k, (dx, dy)) in PATTERN.iter().enumerate() {
+        let i = ((v as i32 + dy) as usize) * w + (u as i32 + dx) as usize;
+        d[k] = du[i];
+        d[16 + k] = dv[i];
+    }
+    d
 }
 
 /// The offset of the vertex of the parabola through `(-1, a)`, `(0, b)`, `(1, c)`, within
@@ -341,10 +564,11 @@ fn vertex(a: f64, b: f64, c: f64) -> f64 {
     (0.5 * (a - c) / denom).clamp(-0.5, 0.5)
 }
 
-/// True if `val` at `(u, v)` is the strict maximum (or minimum) of `img` over the
-/// `(2n+1)^2` window, ties broken towards the smaller index.
-#[allow(clippy::too_many_arguments)]
-fn is_extremum(
+/// True if `val` at `(u, v)` is the strict maximum (`MAX`, else minimum) of `img` over the
+/// `(2n+1)^2` window, ties broken towards the smaller index (row-major): a pixel before
+/// `(u, v)` beats it when equal, a pixel after only when strictly better. Each row segment is
+/// reduced to its extreme without branches, then compared.
+fn is_extremum<const MAX: bool>(
     img: &[i16],
     w: usize,
     h: usize,
@@ -352,111 +576,214 @@ fn is_extremum(
     v: usize,
     n: usize,
     val: i16,
-    maximum: bool,
 ) -> bool {
-    let i0 = v * w + u;
-    for y in v.saturating_sub(n)..(v + n + 1).min(h) {
-        for x in u.saturating_sub(n)..(u + n + 1).min(w) {
-            let i = y * w + x;
-            let o = img[i];
-            let beats = if maximum {
-                o > val || (o == val && i < i0)
-            } else {
-                o < val || (o == val && i < i0)
-            };
-            if beats {
-                return false;
-            }
+    let (x0, x1) = (u.saturating_sub(n), (u + n + 1).min(w));
+    let extreme = |s: &[i16]| {
+        if MAX {
+            s.iter().copied().fold(i16::MIN, i16::max)
+        } else {
+            s.iter().copied().fold(i16::MAX, i16::min)
+        }
+    };
+    // Pixels before `(u, v)` beat it when at least as good, pixels after when better.
+    let beaten = |m: i16, earlier: bool| {
+        if MAX {
+            m > val || (earlier && m == val)
+        } else {
+            m < val || (earlier && m == val)
+        }
+    };
+    let row = |y: usize| &img[y * w + x0..y * w + x1];
+    let centre = row(v);
+    let k = u - x0;
+    if beaten(extreme(&centre[..k]), true) || beaten(extreme(&centre[k + 1..]), false) {
+        return false;
+    }
+    for d in 1..=n {
+        if d <= v && beaten(extreme(row(v - d)), true) {
+            return false;
+        }
+        if v + d < h && beaten(extreme(row(v + d)), false) {
+            return false;
         }
     }
     true
 }
 
-/// 3x3 Sobel responses, stored as `128 + response / 4` clamped to a byte (border rows and
-/// columns: 128).
-fn sobel(px: &[u8], w: usize, h: usize, du: &mut [u8], dv: &mut [u8]) {
+/// The Sobel images and the blob and corner responses of an image, rows in parallel.
+///
+/// Sobel: 3x3 responses stored as `128 + response / 4` clamped to a byte (border rows and
+/// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). Each is a
+/// vertical pass over 3 or 5 rows into column sums, then a horizontal pass over shifted slices
+/// of those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+fn responses(
+    px: &[u8],
+    w: usize,
+    h: usize,
+    du: &mut [u8],
+    dv: &mut [u8],
+    blob: &mut [i16],
+    corner: &mut [i16],
+) {
     du.par_chunks_mut(w)
         .zip(dv.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(y, (ru, rv))| {
-            if y == 0 || y + 1 == h {
-                ru.fill(128);
-                rv.fill(128);
-                return;
-            }
-            let a = &px[(y - 1) * w..y * w];
-            let b = &px[y * w..(y + 1) * w];
-            let c = &px[(y + 1) * w..(y + 2) * w];
-            ru[0] = 128;
-            rv[0] = 128;
-            ru[w - 1] = 128;
-            rv[w - 1] = 128;
-            for x in 1..w - 1 {
-                let l = i32::from(a[x - 1]) + 2 * i32::from(b[x - 1]) + i32::from(c[x - 1]);
-                let r = i32::from(a[x + 1]) + 2 * i32::from(b[x + 1]) + i32::from(c[x + 1]);
-                let t = i32::from(a[x - 1]) + 2 * i32::from(a[x]) + i32::from(a[x + 1]);
-                let bo = i32::from(c[x - 1]) + 2 * i32::from(c[x]) + i32::from(c[x + 1]);
-                ru[x] = (128 + (r - l) / 4).clamp(0, 255) as u8;
-                rv[x] = (128 + (bo - t) / 4).clamp(0, 255) as u8;
-            }
-        });
-}
-
-/// The blob and corner responses (zero within 2 pixels of the border).
-fn filters(px: &[u8], w: usize, h: usize, blob: &mut [i16], corner: &mut [i16]) {
-    blob.par_chunks_mut(w)
+        .zip(blob.par_chunks_mut(w))
         .zip(corner.par_chunks_mut(w))
         .enumerate()
+        .with_min_len(4)
         .for_each_init(
-            || (vec![0i32; w], vec![0i32; w], vec![0i32; w]),
-            |(c5, c3, d), (y, (rb, rc))| {
+            || [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
+            |[s0, s1, s2], (y, (((ru, rv), rb), rc))| {
+                let row = |k: usize| &px[k * w..(k + 1) * w];
+                if y == 0 || y + 1 == h {
+                    ru.fill(128);
+                    rv.fill(128);
+                } else {
+                    sobel_row(row(y - 1), row(y), row(y + 1), ru, rv, s0, s1);
+                }
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
                     rc.fill(0);
-                    return;
-                }
-                let row = |k: usize| &px[k * w..(k + 1) * w];
-                let (r0, r1, r2, r3, r4) = (row(y - 2), row(y - 1), row(y), row(y + 1), row(y + 2));
-                for x in 0..w {
-                    let (a, b, c, e, f) = (
-                        i32::from(r0[x]),
-                        i32::from(r1[x]),
-                        i32::from(r2[x]),
-                        i32::from(r3[x]),
-                        i32::from(r4[x]),
-                    );
-                    c3[x] = b + c + e;
-                    c5[x] = a + c3[x] + f;
-                    d[x] = (e + f) - (a + b);
-                }
-                rb[..2].fill(0);
-                rc[..2].fill(0);
-                rb[w - 2..].fill(0);
-                rc[w - 2..].fill(0);
-                for x in 2..w - 2 {
-                    let box5 = c5[x - 2] + c5[x - 1] + c5[x] + c5[x + 1] + c5[x + 2];
-                    let box3 = c3[x - 1] + c3[x] + c3[x + 1];
-                    rb[x] = (2 * box3 - box5 + 7 * i32::from(r2[x])) as i16;
-                    rc[x] = (d[x - 2] + d[x - 1] - d[x + 1] - d[x + 2]) as i16;
+                } else {
+                    let rows = [row(y - 2), row(y - 1), row(y), row(y + 1), row(y + 2)];
+                    filter_row(rows, rb, rc, s0, s1, s2);
                 }
             },
         );
+}
+
+/// One row of the Sobel images from the rows above (`a`), at (`b`) and below (`c`); `vs` and
+/// `vd` are scratch rows.
+fn sobel_row(
+    a: &[u8],
+    b: &[u8],
+    c: &[u8],
+    ru: &mut [u8],
+    rv: &mut [u8],
+    vs: &mut [i16],
+    vd: &mut [i16],
+) {
+    let w = ru.len();
+    let (a, b, c) = (&a[..w], &b[..w], &c[..w]);
+    let (vs, vd) = (&mut vs[..w], &mut vd[..w]);
+    // Vertical: smoothing [1 2 1] and derivative [-1 0 1].
+    for x in 0..w {
+        let (p, q, r) = (i16::from(a[x]), i16::from(b[x]), i16::from(c[x]));
+        vs[x] = p + 2 * q + r;
+        vd[x] = r - p;
+    }
+    // Horizontal: derivative of the smoothed columns, smoothing of the derivatives.
+    let n = w - 2;
+    let (sl, sr) = (&vs[..n], &vs[2..2 + n]);
+    let (dl, dc, dr) = (&vd[..n], &vd[1..1 + n], &vd[2..2 + n]);
+    let (ou, ov) = (&mut ru[1..1 + n], &mut rv[1..1 + n]);
+    for x in 0..n {
+        ou[x] = (128 + (sr[x] - sl[x]) / 4).clamp(0, 255) as u8;
+        ov[x] = (128 + (dl[x] + 2 * dc[x] + dr[x]) / 4).clamp(0, 255) as u8;
+    }
+    ru[0] = 128;
+    rv[0] = 128;
+    ru[w - 1] = 128;
+    rv[w - 1] = 128;
+}
+
+/// One row of the blob and corner responses from the five rows around it; `c5`, `c3`, `d` are
+/// scratch rows.
+fn filter_row(
+    rows: [&[u8]; 5],
+    rb: &mut [i16],
+    rc: &mut [i16],
+    c5: &mut [i16],
+    c3: &mut [i16],
+    d: &mut [i16],
+) {
+    let w = rb.len();
+    let [r0, r1, r2, r3, r4] = rows.map(|r| &r[..w]);
+    let (c5, c3, d) = (&mut c5[..w], &mut c3[..w], &mut d[..w]);
+    for x in 0..w {
+        let (a, b, c, e, f) = (
+            i16::from(r0[x]),
+            i16::from(r1[x]),
+            i16::from(r2[x]),
+            i16::from(r3[x]),
+            i16::from(r4[x]),
+        );
+        c3[x] = b + c + e;
+        c5[x] = a + b + c + e + f;
+        d[x] = (e + f) - (a + b);
+    }
+    let n = w - 4;
+    let (p0, p1, p2, p3, p4) = (
+        &c5[..n],
+        &c5[1..1 + n],
+        &c5[2..2 + n],
+        &c5[3..3 + n],
+        &c5[4..4 + n],
+    );
+    let (q1, q2, q3) = (&c3[1..1 + n], &c3[2..2 + n], &c3[3..3 + n]);
+    let (d0, d1, d3, d4) = (&d[..n], &d[1..1 + n], &d[3..3 + n], &d[4..4 + n]);
+    let centre = &r2[2..2 + n];
+    let (ob, oc) = (&mut rb[2..2 + n], &mut rc[2..2 + n]);
+    for x in 0..n {
+        let box5 = p0[x] + p1[x] + p2[x] + p3[x] + p4[x];
+        let box3 = q1[x] + q2[x] + q3[x];
+        ob[x] = 2 * box3 - box5 + 7 * i16::from(centre[x]);
+        oc[x] = d0[x] + d1[x] - d3[x] - d4[x];
+    }
+    rb[..2].fill(0);
+    rc[..2].fill(0);
+    rb[w - 2..].fill(0);
+    rc[w - 2..].fill(0);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The box-sum filters equal the 5x5 masks applied directly.
+    /// The separable 16-bit filters equal the 5x5 masks and the 3x3 Sobel masks applied
+    /// directly, on a texture with the extreme values 0 and 255.
     #[test]
     fn filters_equal_the_masks() {
-        let (w, h) = (13usize, 11usize);
+        let (w, h) = (23usize, 11usize);
         let px: Vec<u8> = (0..w * h)
-            .map(|i| ((i * 37 + i * i * 11) % 251) as u8)
+            .map(|i| match i % 7 {
+                0 => 0,
+                3 => 255,
+                _ => ((i * 37 + i * i * 11) % 251) as u8,
+            })
             .collect();
         let mut blob = vec![0i16; w * h];
         let mut corner = vec![0i16; w * h];
-        filters(&px, w, h, &mut blob, &mut corner);
+        let mut du = vec![0u8; w * h];
+        let mut dv = vec![0u8; w * h];
+        responses(&px, w, h, &mut du, &mut dv, &mut blob, &mut corner);
+        let at = |x: usize, y: usize| i32::from(px[y * w + x]);
+        for y in 0..h {
+            for x in 0..w {
+                let (eu, ev) = if x == 0 || y == 0 || x + 1 == w || y + 1 == h {
+                    (128, 128)
+                } else {
+                    let gu = at(x + 1, y - 1) + 2 * at(x + 1, y) + at(x + 1, y + 1)
+                        - at(x - 1, y - 1)
+                        - 2 * at(x - 1, y)
+                        - at(x - 1, y + 1);
+                    let gv = at(x - 1, y + 1) + 2 * at(x, y + 1) + at(x + 1, y + 1)
+                        - at(x - 1, y - 1)
+                        - 2 * at(x, y - 1)
+                        - at(x + 1, y - 1);
+                    ((128 + gu / 4).clamp(0, 255), (128 + gv / 4).clamp(0, 255))
+                };
+                assert_eq!(i32::from(du[y * w + x]), eu, "du at {x},{y}");
+                assert_eq!(i32::from(dv[y * w + x]), ev, "dv at {x},{y}");
+                if x < 2 || y < 2 || x + 2 >= w || y + 2 >= h {
+                    assert_eq!(
+                        (blob[y * w + x], corner[y * w + x]),
+                        (0, 0),
+                        "border {x},{y}"
+                    );
+                }
+            }
+        }
         let bm = |dx: i32, dy: i32| match (dx.abs().max(dy.abs()), dx, dy) {
             (0, _, _) => 8,
             (1, _, _) => 1,

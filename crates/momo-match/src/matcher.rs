@@ -199,8 +199,10 @@ pub fn match_features(
             }
             let g = &cur.classes[class].points[j];
             let (u1, v1) = (i32::from(g.u), i32::from(g.v));
-            let (back, _, _) = prev.classes[class].best_in_window(&g.desc, u1, v1, ru, rv)?;
-            if back != i {
+            // The circular check: `f` must be the best match of `g` in frame k-1 (the window is
+            // symmetric, so `f` lies inside it; the scan stops at the first feature that beats
+            // `f`).
+            if !prev.classes[class].is_best_in_window(&g.desc, u1, v1, ru, rv, i, s) {
                 return None;
             }
             Some(if options.subpixel {
