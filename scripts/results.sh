@@ -4,7 +4,7 @@
 # Usage: scripts/results.sh [DATA_DIR] [OUT_DIR]
 #   DATA_DIR  the shared data folder (default ../shared/data beside the repository)
 #   OUT_DIR   scratch space for sequences and estimates (default target/results)
-#   PARTS     environment variable: which parts to (re)run, default "kitti sim peers sweep images";
+#   PARTS     environment variable: which parts to (re)run, default "kitti sim peers sweep images calibrate speed";
 #             a part that is not run keeps its last section file (OUT_DIR/PART.md) if there is
 #             one, so that one part can be refreshed without re-running all.
 #
@@ -47,7 +47,7 @@ part kitti kitti00_eval.sh "$data" "$out/kitti" &&
 part sim sim_eval.sh "$out/sim" "$out/sim.md" "$root/docs/img"
 # The peers keep their venv in target/peers (installing the wheels again is slow).
 part peers peers_eval.sh "$data" "${PEERS_DIR:-$root/target/peers}" "$out/peers.md"
-part sweep sweep_eval.sh "$data" "$out/sweep" "$out/sweep.md"
+part sweep sweep_eval.sh "$data" "$out/sweep.md" "$out/sweep"
 part images images_eval.sh "$data" "$out/images" "$out/images.md"
 part calibrate calibrate_eval.sh "$data" "$out/calibrate" "$out/calibrate.md"
 part speed speed_eval.sh "$out/speed" "$out/speed.md"
