@@ -109,7 +109,7 @@ pub struct FrameResult {
 /// - fewer than `min_matches` matches: the previous motion is held (with the frame's odometry
 ///   arc length if given), status [`FrameStatus::NoMatches`];
 /// - arc length below `standstill_arc_length`: rotation-only residual, zero arc length, status
-///   [`FrameStatus::Standstill`];
+///   [`FrameStatus::Standstill`]; the first moving frame after it starts straight ahead;
 /// - solver failure: the previous motion is held, status [`FrameStatus::SolverFailure`];
 /// - a camera whose matches are all outliers is down-weighted by the robust loss, the others
 ///   carry the estimate (visible in `inliers_per_camera`);
@@ -123,6 +123,9 @@ pub struct Odometry {
     estimator: Box<dyn FrameEstimator>,
     previous: Vec<f64>,
     last_arc_length: Option<f64>,
+    /// The last frame pair was a standstill: its motion says nothing about the direction of
+    /// travel, so the next moving frame starts straight ahead.
+    after_standstill: bool,
     scale_observable: bool,
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
@@ -165,6 +168,7 @@ impl Odometry {
             estimator,
             previous,
             last_arc_length: None,
+            after_standstill: false,
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
@@ -231,6 +235,17 @@ impl Odometry {
             .is_some_and(|i| init[i] < self.config.odometry.standstill_arc_length && fixed[i]);
         if standstill && let Some(i) = arc_index {
             init[i] = 0.0;
+        } else if self.after_standstill {
+            // Moving off: the held direction of travel is arbitrary (it was not observable at
+            // the standstill), and a start that points sideways can settle in a wrong basin
+            // that the warm start then carries on (seen on KITTI 00's stops).
+            let mut ahead = self
+                .estimator
+                .initial_params(arc_index.map_or(1.0, |i| init[i]));
+            if let Some(i) = arc_index {
+                ahead[i] = init[i];
+            }
+            init = ahead;
         }
 
         let matches = obs.len();
@@ -293,11 +308,15 @@ impl Odometry {
                     }
                 }
                 self.fill_diagnostics(&sol, &mut diag);
-                let ratio = sol.inliers() as f64 / matches.max(1) as f64;
-                self.inlier_ratio_average = Some(match self.inlier_ratio_average {
-                    Some(a) => 0.9 * a + 0.1 * ratio,
-                    None => ratio,
-                });
+                // Standstill frames score another residual (rotation only): they do not count
+                // towards the running inlier ratio of the moving frames.
+                if !standstill {
+                    let ratio = sol.inliers() as f64 / matches.max(1) as f64;
+                    self.inlier_ratio_average = Some(match self.inlier_ratio_average {
+                        Some(a) => 0.9 * a + 0.1 * ratio,
+                        None => ratio,
+                    });
+                }
                 sol.params
             }
             None => {
@@ -321,6 +340,7 @@ impl Odometry {
         {
             self.last_arc_length = Some(params[i]);
         }
+        self.after_standstill = standstill;
         let motion = self.estimator.motion(&params);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.

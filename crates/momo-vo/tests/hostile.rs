@@ -617,3 +617,48 @@ fn a_rig_with_every_camera_in_the_motion_centre_says_scale_is_unobservable() {
     let r = fp.process(&frame(&rig, &drive(0.05, 1.7), 80, 0.5, &mut rng), None);
     assert_eq!(r.diagnostics.scale, ScaleSource::Held);
 }
+
+// ------------------------------------------------------------------------ stop and go
+
+/// Stop and go: the vehicle slows down to a standstill, stands for six frames and moves off
+/// slowly, in a gentle curve (6 seeds, 200 matches, 0.5 px). At a few centimetres per frame the
+/// direction of travel is hardly observable and wanders (heading estimates up to 1 rad were
+/// seen), but the rotation stays within 0.3 degrees (measured worst: 0.11). With 1 px of noise
+/// on this narrow rig the worst frame reaches 0.69 degrees (at 0.16 m per frame, heading 1.06
+/// rad): a known weakness of slow frames, bounded here by the restarts. The real-trajectory
+/// case (KITTI 00's stop at frames 545-552) is `tests/kitti.rs`.
+#[test]
+fn moving_off_after_a_standstill_keeps_the_rotation() {
+    let rig = canned::pinhole_rig();
+    let slow_down = [0.5, 0.3, 0.15, 0.08, 0.04, 0.025, 0.015];
+    let move_off = [
+        0.012, 0.015, 0.02, 0.03, 0.05, 0.08, 0.12, 0.16, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.7,
+        0.8, 0.9, 1.0,
+    ];
+    let mut worst = (0.0_f64, 0, 0);
+    for seed in 1..=6 {
+        let mut rng = Rng(100 + seed);
+        let mut vo = warmed_up(&rig, &drive(0.002, 1.0), 3, &mut rng);
+        let stops = std::iter::repeat_n(0.0, 6);
+        let arcs = slow_down.iter().copied().chain(stops).chain(move_off);
+        let mut standstills = 0;
+        for (k, l) in arcs.enumerate() {
+            // A gentle left curve, the yaw proportional to the distance (curvature 0.02 / m).
+            let truth = drive(0.02 * l, l);
+            let obs = frame(&rig, &truth, 200, 0.5, &mut rng);
+            let r = vo.process(&obs, Some(l));
+            assert_finite_orthonormal(&r.motion);
+            standstills += usize::from(r.diagnostics.status == FrameStatus::Standstill);
+            let err = rot_err_deg(&r.motion, &truth);
+            if err > worst.0 {
+                worst = (err, seed, k);
+            }
+        }
+        assert_eq!(standstills, 6);
+    }
+    eprintln!(
+        "stop and go: worst rotation error {:.4} deg (seed {}, frame {})",
+        worst.0, worst.1, worst.2
+    );
+    assert!(worst.0 < 0.3, "rotation error {:.3} deg", worst.0);
+}
