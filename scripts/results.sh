@@ -4,7 +4,7 @@
 # Usage: scripts/results.sh [DATA_DIR] [OUT_DIR]
 #   DATA_DIR  the shared data folder (default ../shared/data beside the repository)
 #   OUT_DIR   scratch space for sequences and estimates (default target/results)
-#   PARTS     environment variable: which parts to (re)run, default "kitti sim peers sweep images calibrate speed";
+#   PARTS     environment variable: which parts to (re)run, default "kitti sim peers sweep images calibrate trajectories speed";
 #             a part that is not run keeps its last section file (OUT_DIR/PART.md) if there is
 #             one, so that one part can be refreshed without re-running all.
 #
@@ -16,6 +16,7 @@
 #   sweep   scripts/sweep_eval.sh     `momo sweep` over models x metrics x losses x solvers
 #   images  scripts/images_eval.sh    `momo match` / `momo vo` on real KITTI images
 #   calibrate scripts/calibrate_eval.sh `momo calibrate` (camera mount) on KITTI 00
+#   trajectories scripts/trajectories_eval.sh simulated matches along KITTI 00-10 ground truth
 #   speed   scripts/speed_eval.sh     criterion targets and floor, whole-process time per frame
 set -uo pipefail
 
@@ -23,7 +24,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 abs() { case "$1" in /*) printf '%s\n' "$1" ;; *) printf '%s\n' "$PWD/$1" ;; esac; }
 data="$(abs "${1:-$root/../shared/data}")"
 out="$(abs "${2:-$root/target/results}")"
-parts="${PARTS:-kitti sim peers sweep images calibrate speed}"
+parts="${PARTS:-kitti sim peers sweep images calibrate trajectories speed}"
 mkdir -p "$out" "$root/docs/img"
 (cd "$root" && cargo build --release) || exit 1
 
@@ -50,6 +51,7 @@ part peers peers_eval.sh "$data" "${PEERS_DIR:-$root/target/peers}" "$out/peers.
 part sweep sweep_eval.sh "$data" "$out/sweep.md" "$out/sweep"
 part images images_eval.sh "$data" "$out/images" "$out/images.md"
 part calibrate calibrate_eval.sh "$data" "$out/calibrate" "$out/calibrate.md"
+part trajectories trajectories_eval.sh "$data" "$out/trajectories" "$out/trajectories.md"
 part speed speed_eval.sh "$out/speed" "$out/speed.md"
 
 section() { # FILE: prints a section, demoting its top-level heading
@@ -87,7 +89,10 @@ section() { # FILE: prints a section, demoting its top-level heading
     echo "# 6. Mount self-calibration"
     echo
     section "$out/calibrate.md"
-    echo "# 7. Speed"
+    echo "# 7. Simulated matches along the KITTI 00-10 trajectories"
+    echo
+    section "$out/trajectories.md"
+    echo "# 8. Speed"
     echo
     section "$out/speed.md"
 } >"$root/docs/RESULTS.md"
