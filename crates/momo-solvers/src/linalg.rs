@@ -118,8 +118,9 @@ fn cholesky_solve(a: &NormalMatrix, b: &ParamVec, n: usize) -> Option<ParamVec> 
 /// minimum-norm sense by faer's SVD of the Jacobi-scaled matrix `S = D⁻¹ A D⁻¹`
 /// (`D = √|diag A|`, 1 where the diagonal is zero), dropping singular values below
 /// `rcond · σ_max`. Rows and columns of `A` without off-diagonal entries are left out: their
-/// entries of `x` are `bᵢ / aᵢᵢ`, or exactly zero where `aᵢᵢ` is zero too. Returns `None` if the SVD fails or the result is not finite.
-/// Entries at and beyond `n` of the result are zero. No heap allocation.
+/// entries of `x` are `bᵢ / aᵢᵢ`, or exactly zero where `aᵢᵢ` is zero too. Returns `None` if
+/// the SVD fails or the result is not finite. Entries at and beyond `n` of the result are
+/// zero. No heap allocation.
 pub fn truncated_svd_solve(
     a: &NormalMatrix,
     b: &ParamVec,
