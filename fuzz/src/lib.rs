@@ -31,9 +31,7 @@
 //! ```
 
 use arbitrary::Arbitrary;
-use momo_core::{
-    Camera, FrameObservations, KannalaBrandt, Observation, Pinhole, Pose, Rig, RigCamera,
-};
+use momo_core::{Camera, FrameObservations, Observation, Pinhole, Pose, Rig, RigCamera};
 use momo_io::{IoError, MatchReader, POSE_ORTHONORMAL_TOLERANCE};
 use momo_vo::{Config, EstimatorKind, FrameStatus, MotionDriver};
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -46,32 +44,15 @@ pub const MAX_FUZZ_FRAMES: usize = 10_000;
 /// fast).
 pub const MAX_FUZZ_MATCHES: usize = 400;
 
-/// The KITTI-like pinhole camera of `FORMAT.md`.
+/// The KITTI-like pinhole camera of `FORMAT.md` (`momo_costs::canned::kitti_pinhole`).
 pub fn kitti_pinhole() -> Camera {
-    Camera::Pinhole(Pinhole {
-        fx: 718.856,
-        fy: 718.856,
-        cx: 607.1928,
-        cy: 185.2157,
-        width: 1241.0,
-        height: 376.0,
-    })
+    Camera::Pinhole(momo_costs::canned::kitti_pinhole())
 }
 
-/// A Kannala-Brandt fisheye whose field of view exceeds 180 degrees.
+/// A Kannala-Brandt fisheye whose field of view exceeds 180 degrees
+/// (`momo_costs::canned::fisheye`).
 pub fn wide_fisheye() -> Camera {
-    Camera::KannalaBrandt(KannalaBrandt {
-        fx: 330.0,
-        fy: 331.0,
-        cx: 640.0,
-        cy: 480.0,
-        k1: 0.02,
-        k2: -0.005,
-        k3: 0.001,
-        k4: -0.0001,
-        width: 1280.0,
-        height: 960.0,
-    })
+    Camera::KannalaBrandt(momo_costs::canned::fisheye())
 }
 
 /// A valid but hostile pinhole: a 1 x 1 image with wildly different focal lengths.
@@ -88,7 +69,7 @@ pub fn tiny_pinhole() -> Camera {
 
 /// Camera looking along the vehicle's x axis (`FORMAT.md`'s example mount).
 fn forward() -> Matrix3<f64> {
-    Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0)
+    momo_costs::canned::forward_looking()
 }
 
 fn rig_of(cameras: Vec<(Camera, Vector3<f64>, Matrix3<f64>)>) -> Rig {

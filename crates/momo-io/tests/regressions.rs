@@ -7,9 +7,10 @@
 //! run in every `cargo test`.
 #![allow(clippy::unwrap_used)] // tests may unwrap
 
-use momo_core::{Camera, KannalaBrandt, Pinhole, Pose, Rig, RigCamera};
+use momo_core::{Camera, Pinhole, Pose, Rig, RigCamera};
+use momo_costs::canned;
 use momo_io::{IoError, MatchReader, POSE_ORTHONORMAL_TOLERANCE};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 
 fn inputs(target: &str) -> Vec<PathBuf> {
@@ -50,34 +51,13 @@ fn check_error(e: &IoError, path: &str, input: &Path) {
 /// pinhole, camera 1 a fisheye beyond 180 degrees, camera 2 a 1 x 1 pinhole with focal
 /// lengths 1e-6 and 1e9.
 fn matches_rig() -> Rig {
-    let forward = Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0);
+    let forward = canned::forward_looking();
     let cams = [
         (
-            Camera::Pinhole(Pinhole {
-                fx: 718.856,
-                fy: 718.856,
-                cx: 607.1928,
-                cy: 185.2157,
-                width: 1241.0,
-                height: 376.0,
-            }),
+            Camera::Pinhole(canned::kitti_pinhole()),
             Vector3::new(1.0, 0.0, 1.65),
         ),
-        (
-            Camera::KannalaBrandt(KannalaBrandt {
-                fx: 330.0,
-                fy: 331.0,
-                cx: 640.0,
-                cy: 480.0,
-                k1: 0.02,
-                k2: -0.005,
-                k3: 0.001,
-                k4: -0.0001,
-                width: 1280.0,
-                height: 960.0,
-            }),
-            Vector3::zeros(),
-        ),
+        (Camera::KannalaBrandt(canned::fisheye()), Vector3::zeros()),
         (
             Camera::Pinhole(Pinhole {
                 fx: 1e-6,
