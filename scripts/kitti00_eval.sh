@@ -67,12 +67,14 @@ make_cfg() {
     set_cfg "$f" loss scale "$4"
 }
 "$momo" config >"$out/cfg/default.toml"
-# soft: the soft single-track manifold (slip sigma 0.02 rad) and a motion prior on the rotation
-# change (0.002 rad per frame), as in scripts/sim_eval.sh's momo_soft.
+# soft: the soft single-track manifold (slip sigma 0.02 rad) with the default rotation prior, as
+# in scripts/sim_eval.sh's momo_soft; no_prior: the default without the rotation prior
+# (odometry.rotation_change_sigma = 0, the default before 2026-11-23).
 "$momo" config |
-    sed -e 's/^type = "se3"/type = "soft_single_track"\nside_slip_sigma = 0.02\nclimb_sigma = 0.02/' |
-    awk '{ print } /^\[odometry.motion_prior_sigmas\]/ {
-        print "rot_x = 0.002"; print "rot_y = 0.002"; print "rot_z = 0.002" }' >"$out/cfg/soft.toml"
+    sed -e 's/^type = "se3"/type = "soft_single_track"\nside_slip_sigma = 0.02\nclimb_sigma = 0.02/' \
+        >"$out/cfg/soft.toml"
+"$momo" config | sed -e 's/^rotation_change_sigma = .*/rotation_change_sigma = 0.0/' \
+    >"$out/cfg/no_prior.toml"
 # tukey: the default, then each frame refined with Tukey at 0.0075 rad ([refine_loss]), as in
 # scripts/sim_eval.sh's momo_tukey.
 { "$momo" config; printf '\n[refine_loss]\ntype = "tukey"\nscale = 0.0075\n'; } >"$out/cfg/tukey.toml"
@@ -129,6 +131,7 @@ run() {
 }
 for seq in mono100 mono300 stereo200 mono_all; do
     run "$seq" default
+    run "$seq" no_prior
     run "$seq" soft
     run "$seq" tukey
     run "$seq" five_point
@@ -136,6 +139,7 @@ for seq in mono100 mono300 stereo200 mono_all; do
 done
 for s in $seeds; do
     run "mono200_s$s" default
+    run "mono200_s$s" no_prior
     run "mono200_s$s" soft
     run "mono200_s$s" tukey
     run "mono200_s$s" five_point
@@ -188,8 +192,9 @@ fi
         echo "frame-to-frame estimate can score here."
         echo
     fi
-    echo "\`soft\` is the default with the soft single-track manifold and a motion prior (see"
-    echo "scripts/sim_eval.sh); \`tukey\` the default refined per frame with Tukey at 0.0075 rad"
+    echo "\`default\` is \`se3\` with the rotation prior (\`odometry.rotation_change_sigma\` = 0.002);"
+    echo "\`no_prior\` the same without it (the default before 2026-11-23); \`soft\` the default with"
+    echo "the soft single-track manifold (see scripts/sim_eval.sh); \`tukey\` the default refined per frame with Tukey at 0.0075 rad"
     echo "(\`[refine_loss]\`); \`five_point_refined\` the 5-point baseline with LO-RANSAC-style"
     echo "refinement (\`--estimator five-point-refined\`); \`mono_all\` has every match (about 2,000"
     echo "per frame pair)."

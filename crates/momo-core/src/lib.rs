@@ -60,7 +60,7 @@ pub use estimator::{
 pub use lie::{Pose, hat, so3_exp, so3_log, vee};
 pub use loss::RobustLoss;
 pub use loss_trivial::TrivialLoss;
-pub use manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior};
+pub use manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior, ROTATION_PRIOR_CAUCHY};
 pub use metric::{MAX_RESIDUALS, ResidualMetric, RotationOnly, essential};
 pub use problem::{Problem, camera_motion};
 pub use rig::{FrameObservations, Observation, Rig, RigCamera};

@@ -8,23 +8,67 @@ use std::fmt::Debug;
 /// The most prior residuals a [`Manifold`] may have.
 pub const MAX_PRIOR_RESIDUALS: usize = 8;
 
-/// A Gaussian prior on the change of the motion between consecutive frames (vehicle dynamics):
-/// `½ Σ_i (s · (p_i − center_i) · inv_sigma_i)²` over the free parameters, with `s` the loss
-/// scale (the data's noise unit). `center` is usually the previous frame's parameters and
-/// `inv_sigma_i = 1 / σ_i` the inverse of how much parameter i may change from frame to frame
-/// (0: no prior on it).
+/// Scale of the Cauchy loss on the normalised rotation change of [`MotionPrior`], in standard
+/// deviations.
+pub const ROTATION_PRIOR_CAUCHY: f64 = 3.0;
+
+/// A prior on the change of the motion between consecutive frames (vehicle dynamics),
+/// in the loss scale's units `s` (the data's noise unit), with two independent parts:
+///
+/// - per parameter: `½ Σ_i (s · (p_i − center_i) · inv_sigma_i)²` over the free parameters
+///   (`center` is usually the previous frame's parameters, `inv_sigma_i = 1 / σ_i` how much
+///   parameter i may change from frame to frame, 0 for no prior on it; both empty for none);
+/// - on the rotation, for every model alike: `½ s² ρ(|d|²)` with `d = (log R(p) −
+///   rotation_center) · rotation_inv_sigma`, `log R(p)` the rotation vector of the vehicle
+///   motion ([`crate::so3_log`]) and `rotation_center` that of the previous frame. It limits the
+///   change of the yaw, pitch and roll rates from one frame to the next whatever the parameters
+///   are called (the yaw of a single-track model, the rotation vector of `Se3`). `ρ` is a
+///   Cauchy loss with scale [`ROTATION_PRIOR_CAUCHY`] (in σ): Gaussian within a few σ, but a
+///   change of tens of σ that the matches clearly show (a dropped frame, a sharp jolt) costs
+///   only logarithmically more, so the data can still win it; a Gaussian prior would hold the
+///   estimate against all of them, since the robust data cost is bounded.
+///
+/// ```
+/// use momo_core::MotionPrior;
+///
+/// // 0.002 rad of rotation change per frame, centred on a motion turning by 0.01 rad.
+/// let prior = MotionPrior::rotation([0.0, 0.0, 0.01], 0.002);
+/// assert!(prior.is_active());
+/// assert!(!MotionPrior::default().is_active());
+/// ```
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MotionPrior {
-    /// The expected parameters (full vector of the model).
+    /// The expected parameters (full vector of the model; empty for no per-parameter prior).
     pub center: Vec<f64>,
-    /// Inverse standard deviations per parameter (full vector; 0 for none).
+    /// Inverse standard deviations per parameter (full vector; 0 for none; empty for none).
     pub inv_sigma: Vec<f64>,
+    /// The expected rotation vector of the vehicle motion (radians).
+    pub rotation_center: [f64; 3],
+    /// Inverse standard deviation of each component of the rotation vector's change (0: none).
+    pub rotation_inv_sigma: f64,
 }
 
 impl MotionPrior {
+    /// A prior on the rotation only: the rotation vector may change by `sigma` radians per
+    /// frame around `center`.
+    pub fn rotation(center: [f64; 3], sigma: f64) -> Self {
+        Self {
+            rotation_center: center,
+            rotation_inv_sigma: 1.0 / sigma,
+            ..Self::default()
+        }
+    }
+
     /// Whether the prior constrains anything.
     pub fn is_active(&self) -> bool {
-        self.inv_sigma.iter().any(|w| *w != 0.0)
+        self.inv_sigma.iter().any(|w| *w != 0.0) || self.rotation_inv_sigma != 0.0
+    }
+
+    /// Whether the per-parameter part applies to a model with `n_params` parameters.
+    pub fn has_params(&self, n_params: usize) -> bool {
+        self.center.len() == n_params
+            && self.inv_sigma.len() == n_params
+            && self.inv_sigma.iter().any(|w| *w != 0.0)
     }
 }
 

@@ -2,9 +2,9 @@
 //! residual metric and a robust loss, differentiated through num-dual.
 
 use crate::error::CoreError;
-use crate::lie::Pose;
+use crate::lie::{Pose, so3_log};
 use crate::loss::RobustLoss;
-use crate::manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior};
+use crate::manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior, ROTATION_PRIOR_CAUCHY};
 use crate::metric::{MAX_RESIDUALS, ResidualMetric};
 use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
@@ -17,7 +17,8 @@ use num_dual::DualSVec64;
 /// `min_p ½ Σ_j Σ_i ρ(|r(C_j(p), x_ij)|²)`, with camera motion `C_j = P_j⁻¹ M(p) P_j`,
 /// plus, not robustified and in the loss scale's units `s`, the soft manifold's prior
 /// residuals `½ Σ_k (s · q_k(p))²` ([`Manifold::prior_residuals`]) and an optional
-/// [`MotionPrior`] on the change of motion `½ Σ_i (s · (p_i − c_i) / σ_i)²`.
+/// [`MotionPrior`] on the change of motion, per parameter `½ Σ_i (s · (p_i − c_i) / σ_i)²`
+/// and on the rotation vector `½ s² ρ(|(log R(p) − w_c) / σ_w|²)` (Cauchy `ρ`).
 ///
 /// Some parameters may be held fixed (the arc length from odometry); the solver sees only the
 /// free ones. Residuals and Jacobians are evaluated with fixed-size dual numbers whose width is
@@ -37,6 +38,13 @@ pub struct Problem<'a, M: Manifold, R: ResidualMetric> {
     n_free: usize,
     /// The prior on the change of motion, if any.
     motion_prior: Option<&'a MotionPrior>,
+}
+
+/// The rotation prior's loss `ρ(z) = c² ln(1 + z / c²)` and its derivative `ρ'(z)`, with `c` =
+/// [`ROTATION_PRIOR_CAUCHY`] and `z` the squared normalised rotation change.
+fn rotation_prior_rho(z: f64) -> (f64, f64) {
+    let c2 = ROTATION_PRIOR_CAUCHY * ROTATION_PRIOR_CAUCHY;
+    (c2 * (z / c2).ln_1p(), 1.0 / (1.0 + z / c2))
 }
 
 impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
@@ -95,12 +103,11 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         })
     }
 
-    /// Adds a prior on the change of motion (ignored if it does not constrain anything or its
-    /// vectors do not have the model's length).
+    /// Adds a prior on the change of motion (ignored if it does not constrain anything; its
+    /// per-parameter part is ignored if its vectors do not have the model's length).
     pub fn with_motion_prior(mut self, prior: Option<&'a MotionPrior>) -> Self {
         let np = M::PARAMS.len();
-        self.motion_prior =
-            prior.filter(|p| p.is_active() && p.center.len() == np && p.inv_sigma.len() == np);
+        self.motion_prior = prior.filter(|p| p.has_params(np) || p.rotation_inv_sigma != 0.0);
         self
     }
 
@@ -126,9 +133,18 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
                 .sum::<f64>();
         }
         if let Some(mp) = self.motion_prior {
-            for i in 0..M::PARAMS.len() {
-                let r = s * (params[i] - mp.center[i]) * mp.inv_sigma[i];
-                cost += 0.5 * r * r;
+            if mp.has_params(M::PARAMS.len()) {
+                for i in 0..M::PARAMS.len() {
+                    let r = s * (params[i] - mp.center[i]) * mp.inv_sigma[i];
+                    cost += 0.5 * r * r;
+                }
+            }
+            if mp.rotation_inv_sigma != 0.0 {
+                let w = so3_log(&self.model.motion(params).rotation);
+                let z: f64 = (0..3)
+                    .map(|a| ((w[a] - mp.rotation_center[a]) * mp.rotation_inv_sigma).powi(2))
+                    .sum();
+                cost += 0.5 * s * s * rotation_prior_rho(z).0;
             }
         }
         cost
@@ -160,15 +176,34 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             }
         }
         if let Some(mp) = self.motion_prior {
-            let p = self.full_params(x);
-            for i in 0..M::PARAMS.len() {
-                let w = s * mp.inv_sigma[i];
-                let r = w * (p[i] - mp.center[i]);
-                cost += 0.5 * r * r;
-                if let Some(k) = self.free[..self.n_free].iter().position(|&f| f == i) {
-                    if k < N {
-                        h[(k, k)] += w * w;
-                        g[k] += w * r;
+            if mp.has_params(M::PARAMS.len()) {
+                let p = self.full_params(x);
+                for i in 0..M::PARAMS.len() {
+                    let w = s * mp.inv_sigma[i];
+                    let r = w * (p[i] - mp.center[i]);
+                    cost += 0.5 * r * r;
+                    if let Some(k) = self.free[..self.n_free].iter().position(|&f| f == i) {
+                        if k < N {
+                            h[(k, k)] += w * w;
+                            g[k] += w * r;
+                        }
+                    }
+                }
+            }
+            if mp.rotation_inv_sigma != 0.0 {
+                // Iteratively reweighted: the Cauchy weight ρ'(|d|²) on the Gauss-Newton terms.
+                let p = self.seeded::<N>(x);
+                let w = so3_log(&self.model.motion(&p[..M::PARAMS.len()]).rotation);
+                let k = mp.rotation_inv_sigma;
+                let d: [f64; 3] = std::array::from_fn(|a| k * (w[a].re - mp.rotation_center[a]));
+                let (rho, weight) = rotation_prior_rho(d.iter().map(|v| v * v).sum());
+                cost += 0.5 * s * s * rho;
+                let ws = s * s * weight;
+                for a in 0..3 {
+                    if let Some(e) = &w[a].eps.0 {
+                        let j = e * k;
+                        *h += j * j.transpose() * ws;
+                        *g += j * (d[a] * ws);
                     }
                 }
             }

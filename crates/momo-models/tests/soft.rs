@@ -20,6 +20,8 @@ fn gradient_matches_the_cost_with_priors() {
     let prior = MotionPrior {
         center: vec![0.0, 0.0, 0.02, 0.01, 0.0, 1.2],
         inv_sigma: vec![200.0, 200.0, 500.0, 0.0, 100.0, 0.0],
+        rotation_center: [0.002, -0.001, 0.015],
+        rotation_inv_sigma: 300.0,
     };
     let start = [0.001, 0.002, 0.025, 0.03, 0.001, 1.2];
     let p = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &start)
@@ -64,13 +66,63 @@ fn inactive_or_mismatched_priors_are_ignored() {
         MotionPrior {
             center: vec![0.0; 6],
             inv_sigma: vec![0.0; 6],
+            ..MotionPrior::default()
         },
         MotionPrior {
             center: vec![0.0; 2],
             inv_sigma: vec![1.0; 2],
+            ..MotionPrior::default()
         },
     ] {
         let p = base.clone().with_motion_prior(Some(&prior));
         assert_eq!(p.cost(&x), base.cost(&x));
     }
+}
+
+/// The rotation part of the prior works on any model, whatever its parameters are called: on
+/// `SingleTrack3d` (yaw, arc length, pitch, roll) its gradient matches the cost, and it alone
+/// adds `½ s² ρ(|(log R(p) − w_c) / σ|²)` to the cost (Cauchy `ρ`).
+#[test]
+fn the_rotation_prior_applies_to_a_single_track_model() {
+    use momo_core::{ROTATION_PRIOR_CAUCHY, so3_log};
+    use momo_models::SingleTrack3d;
+    let rig = canned::pinhole_rig();
+    let model = SingleTrack3d::default();
+    let truth = [0.03, 1.1, 0.004, -0.002];
+    let obs = canned::synthetic_observations(&rig, &model.motion(&truth), 60, 10, 5);
+    let loss = Cauchy::new(0.001);
+    let prior = MotionPrior::rotation([0.001, 0.003, 0.01], 0.002);
+    let start = [0.025, 1.1, 0.002, 0.001];
+    let base = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &start)
+        .unwrap()
+        .with_fixed(&[false, true, false, false]);
+    let p = base.clone().with_motion_prior(Some(&prior));
+    let x = p.free_params();
+    let lin = p.linearize(&x);
+    assert!((lin.cost - p.cost(&x)).abs() <= 1e-12 * lin.cost.abs().max(1e-300));
+    for k in 0..3 {
+        let h = 1e-7;
+        let (mut a, mut b): (ParamVec, ParamVec) = (x, x);
+        a[k] += h;
+        b[k] -= h;
+        let fd = (p.cost(&a) - p.cost(&b)) / (2.0 * h);
+        let g = lin.gradient[k];
+        assert!(
+            (g - fd).abs() <= 1e-4 * fd.abs().max(1e-9),
+            "parameter {k}: gradient {g:e}, finite differences {fd:e}"
+        );
+    }
+    let w = so3_log(&model.motion(&start).rotation);
+    let z: f64 = (0..3)
+        .map(|a| ((w[a] - prior.rotation_center[a]) / 0.002).powi(2))
+        .sum();
+    let c2 = ROTATION_PRIOR_CAUCHY * ROTATION_PRIOR_CAUCHY;
+    let expected = 0.5 * 0.001 * 0.001 * c2 * (1.0 + z / c2).ln();
+    // The start is several σ from the centre: the Cauchy loss is below the Gaussian there.
+    assert!(z > c2 && expected < 0.5 * 0.001 * 0.001 * z);
+    let added = p.cost(&x) - base.cost(&x);
+    assert!(
+        (added - expected).abs() <= 1e-12 * expected,
+        "{added} vs {expected}"
+    );
 }

@@ -62,10 +62,18 @@ pub struct OdometryOptions {
     pub restart_inlier_ratio: f64,
     /// Yaw offsets (radians) of the extra starts around the previous motion.
     pub restart_yaw_offsets: Vec<f64>,
-    /// The motion prior (vehicle dynamics): for each named model parameter, the standard
-    /// deviation of its change from one frame to the next (radians or metres per frame), as a
-    /// Gaussian cost term centred on the previous frame's motion ([`momo_core::MotionPrior`]).
-    /// Empty (the default): no prior, the previous motion is only the start.
+    /// The rotation prior (vehicle dynamics), for every model: the standard deviation of the
+    /// change of the vehicle's rotation vector from one frame to the next (radians per frame;
+    /// it bounds the change of yaw, pitch and roll rates), a Gaussian cost term centred on the
+    /// previous frame's rotation ([`momo_core::MotionPrior`]). 0: none, the previous motion is
+    /// only the start. The default, 0.002 rad (0.11 deg) per frame, is what the measurements
+    /// on KITTI 00 and the simulated scenarios chose (docs/RESULTS.md).
+    pub rotation_change_sigma: f64,
+    /// The per-parameter motion prior: for each named model parameter, the standard deviation
+    /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
+    /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
+    /// addition to `rotation_change_sigma`. Names depend on the model (an unknown name is an
+    /// error). Empty (the default): none.
     pub motion_prior_sigmas: BTreeMap<String, f64>,
 }
 
@@ -80,6 +88,7 @@ impl Default for OdometryOptions {
             max_arc_length_ratio: 3.0,
             restart_inlier_ratio: 0.7,
             restart_yaw_offsets: vec![-0.1, -0.03, 0.03, 0.1],
+            rotation_change_sigma: 0.002,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -211,12 +220,14 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
     ),
     (
         "odometry",
-        "# Odometry driver: degenerate frames, scale and restarts.",
+        "# Odometry driver: degenerate frames, scale, restarts and the rotation prior\n\
+         # (rotation_change_sigma: how much the rotation may change from one frame to the next,\n\
+         # radians per frame, for every model; 0: none).",
     ),
     (
         "odometry.motion_prior_sigmas",
-        "# Motion prior (vehicle dynamics): the standard deviation of each model parameter's change\n\
-         # from one frame to the next, e.g. rot_z = 0.002 (radians per frame). Empty: no prior.",
+        "# Per-parameter motion prior: the standard deviation of a named model parameter's change\n\
+         # from one frame to the next, e.g. arc_length = 0.1 (metres per frame). Empty: none.",
     ),
     (
         "five_point",
@@ -300,6 +311,12 @@ impl Config {
         }
         if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
             return bad("odometry.restart_yaw_offsets must be finite".into());
+        }
+        if !(o.rotation_change_sigma >= 0.0 && o.rotation_change_sigma.is_finite()) {
+            return bad(format!(
+                "odometry.rotation_change_sigma must be finite and >= 0 (0: none), got {}",
+                o.rotation_change_sigma
+            ));
         }
         if let Some((name, s)) = o
             .motion_prior_sigmas

@@ -4,7 +4,7 @@
 use crate::config::{Config, ConfigError};
 use momo_core::{
     CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, Rig,
-    SolveRequest, Termination,
+    SolveRequest, Termination, so3_log,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -131,8 +131,14 @@ pub struct Odometry {
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
     inlier_ratio_average: Option<f64>,
     /// The prior on the change of motion (centred on the previous frame before each solve),
-    /// if the configuration has one (`odometry.motion_prior_sigmas`).
+    /// if the configuration has one (`odometry.rotation_change_sigma`,
+    /// `odometry.motion_prior_sigmas`).
     motion_prior: Option<MotionPrior>,
+    /// The previous frame pair was estimated while moving, so the motion prior has a centre.
+    /// Off on the first frame, after a standstill and after a frame that held its motion: a
+    /// prior centred on a guess would pull a sharp turn towards straight ahead (KITTI 01 turns
+    /// by 2.5 deg per frame from its first frame).
+    prior_ready: bool,
 }
 
 impl Odometry {
@@ -158,10 +164,19 @@ impl Odometry {
             };
             inv_sigma[i] = 1.0 / sigma;
         }
-        let motion_prior = inv_sigma.iter().any(|w| *w != 0.0).then(|| MotionPrior {
-            center: previous.clone(),
-            inv_sigma,
-        });
+        let has_params = inv_sigma.iter().any(|w| *w != 0.0);
+        let sigma_w = config.odometry.rotation_change_sigma;
+        let prior = MotionPrior {
+            center: if has_params {
+                previous.clone()
+            } else {
+                Vec::new()
+            },
+            inv_sigma: if has_params { inv_sigma } else { Vec::new() },
+            rotation_center: [0.0; 3],
+            rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
+        };
+        let motion_prior = prior.is_active().then_some(prior);
         Ok(Self {
             rig,
             config,
@@ -173,6 +188,7 @@ impl Odometry {
             frame: 0,
             inlier_ratio_average: None,
             motion_prior,
+            prior_ready: false,
         })
     }
 
@@ -276,7 +292,11 @@ impl Odometry {
         };
 
         if let Some(prior) = &mut self.motion_prior {
-            prior.center.clone_from(&init);
+            if !prior.center.is_empty() {
+                prior.center.clone_from(&init);
+            }
+            let w = so3_log(&self.estimator.motion(&init).rotation);
+            prior.rotation_center = [w.x, w.y, w.z];
         }
         let result = if matches < self.config.odometry.min_matches.max(1) {
             diag.status = FrameStatus::NoMatches;
@@ -341,6 +361,7 @@ impl Odometry {
             self.last_arc_length = Some(params[i]);
         }
         self.after_standstill = standstill;
+        self.prior_ready = diag.status == FrameStatus::Estimated;
         let motion = self.estimator.motion(&params);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -394,7 +415,7 @@ impl Odometry {
             initial: init,
             fixed,
             rotation_only,
-            motion_prior: self.motion_prior.as_ref(),
+            motion_prior: self.motion_prior.as_ref().filter(|_| self.prior_ready),
         };
         let usable = |sol: &FrameSolution| {
             sol.report.termination != Termination::NumericalFailure
