@@ -74,6 +74,9 @@ pub trait FrameEstimator: Send + Sync + Debug {
     fn params_from_motion(&self, motion: &Pose<f64>) -> Option<Vec<f64>>;
     /// Which parameters the rig can observe.
     fn observable(&self, rig: &Rig) -> Vec<bool>;
+    /// The soft manifold's prior residuals at a full parameter vector (empty for a hard
+    /// manifold; [`Manifold::prior_residuals`]).
+    fn prior_residuals(&self, params: &[f64]) -> Vec<f64>;
     /// Solves one frame pair.
     fn solve(&self, request: &SolveRequest<'_>) -> Result<FrameSolution, CoreError>;
     /// The cost `½ Σ ρ(|r|²)` at a full parameter vector (for landscapes and restarts).
@@ -145,6 +148,13 @@ impl<M: Manifold, R: ResidualMetric> FrameEstimator for Erased<M, R> {
     }
     fn observable(&self, rig: &Rig) -> Vec<bool> {
         self.model.observable(rig)
+    }
+    fn prior_residuals(&self, params: &[f64]) -> Vec<f64> {
+        let mut q = vec![0.0; M::PRIOR_RESIDUALS];
+        if params.len() == M::PARAMS.len() {
+            self.model.prior_residuals(params, &mut q);
+        }
+        q
     }
 
     fn solve(&self, req: &SolveRequest<'_>) -> Result<FrameSolution, CoreError> {

@@ -46,6 +46,12 @@ pub struct MotionPrior {
     pub rotation_center: [f64; 3],
     /// Inverse standard deviation of each component of the rotation vector's change (0: none).
     pub rotation_inv_sigma: f64,
+    /// The expected values of a soft manifold's prior residuals
+    /// ([`Manifold::prior_residuals`]), subtracted from them (empty: zero). The odometry sets
+    /// it to their running mean over the recent moving frames, which removes a constant part
+    /// (a camera mount a few tenths of a degree off nominal turns into a constant side slip)
+    /// from the model prior. Unlike the other parts it applies on every frame.
+    pub soft_center: Vec<f64>,
 }
 
 impl MotionPrior {
@@ -59,9 +65,11 @@ impl MotionPrior {
         }
     }
 
-    /// Whether the prior constrains anything.
+    /// Whether the prior constrains or shifts anything.
     pub fn is_active(&self) -> bool {
-        self.inv_sigma.iter().any(|w| *w != 0.0) || self.rotation_inv_sigma != 0.0
+        self.inv_sigma.iter().any(|w| *w != 0.0)
+            || self.rotation_inv_sigma != 0.0
+            || self.soft_center.iter().any(|c| *c != 0.0)
     }
 
     /// Whether the per-parameter part applies to a model with `n_params` parameters.

@@ -107,13 +107,30 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     /// per-parameter part is ignored if its vectors do not have the model's length).
     pub fn with_motion_prior(mut self, prior: Option<&'a MotionPrior>) -> Self {
         let np = M::PARAMS.len();
-        self.motion_prior = prior.filter(|p| p.has_params(np) || p.rotation_inv_sigma != 0.0);
+        self.motion_prior = prior.filter(|p| {
+            p.has_params(np)
+                || p.rotation_inv_sigma != 0.0
+                || (p.soft_center.len() == M::PRIOR_RESIDUALS
+                    && p.soft_center.iter().any(|c| *c != 0.0))
+        });
         self
     }
 
     /// Whether the problem has terms besides the matches (soft manifold, motion prior).
     fn has_prior(&self) -> bool {
         M::PRIOR_RESIDUALS > 0 || self.motion_prior.is_some()
+    }
+
+    /// The centre of the soft manifold's prior residuals (zeros unless the motion prior has
+    /// one of the right length).
+    fn soft_center(&self) -> [f64; MAX_PRIOR_RESIDUALS] {
+        let mut c = [0.0; MAX_PRIOR_RESIDUALS];
+        if let Some(mp) = self.motion_prior
+            && mp.soft_center.len() == M::PRIOR_RESIDUALS
+        {
+            c[..M::PRIOR_RESIDUALS].copy_from_slice(&mp.soft_center);
+        }
+        c
     }
 
     /// The prior terms' cost `½ Σ (s q)²` at the full parameters `params` (plain `f64`).
@@ -127,9 +144,11 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             let mut q = [0.0; MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals(params, &mut q[..M::PRIOR_RESIDUALS]);
+            let c = self.soft_center();
             cost += q[..M::PRIOR_RESIDUALS]
                 .iter()
-                .map(|v| 0.5 * (s * v) * (s * v))
+                .zip(c)
+                .map(|(v, c)| 0.5 * (s * (v - c)) * (s * (v - c)))
                 .sum::<f64>();
         }
         if let Some(mp) = self.motion_prior {
@@ -165,8 +184,8 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             let mut q = [DualSVec64::<N>::from_re(0.0); MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals(&p[..M::PARAMS.len()], &mut q[..M::PRIOR_RESIDUALS]);
-            for v in &q[..M::PRIOR_RESIDUALS] {
-                let r = s * v.re;
+            for (v, c) in q[..M::PRIOR_RESIDUALS].iter().zip(self.soft_center()) {
+                let r = s * (v.re - c);
                 cost += 0.5 * r * r;
                 if let Some(e) = &v.eps.0 {
                     let j = e * s;

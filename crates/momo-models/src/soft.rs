@@ -18,7 +18,10 @@ use serde::{Deserialize, Serialize};
 /// single-track models are biased on real motion (docs/RESULTS.md). A moving object that
 /// holds half of the matches, on the other hand, pulls a free `Se3` estimate to a direction of
 /// travel no car drives (several degrees of side slip); the prior holds it. With
-/// `σ → ∞` this is [`Se3`], with `σ → 0` a single-track model. Type tag `soft_single_track`:
+/// `σ → ∞` this is [`Se3`], with `σ → 0` a single-track model. The odometry can centre the
+/// two residuals on their running mean over the recent moving frames
+/// (`odometry.soft_prior_centring_frames`), so that a constant slip (a mount turned a few
+/// tenths of a degree) is learnt instead of pulled against. Type tag `soft_single_track`:
 ///
 /// ```toml
 /// [model]

@@ -22,6 +22,7 @@ fn gradient_matches_the_cost_with_priors() {
         inv_sigma: vec![200.0, 200.0, 500.0, 0.0, 100.0, 0.0],
         rotation_center: [0.002, -0.001, 0.015],
         rotation_inv_sigma: 300.0,
+        soft_center: vec![0.5, -0.3],
     };
     let start = [0.001, 0.002, 0.025, 0.03, 0.001, 1.2];
     let p = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &start)
@@ -50,6 +51,16 @@ fn gradient_matches_the_cost_with_priors() {
     assert!(plain.cost(&x) < p.cost(&x));
     let prior_only = p.prior_cost(&p.full_params(&x));
     assert!((plain.cost(&x) + prior_only - p.cost(&x)).abs() <= 1e-12 * p.cost(&x));
+    // The soft centre moves the model prior: the same prior without it costs differently.
+    let uncentred = MotionPrior {
+        soft_center: Vec::new(),
+        ..prior.clone()
+    };
+    let q = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &start)
+        .unwrap()
+        .with_fixed(&[false, false, false, false, false, true])
+        .with_motion_prior(Some(&uncentred));
+    assert!((q.cost(&x) - p.cost(&x)).abs() > 1e-3 * p.cost(&x));
 }
 
 /// A prior that constrains nothing (all inverse sigmas 0) or has the wrong length is ignored.

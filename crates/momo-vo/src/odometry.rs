@@ -130,15 +130,27 @@ pub struct Odometry {
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
     inlier_ratio_average: Option<f64>,
-    /// The prior on the change of motion (centred on the previous frame before each solve),
-    /// if the configuration has one (`odometry.rotation_change_sigma`,
-    /// `odometry.motion_prior_sigmas`).
-    motion_prior: Option<MotionPrior>,
-    /// The previous frame pair was estimated while moving, so the motion prior has a centre.
-    /// Off on the first frame, after a standstill and after a frame that held its motion: a
-    /// prior centred on a guess would pull a sharp turn towards straight ahead (KITTI 01 turns
-    /// by 2.5 deg per frame from its first frame).
+    /// The motion prior of the next solve: its change-of-motion parts are centred on the
+    /// previous frame before each solve (`odometry.rotation_change_sigma`,
+    /// `odometry.motion_prior_sigmas`), its soft centre is `soft_center`.
+    motion_prior: MotionPrior,
+    /// Inverse sigmas of the per-parameter prior (empty: none).
+    param_inv_sigma: Vec<f64>,
+    /// Inverse sigma of the rotation prior (0: none).
+    rotation_inv_sigma: f64,
+    /// The previous frame pair was estimated while moving and looked right, so the
+    /// change-of-motion prior has a centre. Off on the first frame, after a standstill, after a
+    /// frame that held its motion (a prior centred on a guess would pull a sharp turn towards
+    /// straight ahead: KITTI 01 turns by 2.5 deg per frame from its first frame) and after a
+    /// frame whose inlier ratio fell below `odometry.prior_min_inlier_ratio` of the running
+    /// average (a prior centred on a doubtful frame would hold a wrong motion from frame to
+    /// frame while the inliers drain slowly: the KITTI 08 trajectory's slow tight turn).
     prior_ready: bool,
+    /// Running mean of the soft manifold's prior residuals over the moving frames
+    /// (`odometry.soft_prior_centring_frames`; empty if off or the model is hard).
+    soft_center: Vec<f64>,
+    /// Moving frames that went into `soft_center`.
+    soft_count: usize,
 }
 
 impl Odometry {
@@ -166,17 +178,11 @@ impl Odometry {
         }
         let has_params = inv_sigma.iter().any(|w| *w != 0.0);
         let sigma_w = config.odometry.rotation_change_sigma;
-        let prior = MotionPrior {
-            center: if has_params {
-                previous.clone()
-            } else {
-                Vec::new()
-            },
-            inv_sigma: if has_params { inv_sigma } else { Vec::new() },
-            rotation_center: [0.0; 3],
-            rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
+        let soft_center = if config.odometry.soft_prior_centring_frames > 0 {
+            estimator.prior_residuals(&previous)
+        } else {
+            Vec::new()
         };
-        let motion_prior = prior.is_active().then_some(prior);
         Ok(Self {
             rig,
             config,
@@ -187,9 +193,20 @@ impl Odometry {
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
-            motion_prior,
+            motion_prior: MotionPrior::default(),
+            param_inv_sigma: if has_params { inv_sigma } else { Vec::new() },
+            rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
             prior_ready: false,
+            soft_center,
+            soft_count: 0,
         })
+    }
+
+    /// The running mean of the soft manifold's prior residuals (the centre of its prior; empty
+    /// unless `odometry.soft_prior_centring_frames` is on and the model is soft). For
+    /// `soft_single_track`: the mean side slip and climb in units of their sigmas.
+    pub fn soft_prior_center(&self) -> &[f64] {
+        &self.soft_center
     }
 
     /// The rig.
@@ -291,12 +308,29 @@ impl Odometry {
             time_us: 0.0,
         };
 
-        if let Some(prior) = &mut self.motion_prior {
-            if !prior.center.is_empty() {
+        {
+            // Slow frames see the direction of travel and the yaw only together (a short
+            // baseline): their errors are correlated from frame to frame, and a prior centred
+            // on the previous one carries them on.
+            let fast =
+                arc_index.is_none_or(|i| init[i] >= self.config.odometry.prior_min_arc_length);
+            let use_prior = self.prior_ready && fast;
+            let prior = &mut self.motion_prior;
+            if use_prior && !self.param_inv_sigma.is_empty() {
                 prior.center.clone_from(&init);
+                prior.inv_sigma.clone_from(&self.param_inv_sigma);
+            } else {
+                prior.center.clear();
+                prior.inv_sigma.clear();
             }
-            let w = so3_log(&self.estimator.motion(&init).rotation);
-            prior.rotation_center = [w.x, w.y, w.z];
+            if use_prior && self.rotation_inv_sigma > 0.0 {
+                let w = so3_log(&self.estimator.motion(&init).rotation);
+                prior.rotation_center = [w.x, w.y, w.z];
+                prior.rotation_inv_sigma = self.rotation_inv_sigma;
+            } else {
+                prior.rotation_inv_sigma = 0.0;
+            }
+            prior.soft_center.clone_from(&self.soft_center);
         }
         let result = if matches < self.config.odometry.min_matches.max(1) {
             diag.status = FrameStatus::NoMatches;
@@ -305,6 +339,8 @@ impl Odometry {
             self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag)
         };
 
+        // Whether this frame may centre the next frame's change-of-motion prior.
+        let mut trusted = false;
         let params = match result {
             Some(sol) => {
                 if standstill {
@@ -332,6 +368,9 @@ impl Odometry {
                 // towards the running inlier ratio of the moving frames.
                 if !standstill {
                     let ratio = sol.inliers() as f64 / matches.max(1) as f64;
+                    trusted = self
+                        .inlier_ratio_average
+                        .is_none_or(|a| ratio >= self.config.odometry.prior_min_inlier_ratio * a);
                     self.inlier_ratio_average = Some(match self.inlier_ratio_average {
                         Some(a) => 0.9 * a + 0.1 * ratio,
                         None => ratio,
@@ -361,7 +400,17 @@ impl Odometry {
             self.last_arc_length = Some(params[i]);
         }
         self.after_standstill = standstill;
-        self.prior_ready = diag.status == FrameStatus::Estimated;
+        self.prior_ready = diag.status == FrameStatus::Estimated && trusted;
+        let n = self.config.odometry.soft_prior_centring_frames;
+        if self.prior_ready && n > 0 && !self.soft_center.is_empty() {
+            // A cumulative mean over the first n moving frames, then exponential with n frames.
+            self.soft_count += 1;
+            let alpha = 1.0 / self.soft_count.min(n) as f64;
+            let q = self.estimator.prior_residuals(&params);
+            for (c, q) in self.soft_center.iter_mut().zip(q) {
+                *c += alpha * (q - *c);
+            }
+        }
         let motion = self.estimator.motion(&params);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -415,7 +464,7 @@ impl Odometry {
             initial: init,
             fixed,
             rotation_only,
-            motion_prior: self.motion_prior.as_ref().filter(|_| self.prior_ready),
+            motion_prior: Some(&self.motion_prior).filter(|p| p.is_active()),
         };
         let usable = |sol: &FrameSolution| {
             sol.report.termination != Termination::NumericalFailure

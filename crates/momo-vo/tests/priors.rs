@@ -182,3 +182,132 @@ fn the_rotation_prior_lowers_the_error_on_sparse_noisy_frames() {
     eprintln!("sparse_outliers median rotation error: prior {with:.4}, none {without:.4} deg");
     assert!(with < 0.95 * without, "prior {with} vs none {without}");
 }
+
+/// A camera mount turned by δ from nominal moves the direction of travel by a constant −δ:
+/// the soft model's side-slip prior, centred on zero, pulls every frame towards the nominal
+/// chord. `odometry.soft_prior_centring_frames` learns the constant slip online (its running
+/// mean converges to −δ / σ) and the headings then follow the matches.
+#[test]
+fn soft_prior_centring_learns_a_mount_offset() {
+    use momo_core::{Pose, Rig, so3_exp};
+    use nalgebra::Vector3;
+    let delta = 0.5_f64.to_radians();
+    let sigma = 0.01;
+    let nominal = canned::pinhole_rig();
+    let p = &nominal.cameras()[0];
+    let mount = Pose::new(so3_exp(&Vector3::new(0.0, 0.0, delta)), Vector3::zeros());
+    let truth_rig = Rig::mono(p.model, mount.compose(&p.t_vehicle_camera)).expect("rig");
+    // Mean |heading error| over the last 40 frames, against the heading the matches say
+    // (single-track chord yaw / 2, moved by −δ), and the learnt centre in radians.
+    let run = |centring: usize| {
+        let mut config = Config {
+            model: Box::new(SoftSingleTrack {
+                side_slip_sigma: sigma,
+                climb_sigma: sigma,
+            }),
+            ..Config::default()
+        };
+        config.odometry.soft_prior_centring_frames = centring;
+        let mut vo = Odometry::new(nominal.clone(), config).expect("valid config");
+        let mut err = 0.0;
+        for k in 0..120 {
+            let yaw = 0.015 + 0.015 * (k as f64 * 0.1).sin();
+            let truth = momo_models::SingleTrack2d.motion(&[yaw, 1.0]);
+            let obs = canned::synthetic_observations(&truth_rig, &truth, 25, 0, 100 + k);
+            let r = vo.process(&obs, Some(1.0));
+            if k >= 80 {
+                err += (r.diagnostics.params[3] - (yaw / 2.0 - delta)).abs() / 40.0;
+            }
+        }
+        (
+            err,
+            vo.soft_prior_center().first().copied().unwrap_or(0.0) * sigma,
+        )
+    };
+    let (err_on, center) = run(30);
+    let (err_off, _) = run(0);
+    eprintln!(
+        "mount offset {delta:.5}: centre {center:.5} rad, heading error {err_on:.5} (centred) \
+         vs {err_off:.5} rad"
+    );
+    assert!(
+        (center + delta).abs() < 0.2 * delta,
+        "centre {center} vs {}",
+        -delta
+    );
+    assert!(err_on < 0.3 * err_off, "{err_on} vs {err_off}");
+}
+
+/// A frame whose inlier ratio falls below `odometry.prior_min_inlier_ratio` of the running
+/// average does not centre the next frame's rotation prior: the next frame is solved from the
+/// matches alone, while with the gate off (0) the prior pulls it towards the doubtful frame.
+#[test]
+fn a_doubtful_frame_does_not_centre_the_rotation_prior() {
+    let rig = canned::pinhole_rig();
+    let straight = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+    let turn = [0.0, 0.0, 0.02, 0.01, 0.0, 1.0];
+    let frames: Vec<FrameObservations> = (0..12)
+        .map(|k| {
+            let (truth, inliers, outliers) = match k {
+                0..10 => (&straight, 150, 0),
+                // Half outliers: an inlier ratio of 0.5 against a running average of 1.
+                10 => (&straight, 100, 100),
+                _ => (&turn, 40, 0),
+            };
+            canned::synthetic_observations(&rig, &Se3.motion(truth), inliers, outliers, 40 + k)
+        })
+        .collect();
+    let run = |gate: f64| {
+        let mut config = Config::default();
+        config.odometry.prior_min_inlier_ratio = gate;
+        let mut vo = Odometry::new(rig.clone(), config).expect("valid config");
+        frames
+            .iter()
+            .map(|f| vo.process(f, Some(1.0)).diagnostics.params)
+            .collect::<Vec<_>>()
+    };
+    assert!(Config::default().odometry.prior_min_inlier_ratio > 0.5);
+    let (gated, always) = (
+        run(Config::default().odometry.prior_min_inlier_ratio),
+        run(0.0),
+    );
+    assert_eq!(gated[..11], always[..11], "the gate changes nothing before");
+    let (g, a) = (
+        (gated[11][2] - turn[2]).abs(),
+        (always[11][2] - turn[2]).abs(),
+    );
+    eprintln!("yaw error after the doubtful frame: gated {g:.2e}, always {a:.2e} rad");
+    assert!(
+        g < 1e-6,
+        "without the prior the clean matches give the turn: {g}"
+    );
+    assert!(
+        a > 10.0 * g.max(1e-9),
+        "the prior pulls towards straight ahead: {a}"
+    );
+}
+
+/// `odometry.prior_min_arc_length`: frames slower than it are solved without the rotation
+/// prior (off by default).
+#[test]
+fn slow_frames_can_be_solved_without_the_rotation_prior() {
+    let rig = canned::pinhole_rig();
+    let straight = [0.0, 0.0, 0.0, 0.0, 0.0, 0.3];
+    let turn = [0.0, 0.0, 0.02, 0.01, 0.0, 0.3];
+    let run = |min_arc: f64| {
+        let mut config = Config::default();
+        config.odometry.prior_min_arc_length = min_arc;
+        let mut vo = Odometry::new(rig.clone(), config).expect("valid config");
+        let mut last = Vec::new();
+        for k in 0..8 {
+            let truth = if k < 7 { &straight } else { &turn };
+            let obs = canned::synthetic_observations(&rig, &Se3.motion(truth), 40, 0, 60 + k);
+            last = vo.process(&obs, Some(0.3)).diagnostics.params;
+        }
+        (last[2] - turn[2]).abs()
+    };
+    assert_eq!(Config::default().odometry.prior_min_arc_length, 0.0);
+    let (gated, always) = (run(0.5), run(0.0));
+    eprintln!("slow turn yaw error: without the prior {gated:.2e}, with it {always:.2e} rad");
+    assert!(gated < 1e-6 && always > 10.0 * gated.max(1e-9));
+}
