@@ -13,7 +13,8 @@ pub const MAX_PRIOR_RESIDUALS: usize = 8;
 pub const ROTATION_PRIOR_CAUCHY: f64 = 3.0;
 
 /// A prior on the change of the motion between consecutive frames (vehicle dynamics),
-/// in the loss scale's units `s` (the data's noise unit), with two independent parts:
+/// in units `s` of the data's noise ([`MotionPrior::scale`], by default the loss scale), with
+/// two independent parts:
 ///
 /// - per parameter: `½ Σ_i (s · (p_i − center_i) · inv_sigma_i)²` over the free parameters
 ///   (`center` is usually the previous frame's parameters, `inv_sigma_i = 1 / σ_i` how much
@@ -52,6 +53,11 @@ pub struct MotionPrior {
     /// (a camera mount a few tenths of a degree off nominal turns into a constant side slip)
     /// from the model prior. Unlike the other parts it applies on every frame.
     pub soft_center: Vec<f64>,
+    /// The unit `s` of the prior terms, the data's noise in the metric's units (0: the loss
+    /// scale). The odometry sets it to the first stage's loss scale, so that a second stage
+    /// with a wider loss (`[refine_loss]`, Tukey 0.0075) weighs the priors as the first does:
+    /// inliers cost about `½ r²` under any loss, the priors `½ s² d²`.
+    pub scale: f64,
 }
 
 impl MotionPrior {

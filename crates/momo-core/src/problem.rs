@@ -38,6 +38,8 @@ pub struct Problem<'a, M: Manifold, R: ResidualMetric> {
     n_free: usize,
     /// The prior on the change of motion, if any.
     motion_prior: Option<&'a MotionPrior>,
+    /// The unit `s` of the prior terms (the loss scale unless the motion prior names one).
+    prior_scale: f64,
 }
 
 /// The rotation prior's loss `ρ(z) = c² ln(1 + z / c²)` and its derivative `ρ'(z)`, with `c` =
@@ -100,13 +102,18 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             free,
             n_free: np,
             motion_prior: None,
+            prior_scale: loss.scale(),
         })
     }
 
     /// Adds a prior on the change of motion (ignored if it does not constrain anything; its
-    /// per-parameter part is ignored if its vectors do not have the model's length).
+    /// per-parameter part is ignored if its vectors do not have the model's length). Its
+    /// `scale`, if set, becomes the unit of every prior term, the soft manifold's included.
     pub fn with_motion_prior(mut self, prior: Option<&'a MotionPrior>) -> Self {
         let np = M::PARAMS.len();
+        if let Some(s) = prior.map(|p| p.scale).filter(|s| *s > 0.0 && s.is_finite()) {
+            self.prior_scale = s;
+        }
         self.motion_prior = prior.filter(|p| {
             p.has_params(np)
                 || p.rotation_inv_sigma != 0.0
@@ -138,7 +145,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         if !self.has_prior() {
             return 0.0;
         }
-        let s = self.loss.scale();
+        let s = self.prior_scale;
         let mut cost = 0.0;
         if M::PRIOR_RESIDUALS > 0 {
             let mut q = [0.0; MAX_PRIOR_RESIDUALS];
@@ -177,7 +184,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         h: &mut SMatrix<f64, N, N>,
         g: &mut SVector<f64, N>,
     ) -> f64 {
-        let s = self.loss.scale();
+        let s = self.prior_scale;
         let mut cost = 0.0;
         if M::PRIOR_RESIDUALS > 0 {
             let p = self.seeded::<N>(x);

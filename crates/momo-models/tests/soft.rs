@@ -23,6 +23,7 @@ fn gradient_matches_the_cost_with_priors() {
         rotation_center: [0.002, -0.001, 0.015],
         rotation_inv_sigma: 300.0,
         soft_center: vec![0.5, -0.3],
+        scale: 0.0,
     };
     let start = [0.001, 0.002, 0.025, 0.03, 0.001, 1.2];
     let p = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &start)
@@ -136,4 +137,36 @@ fn the_rotation_prior_applies_to_a_single_track_model() {
         (added - expected).abs() <= 1e-12 * expected,
         "{added} vs {expected}"
     );
+}
+
+/// The prior's unit is the data's noise: with `MotionPrior::scale` set, every prior term
+/// (rotation change and the soft model's slip) costs the same under a wide second-stage loss
+/// (Tukey 0.0075) as under the first stage's Cauchy 0.001; without it the unit is the loss scale
+/// and a wide loss would weigh the prior 56 times more (it held KITTI 00 on a wrong yaw rate).
+#[test]
+fn the_prior_scale_keeps_the_prior_weight_across_losses() {
+    use momo_costs::Tukey;
+    let rig = canned::pinhole_rig();
+    let model = SoftSingleTrack::default();
+    let truth = [0.0, 0.0, 0.03, 0.02, 0.001, 1.0];
+    let obs = canned::synthetic_observations(&rig, &Se3.motion(&truth), 30, 0, 9);
+    let prior = MotionPrior {
+        scale: 0.001,
+        ..MotionPrior::rotation([0.0, 0.0, 0.02], 0.002)
+    };
+    let (cauchy, tukey) = (Cauchy::new(0.001), Tukey::new(0.0075));
+    let cost = |loss: &dyn momo_core::RobustLoss, prior: &MotionPrior| {
+        Problem::new(&model, &AnglePlane, loss, &rig, &obs, &truth)
+            .unwrap()
+            .with_motion_prior(Some(prior))
+            .prior_cost(&truth)
+    };
+    let (a, b) = (cost(&cauchy, &prior), cost(&tukey, &prior));
+    assert!(a > 0.0 && (a - b).abs() <= 1e-12 * a, "{a} vs {b}");
+    let unscaled = MotionPrior {
+        scale: 0.0,
+        ..prior
+    };
+    let c = cost(&tukey, &unscaled);
+    assert!((c / a - 56.25).abs() < 1e-6, "{c} / {a}");
 }

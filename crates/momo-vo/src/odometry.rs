@@ -178,6 +178,7 @@ impl Odometry {
         }
         let has_params = inv_sigma.iter().any(|w| *w != 0.0);
         let sigma_w = config.odometry.rotation_change_sigma;
+        let loss_scale = config.loss.scale();
         let soft_center = if config.odometry.soft_prior_centring_frames > 0 {
             estimator.prior_residuals(&previous)
         } else {
@@ -193,7 +194,10 @@ impl Odometry {
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
-            motion_prior: MotionPrior::default(),
+            motion_prior: MotionPrior {
+                scale: loss_scale,
+                ..MotionPrior::default()
+            },
             param_inv_sigma: if has_params { inv_sigma } else { Vec::new() },
             rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
             prior_ready: false,
@@ -464,7 +468,7 @@ impl Odometry {
             initial: init,
             fixed,
             rotation_only,
-            motion_prior: Some(&self.motion_prior).filter(|p| p.is_active()),
+            motion_prior: Some(&self.motion_prior),
         };
         let usable = |sol: &FrameSolution| {
             sol.report.termination != Termination::NumericalFailure
