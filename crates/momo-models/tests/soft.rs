@@ -1,9 +1,29 @@
 //! The soft manifold and the motion prior inside the problem: their normal equations agree
 //! with the cost they add.
 
-use momo_core::{LeastSquares, Manifold, MotionPrior, ParamVec, Problem};
+use momo_core::{LeastSquares, Manifold, MotionPrior, ParamVec, Problem, ResidualMetric};
 use momo_costs::{AnglePlane, Cauchy, canned};
 use momo_models::{Se3, SoftSingleTrack};
+
+/// The linearisation's cost is the cost, and its gradient matches central differences of the
+/// cost in every free parameter.
+fn assert_gradient_matches_cost<M: Manifold, R: ResidualMetric>(p: &Problem<'_, M, R>) {
+    let x = p.free_params();
+    let lin = p.linearize(&x);
+    assert!((lin.cost - p.cost(&x)).abs() <= 1e-12 * lin.cost.abs().max(1e-300));
+    for k in 0..p.num_params() {
+        let h = 1e-7;
+        let (mut a, mut b): (ParamVec, ParamVec) = (x, x);
+        a[k] += h;
+        b[k] -= h;
+        let fd = (p.cost(&a) - p.cost(&b)) / (2.0 * h);
+        let g = lin.gradient[k];
+        assert!(
+            (g - fd).abs() <= 1e-4 * fd.abs().max(1e-9),
+            "parameter {k}: gradient {g:e}, finite differences {fd:e}"
+        );
+    }
+}
 
 /// The gradient of the linearisation (`Jᵀr`, Ceres-corrected for the loss) is the gradient of
 /// the cost, priors included: central differences of `cost` agree with it.
@@ -31,20 +51,7 @@ fn gradient_matches_the_cost_with_priors() {
         .with_fixed(&[false, false, false, false, false, true])
         .with_motion_prior(Some(&prior));
     let x = p.free_params();
-    let lin = p.linearize(&x);
-    assert!((lin.cost - p.cost(&x)).abs() <= 1e-12 * lin.cost.abs().max(1e-300));
-    for k in 0..5 {
-        let h = 1e-7;
-        let (mut a, mut b): (ParamVec, ParamVec) = (x, x);
-        a[k] += h;
-        b[k] -= h;
-        let fd = (p.cost(&a) - p.cost(&b)) / (2.0 * h);
-        let g = lin.gradient[k];
-        assert!(
-            (g - fd).abs() <= 1e-4 * fd.abs().max(1e-9),
-            "parameter {k}: gradient {g:e}, finite differences {fd:e}"
-        );
-    }
+    assert_gradient_matches_cost(&p);
     // The priors add to the cost: the same problem without them costs less here.
     let plain = Problem::new(&Se3, &AnglePlane, &loss, &rig, &obs, &start)
         .unwrap()
@@ -110,20 +117,7 @@ fn the_rotation_prior_applies_to_a_single_track_model() {
         .with_fixed(&[false, true, false, false]);
     let p = base.clone().with_motion_prior(Some(&prior));
     let x = p.free_params();
-    let lin = p.linearize(&x);
-    assert!((lin.cost - p.cost(&x)).abs() <= 1e-12 * lin.cost.abs().max(1e-300));
-    for k in 0..3 {
-        let h = 1e-7;
-        let (mut a, mut b): (ParamVec, ParamVec) = (x, x);
-        a[k] += h;
-        b[k] -= h;
-        let fd = (p.cost(&a) - p.cost(&b)) / (2.0 * h);
-        let g = lin.gradient[k];
-        assert!(
-            (g - fd).abs() <= 1e-4 * fd.abs().max(1e-9),
-            "parameter {k}: gradient {g:e}, finite differences {fd:e}"
-        );
-    }
+    assert_gradient_matches_cost(&p);
     let w = so3_log(&model.motion(&start).rotation);
     let z: f64 = (0..3)
         .map(|a| ((w[a] - prior.rotation_center[a]) / 0.002).powi(2))
