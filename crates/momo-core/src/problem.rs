@@ -15,10 +15,12 @@ use num_dual::DualSVec64;
 /// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
 ///
 /// `min_p ½ Σ_j Σ_i ρ(|r(C_j(p), x_ij)|²)`, with camera motion `C_j = P_j⁻¹ M(p) P_j`,
-/// plus, not robustified and in the loss scale's units `s`, the soft manifold's prior
-/// residuals `½ Σ_k (s · q_k(p))²` ([`Manifold::prior_residuals`]) and an optional
-/// [`MotionPrior`] on the change of motion, per parameter `½ Σ_i (s · (p_i − c_i) / σ_i)²`
-/// and on the rotation vector `½ s² ρ(|(log R(p) − w_c) / σ_w|²)` (Cauchy `ρ`).
+/// plus, in units `s` of the data's noise ([`MotionPrior::scale`], by default the loss scale),
+/// the soft manifold's prior residuals `½ Σ_k (s · (q_k(p) − c_k))²`
+/// ([`Manifold::prior_residuals`], centre `c` from [`MotionPrior::soft_center`]) and an
+/// optional [`MotionPrior`] on the change of motion, per parameter
+/// `½ Σ_i (s · (p_i − c_i) / σ_i)²` and on the rotation vector
+/// `½ s² ρ(|(log R(p) − w_c) / σ_w|²)` (Cauchy `ρ`, the only robustified prior term).
 ///
 /// Some parameters may be held fixed (the arc length from odometry); the solver sees only the
 /// free ones. Residuals and Jacobians are evaluated with fixed-size dual numbers whose width is
@@ -110,16 +112,10 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     /// per-parameter part is ignored if its vectors do not have the model's length). Its
     /// `scale`, if set, becomes the unit of every prior term, the soft manifold's included.
     pub fn with_motion_prior(mut self, prior: Option<&'a MotionPrior>) -> Self {
-        let np = M::PARAMS.len();
         if let Some(s) = prior.map(|p| p.scale).filter(|s| *s > 0.0 && s.is_finite()) {
             self.prior_scale = s;
         }
-        self.motion_prior = prior.filter(|p| {
-            p.has_params(np)
-                || p.rotation_inv_sigma != 0.0
-                || (p.soft_center.len() == M::PRIOR_RESIDUALS
-                    && p.soft_center.iter().any(|c| *c != 0.0))
-        });
+        self.motion_prior = prior.filter(|p| p.is_active());
         self
     }
 
@@ -186,8 +182,8 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     ) -> f64 {
         let s = self.prior_scale;
         let mut cost = 0.0;
+        let p = self.seeded::<N>(x);
         if M::PRIOR_RESIDUALS > 0 {
-            let p = self.seeded::<N>(x);
             let mut q = [DualSVec64::<N>::from_re(0.0); MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals(&p[..M::PARAMS.len()], &mut q[..M::PRIOR_RESIDUALS]);
@@ -203,10 +199,9 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         }
         if let Some(mp) = self.motion_prior {
             if mp.has_params(M::PARAMS.len()) {
-                let p = self.full_params(x);
                 for i in 0..M::PARAMS.len() {
                     let w = s * mp.inv_sigma[i];
-                    let r = w * (p[i] - mp.center[i]);
+                    let r = w * (p[i].re - mp.center[i]);
                     cost += 0.5 * r * r;
                     if let Some(k) = self.free[..self.n_free].iter().position(|&f| f == i) {
                         if k < N {
@@ -218,7 +213,6 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             }
             if mp.rotation_inv_sigma != 0.0 {
                 // Iteratively reweighted: the Cauchy weight ρ'(|d|²) on the Gauss-Newton terms.
-                let p = self.seeded::<N>(x);
                 let w = so3_log(&self.model.motion(&p[..M::PARAMS.len()]).rotation);
                 let k = mp.rotation_inv_sigma;
                 let d: [f64; 3] = std::array::from_fn(|a| k * (w[a].re - mp.rotation_center[a]));
