@@ -6,8 +6,28 @@ use momo_sim::{SimConfig, simulate};
 use momo_vo::{Config, EstimatorKind, FrameStatus};
 use std::io::IsTerminal;
 
+/// The arguments of `momo demo`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct DemoArgs {
+    /// Number of frames of the simulated drive.
+    #[arg(long, default_value_t = 400)]
+    frames: usize,
+    /// Random seed of the simulation.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// `momo demo`.
+pub(crate) fn demo(args: DemoArgs) -> Result<(), crate::common::Failure> {
+    run_demo(args.frames, args.seed, args.quiet)
+        .map_err(|e| crate::common::Failure::other(e.context("demo failed")))
+}
+
 /// Runs the demo scenarios.
-pub fn demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
+fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
     let frames = frames.max(2);
     let scenarios: [(&str, SimConfig); 3] = [
         ("pinhole, clean", SimConfig::clean_pinhole()),

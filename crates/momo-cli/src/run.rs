@@ -1,0 +1,157 @@
+//! `momo run`.
+
+use crate::calibrate::calibrate_mount;
+use crate::common::{EstimatorArg, Failure, MountModelArg, load_config, progress_bar};
+use momo_vo::{Config, RunError, RunOptions};
+use std::path::{Path, PathBuf};
+
+/// The arguments of `momo run`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct RunArgs {
+    /// The sequence directory.
+    seq: PathBuf,
+    /// Output file: one KITTI pose line per frame (camera 0, first frame = identity).
+    /// Written atomically: on any error no file is left behind.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Estimator configuration (TOML, or JSON if the name ends in .json); see `momo config`.
+    /// Default: the built-in configuration printed by `momo config`.
+    #[arg(short, long)]
+    config: Option<PathBuf>,
+    /// Write per-frame diagnostics (parameters, cost, iterations, termination, inliers,
+    /// covariance, time, status, scale source): CSV if the name ends in .csv, JSON lines
+    /// otherwise.
+    #[arg(short, long)]
+    diagnostics: Option<PathBuf>,
+    /// No progress bar and no summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+    /// The estimator: `momo` (robust least squares on the configured motion manifold),
+    /// `five-point` (the 5-point RANSAC baseline, OpenCV style, scaled by odometry; options
+    /// in the configuration's `[five_point]`) or `five-point-refined` (the same with
+    /// LO-RANSAC-style refinement, PoseLib style).
+    #[arg(long, value_enum, default_value_t = EstimatorArg::Momo)]
+    estimator: EstimatorArg,
+    /// Calibrate the rig's mount rotation on the sequence first (as `momo calibrate`),
+    /// then run with the corrected rig: two passes over the sequence, not online filtering.
+    /// Reads the whole sequence into memory; --diagnostics is then written as JSON lines.
+    #[arg(long)]
+    calibrate_mount: bool,
+    /// The model of the mount calibration (with --calibrate-mount).
+    #[arg(long, value_enum, default_value_t = MountModelArg::SingleTrack3d)]
+    mount_model: MountModelArg,
+    /// Calibrate on the first N frame pairs only (with --calibrate-mount; default: all).
+    #[arg(long)]
+    mount_frames: Option<usize>,
+}
+
+/// `momo run`.
+pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
+    let config = load_config(args.config.as_deref())?;
+    let estimator = args.estimator.into();
+    if args.calibrate_mount {
+        let options = momo_vo::MountCalibration::default()
+            .with_model(Some(args.mount_model.into()))
+            .with_frames(args.mount_frames);
+        return run_calibrated(
+            &args.seq,
+            &args.output,
+            config,
+            args.diagnostics.as_deref(),
+            args.quiet,
+            estimator,
+            &options,
+        );
+    }
+    let quiet = args.quiet;
+    let bar = progress_bar(quiet, None);
+    let options = RunOptions {
+        estimator,
+        output: args.output,
+        diagnostics: args.diagnostics,
+    };
+    let started = std::time::Instant::now();
+    let summary = momo_vo::run_sequence(&args.seq, config, &options, |_| bar.inc(1)).map_err(
+        |e| match e {
+            RunError::Input(e) => Failure::input(e),
+            RunError::Vo(e) => Failure::input(e),
+            RunError::Output(e) => Failure::other(e),
+        },
+    )?;
+    bar.finish_and_clear();
+    if !quiet {
+        let wall = started.elapsed().as_secs_f64();
+        eprintln!(
+            "momo: {} frames in {:.2} s ({:.1} µs/frame estimating): {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
+            summary.frames,
+            wall,
+            1e6 * summary.compute_seconds / (summary.frames.max(2) - 1) as f64,
+            summary.estimated,
+            summary.standstill,
+            summary.no_matches,
+            summary.solver_failures,
+            summary.restarts_won,
+            options.output.display()
+        );
+    }
+    Ok(())
+}
+
+/// `momo run --calibrate-mount`: calibrate on the sequence, then run it with the corrected rig
+/// (in memory: the calibration needs every frame anyway).
+fn run_calibrated(
+    seq: &Path,
+    output: &Path,
+    config: Config,
+    diagnostics: Option<&Path>,
+    quiet: bool,
+    estimator: momo_vo::EstimatorKind,
+    options: &momo_vo::MountCalibration,
+) -> Result<(), Failure> {
+    if let Some(d) = diagnostics
+        && d.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "{}: with --calibrate-mount the diagnostics are written as JSON lines; give a name not ending in .csv",
+            d.display()
+        )));
+    }
+    let mut sequence = momo_io::read_sequence(seq).map_err(Failure::input)?;
+    let est = calibrate_mount(&sequence, &config, options, quiet)?;
+    sequence.rig = est.corrected_rig;
+    let bar = progress_bar(quiet, Some(sequence.num_frames().saturating_sub(1) as u64));
+    let started = std::time::Instant::now();
+    let (poses, diags) = momo_vo::run_in_memory(&sequence, estimator, config, |_| bar.inc(1))
+        .map_err(Failure::input)?;
+    bar.finish_and_clear();
+    momo_io::write_poses(output, &poses).map_err(Failure::other)?;
+    if let Some(path) = diagnostics {
+        let mut text = String::new();
+        for d in &diags {
+            let line = serde_json::to_string(d).map_err(Failure::other)?;
+            text.push_str(&line);
+            text.push('\n');
+        }
+        let mut file = momo_io::AtomicFile::create(path).map_err(Failure::other)?;
+        std::io::Write::write_all(file.writer(), text.as_bytes())
+            .map_err(|e| Failure::other(file.err(e)))?;
+        file.commit().map_err(Failure::other)?;
+    }
+    if !quiet {
+        let count = |s: momo_vo::FrameStatus| diags.iter().filter(|d| d.status == s).count();
+        let compute: f64 = diags.iter().map(|d| d.time_us).sum();
+        eprintln!(
+            "momo: {} frames in {:.2} s ({:.1} µs/frame estimating) with the calibrated rig: {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
+            poses.len(),
+            started.elapsed().as_secs_f64(),
+            compute / diags.len().max(1) as f64,
+            count(momo_vo::FrameStatus::Estimated),
+            count(momo_vo::FrameStatus::Standstill),
+            count(momo_vo::FrameStatus::NoMatches),
+            count(momo_vo::FrameStatus::SolverFailure),
+            diags.iter().filter(|d| d.restart_won).count(),
+            output.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,59 @@
+//! `momo simulate`.
+
+use crate::common::Failure;
+use std::path::PathBuf;
+
+/// The arguments of `momo simulate`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct SimulateArgs {
+    /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, fisheye_surround,
+    /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s).
+    #[arg(long, default_value = "clean_pinhole")]
+    scenario: String,
+    /// Drive along the camera-0 poses of this KITTI poses file (e.g. a KITTI ground truth)
+    /// instead of a generated drive; the vehicle poses are P0 · C_k · P0⁻¹ with P0 the
+    /// scenario rig's camera 0. At most --frames frames.
+    #[arg(long)]
+    trajectory: Option<PathBuf>,
+    /// Number of frames.
+    #[arg(long, default_value_t = 400)]
+    frames: usize,
+    /// Random seed (the output is deterministic for a seed).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Matches per camera and frame pair (default: the scenario's).
+    #[arg(long)]
+    matches: Option<usize>,
+    /// Output directory (created).
+    out_dir: PathBuf,
+}
+
+/// `momo simulate`.
+pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
+    use momo_sim::SimConfig;
+    let scenario = &args.scenario;
+    let Some(mut cfg) = SimConfig::scenario(scenario) else {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "unknown scenario `{scenario}` ({})",
+            SimConfig::SCENARIOS.join(", ")
+        )));
+    };
+    if let Some(path) = &args.trajectory {
+        let poses = momo_io::read_poses(path).map_err(Failure::input)?;
+        if poses.is_empty() {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "{}: no poses",
+                path.display()
+            )));
+        }
+        cfg.camera_trajectory = Some(poses);
+    }
+    cfg.frames = args.frames;
+    cfg.seed = args.seed;
+    if let Some(m) = args.matches {
+        cfg.matches_per_camera = m;
+    }
+    let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
+    sim.write(&args.out_dir).map_err(Failure::other)?;
+    Ok(())
+}
