@@ -1,6 +1,6 @@
 //! `momo calibrate` and the mount calibration of `momo run --calibrate-mount`.
 
-use crate::common::{Failure, MountModelArg, load_config};
+use crate::common::{Failure, load_config, mount_model};
 use momo_vo::Config;
 use std::path::PathBuf;
 
@@ -16,9 +16,10 @@ pub(crate) struct CalibrateArgs {
     /// frame thresholds); see `momo config`. Its model is not used: see --model.
     #[arg(short, long)]
     config: Option<PathBuf>,
-    /// The motion model of the calibration.
-    #[arg(long, value_enum, default_value_t = MountModelArg::SingleTrack3d)]
-    model: MountModelArg,
+    /// The motion model of the calibration: the type tag of any registered model that can see
+    /// the mount (single_track_3d, single_track_2d, or your own; se3 cannot).
+    #[arg(long, default_value = "single_track_3d")]
+    model: String,
     /// Use the first N frame pairs only (default: all).
     #[arg(long)]
     frames: Option<usize>,
@@ -34,7 +35,7 @@ pub(crate) struct CalibrateArgs {
 /// `momo calibrate`.
 pub(crate) fn calibrate(args: CalibrateArgs) -> Result<(), Failure> {
     let options = momo_vo::MountCalibration::default()
-        .with_model(Some(args.model.into()))
+        .with_model(Some(mount_model(&args.model)?))
         .with_frames(args.frames)
         .with_roll(args.estimate_roll.then_some(true));
     let config = load_config(args.config.as_deref())?;

@@ -95,22 +95,8 @@ impl From<EstimatorArg> for momo_vo::EstimatorKind {
     }
 }
 
-/// The `--model` choices of the mount calibration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum MountModelArg {
-    /// The single-track model on a tilted plane (yaw, arc length, pitch, roll).
-    #[value(name = "single_track_3d")]
-    SingleTrack3d,
-    /// The planar single-track model (yaw, arc length).
-    #[value(name = "single_track_2d")]
-    SingleTrack2d,
-}
-
-impl From<MountModelArg> for momo_vo::MountModel {
-    fn from(m: MountModelArg) -> Self {
-        match m {
-            MountModelArg::SingleTrack3d => momo_vo::MountModel::default(),
-            MountModelArg::SingleTrack2d => momo_vo::MountModel::SingleTrack2d,
-        }
-    }
+/// The mount calibration's model from its type tag (`--model`, `--mount-model`): any
+/// registered model that can see the mount.
+pub(crate) fn mount_model(type_tag: &str) -> Result<momo_vo::MountModel, Failure> {
+    momo_vo::MountModel::named(type_tag).map_err(Failure::input)
 }

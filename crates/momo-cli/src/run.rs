@@ -1,7 +1,7 @@
 //! `momo run`.
 
 use crate::calibrate::calibrate_mount;
-use crate::common::{EstimatorArg, Failure, MountModelArg, load_config, progress_bar};
+use crate::common::{EstimatorArg, Failure, load_config, mount_model, progress_bar};
 use momo_vo::{Config, RunError, RunOptions};
 use std::path::{Path, PathBuf};
 
@@ -37,9 +37,10 @@ pub(crate) struct RunArgs {
     /// Reads the whole sequence into memory; --diagnostics is then written as JSON lines.
     #[arg(long)]
     calibrate_mount: bool,
-    /// The model of the mount calibration (with --calibrate-mount).
-    #[arg(long, value_enum, default_value_t = MountModelArg::SingleTrack3d)]
-    mount_model: MountModelArg,
+    /// The model of the mount calibration (with --calibrate-mount): the type tag of any
+    /// registered model that can see the mount (single_track_3d, single_track_2d, or your own).
+    #[arg(long, default_value = "single_track_3d")]
+    mount_model: String,
     /// Calibrate on the first N frame pairs only (with --calibrate-mount; default: all).
     #[arg(long)]
     mount_frames: Option<usize>,
@@ -51,7 +52,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
     let estimator = args.estimator.into();
     if args.calibrate_mount {
         let options = momo_vo::MountCalibration::default()
-            .with_model(Some(args.mount_model.into()))
+            .with_model(Some(mount_model(&args.mount_model)?))
             .with_frames(args.mount_frames);
         return run_calibrated(
             &args.seq,

@@ -36,12 +36,4 @@ pub enum CoreError {
         /// Why.
         reason: String,
     },
-    /// No estimator is registered for this model and metric pair.
-    #[error("no estimator registered for model `{model}` with metric `{metric}`")]
-    UnregisteredCombination {
-        /// Model type name.
-        model: String,
-        /// Metric type name.
-        metric: String,
-    },
 }

@@ -2,11 +2,14 @@
 //! configuration that names model and metric by type tag (`DESIGN.md`, "Static inner loop,
 //! dynamic outer shell").
 //!
-//! The per-match loop is monomorphised for a (model, metric) pair inside [`erase`]; everything
-//! above it works with `Box<dyn FrameEstimator>`. [`ModelSpec`] and [`MetricSpec`] are the
-//! typetag-registered configuration traits; `momo_models::register_model!` implements them for
-//! a new model with one line.
+//! The model is erased at its motion ([`DynManifold`]), the metric at the estimator: the
+//! per-match loop is monomorphised per metric (and number of free parameters) inside
+//! [`Erased`]; everything above it works with `Box<dyn FrameEstimator>`. [`ModelSpec`] and
+//! [`MetricSpec`] are the typetag-registered configuration traits; [`crate::register_model!`]
+//! and [`crate::register_metric!`] implement them with one line, and any registered model
+//! pairs with any registered metric: `metric.estimator(model.manifold())`.
 
+use crate::dyn_manifold::DynManifold;
 use crate::error::CoreError;
 use crate::lie::Pose;
 use crate::loss::RobustLoss;
@@ -14,8 +17,7 @@ use crate::manifold::{Manifold, MotionPrior};
 use crate::metric::{ResidualMetric, RotationOnly};
 use crate::problem::Problem;
 use crate::rig::{FrameObservations, Rig};
-use crate::solver::{LeastSquares, Solver, SolverReport};
-use std::any::Any;
+use crate::solver::{LeastSquares, Linearization, ParamVec, Solver, SolverReport};
 use std::fmt::Debug;
 
 /// What one solve needs besides the model and metric.
@@ -33,8 +35,9 @@ pub struct SolveRequest<'a> {
     pub initial: &'a [f64],
     /// `fixed[i]`: hold parameter i at its start value.
     pub fixed: &'a [bool],
-    /// Use the rotation-only residual (standstill): parameters that do not move the rotation
-    /// are held fixed automatically.
+    /// Use the rotation-only residual ([`RotationOnly`], standstill): parameters that do not
+    /// move the rotation at the start (found by automatic differentiation,
+    /// [`DynManifold::moves_rotation`](crate::DynManifold)) are held fixed.
     pub rotation_only: bool,
     /// A prior on the change of motion (usually centred on the previous frame's parameters).
     pub motion_prior: Option<&'a MotionPrior>,
@@ -62,43 +65,101 @@ impl FrameSolution {
 
 /// A type-erased estimator for one (model, metric) pair. Object safe.
 pub trait FrameEstimator: Send + Sync + Debug {
+    /// The motion model.
+    fn model(&self) -> &dyn DynManifold;
     /// The model's parameter names.
-    fn param_names(&self) -> &'static [&'static str];
+    fn param_names(&self) -> &[&'static str] {
+        self.model().params()
+    }
     /// Index of the arc-length parameter, if any.
-    fn arc_length_index(&self) -> Option<usize>;
+    fn arc_length_index(&self) -> Option<usize> {
+        self.model().arc_length_index()
+    }
     /// The vehicle motion for the full parameter vector.
-    fn motion(&self, params: &[f64]) -> Pose<f64>;
+    fn motion(&self, params: &[f64]) -> Pose<f64> {
+        self.model().motion_f64(params)
+    }
     /// A neutral start with the given arc length.
-    fn initial_params(&self, arc_length: f64) -> Vec<f64>;
+    fn initial_params(&self, arc_length: f64) -> Vec<f64> {
+        self.model().initial_params(arc_length)
+    }
     /// Closed-form parameters of a motion, if the model has them.
-    fn params_from_motion(&self, motion: &Pose<f64>) -> Option<Vec<f64>>;
+    fn params_from_motion(&self, motion: &Pose<f64>) -> Option<Vec<f64>> {
+        self.model().params_from_motion(motion)
+    }
     /// Which parameters the rig can observe.
-    fn observable(&self, rig: &Rig) -> Vec<bool>;
+    fn observable(&self, rig: &Rig) -> Vec<bool> {
+        self.model().observable(rig)
+    }
     /// The soft manifold's prior residuals at a full parameter vector (empty for a hard
     /// manifold; [`Manifold::prior_residuals`]).
-    fn prior_residuals(&self, params: &[f64]) -> Vec<f64>;
+    fn prior_residuals(&self, params: &[f64]) -> Vec<f64> {
+        let m = self.model();
+        let mut q = vec![0.0; m.prior_residual_count()];
+        if params.len() == m.params().len() {
+            m.prior_residuals_f64(params, &mut q);
+        }
+        q
+    }
     /// Solves one frame pair.
     fn solve(&self, request: &SolveRequest<'_>) -> Result<FrameSolution, CoreError>;
     /// The cost `½ Σ ρ(|r|²)` at a full parameter vector (for landscapes and restarts).
     fn cost(&self, request: &SolveRequest<'_>, params: &[f64]) -> Result<f64, CoreError>;
+    /// The robustified normal equations over the free parameters (`request.fixed`) at a full
+    /// parameter vector: what one solver iteration sees (for block-structured problems built
+    /// from frames, such as the mount calibration).
+    fn linearize(
+        &self,
+        request: &SolveRequest<'_>,
+        params: &[f64],
+    ) -> Result<Linearization, CoreError>;
+    /// Matches whose residual norm is within the loss scale, per camera, at a full parameter
+    /// vector.
+    fn inliers(&self, request: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError>;
 }
 
-/// The monomorphised estimator behind [`erase`].
-#[derive(Clone, Debug)]
-pub struct Erased<M, R> {
+/// The estimator of a model with a metric: the model erased, the metric's per-match loop
+/// monomorphised. Built by [`MetricSpec::estimator`] or [`erase`].
+#[derive(Debug)]
+pub struct Erased<R> {
     /// The motion model.
-    pub model: M,
+    pub model: Box<dyn DynManifold>,
     /// The residual metric.
     pub metric: R,
 }
 
 /// Erases a (model, metric) pair into a boxed [`FrameEstimator`].
 pub fn erase<M: Manifold, R: ResidualMetric>(model: M, metric: R) -> Box<dyn FrameEstimator> {
+    erase_dyn(Box::new(model), metric)
+}
+
+/// Pairs an erased model with a metric into a boxed [`FrameEstimator`] (what
+/// [`MetricSpec::estimator`] does).
+pub fn erase_dyn<R: ResidualMetric>(
+    model: Box<dyn DynManifold>,
+    metric: R,
+) -> Box<dyn FrameEstimator> {
     Box::new(Erased { model, metric })
 }
 
-fn run<M: Manifold, R: ResidualMetric>(
-    model: &M,
+/// Counts the inliers (residual norm within the loss scale) per camera.
+fn count_inliers<R: ResidualMetric>(
+    problem: &Problem<'_, R>,
+    rig: &Rig,
+    scale: f64,
+    params: &[f64],
+) -> Vec<usize> {
+    let mut inliers = vec![0; rig.len()];
+    problem.for_each_residual_norm(params, |j, n| {
+        if n <= scale {
+            inliers[j] += 1;
+        }
+    });
+    inliers
+}
+
+fn run<R: ResidualMetric>(
+    model: &dyn DynManifold,
     metric: &R,
     req: &SolveRequest<'_>,
     fixed: &[bool],
@@ -115,13 +176,7 @@ fn run<M: Manifold, R: ResidualMetric>(
     .with_motion_prior(req.motion_prior);
     let report = req.solver.solve(&problem, &problem.free_params());
     let params = problem.full_params(&report.x);
-    let scale = req.loss.scale();
-    let mut inliers = vec![0; req.rig.len()];
-    problem.for_each_residual_norm(&params, |j, n| {
-        if n <= scale {
-            inliers[j] += 1;
-        }
-    });
+    let inliers = count_inliers(&problem, req.rig, req.loss.scale(), &params);
     Ok(FrameSolution {
         free: problem.free_indices().to_vec(),
         params,
@@ -130,61 +185,50 @@ fn run<M: Manifold, R: ResidualMetric>(
     })
 }
 
-impl<M: Manifold, R: ResidualMetric> FrameEstimator for Erased<M, R> {
-    fn param_names(&self) -> &'static [&'static str] {
-        M::PARAMS
+impl<R: ResidualMetric> Erased<R> {
+    /// The problem at `params` with the request's loss, fixed parameters and prior.
+    fn problem<'a>(
+        &'a self,
+        req: &SolveRequest<'a>,
+        params: &[f64],
+    ) -> Result<Problem<'a, R>, CoreError> {
+        Ok(Problem::new(
+            self.model.as_ref(),
+            &self.metric,
+            req.loss,
+            req.rig,
+            req.observations,
+            params,
+        )?
+        .with_fixed(req.fixed)
+        .with_motion_prior(req.motion_prior))
     }
-    fn arc_length_index(&self) -> Option<usize> {
-        M::ARC_LENGTH
-    }
-    fn motion(&self, params: &[f64]) -> Pose<f64> {
-        self.model.motion(params)
-    }
-    fn initial_params(&self, arc_length: f64) -> Vec<f64> {
-        self.model.initial_params(arc_length)
-    }
-    fn params_from_motion(&self, motion: &Pose<f64>) -> Option<Vec<f64>> {
-        self.model.params_from_motion(motion)
-    }
-    fn observable(&self, rig: &Rig) -> Vec<bool> {
-        self.model.observable(rig)
-    }
-    fn prior_residuals(&self, params: &[f64]) -> Vec<f64> {
-        let mut q = vec![0.0; M::PRIOR_RESIDUALS];
-        if params.len() == M::PARAMS.len() {
-            self.model.prior_residuals(params, &mut q);
-        }
-        q
+}
+
+impl<R: ResidualMetric> FrameEstimator for Erased<R> {
+    fn model(&self) -> &dyn DynManifold {
+        self.model.as_ref()
     }
 
     fn solve(&self, req: &SolveRequest<'_>) -> Result<FrameSolution, CoreError> {
         if !req.rotation_only {
-            return run(&self.model, &self.metric, req, req.fixed);
+            return run(self.model.as_ref(), &self.metric, req, req.fixed);
         }
-        // Hold every parameter that does not move the rotation at this point (found by
-        // differentiating the rotation with respect to each free parameter).
+        // Hold every parameter that does not move the rotation at the start.
+        let np = self.model.params().len();
         let mut fixed = req.fixed.to_vec();
-        fixed.resize(M::PARAMS.len(), false);
-        for i in 0..M::PARAMS.len() {
-            if fixed[i] {
-                continue;
-            }
-            let h = 1e-6;
-            let mut a = req.initial.to_vec();
-            let mut b = req.initial.to_vec();
-            a[i] += h;
-            b[i] -= h;
-            let d = (self.model.motion(&a).rotation - self.model.motion(&b).rotation).amax();
-            if d < 1e-12 {
-                fixed[i] = true;
+        fixed.resize(np, false);
+        if req.initial.len() == np {
+            for (f, moves) in fixed.iter_mut().zip(self.model.moves_rotation(req.initial)) {
+                *f |= !moves;
             }
         }
-        run(&self.model, &RotationOnly, req, &fixed)
+        run(self.model.as_ref(), &RotationOnly, req, &fixed)
     }
 
     fn cost(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<f64, CoreError> {
         let problem = Problem::new(
-            &self.model,
+            self.model.as_ref(),
             &self.metric,
             req.loss,
             req.rig,
@@ -194,25 +238,111 @@ impl<M: Manifold, R: ResidualMetric> FrameEstimator for Erased<M, R> {
         .with_motion_prior(req.motion_prior);
         Ok(problem.cost(&problem.free_params()))
     }
+
+    fn linearize(
+        &self,
+        req: &SolveRequest<'_>,
+        params: &[f64],
+    ) -> Result<Linearization, CoreError> {
+        let problem = self.problem(req, params)?;
+        let x: ParamVec = problem.free_params();
+        Ok(problem.linearize(&x))
+    }
+
+    fn inliers(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError> {
+        let problem = self.problem(req, params)?;
+        Ok(count_inliers(&problem, req.rig, req.loss.scale(), params))
+    }
 }
 
 /// A motion model as it appears in a configuration (`[model] type = "se3"`). Implemented by
-/// `momo_models::register_model!`.
+/// [`crate::register_model!`].
 #[typetag::serde(tag = "type")]
 pub trait ModelSpec: Debug + Send + Sync {
-    /// Builds the estimator of this model with the given metric.
-    fn build(&self, metric: &dyn MetricSpec) -> Result<Box<dyn FrameEstimator>, CoreError>;
-    /// For downcasting in [`MetricSpec::build_with_model`].
-    fn as_any(&self) -> &dyn Any;
+    /// The motion model, erased.
+    fn manifold(&self) -> Box<dyn DynManifold>;
+    /// Builds the estimator of this model with the given metric (any registered metric:
+    /// [`MetricSpec::estimator`]).
+    fn build(&self, metric: &dyn MetricSpec) -> Result<Box<dyn FrameEstimator>, CoreError> {
+        Ok(metric.estimator(self.manifold()))
+    }
 }
 
 /// A residual metric as it appears in a configuration (`[metric] type = "angle_plane"`).
+/// Implemented by [`crate::register_metric!`].
 #[typetag::serde(tag = "type")]
 pub trait MetricSpec: Debug + Send + Sync {
-    /// For downcasting in [`ModelSpec::build`].
-    fn as_any(&self) -> &dyn Any;
-    /// For metrics defined outside momo: build with a model that does not know this metric.
-    fn build_with_model(&self, _model: &dyn ModelSpec) -> Option<Box<dyn FrameEstimator>> {
-        None
-    }
+    /// The estimator of this metric with any motion model (the per-match loop compiled for
+    /// this metric).
+    fn estimator(&self, model: Box<dyn DynManifold>) -> Box<dyn FrameEstimator>;
+}
+
+/// Registers a motion model: implements [`ModelSpec`] for `$ty` under the type tag `$name`,
+/// so that a configuration names it (`[model] type = "$name"`) and it is built with every
+/// registered metric, built-in or not.
+///
+/// `$ty` must implement [`Manifold`], `serde::Serialize` and `serde::Deserialize`. The calling
+/// crate needs `serde` for the derives; `typetag` comes through this macro.
+///
+/// ```
+/// use momo_core::{Manifold, ModelSpec, Pose, Scalar, nalgebra::{Matrix3, Vector3}};
+/// use serde::{Deserialize, Serialize};
+///
+/// /// Straight-line motion with a vertical component.
+/// #[derive(Clone, Debug, Serialize, Deserialize)]
+/// struct Ramp { slope: f64 }
+///
+/// impl Manifold for Ramp {
+///     const PARAMS: &'static [&'static str] = &["arc_length"];
+///     const ARC_LENGTH: Option<usize> = Some(0);
+///     fn motion<T: Scalar>(&self, p: &[T]) -> Pose<T> {
+///         let s = T::c(self.slope);
+///         Pose::new(Matrix3::identity(), Vector3::new(p[0], T::zero(), p[0] * s))
+///     }
+/// }
+/// momo_core::register_model!(Ramp, "doc_ramp");
+///
+/// let spec: Box<dyn ModelSpec> = serde_json::from_str(r#"{"type": "doc_ramp", "slope": 0.1}"#).unwrap();
+/// assert_eq!(spec.manifold().params(), &["arc_length"]);
+/// assert!((spec.manifold().motion_f64(&[2.0]).translation.z - 0.2).abs() < 1e-15);
+/// ```
+#[macro_export]
+macro_rules! register_model {
+    ($ty:ty, $name:literal) => {
+        const _: () = {
+            use $crate::typetag;
+
+            #[typetag::serde(name = $name)]
+            impl $crate::ModelSpec for $ty {
+                fn manifold(&self) -> ::std::boxed::Box<dyn $crate::DynManifold> {
+                    ::std::boxed::Box::new(::core::clone::Clone::clone(self))
+                }
+            }
+        };
+    };
+}
+
+/// Registers a residual metric: implements [`MetricSpec`] for `$ty` under the type tag
+/// `$name`, so that a configuration names it (`[metric] type = "$name"`) and every registered
+/// model, built-in or not, is built with it.
+///
+/// `$ty` must implement [`ResidualMetric`], `Clone`, `serde::Serialize` and
+/// `serde::Deserialize`.
+#[macro_export]
+macro_rules! register_metric {
+    ($ty:ty, $name:literal) => {
+        const _: () = {
+            use $crate::typetag;
+
+            #[typetag::serde(name = $name)]
+            impl $crate::MetricSpec for $ty {
+                fn estimator(
+                    &self,
+                    model: ::std::boxed::Box<dyn $crate::DynManifold>,
+                ) -> ::std::boxed::Box<dyn $crate::FrameEstimator> {
+                    $crate::estimator::erase_dyn(model, ::core::clone::Clone::clone(self))
+                }
+            }
+        };
+    };
 }

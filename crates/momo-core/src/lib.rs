@@ -40,6 +40,7 @@
 
 pub mod camera;
 pub mod check;
+pub mod dyn_manifold;
 pub mod error;
 pub mod estimator;
 pub mod lie;
@@ -53,9 +54,10 @@ pub mod scalar;
 pub mod solver;
 
 pub use camera::{Camera, CameraModel, KannalaBrandt, Pinhole};
+pub use dyn_manifold::{DynManifold, ErasedScalar, RuntimeManifold};
 pub use error::CoreError;
 pub use estimator::{
-    Erased, FrameEstimator, FrameSolution, MetricSpec, ModelSpec, SolveRequest, erase,
+    Erased, FrameEstimator, FrameSolution, MetricSpec, ModelSpec, SolveRequest, erase, erase_dyn,
 };
 pub use lie::{Pose, hat, so3_exp, so3_log, vee};
 pub use loss::RobustLoss;

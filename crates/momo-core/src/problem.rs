@@ -1,10 +1,11 @@
 //! The least-squares problem of one frame pair: a rig, its matches, a motion manifold, a
 //! residual metric and a robust loss, differentiated through num-dual.
 
+use crate::dyn_manifold::{DynManifold, ErasedScalar};
 use crate::error::CoreError;
 use crate::lie::{Pose, so3_log};
 use crate::loss::RobustLoss;
-use crate::manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior, ROTATION_PRIOR_CAUCHY};
+use crate::manifold::{MAX_PRIOR_RESIDUALS, MotionPrior, ROTATION_PRIOR_CAUCHY};
 use crate::metric::{MAX_RESIDUALS, ResidualMetric};
 use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
@@ -27,8 +28,13 @@ use num_dual::DualSVec64;
 /// the number of free parameters (monomorphised for 1..=8), with no heap allocation in the
 /// per-match loop.
 #[derive(Debug, Clone)]
-pub struct Problem<'a, M: Manifold, R: ResidualMetric> {
-    model: &'a M,
+pub struct Problem<'a, R: ResidualMetric> {
+    /// The motion model, erased ([`DynManifold`]): one virtual call per evaluation.
+    model: &'a dyn DynManifold,
+    /// Its number of parameters.
+    np: usize,
+    /// Its number of prior residuals (a soft model's).
+    n_prior: usize,
     metric: &'a R,
     loss: &'a dyn RobustLoss,
     rig: &'a Rig,
@@ -51,17 +57,17 @@ fn rotation_prior_rho(z: f64) -> (f64, f64) {
     (c2 * (z / c2).ln_1p(), 1.0 / (1.0 + z / c2))
 }
 
-impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
+impl<'a, R: ResidualMetric> Problem<'a, R> {
     /// A problem with all parameters free, at `params` (the full vector of the model).
     pub fn new(
-        model: &'a M,
+        model: &'a dyn DynManifold,
         metric: &'a R,
         loss: &'a dyn RobustLoss,
         rig: &'a Rig,
         obs: &'a FrameObservations,
         params: &[f64],
     ) -> Result<Self, CoreError> {
-        let np = M::PARAMS.len();
+        let np = model.params().len();
         assert!(
             np <= MAX_PARAMS,
             "a model may have at most {MAX_PARAMS} parameters"
@@ -96,6 +102,8 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         }
         Ok(Self {
             model,
+            np,
+            n_prior: model.prior_residual_count(),
             metric,
             loss,
             rig,
@@ -121,7 +129,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
 
     /// Whether the problem has terms besides the matches (soft manifold, motion prior).
     fn has_prior(&self) -> bool {
-        M::PRIOR_RESIDUALS > 0 || self.motion_prior.is_some()
+        self.n_prior > 0 || self.motion_prior.is_some()
     }
 
     /// The centre of the soft manifold's prior residuals (zeros unless the motion prior has
@@ -129,9 +137,9 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     fn soft_center(&self) -> [f64; MAX_PRIOR_RESIDUALS] {
         let mut c = [0.0; MAX_PRIOR_RESIDUALS];
         if let Some(mp) = self.motion_prior
-            && mp.soft_center.len() == M::PRIOR_RESIDUALS
+            && mp.soft_center.len() == self.n_prior
         {
-            c[..M::PRIOR_RESIDUALS].copy_from_slice(&mp.soft_center);
+            c[..self.n_prior].copy_from_slice(&mp.soft_center);
         }
         c
     }
@@ -143,26 +151,26 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         }
         let s = self.prior_scale;
         let mut cost = 0.0;
-        if M::PRIOR_RESIDUALS > 0 {
+        if self.n_prior > 0 {
             let mut q = [0.0; MAX_PRIOR_RESIDUALS];
             self.model
-                .prior_residuals(params, &mut q[..M::PRIOR_RESIDUALS]);
+                .prior_residuals_of(params, &mut q[..self.n_prior]);
             let c = self.soft_center();
-            cost += q[..M::PRIOR_RESIDUALS]
+            cost += q[..self.n_prior]
                 .iter()
                 .zip(c)
                 .map(|(v, c)| 0.5 * (s * (v - c)) * (s * (v - c)))
                 .sum::<f64>();
         }
         if let Some(mp) = self.motion_prior {
-            if mp.has_params(M::PARAMS.len()) {
-                for i in 0..M::PARAMS.len() {
+            if mp.has_params(self.np) {
+                for i in 0..self.np {
                     let r = s * (params[i] - mp.center[i]) * mp.inv_sigma[i];
                     cost += 0.5 * r * r;
                 }
             }
             if mp.rotation_inv_sigma != 0.0 {
-                let w = so3_log(&self.model.motion(params).rotation);
+                let w = so3_log(&self.model.motion_of(params).rotation);
                 let z: f64 = (0..3)
                     .map(|a| ((w[a] - mp.rotation_center[a]) * mp.rotation_inv_sigma).powi(2))
                     .sum();
@@ -179,15 +187,18 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         x: &ParamVec,
         h: &mut SMatrix<f64, N, N>,
         g: &mut SVector<f64, N>,
-    ) -> f64 {
+    ) -> f64
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
         let s = self.prior_scale;
         let mut cost = 0.0;
         let p = self.seeded::<N>(x);
-        if M::PRIOR_RESIDUALS > 0 {
+        if self.n_prior > 0 {
             let mut q = [DualSVec64::<N>::from_re(0.0); MAX_PRIOR_RESIDUALS];
             self.model
-                .prior_residuals(&p[..M::PARAMS.len()], &mut q[..M::PRIOR_RESIDUALS]);
-            for (v, c) in q[..M::PRIOR_RESIDUALS].iter().zip(self.soft_center()) {
+                .prior_residuals_of(&p[..self.np], &mut q[..self.n_prior]);
+            for (v, c) in q[..self.n_prior].iter().zip(self.soft_center()) {
                 let r = s * (v.re - c);
                 cost += 0.5 * r * r;
                 if let Some(e) = &v.eps.0 {
@@ -198,8 +209,8 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             }
         }
         if let Some(mp) = self.motion_prior {
-            if mp.has_params(M::PARAMS.len()) {
-                for i in 0..M::PARAMS.len() {
+            if mp.has_params(self.np) {
+                for i in 0..self.np {
                     let w = s * mp.inv_sigma[i];
                     let r = w * (p[i].re - mp.center[i]);
                     cost += 0.5 * r * r;
@@ -213,7 +224,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
             }
             if mp.rotation_inv_sigma != 0.0 {
                 // Iteratively reweighted: the Cauchy weight ρ'(|d|²) on the Gauss-Newton terms.
-                let w = so3_log(&self.model.motion(&p[..M::PARAMS.len()]).rotation);
+                let w = so3_log(&self.model.motion_of(&p[..self.np]).rotation);
                 let k = mp.rotation_inv_sigma;
                 let d: [f64; 3] = std::array::from_fn(|a| k * (w[a].re - mp.rotation_center[a]));
                 let (rho, weight) = rotation_prior_rho(d.iter().map(|v| v * v).sum());
@@ -233,7 +244,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
 
     /// Holds the parameters with `fixed[i] == true` at their current values.
     pub fn with_fixed(mut self, fixed: &[bool]) -> Self {
-        let np = M::PARAMS.len();
+        let np = self.np;
         self.n_free = 0;
         for i in 0..np {
             if !fixed.get(i).copied().unwrap_or(false) {
@@ -259,7 +270,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
         for k in 0..self.n_free {
             p[self.free[k]] = x[k];
         }
-        p[..M::PARAMS.len()].to_vec()
+        p[..self.np].to_vec()
     }
 
     /// Indices of the free parameters in the full vector.
@@ -274,7 +285,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
 
     /// Calls `f(camera, |r|²)` for every match at the full parameters `params` (plain `f64`).
     fn for_each_squared_norm(&self, params: &[f64], mut f: impl FnMut(usize, f64)) {
-        let m = self.model.motion(params);
+        let m = self.model.motion_of(params);
         let mut r = [0.0; MAX_RESIDUALS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
@@ -334,10 +345,13 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     /// Builds the full parameter vector in dual numbers (free entries seeded) and calls `f` with
     /// the residuals of each match.
     #[inline(always)]
-    fn visit<const N: usize>(&self, x: &ParamVec, mut f: impl FnMut(&[DualSVec64<N>])) {
-        let np = M::PARAMS.len();
+    fn visit<const N: usize>(&self, x: &ParamVec, mut f: impl FnMut(&[DualSVec64<N>]))
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
+        let np = self.np;
         let p = self.seeded::<N>(x);
-        let m = self.model.motion(&p[..np]);
+        let m = self.model.motion_of(&p[..np]);
         let mut r = [DualSVec64::<N>::from_re(0.0); MAX_RESIDUALS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
@@ -359,7 +373,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     /// derivatives.
     #[inline(always)]
     fn seeded<const N: usize>(&self, x: &ParamVec) -> [DualSVec64<N>; MAX_PARAMS] {
-        let np = M::PARAMS.len();
+        let np = self.np;
         let mut p = [DualSVec64::<N>::from_re(0.0); MAX_PARAMS];
         for i in 0..np {
             p[i] = DualSVec64::from_re(self.full[i]);
@@ -372,7 +386,10 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
 
     /// Robustified normal equations with `N` free parameters; with `known_cost` the loss is
     /// asked only for its weights (no `ρ`), and the cost is taken as given.
-    fn linearize_n<const N: usize>(&self, x: &ParamVec, known_cost: Option<f64>) -> Linearization {
+    fn linearize_n<const N: usize>(&self, x: &ParamVec, known_cost: Option<f64>) -> Linearization
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
         let mut h = SMatrix::<f64, N, N>::zeros();
         let mut g = SVector::<f64, N>::zeros();
         let mut cost = 0.0;
@@ -452,7 +469,7 @@ impl<'a, M: Manifold, R: ResidualMetric> Problem<'a, M, R> {
     }
 }
 
-impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
+impl<R: ResidualMetric> LeastSquares for Problem<'_, R> {
     fn num_params(&self) -> usize {
         self.n_free
     }
@@ -463,10 +480,10 @@ impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
             p[self.free[k]] = x[k];
         }
         let mut cost = 0.0;
-        self.for_each_squared_norm(&p[..M::PARAMS.len()], |_, s| {
+        self.for_each_squared_norm(&p[..self.np], |_, s| {
             cost += 0.5 * self.loss.evaluate(s)[0];
         });
-        cost + self.prior_cost(&p[..M::PARAMS.len()])
+        cost + self.prior_cost(&p[..self.np])
     }
 
     fn linearize(&self, x: &ParamVec) -> Linearization {
@@ -478,7 +495,7 @@ impl<M: Manifold, R: ResidualMetric> LeastSquares for Problem<'_, M, R> {
     }
 }
 
-impl<M: Manifold, R: ResidualMetric> Problem<'_, M, R> {
+impl<R: ResidualMetric> Problem<'_, R> {
     /// Monomorphises the linearisation for the number of free parameters.
     fn linearize_dispatch(&self, x: &ParamVec, known_cost: Option<f64>) -> Linearization {
         match self.n_free {

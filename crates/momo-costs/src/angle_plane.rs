@@ -2,11 +2,10 @@
 
 use crate::NORM_EPS_SQ;
 use momo_core::{
-    Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+    Camera, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
-use std::any::Any;
 
 /// The sine of the angle between the line of sight of a match in frame k and its epipolar plane
 /// (the paper's *AnglePlane*, Sec. III-A):
@@ -59,9 +58,4 @@ impl ResidualMetric for AnglePlane {
     }
 }
 
-#[typetag::serde(name = "angle_plane")]
-impl MetricSpec for AnglePlane {
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-}
+momo_core::register_metric!(AnglePlane, "angle_plane");

@@ -2,12 +2,11 @@
 
 use crate::NORM_EPS_SQ;
 use momo_core::{
-    Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+    Camera, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
     tr_mul_const,
 };
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
-use std::any::Any;
 
 /// The fundamental matrix `F = K⁻ᵀ E K⁻¹` of a pinhole camera for the camera motion `C`, so that
 /// `x1ᵀ F x0 = 0` for homogeneous pixels `x = (u, v, 1)` (the paper, Sec. III-A).
@@ -83,9 +82,4 @@ impl ResidualMetric for GeoLine {
     }
 }
 
-#[typetag::serde(name = "geo_line")]
-impl MetricSpec for GeoLine {
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-}
+momo_core::register_metric!(GeoLine, "geo_line");

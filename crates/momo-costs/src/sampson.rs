@@ -3,12 +3,11 @@
 use crate::NORM_EPS_SQ;
 use crate::geo_line::{fundamental, homogeneous};
 use momo_core::{
-    Camera, MetricSpec, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+    Camera, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
     tr_mul_const,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
-use std::any::Any;
 
 /// The Sampson error, the first-order approximation of the reprojection error of a match
 /// (Hartley & Zisserman, *Multiple View Geometry*, 2nd ed., eq. (11.9)), one residual per match,
@@ -77,9 +76,4 @@ impl ResidualMetric for Sampson {
     }
 }
 
-#[typetag::serde(name = "sampson")]
-impl MetricSpec for Sampson {
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-}
+momo_core::register_metric!(Sampson, "sampson");

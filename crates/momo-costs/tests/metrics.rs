@@ -285,25 +285,25 @@ fn metrics_round_trip_as_trait_objects() {
         let back: Box<dyn MetricSpec> = toml::from_str(&t).unwrap();
         assert_eq!(format!("{back:?}"), format!("{m:?}"));
     }
-    let a: Box<dyn MetricSpec> = toml::from_str("type = \"angle_plane\"").unwrap();
-    assert!(a.as_any().downcast_ref::<AnglePlane>().is_some());
-    // Built-in metrics leave `build_with_model` to the default: the models know them.
-    assert!(a.build_with_model(&NoModel).is_none());
+    // Every metric pairs with any model it has never heard of: here one defined in this test.
+    for m in &all {
+        let e = m.estimator(Box::new(Straight));
+        assert_eq!(e.param_names(), &["arc_length"]);
+        assert_eq!(e.motion(&[2.0]).translation.x, 2.0);
+    }
 }
 
-/// A model spec that builds nothing, to call `MetricSpec::build_with_model` with.
-#[derive(Debug, serde::Serialize, serde::Deserialize)]
-struct NoModel;
+/// A model this crate does not know: straight ahead by the arc length.
+#[derive(Clone, Debug)]
+struct Straight;
 
-#[typetag::serde(name = "test_no_model")]
-impl momo_core::ModelSpec for NoModel {
-    fn build(
-        &self,
-        _: &dyn MetricSpec,
-    ) -> Result<Box<dyn momo_core::FrameEstimator>, momo_core::CoreError> {
-        Err(momo_core::CoreError::EmptyRig)
-    }
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
+impl momo_core::Manifold for Straight {
+    const PARAMS: &'static [&'static str] = &["arc_length"];
+    const ARC_LENGTH: Option<usize> = Some(0);
+    fn motion<T: momo_core::Scalar>(&self, p: &[T]) -> momo_core::Pose<T> {
+        momo_core::Pose::new(
+            nalgebra::Matrix3::identity(),
+            nalgebra::Vector3::new(p[0], T::zero(), T::zero()),
+        )
     }
 }

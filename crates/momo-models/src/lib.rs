@@ -14,10 +14,10 @@
 //! Every model computes its parameters from a motion in closed form
 //! ([`Manifold::params_from_motion`](momo_core::Manifold::params_from_motion)).
 //!
-//! This crate also ties models to metrics: the built-in models implement
-//! [`momo_core::ModelSpec`] (typetag), [`build_with_builtin_metrics`] pairs a model with the
-//! metrics of [`momo_costs`], and the macros [`register_model!`] and [`register_metric!`] do
-//! the same for a researcher's own model or metric in one line. [`check_model`] checks a
+//! The built-in models are registered as [`momo_core::ModelSpec`] (typetag) with
+//! [`register_model!`]; a researcher's model or metric is registered the same way in one line
+//! ([`register_model!`], [`register_metric!`], re-exported from `momo-core`), and any
+//! registered model pairs with any registered metric. [`check_model`] checks a
 //! model's automatic derivatives against finite differences with every built-in metric.
 //!
 //! ```
@@ -48,7 +48,7 @@ mod single_track;
 mod soft;
 
 pub use check::{CHECK_INLIERS, CHECK_OFF_EPIPOLAR, check_model};
-pub use registry::{build_with_builtin_metrics, build_with_builtin_models, unregistered};
+pub use momo_core::{register_metric, register_model};
 pub use rotation::{arc_chord, arc_length_from_chord, half_angle_sinc, rot_x, rot_y, rot_z};
 pub use se3::Se3;
 pub use single_track::{SingleTrack2d, SingleTrack3d, TiltTranslation};
@@ -60,12 +60,3 @@ pub use momo_core;
 pub use momo_costs;
 /// Re-exported for `#[serde(crate = "momo_models::serde")]` in crates without their own serde.
 pub use serde;
-
-/// What the registration macros expand to; not a public API.
-#[doc(hidden)]
-pub mod __private {
-    pub use momo_core::{CoreError, FrameEstimator, MetricSpec, ModelSpec, erase};
-    pub use std::any::Any;
-    pub use std::boxed::Box;
-    pub use typetag;
-}

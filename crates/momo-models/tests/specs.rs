@@ -51,20 +51,17 @@ fn models_round_trip_through_json_and_toml() {
         assert_eq!(format!("{back:?}"), format!("{m:?}"), "{t}");
     }
     let m: Box<dyn ModelSpec> = serde_json::from_str(r#"{"type": "se3"}"#).unwrap();
-    assert!(m.as_any().downcast_ref::<Se3>().is_some());
+    assert_eq!(format!("{m:?}"), format!("{Se3:?}"));
     let m: Box<dyn ModelSpec> = toml::from_str("type = \"single_track_2d\"").unwrap();
-    assert!(m.as_any().downcast_ref::<SingleTrack2d>().is_some());
+    assert_eq!(format!("{m:?}"), format!("{SingleTrack2d:?}"));
     let m: Box<dyn ModelSpec> =
         toml::from_str("type = \"single_track_3d\"\ntranslation = \"planar\"").unwrap();
     assert_eq!(
-        m.as_any().downcast_ref::<SingleTrack3d>(),
-        Some(&SingleTrack3d::new(TiltTranslation::Planar))
+        format!("{m:?}"),
+        format!("{:?}", SingleTrack3d::new(TiltTranslation::Planar))
     );
     let m: Box<dyn ModelSpec> = toml::from_str("type = \"single_track_3d\"").unwrap();
-    assert_eq!(
-        m.as_any().downcast_ref::<SingleTrack3d>(),
-        Some(&SingleTrack3d::default())
-    );
+    assert_eq!(format!("{m:?}"), format!("{:?}", SingleTrack3d::default()));
     for bad in [
         r#"{"type": "single_track_3d", "translation": "sideways"}"#,
         r#"{"type": "single_track_3d", "planar": true}"#,
@@ -180,7 +177,7 @@ fn built_estimators_solve_noise_free_frames() {
                     motion_prior: None,
                 };
                 let is_fisheye = rig.cameras()[0].model.as_pinhole().is_none();
-                if is_fisheye && r.as_any().is::<GeoLine>() {
+                if is_fisheye && r.typetag_name() == "geo_line" {
                     let err = e.solve(&req).unwrap_err();
                     assert!(matches!(err, CoreError::UnsupportedCamera { .. }), "{err}");
                     continue;
@@ -220,25 +217,4 @@ fn built_estimators_solve_noise_free_frames() {
         motion_prior: None,
     };
     assert!((e.solve(&req).unwrap().params[0] - 0.05).abs() < 1e-9);
-}
-
-#[test]
-fn unknown_combinations_are_typed_errors() {
-    /// A metric registered by hand without any model support.
-    #[derive(Debug, serde::Serialize, serde::Deserialize)]
-    struct Orphan;
-    #[typetag::serde(name = "test_orphan_metric")]
-    impl MetricSpec for Orphan {
-        fn as_any(&self) -> &dyn std::any::Any {
-            self
-        }
-    }
-    let err = Se3.build(&Orphan).unwrap_err();
-    assert_eq!(
-        err,
-        CoreError::UnregisteredCombination {
-            model: "se3".into(),
-            metric: "test_orphan_metric".into()
-        }
-    );
 }

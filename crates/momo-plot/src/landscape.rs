@@ -133,7 +133,8 @@ pub fn compute_landscape(
     }
 
     let mut config = config;
-    let names = config.model.build(config.metric.as_ref())?.param_names();
+    let model = config.model.manifold();
+    let names = model.params();
     if param_index(names, "yaw").is_none() || param_index(names, "arc_length").is_none() {
         config.model = Box::new(momo_models::SingleTrack2d);
     }

@@ -30,12 +30,11 @@
 //! sequence first, then runs the odometry with the corrected rig. It is not online filtering.
 
 use crate::config::Config;
+use momo_core::num_dual::DualSVec64;
 use momo_core::{
-    CoreError, FrameObservations, LeastSquares, Manifold, MetricSpec, ModelSpec, Pose, Problem,
-    ResidualMetric, Rig, RigCamera, Scalar, Termination, so3_exp,
+    CoreError, DynManifold, ErasedScalar, FrameObservations, MAX_PARAMS, MetricSpec, ModelSpec,
+    Pose, Rig, RigCamera, RuntimeManifold, Scalar, SolveRequest, Termination, so3_exp,
 };
-use momo_costs::{AnglePlane, GeoLine, Sampson};
-use momo_models::{SingleTrack2d, SingleTrack3d};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use rayon::prelude::*;
 use thiserror::Error;
@@ -54,14 +53,6 @@ pub enum CalibrationError {
         /// Why not.
         reason: String,
     },
-    /// The residual metric is not one of the built-in ones.
-    #[error(
-        "mount calibration: metric `{metric}` is not supported (angle_plane, geo_line, sampson)"
-    )]
-    UnsupportedMetric {
-        /// The metric's type tag.
-        metric: String,
-    },
     /// Every frame pair was skipped.
     #[error(
         "mount calibration: no usable frame pairs ({} without enough matches, {} at standstill, \
@@ -77,31 +68,6 @@ pub enum CalibrationError {
     Core(#[from] CoreError),
 }
 
-/// A motion model the mount can be calibrated with: its parameters plus three mount angles
-/// must fit [`momo_core::MAX_PARAMS`], and the model must constrain the direction of travel
-/// (a model that expresses every rigid motion, like `se3`, cannot see the mount).
-pub trait MountableModel: Manifold {
-    /// [`Manifold::PARAMS`] followed by `mount_x`, `mount_y`, `mount_z`.
-    const MOUNTED_PARAMS: &'static [&'static str];
-}
-
-impl MountableModel for SingleTrack2d {
-    const MOUNTED_PARAMS: &'static [&'static str] =
-        &["yaw", "arc_length", "mount_x", "mount_y", "mount_z"];
-}
-
-impl MountableModel for SingleTrack3d {
-    const MOUNTED_PARAMS: &'static [&'static str] = &[
-        "yaw",
-        "arc_length",
-        "pitch",
-        "roll",
-        "mount_x",
-        "mount_y",
-        "mount_z",
-    ];
-}
-
 /// The rig correction `Q(δ) = T(c) · Rot(exp(δ)) · T(−c)`: a rotation by the axis-angle `δ`
 /// (vehicle frame) about the pivot `c`; as a pose `[exp(δ) | c − exp(δ) c]`.
 pub fn mount_correction<T: Scalar>(delta: &Vector3<T>, pivot: &Vector3<f64>) -> Pose<T> {
@@ -111,34 +77,64 @@ pub fn mount_correction<T: Scalar>(delta: &Vector3<T>, pivot: &Vector3<f64>) -> 
     Pose::new(r, t)
 }
 
-/// A motion model with the mount correction as three extra parameters:
+/// The names of the three mount angles, appended to a model's parameters.
+const MOUNT_PARAMS: [&str; 3] = ["mount_x", "mount_y", "mount_z"];
+
+/// Any motion model with the mount correction as three extra parameters:
 /// `motion(p, δ) = Q(δ)⁻¹ · M(p) · Q(δ)` ([`mount_correction`]), so that with the nominal rig
-/// `P_j` the camera motions are those of the corrected rig `Q(δ) P_j`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Mounted<M> {
+/// `P_j` the camera motions are those of the corrected rig `Q(δ) P_j`. A
+/// [`RuntimeManifold`], so any registered metric builds an estimator of it.
+#[derive(Debug)]
+pub struct Mounted {
     /// The vehicle motion model.
-    pub model: M,
+    pub model: Box<dyn DynManifold>,
     /// The pivot `c` of the correction (camera 0's centre in the vehicle frame).
     pub pivot: Vector3<f64>,
+    /// The model's parameters followed by `mount_x`, `mount_y`, `mount_z`.
+    params: Vec<&'static str>,
 }
 
-impl<M: MountableModel> Manifold for Mounted<M> {
-    const PARAMS: &'static [&'static str] = M::MOUNTED_PARAMS;
-    const ARC_LENGTH: Option<usize> = M::ARC_LENGTH;
-    const PRIOR_RESIDUALS: usize = M::PRIOR_RESIDUALS;
+impl Mounted {
+    /// Wraps a model.
+    pub fn new(model: Box<dyn DynManifold>, pivot: Vector3<f64>) -> Self {
+        let mut params = model.params().to_vec();
+        params.extend(MOUNT_PARAMS);
+        Self {
+            model,
+            pivot,
+            params,
+        }
+    }
+}
 
+impl RuntimeManifold for Mounted {
+    fn params(&self) -> &[&'static str] {
+        &self.params
+    }
+    fn arc_length_index(&self) -> Option<usize> {
+        self.model.arc_length_index()
+    }
+    fn prior_residual_count(&self) -> usize {
+        self.model.prior_residual_count()
+    }
     #[inline]
-    fn motion<T: Scalar>(&self, p: &[T]) -> Pose<T> {
-        let n = M::PARAMS.len();
-        let m = self.model.motion(&p[..n]);
+    fn motion<T: ErasedScalar>(&self, p: &[T]) -> Pose<T> {
+        let n = self.model.params().len();
+        let m = T::motion(self.model.as_ref(), &p[..n]);
         let q = mount_correction(&Vector3::new(p[n], p[n + 1], p[n + 2]), &self.pivot);
         q.inverse().compose(&m.compose(&q))
     }
-
-    fn prior_residuals<T: Scalar>(&self, p: &[T], out: &mut [T]) {
-        self.model.prior_residuals(&p[..M::PARAMS.len()], out);
+    fn prior_residuals<T: ErasedScalar>(&self, p: &[T], out: &mut [T]) {
+        T::prior_residuals(self.model.as_ref(), &p[..self.model.params().len()], out)
     }
-
+    fn initial_params(&self, arc_length: f64) -> Vec<f64> {
+        let mut p = self.model.initial_params(arc_length);
+        p.extend([0.0; 3]);
+        p
+    }
+    fn params_from_motion(&self, _motion: &Pose<f64>) -> Option<Vec<f64>> {
+        None
+    }
     fn observable(&self, rig: &Rig) -> Vec<bool> {
         let mut o = self.model.observable(rig);
         o.extend([true; 3]);
@@ -146,67 +142,142 @@ impl<M: MountableModel> Manifold for Mounted<M> {
     }
 }
 
-/// The model the mount is calibrated with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MountModel {
-    /// The planar single-track model (yaw, arc length).
-    SingleTrack2d,
-    /// The single-track model on a tilted plane (yaw, arc length, pitch, roll), the default.
-    SingleTrack3d(SingleTrack3d),
+/// The model the mount is calibrated with: any registered motion model that can see the mount
+/// (kept as its configuration, so that it is rebuilt for every use).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MountModel {
+    /// The model's configuration (`{"type": ..., ...}`).
+    spec: serde_json::Value,
+    /// Its type tag.
+    name: String,
 }
 
 impl Default for MountModel {
+    /// `single_track_3d`.
     fn default() -> Self {
-        MountModel::SingleTrack3d(SingleTrack3d::default())
+        Self {
+            spec: serde_json::json!({"type": "single_track_3d"}),
+            name: "single_track_3d".into(),
+        }
     }
 }
 
 impl MountModel {
+    /// The registered model of this type tag with its default parameters
+    /// (`single_track_3d`, `single_track_2d`, or a researcher's registered model).
+    pub fn named(type_tag: &str) -> Result<Self, CalibrationError> {
+        let spec = serde_json::json!({ "type": type_tag });
+        let model: Box<dyn ModelSpec> = serde_json::from_value(spec.clone()).map_err(|e| {
+            CalibrationError::UnsupportedModel {
+                model: type_tag.into(),
+                reason: format!("not a registered model with default parameters ({e})"),
+            }
+        })?;
+        Self::from_spec(model.as_ref())
+    }
+
     /// The model of a configuration's `[model]`, if it can calibrate the mount
-    /// (`single_track_2d`, `single_track_3d`); a [`CalibrationError::UnsupportedModel`]
-    /// otherwise.
+    /// ([`Self::check`]); a [`CalibrationError::UnsupportedModel`] otherwise.
     pub fn from_spec(spec: &dyn ModelSpec) -> Result<Self, CalibrationError> {
-        let any = spec.as_any();
-        if any.downcast_ref::<SingleTrack2d>().is_some() {
-            return Ok(MountModel::SingleTrack2d);
-        }
-        if let Some(m) = any.downcast_ref::<SingleTrack3d>() {
-            return Ok(MountModel::SingleTrack3d(*m));
-        }
-        let name = spec.typetag_name();
-        let reason = match name {
-            "se3" => "it expresses every rigid motion, so a rotated mount fits as well as the \
-                      true one (the mount is not observable); use single_track_3d or \
-                      single_track_2d"
-                .to_string(),
-            _ => format!(
-                "only single_track_2d and single_track_3d can calibrate the mount (its parameters \
-                 plus 3 mount angles must fit {} and it must constrain the direction of travel)",
-                momo_core::MAX_PARAMS
-            ),
-        };
-        Err(CalibrationError::UnsupportedModel {
-            model: name.into(),
-            reason,
+        let name = spec.typetag_name().to_string();
+        let value = serde_json::to_value(spec).map_err(|e| CalibrationError::UnsupportedModel {
+            model: name.clone(),
+            reason: format!("its configuration cannot be stored ({e})"),
+        })?;
+        let model = Self { spec: value, name };
+        model.check()?;
+        Ok(model)
+    }
+
+    /// The model's configuration.
+    pub fn spec(&self) -> Result<Box<dyn ModelSpec>, CalibrationError> {
+        serde_json::from_value(self.spec.clone()).map_err(|e| CalibrationError::UnsupportedModel {
+            model: self.name.clone(),
+            reason: e.to_string(),
         })
     }
 
-    /// Whether the model observes the mount's roll well enough to estimate it by default.
-    ///
-    /// `single_track_2d` does: a rolled mount tilts the yaw axis, which the planar model cannot
-    /// follow. `single_track_3d` does not: its per-frame pitch change absorbs the tilt
-    /// (pitch ≈ yaw · roll), so the roll's standard deviation is about 1.5° on 80 simulated
-    /// frames against 0.03-0.05° for yaw and pitch; the roll is then held at zero.
-    pub fn observes_roll(&self) -> bool {
-        matches!(self, MountModel::SingleTrack2d)
+    /// The model's type tag.
+    pub fn name(&self) -> &str {
+        &self.name
     }
 
-    /// The model's type tag.
-    pub fn name(&self) -> &'static str {
-        match self {
-            MountModel::SingleTrack2d => "single_track_2d",
-            MountModel::SingleTrack3d(_) => "single_track_3d",
+    /// Whether the model can see the mount: its parameters plus the three mount angles fit
+    /// [`MAX_PARAMS`], and no change of its own parameters reproduces what a mount rotation
+    /// does to the motion. The second is checked by automatic differentiation at a gentle
+    /// curve (yaw 0.02 rad, 1 m; the model's closed-form parameters of that motion, or its
+    /// neutral start): the Jacobian of the motion (rotation vector and translation) with
+    /// respect to the model's parameters and the mount's yaw and pitch must have full column
+    /// rank. A model that expresses every rigid motion (`se3`) fails both.
+    pub fn check(&self) -> Result<(), CalibrationError> {
+        let model = self.spec()?.manifold();
+        let np = model.params().len();
+        let refuse = |reason: String| {
+            Err(CalibrationError::UnsupportedModel {
+                model: self.name.clone(),
+                reason,
+            })
+        };
+        if np + 3 > MAX_PARAMS {
+            return refuse(format!(
+                "it has {np} parameters; with the 3 mount angles that is more than {MAX_PARAMS}, \
+                 and a model this general (e.g. se3, which expresses every rigid motion) fits a \
+                 rotated mount as well as the true one: use single_track_3d or single_track_2d"
+            ));
         }
+        let curve = so3_exp(&Vector3::new(0.0, 0.0, 0.02));
+        let motion = Pose::new(curve, Vector3::new(1.0, 0.01, 0.0));
+        let p = model
+            .params_from_motion(&motion)
+            .filter(|p| p.len() == np)
+            .unwrap_or_else(|| model.initial_params(1.0));
+        let mounted = Mounted::new(model, Vector3::new(1.0, 0.0, 1.5));
+        // Columns: the model's parameters, then the mount's pitch (y) and yaw (z).
+        let cols: Vec<usize> = (0..np).chain([np + 1, np + 2]).collect();
+        let mut x = [DualSVec64::<8>::from_re(0.0); MAX_PARAMS];
+        for i in 0..np + 3 {
+            let v = if i < np { p[i] } else { 0.0 };
+            x[i] = DualSVec64::from_re(v);
+        }
+        for (k, &i) in cols.iter().enumerate() {
+            x[i] = x[i].derivative(k);
+        }
+        let m = RuntimeManifold::motion(&mounted, &x[..np + 3]);
+        let w = momo_core::so3_log(&m.rotation);
+        let rows: Vec<DualSVec64<8>> = w.iter().chain(m.translation.iter()).copied().collect();
+        let jac = DMatrix::from_fn(6, cols.len(), |r, c| {
+            rows[r].eps.0.as_ref().map_or(0.0, |e| e[c])
+        });
+        let sv = jac.singular_values();
+        let largest = sv.max();
+        let rank = sv.iter().filter(|v| **v > 1e-9 * largest.max(1.0)).count();
+        if rank < cols.len() {
+            return refuse(format!(
+                "the mount is not observable with it: its own parameters reproduce what a mount \
+                 rotation does to the motion (Jacobian rank {rank} of {}); use a model that \
+                 constrains the direction of travel, such as single_track_3d",
+                cols.len()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether the mount's roll is estimated by default: when the model has no `pitch` or
+    /// `roll` parameter of its own.
+    ///
+    /// `single_track_2d` has none, and a rolled mount tilts the yaw axis, which the planar
+    /// model cannot follow. `single_track_3d` has both: its per-frame pitch change absorbs the
+    /// tilt (pitch ≈ yaw · roll), so the roll's standard deviation is about 1.5° on 80
+    /// simulated frames against 0.03-0.05° for yaw and pitch; the roll is then held at zero.
+    pub fn observes_roll(&self) -> bool {
+        self.spec()
+            .map(|s| {
+                !s.manifold()
+                    .params()
+                    .iter()
+                    .any(|n| *n == "pitch" || *n == "roll")
+            })
+            .unwrap_or(false)
     }
 }
 
@@ -379,30 +450,35 @@ pub fn calibrate_mount(
     if frames.is_empty() {
         return Err(CalibrationError::NoFrames);
     }
-    let model = match options.model {
-        Some(m) => m,
+    let model = match &options.model {
+        Some(m) => {
+            m.check()?;
+            m.clone()
+        }
         None => MountModel::from_spec(config.model.as_ref())?,
     };
-    let metric: &dyn MetricSpec = config.metric.as_ref();
-    let any = metric.as_any();
-    macro_rules! with_metric {
-        ($m:expr) => {
-            if let Some(r) = any.downcast_ref::<AnglePlane>() {
-                calibrate_generic($m, r, rig, frames, arc_lengths, config, options, model)
-            } else if let Some(r) = any.downcast_ref::<GeoLine>() {
-                calibrate_generic($m, r, rig, frames, arc_lengths, config, options, model)
-            } else if let Some(r) = any.downcast_ref::<Sampson>() {
-                calibrate_generic($m, r, rig, frames, arc_lengths, config, options, model)
-            } else {
-                Err(CalibrationError::UnsupportedMetric {
-                    metric: metric.typetag_name().into(),
-                })
-            }
-        };
-    }
-    match model {
-        MountModel::SingleTrack2d => with_metric!(SingleTrack2d),
-        MountModel::SingleTrack3d(m) => with_metric!(m),
+    calibrate_with(
+        model,
+        config.metric.as_ref(),
+        rig,
+        frames,
+        arc_lengths,
+        config,
+        options,
+    )
+}
+
+/// The solve request of one frame pair of the joint problem (its fixed parameters, no prior).
+fn frame_request<'r>(rig: &'r Rig, config: &'r Config, s: &'r FrameState<'_>) -> SolveRequest<'r> {
+    SolveRequest {
+        rig,
+        observations: s.obs,
+        loss: config.loss.as_ref(),
+        solver: config.solver.as_ref(),
+        initial: &[],
+        fixed: &s.fixed,
+        rotation_only: false,
+        motion_prior: None,
     }
 }
 
@@ -439,25 +515,26 @@ fn full_vector(params: &[f64], delta: &Vector3<f64>) -> Vec<f64> {
     p
 }
 
-#[allow(clippy::too_many_arguments)]
-fn calibrate_generic<M: MountableModel, R: ResidualMetric>(
-    model: M,
-    metric: &R,
+fn calibrate_with<'a>(
+    which: MountModel,
+    metric: &dyn MetricSpec,
     rig: &Rig,
-    frames: &[FrameObservations],
+    frames: &'a [FrameObservations],
     arc_lengths: Option<&[Option<f64>]>,
     config: &Config,
     options: &MountCalibration,
-    which: MountModel,
 ) -> Result<MountEstimate, CalibrationError> {
+    let spec = which.spec()?;
+    let estimator = metric.estimator(spec.manifold());
+    let model = estimator.model();
     let roll = options.estimate_roll.unwrap_or(which.observes_roll());
     // Free mount components (indices into δ) and their count.
     let mount_free: Vec<usize> = if roll { vec![0, 1, 2] } else { vec![1, 2] };
     let nd = mount_free.len();
     let loss = config.loss.as_ref();
     let odo = &config.odometry;
-    let np = M::PARAMS.len();
-    let arc_index = M::ARC_LENGTH;
+    let np = model.params().len();
+    let arc_index = model.arc_length_index();
     let limit = options.frames.unwrap_or(frames.len()).min(frames.len());
     if limit == 0 {
         return Err(CalibrationError::NoFrames);
@@ -497,9 +574,18 @@ fn calibrate_generic<M: MountableModel, R: ResidualMetric>(
             starts.push(straight);
         }
         for start in starts {
-            let p0 = Problem::new(&model, metric, loss, rig, obs, &start)?.with_fixed(&fixed);
-            let report = config.solver.solve(&p0, &p0.free_params());
-            let params = p0.full_params(&report.x);
+            let request = SolveRequest {
+                rig,
+                observations: obs,
+                loss,
+                solver: config.solver.as_ref(),
+                initial: &start,
+                fixed: &fixed,
+                rotation_only: false,
+                motion_prior: None,
+            };
+            let solution = estimator.solve(&request)?;
+            let (report, params) = (solution.report, solution.params);
             let ok = report.termination != Termination::NumericalFailure
                 && report.final_cost.is_finite()
                 && params.iter().all(|v| v.is_finite());
@@ -527,12 +613,11 @@ fn calibrate_generic<M: MountableModel, R: ResidualMetric>(
 
     // --- joint Levenberg-Marquardt on the Schur complement ----------------------------------
     let pivot = rig.cameras()[0].t_vehicle_camera.translation;
-    let mounted = Mounted { model, pivot };
-    let linearize = |s: &FrameState<'_>, delta: &Vector3<f64>| -> Result<FrameBlocks, CoreError> {
+    let mounted = metric.estimator(Box::new(Mounted::new(spec.manifold(), pivot)));
+    let linearize = |s: &FrameState<'a>, delta: &Vector3<f64>| -> Result<FrameBlocks, CoreError> {
         let full = full_vector(&s.params, delta);
-        let problem = Problem::new(&mounted, metric, loss, rig, s.obs, &full)?.with_fixed(&s.fixed);
-        let lin = problem.linearize(&problem.free_params());
-        let n = problem.num_params();
+        let lin = mounted.linearize(&frame_request(rig, config, s), &full)?;
+        let n = s.fixed.iter().filter(|f| !**f).count();
         let m = n - nd;
         let h = &lin.hessian;
         Ok(FrameBlocks {
@@ -545,13 +630,10 @@ fn calibrate_generic<M: MountableModel, R: ResidualMetric>(
         })
     };
     let frame_cost =
-        |s: &FrameState<'_>, params: &[f64], delta: &Vector3<f64>| -> Result<f64, CoreError> {
-            let full = full_vector(params, delta);
-            let problem =
-                Problem::new(&mounted, metric, loss, rig, s.obs, &full)?.with_fixed(&s.fixed);
-            Ok(problem.cost(&problem.free_params()))
+        |s: &FrameState<'a>, params: &[f64], delta: &Vector3<f64>| -> Result<f64, CoreError> {
+            mounted.cost(&frame_request(rig, config, s), &full_vector(params, delta))
         };
-    let linearize_all = |states: &[FrameState<'_>], delta: &Vector3<f64>| {
+    let linearize_all = |states: &[FrameState<'a>], delta: &Vector3<f64>| {
         states
             .par_iter()
             .map(|s| linearize(s, delta))
@@ -626,18 +708,15 @@ fn calibrate_generic<M: MountableModel, R: ResidualMetric>(
     }
 
     // --- covariance of δ: σ² S⁻¹ (undamped) ------------------------------------------------
-    let scale = loss.scale();
     let mut inliers = 0usize;
     let mut free_total = nd;
     for s in &states {
         let full = full_vector(&s.params, &delta);
-        let problem = Problem::new(&mounted, metric, loss, rig, s.obs, &full)?.with_fixed(&s.fixed);
-        problem.for_each_residual_norm(&full, |_, n| {
-            if n <= scale {
-                inliers += 1;
-            }
-        });
-        free_total += problem.num_params() - nd;
+        inliers += mounted
+            .inliers(&frame_request(rig, config, s), &full)?
+            .iter()
+            .sum::<usize>();
+        free_total += s.fixed.iter().filter(|f| !**f).count() - nd;
     }
     let dof = inliers.saturating_sub(free_total).max(1);
     let sigma2 = 2.0 * cost / dof as f64;

@@ -175,7 +175,11 @@ fn recovers_a_known_mount_error_with_single_track_3d() {
 fn recovers_a_known_mount_error_with_single_track_2d() {
     let sim = simulate(60, true, 5);
     let truth = mount_error();
-    let est = calibrate(&sim, &nominal(&sim.rig, &truth), MountModel::SingleTrack2d);
+    let est = calibrate(
+        &sim,
+        &nominal(&sim.rig, &truth),
+        MountModel::named("single_track_2d").expect("registered"),
+    );
     let err = deg(&(est.delta - truth));
     eprintln!(
         "single_track_2d: error {:?} deg, sigma {:?} deg",
@@ -288,7 +292,10 @@ fn typed_errors_and_skipped_frames() {
         &options.clone().with_model(None),
     )
     .expect("single_track_2d calibrates");
-    assert_eq!(est.model, MountModel::SingleTrack2d);
+    assert_eq!(
+        est.model,
+        MountModel::named("single_track_2d").expect("registered")
+    );
     // Frames without matches and at standstill are skipped and counted.
     let mut frames = sim.frames.clone();
     let mut arcs = sim.arcs.clone();
