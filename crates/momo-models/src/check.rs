@@ -122,3 +122,53 @@ pub fn check_model<M: Manifold>(
     )?;
     Ok(acc)
 }
+
+/// Checks a residual metric's automatic derivatives against central finite differences, in one
+/// call: the Jacobians of its residuals ([`momo_core::check::check_residual_jacobian`]) with
+/// every built-in model ([`crate::SingleTrack2d`], [`crate::SingleTrack3d`], [`crate::Se3`])
+/// at a straight and a curved motion, on the canned pinhole camera and, where the metric
+/// supports it ([`ResidualMetric::supports`]), the four-camera Kannala-Brandt rig
+/// ([`momo_costs::canned`]). The matches are as in [`check_model`]. The metric is checked as
+/// it is: give `tol` in its own units (for a metric in pixels, divide by the focal length or
+/// use a looser `tol`).
+///
+/// Returns the largest relative error, or the first mismatch beyond `tol`.
+///
+/// ```
+/// use momo_models::check_metric;
+/// assert!(check_metric(&momo_costs::AnglePlane, 1e-6).is_ok());
+/// ```
+pub fn check_metric<R: ResidualMetric>(metric: &R, tol: f64) -> Result<f64, JacobianMismatch> {
+    use crate::{Se3, SingleTrack2d, SingleTrack3d};
+    let mut acc: f64 = 0.0;
+    let rigs = [
+        (canned::pinhole_rig(), 0x5eed_u64),
+        (canned::fisheye_rig(), 0xf15e_u64),
+    ];
+    for (rig, seed) in &rigs {
+        if rig
+            .cameras()
+            .iter()
+            .any(|c| metric.supports(&c.model).is_err())
+        {
+            continue;
+        }
+        for yaw in [0.0, 0.05] {
+            let st2 = [yaw, 1.2];
+            let st3 = [yaw, 1.2, 0.01, -0.005];
+            let se3 = [0.01, 0.002, yaw, 0.01, 0.005, 1.2];
+            let motion = SingleTrack3d::default().motion(&st3);
+            let obs = canned::synthetic_observations(
+                rig,
+                &motion,
+                CHECK_INLIERS,
+                CHECK_OFF_EPIPOLAR,
+                *seed,
+            );
+            acc = worst(acc, &SingleTrack2d, metric, rig, &obs, &st2, tol)?;
+            acc = worst(acc, &SingleTrack3d::default(), metric, rig, &obs, &st3, tol)?;
+            acc = worst(acc, &Se3, metric, rig, &obs, &se3, tol)?;
+        }
+    }
+    Ok(acc)
+}

@@ -47,7 +47,7 @@ mod se3;
 mod single_track;
 mod soft;
 
-pub use check::{CHECK_INLIERS, CHECK_OFF_EPIPOLAR, check_model};
+pub use check::{CHECK_INLIERS, CHECK_OFF_EPIPOLAR, check_metric, check_model};
 pub use momo_core::{register_metric, register_model};
 pub use rotation::{arc_chord, arc_length_from_chord, half_angle_sinc, rot_x, rot_y, rot_z};
 pub use se3::Se3;

@@ -205,8 +205,8 @@ impl MountModel {
     /// Whether the model can see the mount: its parameters plus the three mount angles fit
     /// [`MAX_PARAMS`], and no change of its own parameters reproduces what a mount rotation
     /// does to the motion. The second is checked by automatic differentiation at a gentle
-    /// curve (yaw 0.02 rad, 1 m; the model's closed-form parameters of that motion, or its
-    /// neutral start): the Jacobian of the motion (rotation vector and translation) with
+    /// curve (yaw 0.02 rad, 1 m: the model's closed-form parameters of that motion, or, without
+    /// them, its neutral start with every parameter but the arc length moved by 0.02 · i / n): the Jacobian of the motion (rotation vector and translation) with
     /// respect to the model's parameters and the mount's yaw and pitch must have full column
     /// rank. A model that expresses every rigid motion (`se3`) fails both.
     pub fn check(&self) -> Result<(), CalibrationError> {
@@ -227,10 +227,20 @@ impl MountModel {
         }
         let curve = so3_exp(&Vector3::new(0.0, 0.0, 0.02));
         let motion = Pose::new(curve, Vector3::new(1.0, 0.01, 0.0));
+        let arc = model.arc_length_index();
         let p = model
             .params_from_motion(&motion)
             .filter(|p| p.len() == np)
-            .unwrap_or_else(|| model.initial_params(1.0));
+            .unwrap_or_else(|| {
+                // A generic point near the neutral start: every other parameter a little off.
+                let mut p = model.initial_params(1.0);
+                for (i, v) in p.iter_mut().enumerate() {
+                    if Some(i) != arc {
+                        *v += 0.02 * (i + 1) as f64 / np as f64;
+                    }
+                }
+                p
+            });
         let mounted = Mounted::new(model, Vector3::new(1.0, 0.0, 1.5));
         // Columns: the model's parameters, then the mount's pitch (y) and yaw (z).
         let cols: Vec<usize> = (0..np).chain([np + 1, np + 2]).collect();
