@@ -150,7 +150,7 @@ pub trait Manifold: Clone + Debug + Send + Sync + 'static {
     }
 
     /// Which parameters the rig can observe. The default: all, except the arc length when every
-    /// camera sits in the motion centre (then scale is unobservable, the paper's Sec. 3.5).
+    /// camera sits in the motion centre (then scale is unobservable: the paper, Sec. "Optimization on manifolds of the motion space", Fig. 3).
     fn observable(&self, rig: &Rig) -> Vec<bool> {
         let mut o = vec![true; Self::PARAMS.len()];
         if let Some(i) = Self::ARC_LENGTH {

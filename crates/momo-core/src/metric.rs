@@ -34,8 +34,12 @@ pub trait ResidualMetric: Clone + Debug + Send + Sync + 'static {
     fn residuals<T: Scalar>(&self, prepared: &Self::Prepared<T>, obs: &Observation, out: &mut [T]);
 }
 
-/// The essential matrix `E = Rᵀ [t]_x` of a camera motion, so that `f1ᵀ E f0 = 0`
-/// (`DESIGN.md`: coplanarity `(R f1) · (t × f0) = 0`).
+/// The essential matrix `E = Rᵀ [t]_x` of a camera motion `C = [R | t]`, so that
+/// `f1ᵀ E f0 = 0` (`docs/DESIGN.md`: coplanarity `(R f1) · (t × f0) = 0`).
+///
+/// The paper (Sec. "Formulation of the potential function") writes `E(M) = [t]_x R` with the
+/// bearing of the earlier frame on the left, `f0ᵀ [t]_x R f1 = 0`; ours is its negative
+/// transpose, `Rᵀ [t]_x = −([t]_x R)ᵀ`, for the same constraint with `f1` on the left.
 #[inline]
 pub fn essential<T: Scalar>(motion: &Pose<T>) -> nalgebra::Matrix3<T> {
     motion.rotation.transpose() * crate::lie::hat(&motion.translation)

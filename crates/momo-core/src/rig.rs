@@ -68,7 +68,7 @@ impl Rig {
     }
 
     /// Largest distance of a camera centre from the motion centre (vehicle origin), metres.
-    /// Scale is observable from rotation only if this is non-zero (the paper, Sec. 3.5).
+    /// Scale is observable from rotation only if this is non-zero (the paper, Sec. "Optimization on manifolds of the motion space").
     pub fn max_lever_arm(&self) -> f64 {
         self.cameras
             .iter()
