@@ -64,12 +64,7 @@ pub fn from_sections(kwargs: Option<&Bound<'_, PyDict>>, name: &str) -> PyResult
 }
 
 /// Applies one keyword section to a configuration value.
-pub fn apply_section(
-    v: &mut Value,
-    key: &str,
-    val: &Bound<'_, PyAny>,
-    name: &str,
-) -> PyResult<()> {
+pub fn apply_section(v: &mut Value, key: &str, val: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
     let Value::Object(root) = v else {
         return Err(ConfigError::new_err("the configuration is not a table"));
     };

@@ -155,7 +155,11 @@ pub fn pose_from_view(a: &ArrayView2<'_, f64>, what: &str) -> Result<Pose<f64>, 
 
 /// Poses from an (N, 4, 4), (N, 3, 4) or (N, 12) array-like (KITTI rows) or a list of 4x4s;
 /// each rotation must be orthonormal (the tolerance of `FORMAT.md`'s poses files).
-pub fn poses_from_py(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Pose<f64>>> {
+pub fn poses_from_py(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    what: &str,
+) -> PyResult<Vec<Pose<f64>>> {
     let arr = as_f64_array(obj)?;
     let shape: Vec<usize> = arr.getattr("shape")?.extract()?;
     let arr = match shape.as_slice() {
@@ -165,7 +169,9 @@ pub fn poses_from_py(py: Python<'_>, obj: &Bound<'_, PyAny>, what: &str) -> PyRe
         _ => {
             return Err(input_err(
                 py,
-                format!("{what}: expected an (N, 4, 4), (N, 3, 4) or (N, 12) array, got shape {shape:?}"),
+                format!(
+                    "{what}: expected an (N, 4, 4), (N, 3, 4) or (N, 12) array, got shape {shape:?}"
+                ),
             ));
         }
     };
@@ -255,7 +261,7 @@ pub fn fill_observations(
             }
         };
         let view = arr.as_array();
-        if view.len() == 0 {
+        if view.is_empty() {
             continue;
         }
         if view.ncols() != 4 {

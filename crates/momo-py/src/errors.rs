@@ -62,7 +62,12 @@ create_exception!(
 
 /// An [`InputError`] from a file error, with `path` and `line` set.
 pub fn input_error(py: Python<'_>, e: &IoError) -> PyErr {
-    input_error_at(py, e.to_string(), Some(e.path.display().to_string()), e.line)
+    input_error_at(
+        py,
+        e.to_string(),
+        Some(e.path.display().to_string()),
+        e.line,
+    )
 }
 
 /// An [`InputError`] with a message and, if known, the file and line.

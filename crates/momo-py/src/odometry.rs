@@ -299,7 +299,6 @@ impl PyDiagnostics {
 /// fewer matches than free parameters or the solver fails.
 #[pyfunction]
 #[pyo3(signature = (rig, matches, model = None, metric = None, loss = None, solver = None, initial = None, arc_length = None))]
-#[allow(clippy::too_many_arguments)]
 pub fn estimate<'py>(
     py: Python<'py>,
     rig: &Bound<'py, PyRig>,

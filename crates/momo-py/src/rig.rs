@@ -27,7 +27,9 @@ fn camera_from_dict(py: Python<'_>, j: usize, d: &Bound<'_, PyAny>) -> PyResult<
         .cast::<PyDict>()
         .map_err(|_| RigError::new_err(format!("cameras[{j}]: expected a dict")))?;
     let model = d.get_item("model")?.ok_or_else(|| {
-        RigError::new_err(format!("cameras[{j}]: missing `model` (a dict with `type`)"))
+        RigError::new_err(format!(
+            "cameras[{j}]: missing `model` (a dict with `type`)"
+        ))
     })?;
     let t = d.get_item("T_vehicle_camera")?.ok_or_else(|| {
         RigError::new_err(format!("cameras[{j}]: missing `T_vehicle_camera` (4x4)"))
@@ -139,8 +141,8 @@ impl PyRig {
             .map(|c| {
                 let d = PyDict::new(py);
                 d.set_item("name", &c.name)?;
-                let model = serde_json::to_value(c.model)
-                    .map_err(|e| RigError::new_err(e.to_string()))?;
+                let model =
+                    serde_json::to_value(c.model).map_err(|e| RigError::new_err(e.to_string()))?;
                 d.set_item("model", json_to_py(py, &model)?)?;
                 d.set_item("T_vehicle_camera", pose_to_py(py, &c.t_vehicle_camera))?;
                 Ok(d)

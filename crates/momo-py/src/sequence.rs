@@ -104,10 +104,7 @@ impl PySequence {
     /// Ground truth: camera 0's poses `T_cam0(0)_cam0(k)` as (N, 4, 4), or None.
     #[getter]
     fn ground_truth<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray3<f64>>> {
-        self.inner
-            .ground_truth
-            .as_ref()
-            .map(|g| poses_to_py(py, g))
+        self.inner.ground_truth.as_ref().map(|g| poses_to_py(py, g))
     }
 
     /// A simulation's true vehicle poses `V_k` (N, 4, 4), or None.
@@ -214,7 +211,8 @@ fn diagnostics_dict<'py>(
     let col_u = |f: &dyn Fn(&FrameDiagnostics) -> usize| -> Vec<i64> {
         diags.iter().map(|x| f(x) as i64).collect()
     };
-    let col_f = |f: &dyn Fn(&FrameDiagnostics) -> f64| -> Vec<f64> { diags.iter().map(f).collect() };
+    let col_f =
+        |f: &dyn Fn(&FrameDiagnostics) -> f64| -> Vec<f64> { diags.iter().map(f).collect() };
     let strings = |f: &dyn Fn(&FrameDiagnostics) -> String| -> PyResult<Bound<'py, PyAny>> {
         let list: Vec<String> = diags.iter().map(f).collect();
         np.call_method1("array", (list, "U"))
@@ -228,12 +226,21 @@ fn diagnostics_dict<'py>(
     )?;
     d.set_item("matches", PyArray1::from_vec(py, col_u(&|x| x.matches)))?;
     d.set_item("inliers", PyArray1::from_vec(py, col_u(&|x| x.inliers)))?;
-    d.set_item("iterations", PyArray1::from_vec(py, col_u(&|x| x.iterations)))?;
+    d.set_item(
+        "iterations",
+        PyArray1::from_vec(py, col_u(&|x| x.iterations)),
+    )?;
     d.set_item("restarts", PyArray1::from_vec(py, col_u(&|x| x.restarts)))?;
     let won: Vec<bool> = diags.iter().map(|x| x.restart_won).collect();
     d.set_item("restart_won", PyArray1::from_vec(py, won))?;
-    d.set_item("initial_cost", PyArray1::from_vec(py, col_f(&|x| x.initial_cost)))?;
-    d.set_item("final_cost", PyArray1::from_vec(py, col_f(&|x| x.final_cost)))?;
+    d.set_item(
+        "initial_cost",
+        PyArray1::from_vec(py, col_f(&|x| x.initial_cost)),
+    )?;
+    d.set_item(
+        "final_cost",
+        PyArray1::from_vec(py, col_f(&|x| x.final_cost)),
+    )?;
     d.set_item("time_us", PyArray1::from_vec(py, col_f(&|x| x.time_us)))?;
     let p = diags.first().map_or(0, |x| x.params.len());
     let table = |f: &dyn Fn(&FrameDiagnostics) -> &Vec<f64>| {
