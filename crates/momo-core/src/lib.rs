@@ -53,7 +53,7 @@ pub mod rig;
 pub mod scalar;
 pub mod solver;
 
-pub use camera::{Camera, CameraModel, KannalaBrandt, Pinhole};
+pub use camera::{Camera, CameraModel, DoubleSphere, KannalaBrandt, Pinhole, Radtan, Unified};
 pub use dyn_manifold::{DynManifold, ErasedScalar, RuntimeManifold};
 pub use error::CoreError;
 pub use estimator::{
