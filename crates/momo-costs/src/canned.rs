@@ -110,7 +110,7 @@ fn sample_point(camera: &Camera, rng: &mut SplitMix) -> Vector3<f64> {
             let z = rng.uniform(4.0, 40.0);
             Vector3::new((u - p.cx) / p.fx * z, (v - p.cy) / p.fy * z, z)
         }
-        Camera::KannalaBrandt(_) => {
+        _ => {
             let theta = rng.uniform(0.0, 1.3);
             let phi = rng.uniform(-std::f64::consts::PI, std::f64::consts::PI);
             let d = rng.uniform(4.0, 40.0);
@@ -180,7 +180,7 @@ pub fn synthetic_observations(
             let x1 = c_inv.transform_point(&x0);
             let in_front = match cam.model {
                 Camera::Pinhole(_) => x1.z > 0.3,
-                Camera::KannalaBrandt(_) => x1.norm() > 0.3,
+                _ => x1.norm() > 0.3,
             };
             let (Some(px0), Some(px1)) = (cam.model.project(&x0), cam.model.project(&x1)) else {
                 continue;

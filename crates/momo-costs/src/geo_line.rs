@@ -29,8 +29,9 @@ pub fn fundamental<T: Scalar>(camera: &Camera, motion: &Pose<T>) -> Matrix3<T> {
 pub(crate) fn pinhole_only(camera: &Camera) -> Result<(), String> {
     match camera {
         Camera::Pinhole(_) => Ok(()),
-        Camera::KannalaBrandt(_) => Err("it measures distances in pixels of a pinhole image; \
-             use angle_plane (or sampson) for kannala_brandt cameras"
+        _ => Err("it measures distances in pixels of a pinhole image; \
+             use angle_plane (or sampson) for kannala_brandt, radtan, double_sphere and unified \
+             cameras"
             .into()),
     }
 }
@@ -48,7 +49,7 @@ pub(crate) fn homogeneous<T: Scalar>(px: &nalgebra::Vector2<f64>) -> Vector3<T> 
 ///
 /// with `F = K⁻ᵀ E K⁻¹` ([`fundamental`]) and homogeneous pixels `x = (u, v, 1)`. Two residuals
 /// per match (the paper sums both squares). Pinhole cameras only: [`supports`](ResidualMetric::supports)
-/// returns an error for `kannala_brandt`. The residuals use the pixels `px0`, `px1` of the
+/// returns an error for the other models. The residuals use the pixels `px0`, `px1` of the
 /// [`Observation`], not its bearings. Line normals are guarded like [`crate::AnglePlane`]'s
 /// (`sqrt(‖·‖² + 1e-24)`), so degenerate lines give finite values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -45,9 +45,7 @@ impl ResidualMetric for Sampson {
     fn prepare<T: Scalar>(&self, camera: &Camera, motion: &Pose<T>) -> SampsonPrepared<T> {
         match camera {
             Camera::Pinhole(_) => SampsonPrepared::Pixels(fundamental(camera, motion)),
-            Camera::KannalaBrandt(_) => {
-                SampsonPrepared::Bearings(essential(motion), camera.focal_length())
-            }
+            _ => SampsonPrepared::Bearings(essential(motion), camera.focal_length()),
         }
     }
 

@@ -2,7 +2,8 @@
 //!
 //! The structure is parsed with serde (so syntax errors, missing and unknown fields and unknown
 //! `model.type` values come with serde_json's line and column); each camera's `model` and
-//! `T_vehicle_camera` are then checked semantically (positive focal lengths and image sizes, a
+//! `T_vehicle_camera` are then checked semantically (positive focal lengths and image sizes,
+//! parameter ranges of the wide-angle models, a
 //! 4x4 matrix with bottom row `0 0 0 1` and an orthonormal rotation with determinant +1 within
 //! [`ORTHONORMAL_TOLERANCE`]) and errors point at the line where that value starts.
 
@@ -118,42 +119,117 @@ fn shorten_quoted(message: &str) -> String {
     out
 }
 
-/// Checks intrinsics: positive finite focal lengths and image size, finite other parameters.
-pub(crate) fn check_camera(model: &Camera) -> Result<(), String> {
-    let (fx, fy, width, height, others): (f64, f64, f64, f64, Vec<(&str, f64)>) = match model {
-        Camera::Pinhole(p) => (
-            p.fx,
-            p.fy,
-            p.width,
-            p.height,
-            vec![("cx", p.cx), ("cy", p.cy)],
-        ),
-        Camera::KannalaBrandt(k) => (
-            k.fx,
-            k.fy,
-            k.width,
-            k.height,
-            vec![
-                ("cx", k.cx),
-                ("cy", k.cy),
-                ("k1", k.k1),
-                ("k2", k.k2),
-                ("k3", k.k3),
-                ("k4", k.k4),
-            ],
-        ),
-    };
+/// A rejected camera model: the offending field (to point at its line) and the reason.
+pub(crate) struct CameraFault {
+    /// The field of the model, as `rig.json` names it.
+    pub field: &'static str,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// Checks intrinsics: positive finite focal lengths and image size, finite other parameters,
+/// and the parameter ranges of the wide-angle models (`docs/CAMERAS.md`): double sphere
+/// `−1 < xi < 1`, `0 ≤ alpha ≤ 1`; unified `xi ≥ 0`.
+pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
+    let (fx, fy, width, height, others): (f64, f64, f64, f64, Vec<(&'static str, f64)>) =
+        match model {
+            Camera::Pinhole(p) => (
+                p.fx,
+                p.fy,
+                p.width,
+                p.height,
+                vec![("cx", p.cx), ("cy", p.cy)],
+            ),
+            Camera::KannalaBrandt(k) => (
+                k.fx,
+                k.fy,
+                k.width,
+                k.height,
+                vec![
+                    ("cx", k.cx),
+                    ("cy", k.cy),
+                    ("k1", k.k1),
+                    ("k2", k.k2),
+                    ("k3", k.k3),
+                    ("k4", k.k4),
+                ],
+            ),
+            Camera::Radtan(r) => (
+                r.fx,
+                r.fy,
+                r.width,
+                r.height,
+                vec![
+                    ("cx", r.cx),
+                    ("cy", r.cy),
+                    ("k1", r.k1),
+                    ("k2", r.k2),
+                    ("p1", r.p1),
+                    ("p2", r.p2),
+                    ("k3", r.k3),
+                ],
+            ),
+            Camera::DoubleSphere(d) => (
+                d.fx,
+                d.fy,
+                d.width,
+                d.height,
+                vec![("cx", d.cx), ("cy", d.cy), ("xi", d.xi), ("alpha", d.alpha)],
+            ),
+            Camera::Unified(u) => (
+                u.fx,
+                u.fy,
+                u.width,
+                u.height,
+                vec![("cx", u.cx), ("cy", u.cy), ("xi", u.xi)],
+            ),
+        };
+    let fault = |field: &'static str, reason: String| Err(CameraFault { field, reason });
     for (name, v) in [("fx", fx), ("fy", fy), ("width", width), ("height", height)] {
         if !(v.is_finite() && v > 0.0) {
-            return Err(format!("`{name}` must be a positive number, found {v}"));
+            return fault(name, format!("`{name}` must be a positive number, found {v}"));
         }
     }
     for (name, v) in others {
         if !v.is_finite() {
-            return Err(format!("`{name}` must be finite, found {v}"));
+            return fault(name, format!("`{name}` must be finite, found {v}"));
         }
     }
+    match model {
+        Camera::DoubleSphere(d) => {
+            if !(d.xi > -1.0 && d.xi < 1.0) {
+                return fault(
+                    "xi",
+                    format!(
+                        "double_sphere `xi` must lie in (-1, 1) (the first sphere's centre inside \
+                         the second), found {}",
+                        d.xi
+                    ),
+                );
+            }
+            if !(0.0..=1.0).contains(&d.alpha) {
+                return fault(
+                    "alpha",
+                    format!("double_sphere `alpha` must lie in [0, 1], found {}", d.alpha),
+                );
+            }
+        }
+        Camera::Unified(u) if u.xi < 0.0 => {
+            return fault("xi", format!("unified `xi` must be >= 0, found {}", u.xi));
+        }
+        _ => {}
+    }
     Ok(())
+}
+
+/// The 1-based line of `"field"` inside a model's JSON text starting at `base`, or `base`'s line
+/// when the key is not found.
+fn field_line(model_text: &str, base: Pos, field: &str) -> usize {
+    model_text
+        .find(&format!("\"{field}\""))
+        .map_or(base.line, |i| {
+            base.line + model_text[..i].bytes().filter(|&b| b == b'\n').count()
+        })
 }
 
 /// Checks a 4x4 `T_vehicle_camera` (rows of the file) and returns the pose.
@@ -211,11 +287,14 @@ pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoEr
         let cam: CameraFile = parse_at(raw, Pos::of(text, raw), path)?;
         let model_pos = Pos::of(text, cam.model.get());
         let model: Camera = parse_at(cam.model.get(), model_pos, path)?;
-        check_camera(&model).map_err(|reason| {
+        check_camera(&model).map_err(|f| {
             IoError::at(
                 path,
-                model_pos.line,
-                IoErrorKind::InvalidCamera { camera: i, reason },
+                field_line(cam.model.get(), model_pos, f.field),
+                IoErrorKind::InvalidCamera {
+                    camera: i,
+                    reason: f.reason,
+                },
             )
         })?;
         let t_pos = Pos::of(text, cam.t_vehicle_camera.get());
@@ -262,8 +341,10 @@ pub fn rig_to_json(rig: &Rig) -> Result<String, IoErrorKind> {
     use std::fmt::Write as _;
     let mut s = String::from("{\n  \"cameras\": [\n");
     for (i, c) in rig.cameras().iter().enumerate() {
-        check_camera(&c.model)
-            .map_err(|reason| IoErrorKind::InvalidCamera { camera: i, reason })?;
+        check_camera(&c.model).map_err(|f| IoErrorKind::InvalidCamera {
+            camera: i,
+            reason: f.reason,
+        })?;
         let m = c.t_vehicle_camera.to_homogeneous();
         if m.iter().any(|v| !v.is_finite()) {
             return Err(IoErrorKind::BadExtrinsic {

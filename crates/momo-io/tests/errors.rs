@@ -255,18 +255,19 @@ fn wrong_extrinsic_shape() {
 
 #[test]
 fn non_positive_intrinsics() {
-    for (from, to) in [
-        ("\"fx\": 718.856", "\"fx\": 0"),
-        ("\"fy\": 718.856", "\"fy\": -718.856"),
-        ("\"width\": 1241", "\"width\": 0"),
-        ("\"height\": 376", "\"height\": -1"),
+    // The line of the offending field.
+    for (from, to, line) in [
+        ("\"fx\": 718.856", "\"fx\": 0", 6),
+        ("\"fy\": 718.856", "\"fy\": -718.856", 6),
+        ("\"width\": 1241", "\"width\": 0", 7),
+        ("\"height\": 376", "\"height\": -1", 7),
     ] {
         let e = rig_err(&FORMAT_MD_RIG.replace(from, to));
         assert!(
             matches!(e.kind, IoErrorKind::InvalidCamera { camera: 0, .. }),
             "{e}"
         );
-        assert_eq!(e.line, Some(5), "{e}");
+        assert_eq!(e.line, Some(line), "{e}");
         assert!(e.to_string().contains("must be a positive number"), "{e}");
     }
 }
