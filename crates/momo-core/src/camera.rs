@@ -471,7 +471,11 @@ pub struct Unified {
 impl Unified {
     /// `w` of the valid region: `ξ` for `ξ ≤ 1`, `1/ξ` otherwise.
     pub fn w(&self) -> f64 {
-        if self.xi <= 1.0 { self.xi } else { 1.0 / self.xi }
+        if self.xi <= 1.0 {
+            self.xi
+        } else {
+            1.0 / self.xi
+        }
     }
 
     /// Whether a point (camera coordinates, not the origin) lies in the valid region
@@ -674,7 +678,11 @@ mod tests {
     }
 
     fn unit(theta: f64, phi: f64) -> Vector3<f64> {
-        Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+        Vector3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        )
     }
 
     proptest! {
@@ -769,8 +777,24 @@ mod tests {
     /// then do not round-trip) and too strict for ξ > 0.
     #[test]
     fn double_sphere_valid_region_is_exact() {
-        for (xi, alpha) in [(-0.8, 0.9), (-0.5, 0.7), (-0.3, 0.6), (0.0, 0.3), (0.5, 0.7), (0.8, 0.6)] {
-            let c = DoubleSphere { fx: 1.0, fy: 1.0, cx: 0.0, cy: 0.0, xi, alpha, width: 1.0, height: 1.0 };
+        for (xi, alpha) in [
+            (-0.8, 0.9),
+            (-0.5, 0.7),
+            (-0.3, 0.6),
+            (0.0, 0.3),
+            (0.5, 0.7),
+            (0.8, 0.6),
+        ] {
+            let c = DoubleSphere {
+                fx: 1.0,
+                fy: 1.0,
+                cx: 0.0,
+                cy: 0.0,
+                xi,
+                alpha,
+                width: 1.0,
+                height: 1.0,
+            };
             // First θ where m(θ) is no longer increasing, on a fine grid.
             let n = 200_000;
             let mut prev = -1.0;
@@ -786,11 +810,26 @@ mod tests {
                 }
             }
             let step = std::f64::consts::PI / n as f64;
-            assert!(c.valid_point(&unit(fold - 2.0 * step, 0.0)), "xi {xi} alpha {alpha}");
-            assert!(!c.valid_point(&unit(fold + step, 0.0)), "xi {xi} alpha {alpha}");
+            assert!(
+                c.valid_point(&unit(fold - 2.0 * step, 0.0)),
+                "xi {xi} alpha {alpha}"
+            );
+            assert!(
+                !c.valid_point(&unit(fold + step, 0.0)),
+                "xi {xi} alpha {alpha}"
+            );
         }
         // ξ = -0.8, α = 0.9: the fold is at cos θ = 0.7227, the paper's bound at 0.5697.
-        let c = DoubleSphere { fx: 300.0, fy: 300.0, cx: 0.0, cy: 0.0, xi: -0.8, alpha: 0.9, width: 1.0, height: 1.0 };
+        let c = DoubleSphere {
+            fx: 300.0,
+            fy: 300.0,
+            cx: 0.0,
+            cy: 0.0,
+            xi: -0.8,
+            alpha: 0.9,
+            width: 1.0,
+            height: 1.0,
+        };
         let p = unit(0.65f64.acos(), 0.3);
         assert!(c.valid_point_paper(&p) && !c.valid_point(&p));
         assert!(c.project(&p).is_none());
@@ -803,10 +842,16 @@ mod tests {
             assert!((b - p).norm() > 1e-3);
         }
         // ξ = 0.5, α = 0.7: cos θ = -0.75 is valid (fold at -0.7905) but the paper rejects it.
-        let c = DoubleSphere { xi: 0.5, alpha: 0.7, ..c };
+        let c = DoubleSphere {
+            xi: 0.5,
+            alpha: 0.7,
+            ..c
+        };
         let p = unit((-0.75f64).acos(), 1.0);
         assert!(c.valid_point(&p) && !c.valid_point_paper(&p));
-        let b = c.unproject(&c.project(&p).expect("valid")).expect("unprojects");
+        let b = c
+            .unproject(&c.project(&p).expect("valid"))
+            .expect("unprojects");
         assert!((b - p).norm() < 1e-9);
     }
 
@@ -815,7 +860,14 @@ mod tests {
     #[test]
     fn radtan_outside_the_valid_region_is_none() {
         // k1 = -0.3 alone: r(1 - 0.3 r²) folds at r² = 1/0.9.
-        let c = Radtan { k1: -0.3, k2: 0.0, p1: 0.0, p2: 0.0, k3: 0.0, ..radtan() };
+        let c = Radtan {
+            k1: -0.3,
+            k2: 0.0,
+            p1: 0.0,
+            p2: 0.0,
+            k3: 0.0,
+            ..radtan()
+        };
         assert!(c.radially_monotonic(1.0 / 0.9 - 1e-9));
         assert!(!c.radially_monotonic(1.0 / 0.9 + 1e-9));
         assert!(c.project(&Vector3::new(1.1, 0.0, 1.0)).is_none());
@@ -832,7 +884,11 @@ mod tests {
         assert!(c.unproject(&Vector2::new(f64::NAN, 0.0)).is_none());
         assert!(c.project(&Vector3::new(0.0, 0.0, -1.0)).is_none());
         // A positive k2 after the fold makes the slope positive again: still invalid past it.
-        let c = Radtan { k1: -0.5, k2: 0.06, ..c };
+        let c = Radtan {
+            k1: -0.5,
+            k2: 0.06,
+            ..c
+        };
         // slope 1 − 1.5 s + 0.3 s² has roots s = 0.7767 and 4.29.
         assert!(!c.radially_monotonic(5.0));
         assert!(c.radial_slope(5.0) > 0.0);
@@ -845,8 +901,14 @@ mod tests {
         let c: Camera = serde_json::from_str(j).expect("k3 defaults to 0");
         assert!(matches!(c, Camera::Radtan(Radtan { k3: 0.0, .. })));
         let j = r#"{"type":"double_sphere","fx":1,"fy":1,"cx":0,"cy":0,"xi":-0.2,"alpha":0.6,"width":10,"height":10}"#;
-        assert!(matches!(serde_json::from_str(j).expect("parses"), Camera::DoubleSphere(_)));
+        assert!(matches!(
+            serde_json::from_str(j).expect("parses"),
+            Camera::DoubleSphere(_)
+        ));
         let j = r#"{"type":"unified","fx":1,"fy":1,"cx":0,"cy":0,"xi":0.9,"width":10,"height":10}"#;
-        assert!(matches!(serde_json::from_str(j).expect("parses"), Camera::Unified(_)));
+        assert!(matches!(
+            serde_json::from_str(j).expect("parses"),
+            Camera::Unified(_)
+        ));
     }
 }

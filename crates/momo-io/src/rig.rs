@@ -187,7 +187,10 @@ pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
     let fault = |field: &'static str, reason: String| Err(CameraFault { field, reason });
     for (name, v) in [("fx", fx), ("fy", fy), ("width", width), ("height", height)] {
         if !(v.is_finite() && v > 0.0) {
-            return fault(name, format!("`{name}` must be a positive number, found {v}"));
+            return fault(
+                name,
+                format!("`{name}` must be a positive number, found {v}"),
+            );
         }
     }
     for (name, v) in others {
@@ -210,7 +213,10 @@ pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
             if !(0.0..=1.0).contains(&d.alpha) {
                 return fault(
                     "alpha",
-                    format!("double_sphere `alpha` must lie in [0, 1], found {}", d.alpha),
+                    format!(
+                        "double_sphere `alpha` must lie in [0, 1], found {}",
+                        d.alpha
+                    ),
                 );
             }
         }

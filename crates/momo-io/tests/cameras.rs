@@ -61,13 +61,48 @@ fn version_two_models_parse_and_write_back() {
 #[test]
 fn invalid_parameters_point_at_their_line() {
     for (from, to, line, reason) in [
-        ("\"xi\": -0.18", "\"xi\": -1.0", 15, "`xi` must lie in (-1, 1)"),
-        ("\"xi\": -0.18", "\"xi\": 1.5", 15, "`xi` must lie in (-1, 1)"),
-        ("\"alpha\": 0.59", "\"alpha\": 1.2", 16, "`alpha` must lie in [0, 1]"),
-        ("\"alpha\": 0.59", "\"alpha\": -0.1", 16, "`alpha` must lie in [0, 1]"),
-        ("\"xi\": 1.1", "\"xi\": -0.5", 24, "unified `xi` must be >= 0"),
-        ("\"fx\": 313.2", "\"fx\": 0", 14, "`fx` must be a positive number"),
-        ("\"fy\": 457.296", "\"fy\": -1", 6, "`fy` must be a positive number"),
+        (
+            "\"xi\": -0.18",
+            "\"xi\": -1.0",
+            15,
+            "`xi` must lie in (-1, 1)",
+        ),
+        (
+            "\"xi\": -0.18",
+            "\"xi\": 1.5",
+            15,
+            "`xi` must lie in (-1, 1)",
+        ),
+        (
+            "\"alpha\": 0.59",
+            "\"alpha\": 1.2",
+            16,
+            "`alpha` must lie in [0, 1]",
+        ),
+        (
+            "\"alpha\": 0.59",
+            "\"alpha\": -0.1",
+            16,
+            "`alpha` must lie in [0, 1]",
+        ),
+        (
+            "\"xi\": 1.1",
+            "\"xi\": -0.5",
+            24,
+            "unified `xi` must be >= 0",
+        ),
+        (
+            "\"fx\": 313.2",
+            "\"fx\": 0",
+            14,
+            "`fx` must be a positive number",
+        ),
+        (
+            "\"fy\": 457.296",
+            "\"fy\": -1",
+            6,
+            "`fy` must be a positive number",
+        ),
     ] {
         let text = RIG_V2.replace(from, to);
         assert_ne!(text, RIG_V2);
@@ -77,7 +112,11 @@ fn invalid_parameters_point_at_their_line() {
             "{from}: {e}"
         );
         assert_eq!(e.line, Some(line), "{from}: {e}");
-        assert!(e.to_string().starts_with(&format!("seq/rig.json:{line}: camera ")), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("seq/rig.json:{line}: camera ")),
+            "{e}"
+        );
         assert!(e.to_string().contains(reason), "{e}");
     }
     // A missing radtan coefficient or an unknown field: serde's message with the line.

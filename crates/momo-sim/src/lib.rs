@@ -45,10 +45,14 @@
 //! # }
 //! ```
 
+pub mod camera_scenarios;
 pub mod drive;
 pub mod rigs;
 pub mod sim;
 
+pub use camera_scenarios::{
+    double_sphere_camera, radtan_camera, radtan_mono_rig, unified_camera, wide_angle_surround_rig,
+};
 pub use drive::{Drive, DriveConfig, generate_drive};
 pub use rigs::{
     RigPreset, camera_mount, kitti_camera, kitti_mono, kitti_stereo, surround_fisheye,

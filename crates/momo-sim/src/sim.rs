@@ -209,6 +209,8 @@ impl SimConfig {
         "sparse_outliers",
         "very_sparse",
         "highway",
+        "radtan_mono",
+        "wide_angle_surround",
     ];
 
     /// The preset of a name in [`SimConfig::SCENARIOS`]; `None` for any other name.
@@ -231,7 +233,7 @@ impl SimConfig {
             "sparse_outliers" => Self::sparse_outliers(),
             "very_sparse" => Self::very_sparse(),
             "highway" => Self::highway(),
-            _ => return None,
+            _ => return crate::camera_scenarios::camera_scenario(name),
         })
     }
 
