@@ -71,6 +71,10 @@ fn wide_angle_surround_is_as_accurate_as_fisheye() {
             rig: RigPreset::SurroundFisheye,
             ..new.clone()
         };
-        compare(&format!("wide_angle_surround seed {seed}"), &new, &reference);
+        compare(
+            &format!("wide_angle_surround seed {seed}"),
+            &new,
+            &reference,
+        );
     }
 }

@@ -718,7 +718,7 @@ mod tests {
         /// Random parameters and directions: a point projects iff it is in the exact valid
         /// region, and valid points round-trip (including rays behind the camera for ξ > 0).
         #[test]
-        fn double_sphere_roundtrip(xi in -0.9..0.9f64, alpha in 0.0..1.0f64, theta in 0.0..3.1f64, phi in -3.14..3.14f64, depth in 0.5..50.0f64) {
+        fn double_sphere_roundtrip(xi in -0.9..0.9f64, alpha in 0.0..1.0f64, theta in 0.0..3.1f64, phi in -std::f64::consts::PI..std::f64::consts::PI, depth in 0.5..50.0f64) {
             let c = DoubleSphere { fx: 350.0, fy: 351.0, cx: 640.0, cy: 400.0, xi, alpha, width: 1280.0, height: 800.0 };
             let p = unit(theta, phi) * depth;
             let px = c.project(&p);
@@ -734,7 +734,7 @@ mod tests {
         }
 
         #[test]
-        fn unified_roundtrip(xi in 0.0..3.0f64, theta in 0.0..3.1f64, phi in -3.14..3.14f64, depth in 0.5..50.0f64) {
+        fn unified_roundtrip(xi in 0.0..3.0f64, theta in 0.0..3.1f64, phi in -std::f64::consts::PI..std::f64::consts::PI, depth in 0.5..50.0f64) {
             let c = Unified { fx: 600.0, fy: 601.0, cx: 640.0, cy: 400.0, xi, width: 1280.0, height: 800.0 };
             let p = unit(theta, phi) * depth;
             let px = c.project(&p);

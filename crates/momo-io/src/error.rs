@@ -134,6 +134,9 @@ pub enum IoErrorKind {
     /// The rig was rejected by `momo_core::Rig::new`.
     #[error("{0}")]
     Rig(momo_core::CoreError),
+    /// A calibration file (OpenCV, ROS or Kalibr YAML) that `momo rig import` cannot use.
+    #[error("{0}")]
+    Calibration(String),
     /// The file has no header line.
     #[error("missing header line `{expected}`")]
     MissingHeader {

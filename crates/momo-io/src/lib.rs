@@ -62,6 +62,7 @@
 //! ```
 
 mod atomic;
+pub mod calib_import;
 pub mod error;
 pub mod kitti;
 pub mod matches;
