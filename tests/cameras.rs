@@ -78,3 +78,53 @@ fn wide_angle_surround_is_as_accurate_as_fisheye() {
         );
     }
 }
+
+/// `momo rig import` as a process: the Kalibr sample to a rig.json that `momo_io` reads back,
+/// and a bad file to exit code 2 with `path:line: reason`.
+#[test]
+fn rig_import_command() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let calib = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/momo-io/tests/calib");
+    let out = tmp.path().join("rig.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_momo"))
+        .args(["rig", "import"])
+        .arg(calib.join("kalibr_camchain.yaml"))
+        .arg("-o")
+        .arg(&out)
+        .args(["--mount", "1.5,0,1.3,0,5"])
+        .output()
+        .expect("momo starts");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(
+            "Kalibr camchain YAML: 3 camera(s): cam0 (radtan), cam1 (double_sphere), cam2 (unified)"
+        ),
+        "{stderr}"
+    );
+    let rig = momo::io::read_rig(&out).expect("valid rig.json");
+    assert_eq!(rig.len(), 3);
+    let mount = rig.cameras()[0].t_vehicle_camera;
+    assert_eq!(mount.translation, nalgebra::Vector3::new(1.5, 0.0, 1.3));
+    // Tilted 5 degrees down: the optical axis points forward and slightly down.
+    let z = mount.rotation.column(2);
+    assert!((z.z + 5f64.to_radians().sin()).abs() < 1e-12, "{z}");
+
+    let bad = tmp.path().join("bad.yaml");
+    std::fs::write(&bad, "cam0:\n  camera_model: ds\n  intrinsics: [1.2, 0.5, 300, 300, 320, 240]\n  resolution: [640, 480]\n").expect("write");
+    let o = Command::new(env!("CARGO_BIN_EXE_momo"))
+        .args(["rig", "import"])
+        .arg(&bad)
+        .arg("-o")
+        .arg(tmp.path().join("bad.json"))
+        .output()
+        .expect("momo starts");
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains(&format!("{}:3: ", bad.display())),
+        "{stderr}"
+    );
+    assert!(stderr.contains("`xi` must lie in (-1, 1)"), "{stderr}");
+    assert!(!tmp.path().join("bad.json").exists());
+}

@@ -20,6 +20,7 @@ mod eval;
 mod images;
 mod import;
 mod plot;
+mod rig;
 mod run;
 mod simulate;
 
@@ -77,6 +78,11 @@ enum Command {
     /// Simulate a drive (no data needed), run the estimator on it and print how close the
     /// result is to the truth.
     Demo(demo::DemoArgs),
+    /// Rig files: `momo rig import` writes rig.json from an OpenCV, ROS or Kalibr calibration.
+    Rig {
+        #[command(subcommand)]
+        command: rig::RigCommand,
+    },
 }
 
 /// Runs the `momo` command line on the process's arguments and returns its exit code.
@@ -121,6 +127,7 @@ where
         Command::Match(args) => images::match_cmd(args),
         Command::Vo(args) => images::vo_cmd(args),
         Command::Demo(args) => demo::demo(args),
+        Command::Rig { command } => rig::rig(command),
     };
     common::exit_code(result)
 }

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub(crate) struct SimulateArgs {
     /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, fisheye_surround,
-    /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s).
+    /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s),
+    /// radtan_mono (OpenCV distortion), wide_angle_surround (double sphere and unified).
     #[arg(long, default_value = "clean_pinhole")]
     scenario: String,
     /// Drive along the camera-0 poses of this KITTI poses file (e.g. a KITTI ground truth)
