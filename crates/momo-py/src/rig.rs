@@ -176,6 +176,9 @@ impl PyRig {
             .map(|c| match c.model {
                 Camera::Pinhole(_) => "pinhole",
                 Camera::KannalaBrandt(_) => "kannala_brandt",
+                Camera::Radtan(_) => "radtan",
+                Camera::DoubleSphere(_) => "double_sphere",
+                Camera::Unified(_) => "unified",
             })
             .collect();
         format!("Rig({} camera(s): {})", self.inner.len(), models.join(", "))
