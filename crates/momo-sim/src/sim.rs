@@ -445,6 +445,10 @@ pub struct Simulation {
     /// `labels[k][j][i]`: what match i of camera j in frame pair k is (parallel to
     /// `sequence.frames`).
     pub labels: Vec<Vec<Vec<MatchLabel>>>,
+    /// `static_points[k][j][i]`: the noise-free scene point of match i of camera j in frame pair
+    /// k, in camera j coordinates at frame k-1, for static matches ([`MatchLabel::Inlier`]);
+    /// `None` for every other label. What [`crate::bound`] needs.
+    pub static_points: Vec<Vec<Vec<Option<Vector3<f64>>>>>,
 }
 
 impl Simulation {
@@ -509,6 +513,9 @@ fn scene_range(rng: &mut StdRng, scene: &SceneConfig, mount: &Pose<f64>, b: &Vec
     }
 }
 
+/// The matches of one camera and frame pair, their labels and the static points.
+type Generated = (Vec<Observation>, Vec<MatchLabel>, Vec<Option<Vector3<f64>>>);
+
 /// One camera of one frame pair.
 struct CameraFrame<'a> {
     cfg: &'a SimConfig,
@@ -521,7 +528,8 @@ struct CameraFrame<'a> {
 
 impl CameraFrame<'_> {
     /// Tries once to make an inlier (or an object point); `None` if the point leaves the image.
-    fn try_match(&self, rng: &mut StdRng, on_object: bool) -> Option<Observation> {
+    /// Also returns the noise-free point in camera coordinates at k-1.
+    fn try_match(&self, rng: &mut StdRng, on_object: bool) -> Option<(Observation, Vector3<f64>)> {
         let model = &self.camera.model;
         let (w, h) = model.size();
         let (px0, x0, motion) = match (on_object, &self.object) {
@@ -559,7 +567,7 @@ impl CameraFrame<'_> {
         if !(model.contains(&px0n, 0.0) && model.contains(&px1n, 0.0)) {
             return None;
         }
-        Observation::new(model, px0n, px1n)
+        Observation::new(model, px0n, px1n).map(|o| (o, x0))
     }
 
     /// A wrong pixel in frame k for `obs` (keeping its pixel in frame k-1).
@@ -590,15 +598,11 @@ impl CameraFrame<'_> {
         None
     }
 
-    fn generate(
-        &self,
-        rng: &mut StdRng,
-        blind: Option<BlindMode>,
-    ) -> (Vec<Observation>, Vec<MatchLabel>) {
+    fn generate(&self, rng: &mut StdRng, blind: Option<BlindMode>) -> Generated {
         let n = self.cfg.matches_per_camera;
         let model = &self.camera.model;
         match blind {
-            Some(BlindMode::Absent) => return (Vec::new(), Vec::new()),
+            Some(BlindMode::Absent) => return (Vec::new(), Vec::new(), Vec::new()),
             Some(BlindMode::Outliers) => {
                 let obs: Vec<Observation> = (0..n)
                     .filter_map(|_| {
@@ -607,7 +611,8 @@ impl CameraFrame<'_> {
                     })
                     .collect();
                 let labels = vec![MatchLabel::Blinded; obs.len()];
-                return (obs, labels);
+                let points = vec![None; obs.len()];
+                return (obs, labels, points);
             }
             None => {}
         }
@@ -619,10 +624,12 @@ impl CameraFrame<'_> {
         kinds.shuffle(rng);
         let mut obs = Vec::with_capacity(n);
         let mut labels = Vec::with_capacity(n);
+        let mut points = Vec::with_capacity(n);
         for on_object in kinds {
             for _ in 0..100 {
-                if let Some(o) = self.try_match(rng, on_object) {
+                if let Some((o, x0)) = self.try_match(rng, on_object) {
                     obs.push(o);
+                    points.push((!on_object).then_some(x0));
                     labels.push(if on_object {
                         MatchLabel::MovingObject
                     } else {
@@ -640,6 +647,7 @@ impl CameraFrame<'_> {
                 Some(o) => {
                     obs[i] = o;
                     labels[i] = MatchLabel::Outlier;
+                    points[i] = None;
                 }
                 None => drop.push(i),
             }
@@ -650,8 +658,9 @@ impl CameraFrame<'_> {
         for i in drop.into_iter().rev() {
             obs.remove(i);
             labels.remove(i);
+            points.remove(i);
         }
-        (obs, labels)
+        (obs, labels, points)
     }
 }
 
@@ -670,10 +679,12 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
 
     let mut frames = vec![FrameObservations::new(n_cams)];
     let mut labels = vec![vec![Vec::new(); n_cams]];
+    let mut static_points = vec![vec![Vec::new(); n_cams]];
     for k in 1..n_frames {
         let m = &vehicle_motions[k];
         let mut frame = FrameObservations::new(n_cams);
         let mut frame_labels = vec![Vec::new(); n_cams];
+        let mut frame_points = vec![Vec::new(); n_cams];
         for (j, camera) in rig.cameras().iter().enumerate() {
             let mut rng = StdRng::seed_from_u64(mix(mix(mix(cfg.seed) ^ k as u64) ^ j as u64));
             let p = &camera.t_vehicle_camera;
@@ -693,12 +704,14 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
                 static_motion: camera_motion(m, p).inverse(),
                 object,
             };
-            let (obs, lab) = cf.generate(&mut rng, blind);
+            let (obs, lab, pts) = cf.generate(&mut rng, blind);
             frame.per_camera[j] = obs;
             frame_labels[j] = lab;
+            frame_points[j] = pts;
         }
         frames.push(frame);
         labels.push(frame_labels);
+        static_points.push(frame_points);
     }
 
     let arc_lengths = cfg.odometry.then(|| {
@@ -729,6 +742,7 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
         speeds: drive.speeds,
         true_arc_lengths: drive.arc_lengths,
         labels,
+        static_points,
     })
 }
 
