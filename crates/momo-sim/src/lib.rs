@@ -51,6 +51,7 @@ pub mod camera_scenarios;
 pub mod drive;
 pub mod rigs;
 pub mod sim;
+pub mod traffic;
 
 pub use camera_scenarios::{
     double_sphere_camera, radtan_camera, radtan_mono_rig, unified_camera, wide_angle_surround_rig,
@@ -65,3 +66,4 @@ pub use sim::{
     SimError, Simulation, camera_poses_from_vehicle_poses, simulate,
     vehicle_poses_from_camera_poses,
 };
+pub use traffic::{Traffic, TrafficConfig, TrafficObject, generate_traffic};

@@ -218,3 +218,40 @@ fn ml_reaches_the_bound_stereo() {
         "Monte-Carlo ML median {mc:.5} deg vs bound {bound:.5} deg"
     );
 }
+
+#[test]
+fn moving_traffic_objects_hold_30_to_70_percent_of_the_matches() {
+    for seed in [1, 2] {
+        let cfg = SimConfig {
+            frames: 120,
+            seed,
+            ..SimConfig::moving_traffic()
+        };
+        let sim = simulate(&cfg).expect("valid config");
+        assert_eq!(sim, simulate(&cfg).expect("valid config"), "deterministic");
+        let mut with_objects = 0;
+        for k in 1..sim.labels.len() {
+            let l = &sim.labels[k][0];
+            let on_object = l.iter().filter(|x| **x == MatchLabel::MovingObject).count();
+            let static_ = l.iter().filter(|x| **x == MatchLabel::Inlier).count();
+            assert!(
+                static_ >= 40,
+                "seed {seed} frame {k}: {static_} static matches"
+            );
+            if on_object > 0 {
+                with_objects += 1;
+                // Of the matches before outliers replace 5 % of them.
+                let f = on_object as f64 / (on_object + static_) as f64;
+                assert!((0.2..=0.75).contains(&f), "seed {seed} frame {k}: {f}");
+            }
+            // Static points carry no object labels and vice versa.
+            for (p, lab) in sim.static_points[k][0].iter().zip(l) {
+                assert_eq!(p.is_some(), *lab == MatchLabel::Inlier);
+            }
+        }
+        assert!(
+            with_objects >= 60,
+            "seed {seed}: objects in {with_objects} of 119 pairs"
+        );
+    }
+}
