@@ -14,6 +14,8 @@
 #   SCENARIO      environment variable: the `momo simulate --scenario` (default moving_traffic)
 #   PEERS         environment variable: 1 (default) runs opencv-magsac and poselib too, 0 not
 #   MOMO          environment variable: the momo binary (default target/release/momo)
+#   MOMO_CONFIG   environment variable: a `momo run --config` file (default: the built-in one)
+#   REUSE         environment variable: 1 keeps existing sequences (no re-simulation)
 #   PYTHON        environment variable: Python for the peers' venv (default python3.11/python3)
 #
 # Per sequence, `momo eval` gives the frame-to-frame rotation error median, the frames above
@@ -77,11 +79,15 @@ for t in $trajectories; do
     fi
     for seed in $(seq 1 "$seeds"); do
         name="${scenario}_${t}_s$seed"
-        rm -rf "$out/seq/$name"
-        "$momo" simulate --scenario "$scenario" "${traj[@]}" --frames "$frames" --seed "$seed" \
-            "$out/seq/$name" >/dev/null
+        if [[ "${REUSE:-0}" != 1 || ! -f "$out/seq/$name/bound.csv" ]]; then
+            rm -rf "$out/seq/$name"
+            "$momo" simulate --scenario "$scenario" "${traj[@]}" --frames "$frames" \
+                --seed "$seed" "$out/seq/$name" >/dev/null
+        fi
         est="$out/est/$name.momo.txt"
-        if "$momo" run "$out/seq/$name" -o "$est" -q; then
+        cfg=()
+        if [[ -n "${MOMO_CONFIG:-}" ]]; then cfg=(--config "$MOMO_CONFIG"); fi
+        if "$momo" run "$out/seq/$name" "${cfg[@]}" -o "$est" -q; then
             score "$name" momo "$est"
         else
             printf '%s\tmomo\tfailed\n' "$name" >>"$rows"
