@@ -102,7 +102,11 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
             s.p95,
             s.max,
             s.above_one,
-            match (bounds.is_some(), row.scores.bound_deg, row.scores.efficiency) {
+            match (
+                bounds.is_some(),
+                row.scores.bound_deg,
+                row.scores.efficiency
+            ) {
                 (false, _, _) => String::new(),
                 (true, Some(b), Some(e)) => format!(" {b:>8.4} {e:>6.2}"),
                 (true, _, _) => format!(" {:>8} {:>6}", "-", "-"),
