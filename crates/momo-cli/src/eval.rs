@@ -29,6 +29,19 @@ struct EvalRow {
 pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
     let gt = &args.gt;
     let ground_truth = momo_io::read_poses(gt).map_err(Failure::input)?;
+    // bound.csv beside the ground truth (FORMAT.md version 3): the Cramér-Rao bound per frame.
+    let bound_path = gt.with_file_name("bound.csv");
+    let bounds = match std::fs::read_to_string(&bound_path) {
+        Ok(text) => Some(momo_eval::parse_bound_csv(&text).map_err(|e| {
+            Failure::Input(anyhow::anyhow!(
+                "{}:{}: {}",
+                bound_path.display(),
+                e.line,
+                e.reason
+            ))
+        })?),
+        Err(_) => None,
+    };
     let mut rows = Vec::with_capacity(args.est.len());
     for path in &args.est {
         let est = momo_io::read_poses(path).map_err(Failure::input)?;
@@ -43,7 +56,10 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
         }
         rows.push(EvalRow {
             path: path.clone(),
-            scores: momo_eval::evaluate(&ground_truth, &est),
+            scores: match &bounds {
+                Some(b) => momo_eval::evaluate_with_bound(&ground_truth, &est, b),
+                None => momo_eval::evaluate(&ground_truth, &est),
+            },
         });
     }
     if args.json {
@@ -60,8 +76,18 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
         ground_truth.len()
     );
     println!(
-        "{:>8} {:>8} {:>8} {:>8} {:>8} {:>5}  estimate",
-        "t_err", "r_err", "median", "p95", "max", ">1deg"
+        "{:>8} {:>8} {:>8} {:>8} {:>8} {:>5}{}  estimate",
+        "t_err",
+        "r_err",
+        "median",
+        "p95",
+        "max",
+        ">1deg",
+        if bounds.is_some() {
+            format!(" {:>8} {:>6}", "bound", "eff")
+        } else {
+            String::new()
+        }
     );
     for row in &rows {
         let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
@@ -71,11 +97,20 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
         );
         let s = &row.scores.rotation_deg;
         println!(
-            "{t:>8} {r:>8} {:>8.4} {:>8.4} {:>8.4} {:>5}  {}",
+            "{t:>8} {r:>8} {:>8.4} {:>8.4} {:>8.4} {:>5}{}  {}",
             s.median,
             s.p95,
             s.max,
             s.above_one,
+            match (
+                bounds.is_some(),
+                row.scores.bound_deg,
+                row.scores.efficiency
+            ) {
+                (false, _, _) => String::new(),
+                (true, Some(b), Some(e)) => format!(" {b:>8.4} {e:>6.2}"),
+                (true, _, _) => format!(" {:>8} {:>6}", "-", "-"),
+            },
             row.path.display()
         );
     }

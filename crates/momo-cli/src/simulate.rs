@@ -6,9 +6,10 @@ use std::path::PathBuf;
 /// The arguments of `momo simulate`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct SimulateArgs {
-    /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, fisheye_surround,
-    /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s),
-    /// radtan_mono (OpenCV distortion), wide_angle_surround (double sphere and unified).
+    /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, moving_traffic,
+    /// fisheye_surround, sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway
+    /// (25-30 m/s), radtan_mono (OpenCV distortion), wide_angle_surround (double sphere and
+    /// unified).
     #[arg(long, default_value = "clean_pinhole")]
     scenario: String,
     /// Drive along the camera-0 poses of this KITTI poses file (e.g. a KITTI ground truth)
@@ -56,5 +57,8 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
     }
     let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
     sim.write(&args.out_dir).map_err(Failure::other)?;
+    // bound.csv (FORMAT.md version 3): the Cramér-Rao bound of every frame pair's rotation.
+    let bounds = momo_sim::bound::rotation_bounds(&sim, cfg.pixel_noise);
+    momo_sim::bound::write_bound_csv(&args.out_dir, &sim, &bounds).map_err(Failure::other)?;
     Ok(())
 }

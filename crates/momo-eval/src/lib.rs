@@ -204,6 +204,11 @@ pub struct Evaluation {
     pub r_err_deg_per_100m: Option<f64>,
     /// Frame-to-frame rotation errors in degrees.
     pub rotation_deg: ErrorSummary,
+    /// Median over frame pairs of the Cramér-Rao bound of the rotation error angle (degrees,
+    /// `bound.csv` of a simulated sequence); `None` without a bound.
+    pub bound_deg: Option<f64>,
+    /// Efficiency `rotation_deg.median / bound_deg` (1 = at the bound); `None` without a bound.
+    pub efficiency: Option<f64>,
 }
 
 /// Scores `estimate` against `ground_truth` (same length, camera-0 poses).
@@ -216,7 +221,101 @@ pub fn evaluate(ground_truth: &[Pose<f64>], estimate: &[Pose<f64>]) -> Evaluatio
             ground_truth,
             estimate,
         )),
+        bound_deg: None,
+        efficiency: None,
     }
+}
+
+/// [`evaluate`] plus the bound and the efficiency: `bounds[k]` is frame pair k's bound in
+/// degrees ([`parse_bound_csv`]); the bound is the median of the defined ones (frame pairs
+/// `1..n` of the ground truth), the efficiency the error median over it.
+pub fn evaluate_with_bound(
+    ground_truth: &[Pose<f64>],
+    estimate: &[Pose<f64>],
+    bounds: &[Option<f64>],
+) -> Evaluation {
+    let mut e = evaluate(ground_truth, estimate);
+    let defined: Vec<f64> = bounds
+        .iter()
+        .take(ground_truth.len())
+        .skip(1)
+        .flatten()
+        .copied()
+        .collect();
+    if !defined.is_empty() {
+        let b = ErrorSummary::from_values(&defined).median;
+        e.bound_deg = Some(b);
+        e.efficiency = (b > 0.0).then(|| e.rotation_deg.median / b);
+    }
+    e
+}
+
+/// A malformed `bound.csv` line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("line {line}: {reason}")]
+pub struct BoundCsvError {
+    /// 1-based line number.
+    pub line: usize,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// Parses `bound.csv` (`docs/FORMAT.md`, version 3): header
+/// `frame,rotation_bound_deg[,...]`, then `k,bound[,...]` rows with an empty bound where it is
+/// undefined. Returns `bounds[k]` for k = 0..=max frame (`None` where no row or no value).
+///
+/// ```
+/// let b = momo_eval::parse_bound_csv("frame,rotation_bound_deg,static_matches\n1,0.04,150\n2,,3\n")?;
+/// assert_eq!(b, vec![None, Some(0.04), None]);
+/// assert!(momo_eval::parse_bound_csv("frame,rotation_bound_deg\n1,-2\n").is_err());
+/// # Ok::<(), momo_eval::BoundCsvError>(())
+/// ```
+pub fn parse_bound_csv(text: &str) -> Result<Vec<Option<f64>>, BoundCsvError> {
+    let err = |line: usize, reason: String| BoundCsvError { line, reason };
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, h)) if h.trim().starts_with("frame,rotation_bound_deg") => {}
+        _ => {
+            return Err(err(
+                1,
+                "expected the header `frame,rotation_bound_deg,...`".into(),
+            ));
+        }
+    }
+    let mut out: Vec<Option<f64>> = Vec::new();
+    for (i, line) in lines {
+        let line_no = i + 1;
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let mut fields = line.split(',');
+        let frame: usize = fields
+            .next()
+            .and_then(|f| f.trim().parse().ok())
+            .ok_or_else(|| err(line_no, "frame is not a non-negative integer".into()))?;
+        if frame > 10_000_000 {
+            return Err(err(line_no, format!("frame {frame} is too large")));
+        }
+        let value = match fields.next().map(str::trim) {
+            None => return Err(err(line_no, "missing rotation_bound_deg".into())),
+            Some("") => None,
+            Some(v) => match v.parse::<f64>() {
+                Ok(x) if x.is_finite() && x >= 0.0 => Some(x),
+                _ => {
+                    return Err(err(
+                        line_no,
+                        format!("rotation_bound_deg `{v}` is not a non-negative number"),
+                    ));
+                }
+            },
+        };
+        if out.len() <= frame {
+            out.resize(frame + 1, None);
+        }
+        out[frame] = value;
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

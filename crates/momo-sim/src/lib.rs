@@ -11,6 +11,7 @@
 //!   roll oscillations, optional side slip.
 //! - Or a drive along real camera poses ([`SimConfig::camera_trajectory`], e.g. a KITTI
 //!   ground-truth file; [`vehicle_poses_from_camera_poses`]).
+//! - The Cramér-Rao bound of every frame pair's rotation from its static matches ([`bound`]).
 //! - Presets by name: [`SimConfig::SCENARIOS`], [`SimConfig::scenario`].
 //! - Matches ([`sim`]): uniform pixels, depths from a ground plane / facade / far-point scene,
 //!   Gaussian pixel noise, outliers, blinded cameras, an independently moving object; every match
@@ -45,10 +46,12 @@
 //! # }
 //! ```
 
+pub mod bound;
 pub mod camera_scenarios;
 pub mod drive;
 pub mod rigs;
 pub mod sim;
+pub mod traffic;
 
 pub use camera_scenarios::{
     double_sphere_camera, radtan_camera, radtan_mono_rig, unified_camera, wide_angle_surround_rig,
@@ -63,3 +66,4 @@ pub use sim::{
     SimError, Simulation, camera_poses_from_vehicle_poses, simulate,
     vehicle_poses_from_camera_poses,
 };
+pub use traffic::{Traffic, TrafficConfig, TrafficObject, generate_traffic};

@@ -19,6 +19,7 @@
 
 use crate::drive::{Drive, DriveConfig, generate_drive};
 use crate::rigs::RigPreset;
+use crate::traffic::{CameraTraffic, TrafficConfig, generate_traffic};
 use momo_core::{CameraModel, FrameObservations, Observation, Pose, Rig, RigCamera, camera_motion};
 use momo_io::{IoError, MAX_FRAME, Sequence, write_sequence};
 use nalgebra::{Vector2, Vector3};
@@ -161,6 +162,8 @@ pub struct SimConfig {
     pub blinded: Vec<Blinding>,
     /// An optional independently moving object.
     pub moving_object: Option<MovingObject>,
+    /// Optional moving traffic around the ego vehicle ([`crate::traffic`]).
+    pub traffic: Option<TrafficConfig>,
     /// Whether the sequence gets `odometry.csv` arc lengths.
     pub odometry: bool,
     /// Relative standard deviation of the odometry arc lengths (0: exact).
@@ -191,6 +194,7 @@ impl Default for SimConfig {
             scene: SceneConfig::default(),
             blinded: Vec::new(),
             moving_object: None,
+            traffic: None,
             odometry: true,
             odometry_noise: 0.0,
             camera_trajectory: None,
@@ -205,6 +209,7 @@ impl SimConfig {
         "clean_pinhole",
         "outliers",
         "moving_object",
+        "moving_traffic",
         "fisheye_surround",
         "sparse_outliers",
         "very_sparse",
@@ -229,6 +234,7 @@ impl SimConfig {
             "clean_pinhole" => Self::clean_pinhole(),
             "outliers" => Self::outliers(),
             "moving_object" => Self::moving_object(),
+            "moving_traffic" => Self::moving_traffic(),
             "fisheye_surround" => Self::fisheye_surround(),
             "sparse_outliers" => Self::sparse_outliers(),
             "very_sparse" => Self::very_sparse(),
@@ -276,6 +282,19 @@ impl SimConfig {
         Self {
             outlier_ratio: 0.0,
             moving_object: Some(MovingObject::following(0, 30..60, 0.45)),
+            ..Self::default()
+        }
+    }
+
+    /// The hard moving-traffic family ([`crate::traffic`]): KITTI mono rig, 300 matches,
+    /// σ = 1 px, 5 % outliers, lead vehicles at 5 to 40 m with lateral drift, a close bus,
+    /// cut-ins, oncoming cars and crossing trucks holding 30 to 70 % of the matches when
+    /// visible. Vary `seed` and drive it along real trajectories (`camera_trajectory`).
+    pub fn moving_traffic() -> Self {
+        Self {
+            pixel_noise: 1.0,
+            outlier_ratio: 0.05,
+            traffic: Some(TrafficConfig::default()),
             ..Self::default()
         }
     }
@@ -424,6 +443,15 @@ impl SimConfig {
                 return bad("moving_object.relative_motion must be a finite rigid motion".into());
             }
         }
+        if let Some(t) = &self.traffic {
+            let (lo, hi) = t.fraction;
+            if !(0.0 <= lo && lo <= hi && hi <= 1.0) {
+                return bad("traffic.fraction must be (min, max) with 0 <= min <= max <= 1".into());
+            }
+            if !(t.min_area_px.is_finite() && t.min_area_px >= 0.0) {
+                return bad("traffic.min_area_px must be a non-negative number".into());
+            }
+        }
         Ok(())
     }
 }
@@ -445,6 +473,10 @@ pub struct Simulation {
     /// `labels[k][j][i]`: what match i of camera j in frame pair k is (parallel to
     /// `sequence.frames`).
     pub labels: Vec<Vec<Vec<MatchLabel>>>,
+    /// `static_points[k][j][i]`: the noise-free scene point of match i of camera j in frame pair
+    /// k, in camera j coordinates at frame k-1, for static matches ([`MatchLabel::Inlier`]);
+    /// `None` for every other label. What [`crate::bound`] needs.
+    pub static_points: Vec<Vec<Vec<Option<Vector3<f64>>>>>,
 }
 
 impl Simulation {
@@ -509,6 +541,9 @@ fn scene_range(rng: &mut StdRng, scene: &SceneConfig, mount: &Pose<f64>, b: &Vec
     }
 }
 
+/// The matches of one camera and frame pair, their labels and the static points.
+type Generated = (Vec<Observation>, Vec<MatchLabel>, Vec<Option<Vector3<f64>>>);
+
 /// One camera of one frame pair.
 struct CameraFrame<'a> {
     cfg: &'a SimConfig,
@@ -517,15 +552,33 @@ struct CameraFrame<'a> {
     static_motion: Pose<f64>,
     /// Object points, if the object is in view: the same for the object, and its region.
     object: Option<(Pose<f64>, &'a MovingObject)>,
+    /// Traffic seen by this camera.
+    traffic: Option<CameraTraffic>,
+}
+
+/// What a match is made of.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    Static,
+    Object,
+    /// Visible traffic object i of [`CameraTraffic::objects`].
+    Traffic(usize),
 }
 
 impl CameraFrame<'_> {
     /// Tries once to make an inlier (or an object point); `None` if the point leaves the image.
-    fn try_match(&self, rng: &mut StdRng, on_object: bool) -> Option<Observation> {
+    /// Also returns the noise-free point in camera coordinates at k-1.
+    fn try_match(&self, rng: &mut StdRng, kind: Kind) -> Option<(Observation, Vector3<f64>)> {
         let model = &self.camera.model;
         let (w, h) = model.size();
-        let (px0, x0, motion) = match (on_object, &self.object) {
-            (true, Some((motion, obj))) => {
+        let (px0, x0, motion) = match (kind, &self.object, &self.traffic) {
+            (Kind::Traffic(i), _, Some(t)) => {
+                let v = t.objects.get(i)?;
+                let [u0, v0, u1, v1] = v.bbox;
+                let px0 = Vector2::new(uniform(rng, (u0, u1)), uniform(rng, (v0, v1)));
+                (px0, t.object_point(model, &px0, v.index)?, &v.motion)
+            }
+            (Kind::Object, Some((motion, obj)), _) => {
                 let [u0, v0, u1, v1] = obj.region;
                 let px0 = Vector2::new(
                     uniform(rng, (u0 * (w - 1.0), u1 * (w - 1.0))),
@@ -536,6 +589,13 @@ impl CameraFrame<'_> {
             }
             _ => {
                 let px0 = random_pixel(rng, (w, h));
+                if self
+                    .traffic
+                    .as_ref()
+                    .is_some_and(|t| t.occludes(model, &px0))
+                {
+                    return None;
+                }
                 let b0 = model.unproject(&px0)?;
                 let range = scene_range(rng, &self.cfg.scene, &self.camera.t_vehicle_camera, &b0);
                 (px0, b0 * range, &self.static_motion)
@@ -559,7 +619,7 @@ impl CameraFrame<'_> {
         if !(model.contains(&px0n, 0.0) && model.contains(&px1n, 0.0)) {
             return None;
         }
-        Observation::new(model, px0n, px1n)
+        Observation::new(model, px0n, px1n).map(|o| (o, x0))
     }
 
     /// A wrong pixel in frame k for `obs` (keeping its pixel in frame k-1).
@@ -590,15 +650,11 @@ impl CameraFrame<'_> {
         None
     }
 
-    fn generate(
-        &self,
-        rng: &mut StdRng,
-        blind: Option<BlindMode>,
-    ) -> (Vec<Observation>, Vec<MatchLabel>) {
+    fn generate(&self, rng: &mut StdRng, blind: Option<BlindMode>) -> Generated {
         let n = self.cfg.matches_per_camera;
         let model = &self.camera.model;
         match blind {
-            Some(BlindMode::Absent) => return (Vec::new(), Vec::new()),
+            Some(BlindMode::Absent) => return (Vec::new(), Vec::new(), Vec::new()),
             Some(BlindMode::Outliers) => {
                 let obs: Vec<Observation> = (0..n)
                     .filter_map(|_| {
@@ -607,7 +663,8 @@ impl CameraFrame<'_> {
                     })
                     .collect();
                 let labels = vec![MatchLabel::Blinded; obs.len()];
-                return (obs, labels);
+                let points = vec![None; obs.len()];
+                return (obs, labels, points);
             }
             None => {}
         }
@@ -615,14 +672,25 @@ impl CameraFrame<'_> {
             Some((_, o)) => (o.fraction * n as f64).round() as usize,
             None => 0,
         };
-        let mut kinds: Vec<bool> = (0..n).map(|i| i < n_object).collect();
+        let mut kinds: Vec<Kind> = vec![Kind::Object; n_object.min(n)];
+        if let Some(t) = &self.traffic {
+            for (i, v) in t.objects.iter().enumerate() {
+                let m = (v.fraction * n as f64).round() as usize;
+                kinds.extend(std::iter::repeat_n(Kind::Traffic(i), m));
+            }
+        }
+        kinds.truncate(n);
+        kinds.resize(n, Kind::Static);
         kinds.shuffle(rng);
         let mut obs = Vec::with_capacity(n);
         let mut labels = Vec::with_capacity(n);
-        for on_object in kinds {
+        let mut points = Vec::with_capacity(n);
+        for kind in kinds {
             for _ in 0..100 {
-                if let Some(o) = self.try_match(rng, on_object) {
+                if let Some((o, x0)) = self.try_match(rng, kind) {
                     obs.push(o);
+                    let on_object = kind != Kind::Static;
+                    points.push((!on_object).then_some(x0));
                     labels.push(if on_object {
                         MatchLabel::MovingObject
                     } else {
@@ -640,6 +708,7 @@ impl CameraFrame<'_> {
                 Some(o) => {
                     obs[i] = o;
                     labels[i] = MatchLabel::Outlier;
+                    points[i] = None;
                 }
                 None => drop.push(i),
             }
@@ -650,8 +719,9 @@ impl CameraFrame<'_> {
         for i in drop.into_iter().rev() {
             obs.remove(i);
             labels.remove(i);
+            points.remove(i);
         }
-        (obs, labels)
+        (obs, labels, points)
     }
 }
 
@@ -667,13 +737,27 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     };
     let n_frames = drive.poses.len();
     let vehicle_motions: Vec<Pose<f64>> = (0..n_frames).map(|k| drive.motion(k)).collect();
+    let traffic = cfg.traffic.as_ref().map(|t| {
+        (
+            t,
+            generate_traffic(
+                t,
+                &drive.poses,
+                &drive.arc_lengths,
+                cfg.drive.frame_rate,
+                cfg.seed,
+            ),
+        )
+    });
 
     let mut frames = vec![FrameObservations::new(n_cams)];
     let mut labels = vec![vec![Vec::new(); n_cams]];
+    let mut static_points = vec![vec![Vec::new(); n_cams]];
     for k in 1..n_frames {
         let m = &vehicle_motions[k];
         let mut frame = FrameObservations::new(n_cams);
         let mut frame_labels = vec![Vec::new(); n_cams];
+        let mut frame_points = vec![Vec::new(); n_cams];
         for (j, camera) in rig.cameras().iter().enumerate() {
             let mut rng = StdRng::seed_from_u64(mix(mix(mix(cfg.seed) ^ k as u64) ^ j as u64));
             let p = &camera.t_vehicle_camera;
@@ -692,13 +776,18 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
                 camera,
                 static_motion: camera_motion(m, p).inverse(),
                 object,
+                traffic: traffic
+                    .as_ref()
+                    .and_then(|(t, tr)| CameraTraffic::new(t, tr, camera, k)),
             };
-            let (obs, lab) = cf.generate(&mut rng, blind);
+            let (obs, lab, pts) = cf.generate(&mut rng, blind);
             frame.per_camera[j] = obs;
             frame_labels[j] = lab;
+            frame_points[j] = pts;
         }
         frames.push(frame);
         labels.push(frame_labels);
+        static_points.push(frame_points);
     }
 
     let arc_lengths = cfg.odometry.then(|| {
@@ -729,6 +818,7 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
         speeds: drive.speeds,
         true_arc_lengths: drive.arc_lengths,
         labels,
+        static_points,
     })
 }
 

@@ -79,6 +79,9 @@ pub struct OdometryOptions {
     /// together, their errors run on from frame to frame, and a prior centred on the previous
     /// frame carries them on (simulated KITTI 07 and 08 drives, docs/RESULTS.md). 0: always.
     pub prior_min_arc_length: f64,
+    /// Motion separation after each frame's solve ([`crate::separate`]); none by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub separate: Option<crate::separate::SeparateOptions>,
     /// Centre a soft manifold's prior (`soft_single_track`'s side slip and climb) on its
     /// running mean over this many recent moving frames, so that a constant offset (a camera
     /// mount a few tenths of a degree off nominal) is learnt online instead of pulling every
@@ -108,6 +111,7 @@ impl Default for OdometryOptions {
             rotation_change_sigma: 0.002,
             prior_min_inlier_ratio: 0.85,
             prior_min_arc_length: 0.0,
+            separate: None,
             soft_prior_centring_frames: 0,
             motion_prior_sigmas: BTreeMap::new(),
         }
@@ -332,6 +336,9 @@ impl Config {
         }
         if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
             return bad("odometry.restart_yaw_offsets must be finite".into());
+        }
+        if let Some(Err(reason)) = o.separate.as_ref().map(|s| s.validate()) {
+            return bad(reason);
         }
         if !(o.prior_min_arc_length >= 0.0 && o.prior_min_arc_length.is_finite()) {
             return bad("odometry.prior_min_arc_length must be finite and >= 0".into());

@@ -25,6 +25,7 @@ pub mod calibrate;
 pub mod config;
 pub mod odometry;
 pub mod pipeline;
+pub mod separate;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
 pub use calibrate::{

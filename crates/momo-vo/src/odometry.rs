@@ -342,6 +342,24 @@ impl Odometry {
         } else {
             self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag)
         };
+        // Motion separation (issue 14, crate::separate; off by default).
+        let (result, competing) = match (result, &self.config.odometry.separate) {
+            (Some(sol), Some(opts)) if !standstill => {
+                let mut starts = vec![init.clone()];
+                starts.extend(self.restart_points(&init));
+                let ctx = crate::separate::SolveContext {
+                    rig: &self.rig,
+                    estimator: self.estimator.as_ref(),
+                    loss: self.config.loss.as_ref(),
+                    solver: self.config.solver.as_ref(),
+                    fixed: &fixed,
+                    motion_prior: Some(&self.motion_prior),
+                };
+                let (sol, o) = crate::separate::separate(&ctx, opts, obs, sol, &starts);
+                (Some(sol), o.competing)
+            }
+            (r, _) => (r, false),
+        };
 
         // Whether this frame may centre the next frame's change-of-motion prior.
         let mut trusted = false;
@@ -404,7 +422,8 @@ impl Odometry {
             self.last_arc_length = Some(params[i]);
         }
         self.after_standstill = standstill;
-        self.prior_ready = diag.status == FrameStatus::Estimated && trusted;
+        // A frame where two motions competed does not centre the next frame's prior.
+        self.prior_ready = diag.status == FrameStatus::Estimated && trusted && !competing;
         let n = self.config.odometry.soft_prior_centring_frames;
         if self.prior_ready && n > 0 && !self.soft_center.is_empty() {
             // A cumulative mean over the first n moving frames, then exponential with n frames.

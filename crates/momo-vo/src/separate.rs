@@ -1,0 +1,247 @@
+//! Motion separation: tell the static world from large moving objects (issue 14), as an
+//! optional stage after each frame's solve (`odometry.separate`, off by default).
+//!
+//! Given the frame's solution A (the usual robust solve):
+//! 1. **Support**: every match's epipolar angle under A (the mean of the angles of `f1` from the
+//!    epipolar plane of `f0` and of `f0` from that of `f1`, radians); A's support are the
+//!    matches below [`SeparateOptions::threshold`].
+//! 2. **Sequential fitting**: if at least [`SeparateOptions::min_fraction`] of the matches lie
+//!    outside A's support, a second motion B is fitted to them alone (starts: straight ahead, the
+//!    frame's start and the restart yaw offsets; the lowest cost wins) and its support is scored
+//!    on all matches.
+//! 3. **Choice by spatial support**: each motion's support is counted in image cells (a
+//!    [`SeparateOptions::grid`] grid per camera, a cell counts if it holds at least one supporting
+//!    match) so that a compact object cannot outweigh a spread-out static scene; B replaces A if
+//!    it covers more cells. The two motions *compete* when B's support holds at least
+//!    `min_fraction` of the matches.
+//! 4. **Final efficient stage**: the chosen motion is re-solved on its support alone with plain
+//!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches.
+
+use momo_core::{
+    FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
+    Solver, TrivialLoss, camera_motion, essential,
+};
+use momo_core::{Rig, Termination};
+use serde::{Deserialize, Serialize};
+
+/// Options of the motion separation (`[odometry.separate]` in the TOML config).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SeparateOptions {
+    /// Support threshold on the epipolar angle, radians (0.003 ≈ 2.2 px at f = 718 px).
+    pub threshold: f64,
+    /// Fit a second motion when at least this fraction of the matches lies outside the first
+    /// motion's support; the motions compete when the second one's support is that large.
+    pub min_fraction: f64,
+    /// Cells per camera image (columns, rows) of the spatial support.
+    pub grid: (usize, usize),
+    /// Run the final least-squares stage on the chosen support.
+    pub final_stage: bool,
+    /// Fit and choose between two motions (off: only the final stage on A's support).
+    pub second_motion: bool,
+}
+
+impl Default for SeparateOptions {
+    fn default() -> Self {
+        Self {
+            threshold: 0.003,
+            min_fraction: 0.15,
+            grid: (8, 4),
+            final_stage: true,
+            second_motion: true,
+        }
+    }
+}
+
+impl SeparateOptions {
+    /// Checks the options; the message names the first bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.threshold.is_finite() && self.threshold > 0.0) {
+            return Err("odometry.separate.threshold must be a positive number".into());
+        }
+        if !(0.0..=1.0).contains(&self.min_fraction) {
+            return Err("odometry.separate.min_fraction must be in [0, 1]".into());
+        }
+        if self.grid.0 == 0 || self.grid.1 == 0 || self.grid.0 * self.grid.1 > 10_000 {
+            return Err("odometry.separate.grid must be (columns, rows), 1 to 10000 cells".into());
+        }
+        Ok(())
+    }
+}
+
+/// What the separation did in one frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SeparationOutcome {
+    /// Two motions with large support competed.
+    pub competing: bool,
+    /// The second motion was chosen over the first.
+    pub switched: bool,
+}
+
+/// Epipolar angles (radians) of every match (per camera, in order) under a vehicle motion.
+pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -> Vec<Vec<f64>> {
+    rig.cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .map(|(cam, matches)| {
+            let e = essential(&camera_motion(motion, &cam.t_vehicle_camera));
+            matches
+                .iter()
+                .map(|o| {
+                    let n0 = e * o.f0;
+                    let n1 = e.transpose() * o.f1;
+                    let c = o.f1.dot(&n0).abs();
+                    let (a, b) = (n0.norm(), n1.norm());
+                    if a < 1e-15 || b < 1e-15 {
+                        0.0
+                    } else {
+                        0.5 * ((c / a).min(1.0).asin() + (c / b).min(1.0).asin())
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The matches where `mask` holds.
+fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObservations {
+    FrameObservations {
+        per_camera: obs
+            .per_camera
+            .iter()
+            .zip(mask)
+            .map(|(m, k)| {
+                m.iter()
+                    .zip(k)
+                    .filter(|(_, k)| **k)
+                    .map(|(o, _)| *o)
+                    .collect()
+            })
+            .collect(),
+    }
+}
+
+/// Image cells holding at least one match of `mask` (frame k-1 pixels), over all cameras.
+fn cells(rig: &Rig, obs: &FrameObservations, mask: &[Vec<bool>], grid: (usize, usize)) -> usize {
+    use momo_core::CameraModel;
+    let mut total = 0;
+    for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
+        let (w, h) = cam.model.size();
+        let mut seen = vec![false; grid.0 * grid.1];
+        for (o, _) in m.iter().zip(k).filter(|(_, k)| **k) {
+            let cx = ((o.px0.x / w.max(1.0)) * grid.0 as f64).clamp(0.0, grid.0 as f64 - 1.0);
+            let cy = ((o.px0.y / h.max(1.0)) * grid.1 as f64).clamp(0.0, grid.1 as f64 - 1.0);
+            seen[cy as usize * grid.0 + cx as usize] = true;
+        }
+        total += seen.iter().filter(|s| **s).count();
+    }
+    total
+}
+
+fn count(mask: &[Vec<bool>]) -> usize {
+    mask.iter().flatten().filter(|k| **k).count()
+}
+
+/// Everything one solve needs besides the matches and the start.
+pub struct SolveContext<'a> {
+    /// The rig.
+    pub rig: &'a Rig,
+    /// The frame estimator (model and metric).
+    pub estimator: &'a dyn FrameEstimator,
+    /// The robust loss of the usual solve.
+    pub loss: &'a dyn RobustLoss,
+    /// The solver.
+    pub solver: &'a dyn Solver,
+    /// Fixed parameters (e.g. the odometry arc length).
+    pub fixed: &'a [bool],
+    /// The motion prior of the frame (used by the second motion's fit and the final stage).
+    pub motion_prior: Option<&'a MotionPrior>,
+}
+
+impl SolveContext<'_> {
+    fn solve(
+        &self,
+        obs: &FrameObservations,
+        init: &[f64],
+        loss: &dyn RobustLoss,
+        prior: bool,
+    ) -> Option<FrameSolution> {
+        let req = SolveRequest {
+            rig: self.rig,
+            observations: obs,
+            loss,
+            solver: self.solver,
+            initial: init,
+            fixed: self.fixed,
+            rotation_only: false,
+            motion_prior: if prior { self.motion_prior } else { None },
+        };
+        self.estimator.solve(&req).ok().filter(|s| {
+            s.report.termination != Termination::NumericalFailure
+                && s.params.iter().all(|p| p.is_finite())
+                && s.report.final_cost.is_finite()
+        })
+    }
+}
+
+/// The separation stage (see the module doc): returns the frame's solution (A, or the second
+/// motion, after the final stage) and what happened. `starts` are the second motion's starts.
+pub fn separate(
+    ctx: &SolveContext<'_>,
+    opts: &SeparateOptions,
+    obs: &FrameObservations,
+    first: FrameSolution,
+    starts: &[Vec<f64>],
+) -> (FrameSolution, SeparationOutcome) {
+    let n = obs.len();
+    let mut outcome = SeparationOutcome::default();
+    let support = |params: &[f64]| -> Vec<Vec<bool>> {
+        epipolar_angles(ctx.rig, &ctx.estimator.motion(params), obs)
+            .into_iter()
+            .map(|a| a.into_iter().map(|x| x < opts.threshold).collect())
+            .collect()
+    };
+    let min_n = ((opts.min_fraction * n as f64).ceil() as usize).max(12);
+    let sup_a = support(&first.params);
+    let mut chosen = (first, sup_a);
+    if opts.second_motion && n - count(&chosen.1) >= min_n {
+        let rest_mask: Vec<Vec<bool>> = chosen
+            .1
+            .iter()
+            .map(|m| m.iter().map(|k| !k).collect())
+            .collect();
+        let rest = subset(obs, &rest_mask);
+        let mut best: Option<FrameSolution> = None;
+        for s in starts {
+            if let Some(sol) = ctx.solve(&rest, s, ctx.loss, false)
+                && best
+                    .as_ref()
+                    .is_none_or(|b| sol.report.final_cost < b.report.final_cost)
+            {
+                best = Some(sol);
+            }
+        }
+        if let Some(b) = best {
+            let sup_b = support(&b.params);
+            if count(&sup_b) >= min_n {
+                outcome.competing = true;
+                let (ca, cb) = (
+                    cells(ctx.rig, obs, &chosen.1, opts.grid),
+                    cells(ctx.rig, obs, &sup_b, opts.grid),
+                );
+                if cb > ca {
+                    outcome.switched = true;
+                    chosen = (b, sup_b);
+                }
+            }
+        }
+    }
+    let (sol, mask) = chosen;
+    if opts.final_stage && count(&mask) >= 8 {
+        let core = subset(obs, &mask);
+        if let Some(fin) = ctx.solve(&core, &sol.params, &TrivialLoss, !outcome.competing) {
+            return (fin, outcome);
+        }
+    }
+    (sol, outcome)
+}
