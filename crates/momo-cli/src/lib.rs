@@ -23,6 +23,7 @@ mod plot;
 mod rig;
 mod run;
 mod simulate;
+mod trajfmt;
 
 use common::Failure;
 

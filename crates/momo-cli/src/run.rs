@@ -2,11 +2,15 @@
 
 use crate::calibrate::calibrate_mount;
 use crate::common::{EstimatorArg, Failure, load_config, mount_model, progress_bar};
+use crate::trajfmt::OutputFormat;
 use momo_vo::{Config, RunError, RunOptions};
 use std::path::{Path, PathBuf};
 
 /// The arguments of `momo run`.
 #[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  momo simulate sim && momo run sim -o est.txt && momo eval --gt sim/poses.txt --est est.txt"
+)]
 pub(crate) struct RunArgs {
     /// The sequence directory.
     seq: PathBuf,
@@ -44,17 +48,23 @@ pub(crate) struct RunArgs {
     /// Calibrate on the first N frame pairs only (with --calibrate-mount; default: all).
     #[arg(long)]
     mount_frames: Option<usize>,
+    /// Output format: kitti, or tum (timestamps from SEQ/times.txt, which is read and checked
+    /// whenever present).
+    #[arg(long, value_enum, default_value = "kitti")]
+    format: OutputFormat,
 }
 
 /// `momo run`.
 pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
     let config = load_config(args.config.as_deref())?;
     let estimator = args.estimator.into();
+    let times =
+        crate::trajfmt::check_times(args.format, &args.seq.join(momo_io::files::TIMES), None)?;
     if args.calibrate_mount {
         let options = momo_vo::MountCalibration::default()
             .with_model(Some(mount_model(&args.mount_model)?))
             .with_frames(args.mount_frames);
-        return run_calibrated(
+        run_calibrated(
             &args.seq,
             &args.output,
             config,
@@ -62,7 +72,8 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
             args.quiet,
             estimator,
             &options,
-        );
+        )?;
+        return crate::trajfmt::finish(args.format, &args.output, times.as_deref());
     }
     let quiet = args.quiet;
     let bar = progress_bar(quiet, None);
@@ -80,6 +91,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
         },
     )?;
     bar.finish_and_clear();
+    crate::trajfmt::finish(args.format, &options.output, times.as_deref())?;
     if !quiet {
         let wall = started.elapsed().as_secs_f64();
         eprintln!(
