@@ -76,7 +76,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
         return crate::trajfmt::finish(args.format, &args.output, times.as_deref());
     }
     let quiet = args.quiet;
-    let bar = progress_bar(quiet, None);
+    let bar = progress_bar(quiet, frame_pairs(&args.seq));
     let options = RunOptions {
         estimator,
         output: args.output,
@@ -167,4 +167,25 @@ fn run_calibrated(
         );
     }
     Ok(())
+}
+
+/// The number of frame pairs of a sequence, from the last lines of matches.csv and
+/// odometry.csv (for the progress bar's total and ETA; `None` if unreadable).
+fn frame_pairs(seq: &Path) -> Option<u64> {
+    use std::io::{Read, Seek, SeekFrom};
+    let last_frame = |name: &str| -> Option<u64> {
+        let mut f = std::fs::File::open(seq.join(name)).ok()?;
+        let len = f.metadata().ok()?.len();
+        f.seek(SeekFrom::Start(len.saturating_sub(4096))).ok()?;
+        let mut tail = String::new();
+        f.read_to_string(&mut tail).ok()?;
+        let line = tail.lines().rev().find(|l| !l.trim().is_empty())?;
+        let first = line.split(',').next()?.trim();
+        first
+            .parse::<u64>()
+            .ok()
+            .or_else(|| first.parse::<f64>().ok().map(|v| v as u64))
+    };
+    let n = last_frame(momo_io::files::MATCHES).max(last_frame(momo_io::files::ODOMETRY))?;
+    Some(n)
 }

@@ -27,6 +27,9 @@ pub(crate) struct SimulateArgs {
     matches: Option<usize>,
     /// Output directory (created).
     out_dir: PathBuf,
+    /// No summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 /// `momo simulate`.
@@ -56,5 +59,16 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
     }
     let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
     sim.write(&args.out_dir).map_err(Failure::other)?;
+    if !args.quiet {
+        let seq = &sim.sequence;
+        eprintln!(
+            "momo: simulated `{scenario}` (seed {}): {} frames, {} camera(s), {} matches, with ground truth; wrote {}",
+            args.seed,
+            seq.num_frames(),
+            seq.rig.len(),
+            seq.num_matches(),
+            args.out_dir.display()
+        );
+    }
     Ok(())
 }
