@@ -13,7 +13,7 @@
 //! | [`io`] | `momo-io` | the sequence format (`FORMAT.md`) |
 //! | [`sim`] | `momo-sim` | simulated drives and matches |
 //! | [`vo`] | `momo-vo` | the odometry driver, configuration, whole-sequence runs |
-//! | [`eval`] | `momo-eval` | KITTI devkit metric, frame-to-frame errors |
+//! | [`eval`] | `momo-eval` | ATE, RPE (as evo), KITTI devkit metric, frame-to-frame errors |
 //!
 //! ```
 //! let config = momo::vo::Config::default();
@@ -33,3 +33,8 @@ pub use momo_vo as vo;
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
+
+/// The user guide's Rust examples, compiled and run as doctests.
+#[doc = include_str!("../docs/GUIDE.md")]
+#[cfg(doctest)]
+pub struct GuideDoctests;

@@ -52,7 +52,7 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
         let bar = if quiet || !std::io::stderr().is_terminal() {
             ProgressBar::hidden()
         } else {
-            ProgressBar::new(2 * seq.num_frames().saturating_sub(1) as u64).with_style(
+            ProgressBar::new(3 * seq.num_frames().saturating_sub(1) as u64).with_style(
                 ProgressStyle::with_template("{msg:>32} {bar:40} {pos}/{len} {per_sec}")
                     .unwrap_or_else(|_| ProgressStyle::default_bar()),
             )
@@ -77,7 +77,7 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
                 .iter()
                 .filter(|d| d.status == FrameStatus::NoMatches)
                 .count();
-            println!(
+            let row = format!(
                 "{:<42} {:>9.4} {:>9.4} {:>9.4} {:>6} {:>9} {:>11} {:>9.1}{}",
                 name,
                 rot.median,
@@ -97,6 +97,8 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
                     String::new()
                 }
             );
+            // The bar is drawn on stderr below the table: hide it while a row is printed.
+            bar.suspend(|| println!("{row}"));
         }
         bar.finish_and_clear();
     }

@@ -1,6 +1,7 @@
 //! `momo match` and `momo vo`: the image front end.
 
 use crate::common::{EstimatorArg, Failure, load_config, progress_bar};
+use crate::trajfmt::OutputFormat;
 use std::path::PathBuf;
 
 /// Options of the feature front end (`momo match`, `momo vo`).
@@ -78,19 +79,32 @@ pub(crate) struct MatchArgs {
 
 /// The arguments of `momo vo`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:\n  \
+    momo vo seq06 -o est.txt            (a directory made by `momo import-kitti`)\n  \
+    momo vo image_0 image_1 --rig rig.json --odometry odometry.csv -o est.txt")]
 pub(crate) struct VoArgs {
-    /// Image folders, one per camera of the rig.
+    /// Image folders, one per camera of the rig; or one sequence directory made by `momo
+    /// import-kitti` (rig.json, image_0/, ..., optional odometry.csv and times.txt).
     #[arg(required = true)]
     images: Vec<PathBuf>,
-    /// The rig (rig.json of docs/FORMAT.md); image sizes must match its cameras.
+    /// The rig (rig.json of docs/FORMAT.md); image sizes must match its cameras. Default:
+    /// DIR/rig.json of a sequence directory.
     #[arg(long)]
-    rig: PathBuf,
-    /// Arc lengths per frame pair (odometry.csv of docs/FORMAT.md): fixes the scale.
+    rig: Option<PathBuf>,
+    /// Arc lengths per frame pair (odometry.csv of docs/FORMAT.md): fixes the scale. Default:
+    /// DIR/odometry.csv of a sequence directory, if present.
     #[arg(long)]
     odometry: Option<PathBuf>,
-    /// Output trajectory (KITTI format), written atomically.
+    /// Output trajectory, written atomically.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format: kitti, or tum (timestamps from --times).
+    #[arg(long, value_enum, default_value = "kitti")]
+    format: OutputFormat,
+    /// Timestamps, one per image (KITTI times.txt). Default: DIR/times.txt of a sequence
+    /// directory.
+    #[arg(long)]
+    times: Option<PathBuf>,
     /// Estimator configuration (TOML, or JSON if the name ends in .json); see `momo config`.
     #[arg(short, long)]
     config: Option<PathBuf>,
@@ -137,21 +151,32 @@ pub(crate) fn match_cmd(args: MatchArgs) -> Result<(), Failure> {
 pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
     let quiet = args.quiet;
     let config = load_config(args.config.as_deref())?;
+    let (folders, rig, odometry, times) = vo_inputs(&args)?;
     let run = momo_match::VoRun {
-        folders: args.images,
-        rig: args.rig,
-        odometry: args.odometry,
+        folders,
+        rig,
+        odometry,
         output: args.output,
         estimator: args.estimator.into(),
     };
     let frames = momo_match::ImageSequence::open(&run.folders)
         .map_err(match_failure)?
         .len();
+    let times = match &times {
+        Some(t) => crate::trajfmt::check_times(args.format, t, Some(frames))?,
+        None if args.format == OutputFormat::Tum => {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "--format tum needs timestamps: --times FILE (KITTI's times.txt)"
+            )));
+        }
+        None => None,
+    };
     let bar = progress_bar(quiet, Some(frames.saturating_sub(1) as u64));
     let started = std::time::Instant::now();
     let summary = momo_match::vo_from_images(&run, config, &args.front.into(), |_| bar.inc(1))
         .map_err(match_failure)?;
     bar.finish_and_clear();
+    crate::trajfmt::finish(args.format, &run.output, times.as_deref())?;
     if !quiet {
         let f = summary.front_end;
         eprintln!(
@@ -168,4 +193,44 @@ pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// The image folders, rig, odometry and timestamps of `momo vo`: as given, or from one sequence
+/// directory (rig.json, image_0/, ..., odometry.csv and times.txt when present).
+#[allow(clippy::type_complexity)]
+fn vo_inputs(
+    args: &VoArgs,
+) -> Result<(Vec<PathBuf>, PathBuf, Option<PathBuf>, Option<PathBuf>), Failure> {
+    if let ([dir], None) = (args.images.as_slice(), &args.rig) {
+        let rig_path = dir.join(momo_io::files::RIG);
+        if !rig_path.is_file() {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "{}: no rig.json; give --rig RIG with image folders, or a directory made by `momo import-kitti`",
+                dir.display()
+            )));
+        }
+        let rig = momo_io::read_rig(&rig_path).map_err(Failure::input)?;
+        let folders = momo_match::kitti::sequence_image_folders(dir, rig.len());
+        let optional = |name: &str| Some(dir.join(name)).filter(|p| p.is_file());
+        let odometry = args
+            .odometry
+            .clone()
+            .or_else(|| optional(momo_io::files::ODOMETRY));
+        let times = args
+            .times
+            .clone()
+            .or_else(|| optional(momo_io::files::TIMES));
+        return Ok((folders, rig_path, odometry, times));
+    }
+    let Some(rig) = args.rig.clone() else {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--rig RIG is needed with image folders (or give one directory made by `momo import-kitti`)"
+        )));
+    };
+    Ok((
+        args.images.clone(),
+        rig,
+        args.odometry.clone(),
+        args.times.clone(),
+    ))
 }

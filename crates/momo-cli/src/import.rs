@@ -6,21 +6,32 @@ use std::path::PathBuf;
 
 /// The arguments of `momo import-kitti`.
 #[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:\n  \
+    momo import-kitti dataset/sequences/06 seq06 --poses dataset/poses/06.txt --stereo\n  \
+    momo vo seq06 -o est.txt && momo eval --gt seq06/poses.txt --est est.txt")]
 pub(crate) struct ImportKittiArgs {
-    /// The data folder (holding calib.txt).
+    /// A KITTI odometry sequence folder (calib.txt, image_0/, image_1/, times.txt), or the
+    /// folder of the l1avgvo matches (calib.txt, poses*.txt, `i_to_{i+1}.txt` files).
     dir: PathBuf,
     /// Output sequence directory (created).
     out_dir: PathBuf,
+    /// Ground-truth poses of a sequence folder (KITTI's poses/NN.txt): written as poses.txt,
+    /// and odometry.csv arc lengths from them (default: DIR/poses.txt if present).
+    #[arg(long)]
+    poses: Option<PathBuf>,
     /// A stereo rig (left = camera 0, right = camera 1) instead of the left camera only.
     #[arg(long)]
     stereo: bool,
     /// Keep at most this many matches per frame pair and camera, spread over the image
-    /// (default: all).
+    /// (default: all; l1avgvo matches only).
     #[arg(long)]
     matches: Option<usize>,
     /// Seed of the sub-sampling (the output is deterministic for a seed).
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// No summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 /// `momo import-kitti`.
@@ -30,6 +41,43 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
             "--matches must be at least 1"
         )));
     }
+    if momo_match::kitti::is_kitti_sequence_folder(&args.dir) {
+        let done = momo_match::kitti::import_kitti_sequence(
+            &args.dir,
+            &args.out_dir,
+            args.poses.as_deref(),
+            args.stereo,
+        )
+        .map_err(|e| {
+            if e.is_input() {
+                Failure::input(e)
+            } else {
+                Failure::other(e)
+            }
+        })?;
+        if !args.quiet {
+            eprintln!(
+                "momo: imported the KITTI sequence folder: {} frames, {} camera(s){}{}; wrote {} (run `momo vo {} -o est.txt`)",
+                done.frames,
+                done.cameras,
+                if done.ground_truth {
+                    ", ground truth and arc lengths"
+                } else {
+                    ""
+                },
+                if done.timestamps { ", timestamps" } else { "" },
+                args.out_dir.display(),
+                args.out_dir.display()
+            );
+        }
+        return Ok(());
+    }
+    if args.poses.is_some() {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--poses applies to a KITTI sequence folder (calib.txt and image_0/), and {} has no image_0/",
+            args.dir.display()
+        )));
+    }
     let options = KittiImport {
         stereo: args.stereo,
         matches_per_frame: args.matches,
@@ -37,17 +85,19 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
     };
     let seq = import_l1avgvo(&args.dir, &options).map_err(Failure::input)?;
     momo_io::write_sequence(&args.out_dir, &seq).map_err(Failure::other)?;
-    eprintln!(
-        "momo: imported {} frames, {} camera(s), {} matches{}; wrote {}",
-        seq.num_frames(),
-        seq.rig.len(),
-        seq.num_matches(),
-        if seq.ground_truth.is_some() {
-            " with ground truth and arc lengths"
-        } else {
-            ""
-        },
-        args.out_dir.display()
-    );
+    if !args.quiet {
+        eprintln!(
+            "momo: imported {} frames, {} camera(s), {} matches{}; wrote {}",
+            seq.num_frames(),
+            seq.rig.len(),
+            seq.num_matches(),
+            if seq.ground_truth.is_some() {
+                " with ground truth and arc lengths"
+            } else {
+                ""
+            },
+            args.out_dir.display()
+        );
+    }
     Ok(())
 }

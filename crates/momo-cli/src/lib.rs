@@ -23,6 +23,7 @@ mod plot;
 mod rig;
 mod run;
 mod simulate;
+mod trajfmt;
 
 use common::Failure;
 
@@ -44,10 +45,19 @@ enum Command {
     /// Estimate the rig's mount rotation relative to the vehicle jointly over the frame pairs
     /// of a sequence (robust Levenberg-Marquardt on a single-track model, Schur complement over
     /// the shared mount) and write the corrected rig.json.
+    #[command(after_help = "Example:\n  momo calibrate seq -o seq/rig_calibrated.json")]
     Calibrate(calibrate::CalibrateArgs),
     /// Print the default configuration as a commented TOML file.
-    Config,
+    #[command(
+        after_help = "Example:\n  momo config > my.toml   (keep only the sections you change: the others take their defaults)"
+    )]
+    Config {
+        /// Accepted for symmetry (config prints only the file).
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Write a simulated sequence (docs/FORMAT.md, with poses.txt ground truth) to a directory.
+    #[command(after_help = "Example:\n  momo simulate --scenario outliers --frames 200 sim")]
     Simulate(simulate::SimulateArgs),
     /// Import the real KITTI 00 stereo matches of the `l1avgvo` demo (calib.txt, poses*.txt,
     /// a folder of `i_to_{i+1}.txt` files) as a sequence directory (docs/FORMAT.md, with
@@ -58,6 +68,9 @@ enum Command {
     Eval(eval::EvalArgs),
     /// Draw figures as PNG or SVG (chosen by the output file's extension): trajectories,
     /// frame-to-frame rotation errors, the cost landscape of a frame.
+    #[command(
+        after_help = "Example:\n  momo plot trajectory --gt sim/poses.txt --est est.txt -o trajectory.png"
+    )]
     Plot {
         #[command(subcommand)]
         figure: plot::PlotCommand,
@@ -65,11 +78,17 @@ enum Command {
     /// Run every combination of a grid (models x metrics x losses x scales x solvers x matches)
     /// on every sequence in parallel, score each against the ground truth and write
     /// results.csv and summary.md; `--shard I/N` runs one slice, `momo sweep merge` joins them.
+    #[command(
+        after_help = "Example:\n  momo sweep --grid grid.toml --sequences sim --output sweep_out"
+    )]
     Sweep(momo_sweep::cli::SweepArgs),
     /// Detect and match features in image sequences (PNG/JPEG, one folder per camera in the
     /// rig's order, files in name order) and write a sequence directory: matches.csv
     /// (docs/FORMAT.md), a copy of the rig file as rig.json, and with --odometry a copy of it
     /// as odometry.csv, so that `momo run SEQ_DIR` follows.
+    #[command(
+        after_help = "Example:\n  momo match image_0 --rig rig.json --odometry odometry.csv -o seq && momo run seq -o est.txt"
+    )]
     Match(images::MatchArgs),
     /// Visual odometry from images in one streaming pass: match consecutive frames and
     /// estimate the motion frame by frame; writes camera 0's trajectory (KITTI format, one line
@@ -77,6 +96,7 @@ enum Command {
     Vo(images::VoArgs),
     /// Simulate a drive (no data needed), run the estimator on it and print how close the
     /// result is to the truth.
+    #[command(after_help = "Example:\n  momo demo --frames 200")]
     Demo(demo::DemoArgs),
     /// Rig files: `momo rig import` writes rig.json from an OpenCV, ROS or Kalibr calibration.
     Rig {
@@ -109,7 +129,7 @@ where
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Calibrate(args) => calibrate::calibrate(args),
-        Command::Config => {
+        Command::Config { .. } => {
             print!("{}", momo_vo::Config::default().to_commented_toml());
             Ok(())
         }

@@ -2,11 +2,15 @@
 
 use crate::calibrate::calibrate_mount;
 use crate::common::{EstimatorArg, Failure, load_config, mount_model, progress_bar};
+use crate::trajfmt::OutputFormat;
 use momo_vo::{Config, RunError, RunOptions};
 use std::path::{Path, PathBuf};
 
 /// The arguments of `momo run`.
 #[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Example:\n  momo simulate sim && momo run sim -o est.txt && momo eval --gt sim/poses.txt --est est.txt"
+)]
 pub(crate) struct RunArgs {
     /// The sequence directory.
     seq: PathBuf,
@@ -44,17 +48,23 @@ pub(crate) struct RunArgs {
     /// Calibrate on the first N frame pairs only (with --calibrate-mount; default: all).
     #[arg(long)]
     mount_frames: Option<usize>,
+    /// Output format: kitti, or tum (timestamps from SEQ/times.txt, which is read and checked
+    /// whenever present).
+    #[arg(long, value_enum, default_value = "kitti")]
+    format: OutputFormat,
 }
 
 /// `momo run`.
 pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
     let config = load_config(args.config.as_deref())?;
     let estimator = args.estimator.into();
+    let times =
+        crate::trajfmt::check_times(args.format, &args.seq.join(momo_io::files::TIMES), None)?;
     if args.calibrate_mount {
         let options = momo_vo::MountCalibration::default()
             .with_model(Some(mount_model(&args.mount_model)?))
             .with_frames(args.mount_frames);
-        return run_calibrated(
+        run_calibrated(
             &args.seq,
             &args.output,
             config,
@@ -62,10 +72,11 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
             args.quiet,
             estimator,
             &options,
-        );
+        )?;
+        return crate::trajfmt::finish(args.format, &args.output, times.as_deref());
     }
     let quiet = args.quiet;
-    let bar = progress_bar(quiet, None);
+    let bar = progress_bar(quiet, frame_pairs(&args.seq));
     let options = RunOptions {
         estimator,
         output: args.output,
@@ -80,6 +91,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
         },
     )?;
     bar.finish_and_clear();
+    crate::trajfmt::finish(args.format, &options.output, times.as_deref())?;
     if !quiet {
         let wall = started.elapsed().as_secs_f64();
         eprintln!(
@@ -155,4 +167,25 @@ fn run_calibrated(
         );
     }
     Ok(())
+}
+
+/// The number of frame pairs of a sequence, from the last lines of matches.csv and
+/// odometry.csv (for the progress bar's total and ETA; `None` if unreadable).
+fn frame_pairs(seq: &Path) -> Option<u64> {
+    use std::io::{Read, Seek, SeekFrom};
+    let last_frame = |name: &str| -> Option<u64> {
+        let mut f = std::fs::File::open(seq.join(name)).ok()?;
+        let len = f.metadata().ok()?.len();
+        f.seek(SeekFrom::Start(len.saturating_sub(4096))).ok()?;
+        let mut tail = String::new();
+        f.read_to_string(&mut tail).ok()?;
+        let line = tail.lines().rev().find(|l| !l.trim().is_empty())?;
+        let first = line.split(',').next()?.trim();
+        first
+            .parse::<u64>()
+            .ok()
+            .or_else(|| first.parse::<f64>().ok().map(|v| v as u64))
+    };
+    let n = last_frame(momo_io::files::MATCHES).max(last_frame(momo_io::files::ODOMETRY))?;
+    Some(n)
 }

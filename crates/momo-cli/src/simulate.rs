@@ -28,6 +28,9 @@ pub(crate) struct SimulateArgs {
     matches: Option<usize>,
     /// Output directory (created).
     out_dir: PathBuf,
+    /// No summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 /// `momo simulate`.
@@ -60,5 +63,16 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
     // bound.csv (FORMAT.md version 3): the Cramér-Rao bound of every frame pair's rotation.
     let bounds = momo_sim::bound::rotation_bounds(&sim, cfg.pixel_noise);
     momo_sim::bound::write_bound_csv(&args.out_dir, &sim, &bounds).map_err(Failure::other)?;
+    if !args.quiet {
+        let seq = &sim.sequence;
+        eprintln!(
+            "momo: simulated `{scenario}` (seed {}): {} frames, {} camera(s), {} matches, with ground truth; wrote {}",
+            args.seed,
+            seq.num_frames(),
+            seq.rig.len(),
+            seq.num_matches(),
+            args.out_dir.display()
+        );
+    }
     Ok(())
 }

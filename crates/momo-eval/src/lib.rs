@@ -6,7 +6,11 @@
 //!   error in % and rotational error in deg/m, averaged over all sub-sequences of 100, 200, ...,
 //!   800 m starting every 10 frames;
 //! - [`frame_to_frame_rotation_errors`] and [`ErrorSummary`]: the rotation error of every
-//!   frame-to-frame motion (mean, median, 95th percentile, max, count above 1 degree).
+//!   frame-to-frame motion (mean, median, 95th percentile, max, count above 1 degree);
+//! - [`ate`] and [`rpe`] (module [`trajectory`]): the absolute trajectory error after SE(3) or
+//!   Sim(3) alignment (Umeyama) and the relative pose error at a delta in frames or metres,
+//!   with the definitions of evo's `evo_ape` and `evo_rpe` (equal to 1e-6 on the fixtures of
+//!   `tests/evo.rs`); [`Report`] gathers all of them for `momo eval`.
 //!
 //! ```
 //! use momo_core::Pose;
@@ -22,6 +26,10 @@
 
 use momo_core::{Pose, so3_log};
 use serde::Serialize;
+
+pub mod trajectory;
+
+pub use trajectory::{Alignment, Ate, Delta, Rpe, Similarity, Stats, ate, rpe, rpe_pairs, umeyama};
 
 /// The sub-sequence lengths of the KITTI devkit, metres.
 pub const KITTI_LENGTHS: [f64; 8] = [100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0];
@@ -52,6 +60,9 @@ pub struct KittiErrors {
     pub r_err_deg_per_100m: f64,
     /// Per length (m): (length, t_err %, r_err deg/100 m, count).
     pub per_length: Vec<(f64, f64, f64, usize)>,
+    /// Per speed as the devkit bins it (segments within 2 m/s of 2, 4, ..., 24 m/s):
+    /// (speed, t_err %, r_err deg/100 m, count); empty bins are left out.
+    pub per_speed: Vec<(f64, f64, f64, usize)>,
 }
 
 fn trajectory_distances(poses: &[Pose<f64>]) -> Vec<f64> {
@@ -118,11 +129,30 @@ pub fn kitti_errors(ground_truth: &[Pose<f64>], estimate: &[Pose<f64>]) -> Optio
             })
         })
         .collect();
+    let per_speed = (1..=12)
+        .filter_map(|k| {
+            let speed = 2.0 * f64::from(k);
+            let s: Vec<_> = segments
+                .iter()
+                .filter(|s| (s.speed - speed).abs() < 2.0)
+                .collect();
+            (!s.is_empty()).then(|| {
+                let c = s.len() as f64;
+                (
+                    speed,
+                    100.0 * s.iter().map(|e| e.t_err).sum::<f64>() / c,
+                    100.0 * s.iter().map(|e| e.r_err).sum::<f64>().to_degrees() / c,
+                    s.len(),
+                )
+            })
+        })
+        .collect();
     Some(KittiErrors {
         segments,
         t_err_percent,
         r_err_deg_per_100m,
         per_length,
+        per_speed,
     })
 }
 
@@ -316,6 +346,38 @@ pub fn parse_bound_csv(text: &str) -> Result<Vec<Option<f64>>, BoundCsvError> {
         out[frame] = value;
     }
     Ok(out)
+}
+
+/// Everything `momo eval` reports for one estimate: ATE after SE(3) and Sim(3) alignment, RPE
+/// at one delta, the KITTI devkit (when the path has 100 m) and the frame-to-frame rotation
+/// errors.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// ATE after rigid alignment (`None`: fewer than 2 frames or a standing estimate).
+    pub ate_se3: Option<Ate>,
+    /// ATE after similarity alignment.
+    pub ate_sim3: Option<Ate>,
+    /// RPE at the chosen delta (`None`: no pair at that delta).
+    pub rpe: Option<Rpe>,
+    /// The KITTI devkit (`None`: path shorter than 100 m).
+    pub kitti: Option<KittiErrors>,
+    /// Frame-to-frame rotation errors in degrees.
+    pub rotation_deg: ErrorSummary,
+}
+
+/// Scores `estimate` against `ground_truth` (same length, frame k with frame k) with every
+/// metric; `delta` is the RPE's.
+pub fn report(ground_truth: &[Pose<f64>], estimate: &[Pose<f64>], delta: Delta) -> Report {
+    Report {
+        ate_se3: ate(ground_truth, estimate, Alignment::Se3),
+        ate_sim3: ate(ground_truth, estimate, Alignment::Sim3),
+        rpe: rpe(ground_truth, estimate, delta),
+        kitti: kitti_errors(ground_truth, estimate),
+        rotation_deg: ErrorSummary::from_values(&frame_to_frame_rotation_errors(
+            ground_truth,
+            estimate,
+        )),
+    }
 }
 
 #[cfg(test)]

@@ -268,6 +268,10 @@ pub enum IoErrorKind {
     /// Data that cannot be written so that it reads back (writers only).
     #[error("cannot write: {0}")]
     InvalidData(String),
+    /// Content that breaks a rule of its format not covered above (readers; the message says
+    /// which rule).
+    #[error("{0}")]
+    Invalid(String),
 }
 
 /// Shortens user text quoted in messages.

@@ -9,7 +9,11 @@
 //!   matches.csv     required  matches between consecutive frames          -> MatchReader / MatchWriter
 //!   odometry.csv    optional  arc length per frame pair                   -> read_odometry / write_odometry
 //!   poses.txt       optional  ground truth, KITTI format                  -> read_poses / write_poses / PoseWriter
+//!   times.txt       optional  timestamp per frame (s), KITTI's            -> read_times / write_times
 //! ```
+//!
+//! Trajectories can also be read and written in the TUM format (`read_tum`, `write_tum`,
+//! [`read_trajectory`] detects the format).
 //!
 //! - [`read_sequence`] loads a whole directory into a [`Sequence`]; [`MatchReader`] streams
 //!   `matches.csv` one frame pair at a time (memory bounded by one frame pair).
@@ -70,6 +74,7 @@ pub mod odometry;
 pub mod poses;
 pub mod rig;
 mod text;
+pub mod tum;
 
 pub use atomic::AtomicFile;
 pub use error::{IoError, IoErrorKind};
@@ -80,6 +85,9 @@ pub use odometry::{ODOMETRY_HEADER, read_odometry, read_odometry_from, write_odo
 pub use poses::{POSE_ORTHONORMAL_TOLERANCE, PoseWriter, read_poses, read_poses_from, write_poses};
 pub use rig::{MAX_RIG_BYTES, read_rig, read_rig_from_str, rig_to_json, write_rig};
 pub use text::MAX_LINE_BYTES;
+pub use tum::{
+    Trajectory, TrajectoryFormat, read_times, read_trajectory, read_tum, write_times, write_tum,
+};
 
 use momo_core::{FrameObservations, Pose, Rig};
 use std::path::Path;
@@ -94,6 +102,8 @@ pub mod files {
     pub const ODOMETRY: &str = "odometry.csv";
     /// Optional: ground truth.
     pub const POSES: &str = "poses.txt";
+    /// Optional: timestamps (seconds), one per frame.
+    pub const TIMES: &str = "times.txt";
 }
 
 /// A whole sequence in memory.

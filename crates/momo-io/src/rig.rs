@@ -281,6 +281,25 @@ fn extrinsic(rows: &[Vec<f64>], camera: usize) -> Result<Pose<f64>, IoErrorKind>
 /// Parses the text of a `rig.json`; `path` only names the file in errors.
 pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoError> {
     let path = path.as_ref();
+    let trimmed = text.trim_start();
+    if !trimmed.is_empty() && !trimmed.starts_with('{') {
+        let line = 1 + text[..text.len() - trimmed.len()].matches('\n').count();
+        let first: String = trimmed
+            .lines()
+            .next()
+            .unwrap_or("")
+            .chars()
+            .take(30)
+            .collect();
+        return Err(IoError::at(
+            path,
+            line,
+            IoErrorKind::Invalid(format!(
+                "not JSON: expected a JSON rig file (`{{\"cameras\": [...]}}`, docs/FORMAT.md), found `{first}`; \
+                 a KITTI calib.txt is turned into rig.json by `momo import-kitti`"
+            )),
+        ));
+    }
     let file: RigFile = parse_at(text, Pos::START, path)?;
     let list_pos = Pos::of(text, file.cameras.get());
     let list: Vec<&RawValue> = parse_at(file.cameras.get(), list_pos, path)?;

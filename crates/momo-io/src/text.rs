@@ -94,6 +94,15 @@ pub(crate) fn parse_header<const N: usize>(
         reason,
         expected: expected_line,
     };
+    // numpy's `savetxt(..., header=...)` writes the header as a `# ` comment.
+    let line = line.trim_start();
+    let line = line.strip_prefix('#').unwrap_or(line);
+    if !line.contains(',') && line.split_whitespace().count() > 1 {
+        return Err(bad(format!(
+            "columns must be separated by commas, found `{}` (numpy: np.savetxt(path, a, delimiter=\",\", header=\"{expected_line}\"))",
+            quote(line.trim())
+        )));
+    }
     let names: Vec<&str> = line.split(',').map(str::trim).collect();
     if names.first().is_some_and(|n| n.parse::<f64>().is_ok()) {
         return Err(IoErrorKind::MissingHeader {
@@ -159,12 +168,19 @@ pub(crate) fn parse_f64(field: &str, text: &str) -> Result<f64, IoErrorKind> {
     }
 }
 
-/// Parses a non-negative integer.
+/// Parses a non-negative integer; a whole number written as a float (`3.0`,
+/// `3.000000000000000000e+00`, as numpy's `savetxt` writes integers by default) is accepted.
 pub(crate) fn parse_index(field: &str, text: &str) -> Result<usize, IoErrorKind> {
-    text.parse().map_err(|_| IoErrorKind::BadNumber {
-        field: field.to_owned(),
-        value: quote(text),
-        expected: "a non-negative integer",
+    text.parse().or_else(|_| {
+        text.parse::<f64>()
+            .ok()
+            .filter(|v| *v >= 0.0 && v.fract() == 0.0 && *v <= 9_007_199_254_740_992.0)
+            .map(|v| v as usize)
+            .ok_or_else(|| IoErrorKind::BadNumber {
+                field: field.to_owned(),
+                value: quote(text),
+                expected: "a non-negative integer",
+            })
     })
 }
 

@@ -176,3 +176,142 @@ pub fn arc_lengths_from_poses(
     }
     out
 }
+
+/// What [`import_kitti_sequence`] wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KittiSequenceImport {
+    /// Number of image frames.
+    pub frames: usize,
+    /// Number of cameras of the rig (1 or 2).
+    pub cameras: usize,
+    /// Ground-truth poses written to `poses.txt` (and arc lengths to `odometry.csv`).
+    pub ground_truth: bool,
+    /// Timestamps written to `times.txt`.
+    pub timestamps: bool,
+}
+
+/// True if `dir` looks like a KITTI odometry sequence folder (`calib.txt` and `image_0/`).
+pub fn is_kitti_sequence_folder(dir: &Path) -> bool {
+    dir.join("calib.txt").is_file() && dir.join("image_0").is_dir()
+}
+
+/// Makes `out` a sequence directory for `momo vo OUT` from a KITTI odometry sequence folder
+/// (`calib.txt` with `P0:`/`P1:`, `image_0/`, `image_1/`, optional `times.txt`):
+///
+/// ```text
+/// OUT/rig.json       camera 0 (and with `stereo` camera 1), image size from image_0's first image
+/// OUT/image_0 (, image_1)   symbolic links to the image folders (not copies)
+/// OUT/poses.txt      the ground truth (from `poses`, else DIR/poses.txt if present)
+/// OUT/odometry.csv   arc lengths of the vehicle from that ground truth
+/// OUT/times.txt      the timestamps (DIR/times.txt if present; one per image)
+/// ```
+///
+/// Errors name the offending file (and line); the image folders must hold the same number of
+/// images, and `poses`/`times.txt` one line per image.
+pub fn import_kitti_sequence(
+    dir: &Path,
+    out: &Path,
+    poses: Option<&Path>,
+    stereo: bool,
+) -> Result<KittiSequenceImport, crate::MatchError> {
+    let calib_path = dir.join("calib.txt");
+    let calib = read_kitti_projections(&calib_path)?;
+    let mut folders = vec![dir.join("image_0")];
+    if stereo {
+        folders.push(dir.join("image_1"));
+    }
+    let images = crate::ImageSequence::open(&folders)?;
+    let frames = images.len();
+    let first = images
+        .path(0, 0)
+        .ok_or_else(|| crate::MatchError::NoImages {
+            path: folders[0].clone(),
+        })?;
+    let img = crate::load_gray(first)?;
+    let rig = kitti_image_rig(&calib, img.width(), img.height(), stereo, &calib_path)?;
+    let poses_path = poses
+        .map(Path::to_path_buf)
+        .or_else(|| Some(dir.join("poses.txt")).filter(|p| p.is_file()));
+    let ground_truth = poses_path
+        .as_deref()
+        .map(|p| {
+            let gt = momo_io::read_poses(p)?;
+            if gt.len() != frames {
+                return Err(IoError::file(
+                    p,
+                    IoErrorKind::Invalid(format!(
+                        "{} poses, but {} has {frames} images; one pose per image is needed",
+                        gt.len(),
+                        folders[0].display()
+                    )),
+                ));
+            }
+            Ok(gt)
+        })
+        .transpose()?;
+    let times_path = dir.join(momo_io::files::TIMES);
+    let times = if times_path.is_file() {
+        let t = momo_io::read_times(&times_path)?;
+        if t.len() != frames {
+            return Err(IoError::file(
+                &times_path,
+                IoErrorKind::Invalid(format!(
+                    "{} timestamps, but {} has {frames} images",
+                    t.len(),
+                    folders[0].display()
+                )),
+            )
+            .into());
+        }
+        Some(t)
+    } else {
+        None
+    };
+    std::fs::create_dir_all(out).map_err(|e| IoError::io(out, e))?;
+    momo_io::write_rig(out.join(momo_io::files::RIG), &rig)?;
+    for (j, folder) in folders.iter().enumerate() {
+        link_folder(folder, &out.join(format!("image_{j}")))?;
+    }
+    if let Some(gt) = &ground_truth {
+        momo_io::write_poses(out.join(momo_io::files::POSES), gt)?;
+        let arcs = arc_lengths_from_poses(gt, &kitti_mount());
+        momo_io::write_odometry(out.join(momo_io::files::ODOMETRY), &arcs)?;
+    }
+    if let Some(t) = &times {
+        momo_io::write_times(out.join(momo_io::files::TIMES), t)?;
+    }
+    Ok(KittiSequenceImport {
+        frames,
+        cameras: rig.len(),
+        ground_truth: ground_truth.is_some(),
+        timestamps: times.is_some(),
+    })
+}
+
+/// Links `link` to the folder `target` (absolute), replacing an old link.
+fn link_folder(target: &Path, link: &Path) -> Result<(), IoError> {
+    let target = std::fs::canonicalize(target).map_err(|e| IoError::io(target, e))?;
+    if link.is_symlink() {
+        std::fs::remove_file(link).map_err(|e| IoError::io(link, e))?;
+    }
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::symlink(&target, link).map_err(|e| IoError::io(link, e))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = target;
+        Err(IoError::file(
+            link,
+            IoErrorKind::Invalid("linking the image folders needs a Unix system".into()),
+        ))
+    }
+}
+
+/// The image folders of a sequence directory made by [`import_kitti_sequence`]:
+/// `DIR/image_0`, `DIR/image_1`, ... one per camera of the rig.
+pub fn sequence_image_folders(dir: &Path, cameras: usize) -> Vec<std::path::PathBuf> {
+    (0..cameras)
+        .map(|j| dir.join(format!("image_{j}")))
+        .collect()
+}

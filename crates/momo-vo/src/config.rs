@@ -167,17 +167,22 @@ impl From<&FivePointOptions> for momo_fivepoint::FivePointRansac {
     }
 }
 
-/// The whole configuration of an estimator.
+/// The whole configuration of an estimator. Every section is optional in a file: a section
+/// left out takes its value from [`Config::default`] (so a file may hold only `[loss]`).
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Config {
     /// The motion model (`type = "se3"`, `"single_track_2d"`, `"single_track_3d"`).
+    #[serde(default = "default_model")]
     pub model: Box<dyn ModelSpec>,
     /// The residual metric (`type = "angle_plane"`, `"geo_line"`, `"sampson"`).
+    #[serde(default = "default_metric")]
     pub metric: Box<dyn MetricSpec>,
     /// The robust loss and its scale in the metric's units (`type = "cauchy"`, `scale = 0.001`).
+    #[serde(default = "default_loss")]
     pub loss: Box<dyn RobustLoss>,
     /// The solver and its options (`type = "levenberg_marquardt"`, ...).
+    #[serde(default = "default_solver")]
     pub solver: Box<dyn Solver>,
     /// The odometry driver's options.
     #[serde(default)]
@@ -208,15 +213,35 @@ pub struct Config {
 impl Default for Config {
     fn default() -> Self {
         Self {
-            model: Box::new(momo_models::Se3),
-            metric: Box::new(momo_costs::AnglePlane),
-            loss: Box::new(momo_costs::Cauchy::new(0.001)),
-            solver: Box::new(momo_solvers::LevenbergMarquardt::default()),
+            model: default_model(),
+            metric: default_metric(),
+            loss: default_loss(),
+            solver: default_solver(),
             odometry: OdometryOptions::default(),
             five_point: FivePointOptions::default(),
             refine_loss: None,
         }
     }
+}
+
+/// The default `[model]`: `se3`.
+fn default_model() -> Box<dyn ModelSpec> {
+    Box::new(momo_models::Se3)
+}
+
+/// The default `[metric]`: `angle_plane`.
+fn default_metric() -> Box<dyn MetricSpec> {
+    Box::new(momo_costs::AnglePlane)
+}
+
+/// The default `[loss]`: Cauchy with scale 0.001 rad.
+fn default_loss() -> Box<dyn RobustLoss> {
+    Box::new(momo_costs::Cauchy::new(0.001))
+}
+
+/// The default `[solver]`: Levenberg-Marquardt with its default options.
+fn default_solver() -> Box<dyn Solver> {
+    Box::new(momo_solvers::LevenbergMarquardt::default())
 }
 
 /// Comments printed above each section by [`Config::to_commented_toml`].
@@ -397,5 +422,30 @@ impl Config {
             out.push('\n');
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod partial_tests {
+    use super::Config;
+
+    #[test]
+    fn sections_left_out_take_their_defaults() {
+        let c = Config::from_toml_str("[loss]\ntype = \"huber\"\nscale = 0.002\n", "p.toml")
+            .expect("a partial configuration");
+        let d = Config::default();
+        let json = |v: &Config| serde_json::to_value(v).expect("serialisable");
+        let (c, d) = (json(&c), json(&d));
+        assert_eq!(c["loss"]["type"], "huber");
+        assert_ne!(c["loss"], d["loss"]);
+        for section in ["model", "metric", "solver", "odometry", "five_point"] {
+            assert_eq!(c[section], d[section], "{section}");
+        }
+        let empty = Config::from_toml_str("", "e.toml").expect("empty configuration");
+        assert_eq!(json(&empty), d);
+        let e = Config::from_json_str("{\"metric\": {\"type\": \"sampson\"}}", "m.json")
+            .expect("partial JSON");
+        assert_eq!(json(&e)["metric"]["type"], "sampson");
+        assert_eq!(json(&e)["model"], d["model"]);
     }
 }
