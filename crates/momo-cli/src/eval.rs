@@ -29,6 +29,13 @@ struct EvalRow {
 pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
     let gt = &args.gt;
     let ground_truth = momo_io::read_poses(gt).map_err(Failure::input)?;
+    if ground_truth.len() < 2 {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "{}: {} pose(s); scoring needs at least 2 (one frame pair)",
+            gt.display(),
+            ground_truth.len()
+        )));
+    }
     let mut rows = Vec::with_capacity(args.est.len());
     for path in &args.est {
         let est = momo_io::read_poses(path).map_err(Failure::input)?;
@@ -52,14 +59,14 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
             "frames": ground_truth.len(),
             "estimates": rows,
         });
-        println!("{doc}");
+        outln!("{doc}");
         return Ok(());
     }
-    println!(
+    outln!(
         "{} frames; frame-to-frame rotation errors in degrees; KITTI devkit t_err in %, r_err in deg/100 m (\"-\": path shorter than 100 m)",
         ground_truth.len()
     );
-    println!(
+    outln!(
         "{:>8} {:>8} {:>8} {:>8} {:>8} {:>5}  estimate",
         "t_err", "r_err", "median", "p95", "max", ">1deg"
     );
@@ -70,7 +77,7 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
             fmt(row.scores.r_err_deg_per_100m),
         );
         let s = &row.scores.rotation_deg;
-        println!(
+        outln!(
             "{t:>8} {r:>8} {:>8.4} {:>8.4} {:>8.4} {:>5}  {}",
             s.median,
             s.p95,

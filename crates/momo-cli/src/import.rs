@@ -9,8 +9,13 @@ use std::path::PathBuf;
 pub(crate) struct ImportKittiArgs {
     /// The data folder (holding calib.txt).
     dir: PathBuf,
-    /// Output sequence directory (created).
+    /// Output sequence directory (created; an existing one must be empty unless --force;
+    /// removed again on failure if this created it).
     out_dir: PathBuf,
+    /// Write into an existing, non-empty output directory (its files of the same names are
+    /// replaced).
+    #[arg(long)]
+    force: bool,
     /// A stereo rig (left = camera 0, right = camera 1) instead of the left camera only.
     #[arg(long)]
     stereo: bool,
@@ -36,8 +41,10 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
         seed: args.seed,
     };
     let seq = import_l1avgvo(&args.dir, &options).map_err(Failure::input)?;
+    let out = momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)?;
     momo_io::write_sequence(&args.out_dir, &seq).map_err(Failure::other)?;
-    eprintln!(
+    out.keep();
+    note!(
         "momo: imported {} frames, {} camera(s), {} matches{}; wrote {}",
         seq.num_frames(),
         seq.rig.len(),

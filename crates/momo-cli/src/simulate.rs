@@ -25,8 +25,13 @@ pub(crate) struct SimulateArgs {
     /// Matches per camera and frame pair (default: the scenario's).
     #[arg(long)]
     matches: Option<usize>,
-    /// Output directory (created).
+    /// Output directory (created; an existing one must be empty unless --force; removed
+    /// again on failure if this created it).
     out_dir: PathBuf,
+    /// Write into an existing, non-empty output directory (its files of the same names are
+    /// replaced).
+    #[arg(long)]
+    force: bool,
 }
 
 /// `momo simulate`.
@@ -55,6 +60,14 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
         cfg.matches_per_camera = m;
     }
     let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
+    if std::fs::metadata(&args.out_dir).is_ok() {
+        let written = crate::common::sequence_files(&args.out_dir);
+        let written: Vec<&std::path::Path> = written.iter().map(PathBuf::as_path).collect();
+        let inputs: Vec<&std::path::Path> = args.trajectory.as_deref().into_iter().collect();
+        crate::common::check_outputs(&inputs, &written)?;
+    }
+    let dir = momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)?;
     sim.write(&args.out_dir).map_err(Failure::other)?;
+    dir.keep();
     Ok(())
 }

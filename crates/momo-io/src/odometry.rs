@@ -1,7 +1,7 @@
 //! `odometry.csv`: the travelled arc length per frame pair (`FORMAT.md`, section
 //! "odometry.csv").
 
-use crate::atomic::{put, write_atomic};
+use crate::atomic::{put, stage_atomic};
 use crate::error::{IoError, IoErrorKind};
 use crate::matches::MAX_FRAME;
 use crate::text::{Exact, LineReader, is_blank, parse_f64, parse_header, parse_index, split_row};
@@ -94,7 +94,14 @@ pub fn read_odometry(path: impl AsRef<Path>) -> Result<Vec<Option<f64>>, IoError
 /// Writes `odometry.csv` atomically: one row per `Some` entry of `arc_lengths` (indexed by
 /// frame). Fails on an arc length for frame 0, negative or non-finite values.
 pub fn write_odometry(path: impl AsRef<Path>, arc_lengths: &[Option<f64>]) -> Result<(), IoError> {
-    let path = path.as_ref();
+    stage_odometry(path.as_ref(), arc_lengths)?.commit()
+}
+
+/// [`write_odometry`] without the commit.
+pub(crate) fn stage_odometry(
+    path: &Path,
+    arc_lengths: &[Option<f64>],
+) -> Result<crate::AtomicFile, IoError> {
     let bad = |m: String| IoError::file(path, IoErrorKind::InvalidData(m));
     if let Some(Some(_)) = arc_lengths.first() {
         return Err(bad("an arc length for frame 0 (frames start at 1)".into()));
@@ -108,7 +115,7 @@ pub fn write_odometry(path: impl AsRef<Path>, arc_lengths: &[Option<f64>]) -> Re
             "arc length {v} of frame {k} is not a non-negative number"
         )));
     }
-    write_atomic(path, |f| {
+    stage_atomic(path, |f| {
         put!(f, "{ODOMETRY_HEADER}\n")?;
         for (k, v) in arc_lengths.iter().enumerate() {
             if let Some(v) = v {

@@ -7,7 +7,7 @@
 //! 4x4 matrix with bottom row `0 0 0 1` and an orthonormal rotation with determinant +1 within
 //! [`ORTHONORMAL_TOLERANCE`]) and errors point at the line where that value starts.
 
-use crate::atomic::{put, write_atomic};
+use crate::atomic::{put, stage_atomic};
 use crate::error::{IoError, IoErrorKind, quote};
 use crate::text::Exact;
 use momo_core::rig::ORTHONORMAL_TOLERANCE;
@@ -389,9 +389,13 @@ fn json_number(v: f64) -> String {
 /// Writes `rig.json` atomically. Fails (writing nothing) on intrinsics or extrinsics that the
 /// reader would reject.
 pub fn write_rig(path: impl AsRef<Path>, rig: &Rig) -> Result<(), IoError> {
-    let path = path.as_ref();
+    stage_rig(path.as_ref(), rig)?.commit()
+}
+
+/// [`write_rig`] without the commit.
+pub(crate) fn stage_rig(path: &Path, rig: &Rig) -> Result<crate::AtomicFile, IoError> {
     let text = rig_to_json(rig).map_err(|k| IoError::file(path, k))?;
-    write_atomic(path, |f| put!(f, "{text}"))
+    stage_atomic(path, |f| put!(f, "{text}"))
 }
 
 #[cfg(test)]
