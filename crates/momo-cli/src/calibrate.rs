@@ -95,11 +95,13 @@ fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) -> Result<()
     outln!("  roll  (about x) {:+.4} \u{b1} {:.4}{held}", d.x, s.x);
     outln!(
         "  pitch (about y) {:+.4} \u{b1} {:.4}  (positive: cameras nose down)",
-        d.y, s.y
+        d.y,
+        s.y
     );
     outln!(
         "  yaw   (about z) {:+.4} \u{b1} {:.4}  (positive: cameras turned left)",
-        d.z, s.z
+        d.z,
+        s.z
     );
     outln!(
         "the direction of travel lies {:.4} deg {} and {:.4} deg {} of where the nominal rig puts it",
@@ -110,7 +112,12 @@ fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) -> Result<()
     );
     outln!(
         "delta_deg {:.6} {:.6} {:.6} sigma_deg {:.6} {:.6} {:.6}",
-        d.x, d.y, d.z, s.x, s.y, s.z
+        d.x,
+        d.y,
+        d.z,
+        s.x,
+        s.y,
+        s.z
     );
     Ok(())
 }

@@ -33,7 +33,13 @@ pub(crate) fn write_out(args: std::fmt::Arguments<'_>, newline: bool) -> Result<
     use std::io::Write;
     let mut out = std::io::stdout().lock();
     out.write_fmt(args)
-        .and_then(|()| if newline { out.write_all(b"\n") } else { Ok(()) })
+        .and_then(|()| {
+            if newline {
+                out.write_all(b"\n")
+            } else {
+                Ok(())
+            }
+        })
         .and_then(|()| out.flush())
         .map_err(|e| {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
@@ -91,7 +97,11 @@ pub(crate) fn install_signal_cleanup() {
             .spawn(move || {
                 if let Some(sig) = signals.forever().next() {
                     momo_io::remove_temporaries();
-                    let code = if sig == SIGINT { EXIT_SIGINT } else { EXIT_SIGTERM };
+                    let code = if sig == SIGINT {
+                        EXIT_SIGINT
+                    } else {
+                        EXIT_SIGTERM
+                    };
                     std::process::exit(i32::from(code));
                 }
             });
@@ -121,11 +131,17 @@ pub(crate) fn exit_code(result: Result<(), Failure>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Input(e)) => {
-            note!("momo: error: {}", crate::common::clean_message(&format!("{e:#}")));
+            note!(
+                "momo: error: {}",
+                crate::common::clean_message(&format!("{e:#}"))
+            );
             ExitCode::from(2)
         }
         Err(Failure::Other(e)) => {
-            note!("momo: error: {}", crate::common::clean_message(&format!("{e:#}")));
+            note!(
+                "momo: error: {}",
+                crate::common::clean_message(&format!("{e:#}"))
+            );
             ExitCode::from(1)
         }
         Err(Failure::BrokenPipe) => ExitCode::from(EXIT_BROKEN_PIPE),

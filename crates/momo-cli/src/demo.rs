@@ -42,7 +42,14 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> Result<(), crate::common::
     );
     outln!(
         "{:<42} {:>9} {:>9} {:>9} {:>6} {:>9} {:>11} {:>9}",
-        "scenario", "rot med", "rot p95", "rot max", ">1deg", "t_err %", "r_err d/100m", "us/frame"
+        "scenario",
+        "rot med",
+        "rot p95",
+        "rot max",
+        ">1deg",
+        "t_err %",
+        "r_err d/100m",
+        "us/frame"
     );
     for (name, mut sim) in scenarios {
         sim.frames = frames;

@@ -68,7 +68,12 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
     );
     outln!(
         "{:>8} {:>8} {:>8} {:>8} {:>8} {:>5}  estimate",
-        "t_err", "r_err", "median", "p95", "max", ">1deg"
+        "t_err",
+        "r_err",
+        "median",
+        "p95",
+        "max",
+        ">1deg"
     );
     for row in &rows {
         let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));

@@ -114,12 +114,10 @@ where
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Calibrate(args) => calibrate::calibrate(args),
-        Command::Config => {
-            (|| {
-                out!("{}", momo_vo::Config::default().to_commented_toml());
-                Ok(())
-            })()
-        }
+        Command::Config => (|| {
+            out!("{}", momo_vo::Config::default().to_commented_toml());
+            Ok(())
+        })(),
         Command::Simulate(args) => simulate::simulate(args),
         Command::ImportKitti(args) => import::import_kitti(args),
         Command::Eval(args) => eval::eval(args),

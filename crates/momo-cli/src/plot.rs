@@ -115,7 +115,9 @@ pub(crate) fn plot(figure: PlotCommand) -> Result<(), Failure> {
     momo_plot::Format::from_path(&output).map_err(plot_failure)?;
     let mut inputs: Vec<PathBuf> = match &figure {
         PlotCommand::Trajectory { gt, est, .. } | PlotCommand::Errors { gt, est, .. } => {
-            std::iter::once(gt.clone()).chain(est.iter().cloned()).collect()
+            std::iter::once(gt.clone())
+                .chain(est.iter().cloned())
+                .collect()
         }
         PlotCommand::Landscape { seq, config, .. } => {
             let mut v = crate::common::sequence_files(seq);

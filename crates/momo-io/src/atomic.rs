@@ -135,9 +135,9 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), IoError>
             Some(k) => k,
             None => {
                 let dir = parent_dir(out);
-                let name = out.file_name().ok_or_else(|| {
-                    refused(out, "does not name a file".into())
-                })?;
+                let name = out
+                    .file_name()
+                    .ok_or_else(|| refused(out, "does not name a file".into()))?;
                 match std::fs::metadata(dir) {
                     Ok(m) if m.is_dir() => {}
                     Ok(_) => {
@@ -154,7 +154,10 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), IoError>
                     }
                 }
                 let dir_key = file_key(dir).ok_or_else(|| {
-                    refused(out, format!("the directory {} cannot be read", dir.display()))
+                    refused(
+                        out,
+                        format!("the directory {} cannot be read", dir.display()),
+                    )
                 })?;
                 FileKey::New(Box::new(dir_key), name.to_owned())
             }
@@ -171,10 +174,7 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), IoError>
         if let Some((_, other)) = seen.iter().find(|(k, _)| *k == key) {
             return Err(refused(
                 out,
-                format!(
-                    "is given twice as an output (also as {})",
-                    other.display()
-                ),
+                format!("is given twice as an output (also as {})", other.display()),
             ));
         }
         seen.push((key, out));
@@ -413,8 +413,7 @@ impl OutputDir {
                 // The topmost ancestor that does not exist yet is what this creates.
                 let mut top = path.to_path_buf();
                 while let Some(parent) = top.parent() {
-                    if parent.as_os_str().is_empty() || std::fs::symlink_metadata(parent).is_ok()
-                    {
+                    if parent.as_os_str().is_empty() || std::fs::symlink_metadata(parent).is_ok() {
                         break;
                     }
                     top = parent.to_path_buf();

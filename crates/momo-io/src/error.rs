@@ -267,7 +267,9 @@ pub enum IoErrorKind {
     BlankLine,
     /// A symbolic link to a file that does not exist (an optional file such as `odometry.csv`
     /// is then an error, not absent).
-    #[error("a symbolic link to a file that does not exist (remove the link if there is no such file)")]
+    #[error(
+        "a symbolic link to a file that does not exist (remove the link if there is no such file)"
+    )]
     DanglingLink,
     /// An output that would destroy a file or cannot be written safely: it is also an input,
     /// given twice, an existing directory / FIFO / device, in a missing directory, or a
