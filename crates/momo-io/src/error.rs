@@ -252,6 +252,14 @@ pub enum IoErrorKind {
         /// The value.
         value: f64,
     },
+    /// An arc length above [`MAX_ARC_LENGTH`](crate::odometry::MAX_ARC_LENGTH) in odometry.csv.
+    #[error("arc_length {value:.6e} m is above the supported maximum of {max} m per frame pair")]
+    ArcLengthTooLarge {
+        /// The value.
+        value: f64,
+        /// The limit.
+        max: f64,
+    },
     /// A KITTI pose whose rotation block is not orthonormal with determinant +1.
     #[error(
         "rotation is not orthonormal with determinant +1 (error {error:.3e}, tolerance {tolerance:e})"

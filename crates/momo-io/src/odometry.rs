@@ -9,6 +9,10 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 
+/// Largest arc length of one frame pair, metres: 1 km between two frames is 36,000 km/h at
+/// 10 Hz (and 3,600 km/h at 1 Hz), beyond any vehicle; larger values are typos or overflows.
+pub const MAX_ARC_LENGTH: f64 = 1000.0;
+
 /// The header line of `odometry.csv`. Readers accept the names in any order.
 pub const ODOMETRY_HEADER: &str = "frame,arc_length";
 const ODOMETRY_COLUMNS: [&str; 2] = ["frame", "arc_length"];
@@ -70,6 +74,12 @@ pub fn read_odometry_from<R: BufRead>(
         if value < 0.0 {
             return Err(at(IoErrorKind::NegativeArcLength { value }));
         }
+        if value > MAX_ARC_LENGTH {
+            return Err(at(IoErrorKind::ArcLengthTooLarge {
+                value,
+                max: MAX_ARC_LENGTH,
+            }));
+        }
         out.resize(frame, None);
         out.push(Some(value));
     }
@@ -106,13 +116,12 @@ pub(crate) fn stage_odometry(
     if let Some(Some(_)) = arc_lengths.first() {
         return Err(bad("an arc length for frame 0 (frames start at 1)".into()));
     }
-    if let Some((k, v)) = arc_lengths
-        .iter()
-        .enumerate()
-        .find_map(|(k, v)| v.filter(|v| !(v.is_finite() && *v >= 0.0)).map(|v| (k, v)))
-    {
+    if let Some((k, v)) = arc_lengths.iter().enumerate().find_map(|(k, v)| {
+        v.filter(|v| !(v.is_finite() && *v >= 0.0 && *v <= MAX_ARC_LENGTH))
+            .map(|v| (k, v))
+    }) {
         return Err(bad(format!(
-            "arc length {v} of frame {k} is not a non-negative number"
+            "arc length {v:.6e} of frame {k} is not a number within 0..={MAX_ARC_LENGTH} m"
         )));
     }
     stage_atomic(path, |f| {

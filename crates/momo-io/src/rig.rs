@@ -474,7 +474,13 @@ mod tests {
         let p = Lines::new(text).of(sub);
         assert_eq!(Lines::new(text).of(text).line, 1);
         let last = &text[text.len() - 1..];
-        assert_eq!((Lines::new(text).of(last).line, Lines::new(text).of(last).column), (4, 1));
+        assert_eq!(
+            (
+                Lines::new(text).of(last).line,
+                Lines::new(text).of(last).column
+            ),
+            (4, 1)
+        );
         assert_eq!((p.line, p.column), (2, 8));
     }
 }
