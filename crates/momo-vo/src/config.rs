@@ -41,6 +41,9 @@ pub enum ConfigError {
 /// The largest configuration file read (1 MiB): `--config /dev/zero` fails at once.
 pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
 
+/// The most `odometry.restart_yaw_offsets` (each is one more solve per frame).
+pub const MAX_RESTART_OFFSETS: usize = 64;
+
 /// Options of the odometry driver (everything that is not model, metric, loss or solver).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -355,6 +358,13 @@ impl Config {
         }
         if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
             return bad("odometry.restart_yaw_offsets must be finite".into());
+        }
+        // Every offset is one more solve per frame: 100,000 ran for minutes per frame.
+        if o.restart_yaw_offsets.len() > MAX_RESTART_OFFSETS {
+            return bad(format!(
+                "odometry.restart_yaw_offsets has {} entries; at most {MAX_RESTART_OFFSETS}",
+                o.restart_yaw_offsets.len()
+            ));
         }
         if !(o.prior_min_arc_length >= 0.0 && o.prior_min_arc_length.is_finite()) {
             return bad("odometry.prior_min_arc_length must be finite and >= 0".into());
