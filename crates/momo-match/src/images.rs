@@ -98,11 +98,9 @@ impl ImageSequence {
                     ))
                 })?;
                 if let Some(Some((ew, eh))) = self.expected.get(j) {
-                    let (w, h) = image::image_dimensions(path).map_err(|e| {
-                        MatchError::Decode {
-                            path: path.to_path_buf(),
-                            reason: e.to_string(),
-                        }
+                    let (w, h) = image::image_dimensions(path).map_err(|e| MatchError::Decode {
+                        path: path.to_path_buf(),
+                        reason: e.to_string(),
                     })?;
                     if (w, h) != (*ew, *eh) {
                         return Err(MatchError::ImageSize {

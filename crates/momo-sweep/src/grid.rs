@@ -372,9 +372,8 @@ impl Grid {
                 path.display()
             )));
         }
-        let text = String::from_utf8(bytes).map_err(|_| {
-            SweepError::Input(format!("{}: invalid UTF-8", path.display()))
-        })?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| SweepError::Input(format!("{}: invalid UTF-8", path.display())))?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
