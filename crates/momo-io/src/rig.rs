@@ -212,7 +212,7 @@ pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
             );
         }
     }
-    for (name, v) in others {
+    for &(name, v) in &others {
         if !v.is_finite() {
             return fault(name, format!("`{name}` must be finite, found {v}"));
         }
@@ -243,6 +243,119 @@ pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
             return fault("xi", format!("unified `xi` must be >= 0, found {}", u.xi));
         }
         _ => {}
+    }
+    check_ranges(model, fx, fy, width, height, &others)
+}
+
+/// Largest image side accepted, pixels (the largest sensors have ~20,000 px a side).
+pub const MAX_IMAGE_SIDE: f64 = 100_000.0;
+/// Focal lengths are accepted within `[s / FOCAL_RANGE, s · FOCAL_RANGE]` of the larger image
+/// side `s`: from a field of view near 180° to a telescope's 0.06°.
+pub const FOCAL_RANGE: f64 = 1000.0;
+/// Largest distance of a camera from the motion centre, metres (a lever arm of a road vehicle is
+/// a few metres; 1 km is generous).
+pub const MAX_LEVER_ARM: f64 = 1000.0;
+/// Largest magnitude of a Kannala-Brandt coefficient.
+pub const MAX_KB_COEFFICIENT: f64 = 100.0;
+
+/// A number for a message: at most ~12 significant digits (a 444-digit literal stays short).
+fn short_number(v: f64) -> String {
+    let s = format!("{v}");
+    if s.len() > 20 { format!("{v:.6e}") } else { s }
+}
+
+/// The physical ranges (`FORMAT.md`, "Value ranges"): image size within
+/// `1..=`[`MAX_IMAGE_SIDE`], focal lengths within [`FOCAL_RANGE`] of the image size, the
+/// principal point within one image size of the image, Kannala-Brandt coefficients within
+/// ±[`MAX_KB_COEFFICIENT`] and a projection that does not fold back (`d'(θ) > 0`) for every
+/// angle up to the image's corners or 90°, whichever is less.
+fn check_ranges(
+    model: &Camera,
+    fx: f64,
+    fy: f64,
+    width: f64,
+    height: f64,
+    others: &[(&'static str, f64)],
+) -> Result<(), CameraFault> {
+    let fault = |field: &'static str, reason: String| Err(CameraFault { field, reason });
+    for (name, v) in [("width", width), ("height", height)] {
+        if !(1.0..=MAX_IMAGE_SIDE).contains(&v) {
+            return fault(
+                name,
+                format!(
+                    "`{name}` must be within 1..={MAX_IMAGE_SIDE} pixels, found {}",
+                    short_number(v)
+                ),
+            );
+        }
+    }
+    let side = width.max(height);
+    let (lo, hi) = (side / FOCAL_RANGE, side * FOCAL_RANGE);
+    for (name, v) in [("fx", fx), ("fy", fy)] {
+        if !(lo..=hi).contains(&v) {
+            return fault(
+                name,
+                format!(
+                    "`{name}` = {} pixels is outside {lo}..={hi} (1/{FOCAL_RANGE} to \
+                     {FOCAL_RANGE} times the larger image side)",
+                    short_number(v)
+                ),
+            );
+        }
+    }
+    let get = |n: &str| others.iter().find(|(k, _)| *k == n).map(|(_, v)| *v);
+    let (cx, cy) = (get("cx").unwrap_or(0.0), get("cy").unwrap_or(0.0));
+    for (name, v, size) in [("cx", cx, width), ("cy", cy, height)] {
+        if !(-size..=2.0 * size).contains(&v) {
+            return fault(
+                name,
+                format!(
+                    "`{name}` = {} is more than one image size ({size} px) outside the image",
+                    short_number(v)
+                ),
+            );
+        }
+    }
+    if let Camera::KannalaBrandt(k) = model {
+        for (name, v) in [("k1", k.k1), ("k2", k.k2), ("k3", k.k3), ("k4", k.k4)] {
+            if v.abs() > MAX_KB_COEFFICIENT {
+                return fault(
+                    name,
+                    format!(
+                        "`{name}` = {} is outside ±{MAX_KB_COEFFICIENT}",
+                        short_number(v)
+                    ),
+                );
+            }
+        }
+        // d(θ) must increase up to the farthest image corner or up to 90° off-axis, whichever
+        // comes first (a fisheye's image circle may end inside the image; any lens is
+        // monotonic over a hemisphere).
+        let corner = [(0.0, 0.0), (width, 0.0), (0.0, height), (width, height)]
+            .iter()
+            .map(|&(u, v)| ((u - cx) / fx).hypot((v - cy) / fy))
+            .fold(0.0, f64::max);
+        const STEPS: usize = 1000;
+        for i in 1..=STEPS {
+            let theta = std::f64::consts::FRAC_PI_2 * i as f64 / STEPS as f64;
+            let t2 = theta * theta;
+            let d = theta * (1.0 + t2 * (k.k1 + t2 * (k.k2 + t2 * (k.k3 + t2 * k.k4))));
+            let dd = 1.0
+                + t2 * (3.0 * k.k1 + t2 * (5.0 * k.k2 + t2 * (7.0 * k.k3 + t2 * 9.0 * k.k4)));
+            if !(dd > 0.0) {
+                return fault(
+                    "k1",
+                    format!(
+                        "the Kannala-Brandt projection folds back at {:.1}° off-axis \
+                         (d'(θ) <= 0) inside the image: check k1..k4",
+                        theta.to_degrees()
+                    ),
+                );
+            }
+            if d >= corner {
+                break;
+            }
+        }
     }
     Ok(())
 }
