@@ -340,8 +340,8 @@ fn check_ranges(
             let theta = std::f64::consts::FRAC_PI_2 * i as f64 / STEPS as f64;
             let t2 = theta * theta;
             let d = theta * (1.0 + t2 * (k.k1 + t2 * (k.k2 + t2 * (k.k3 + t2 * k.k4))));
-            let dd = 1.0
-                + t2 * (3.0 * k.k1 + t2 * (5.0 * k.k2 + t2 * (7.0 * k.k3 + t2 * 9.0 * k.k4)));
+            let dd =
+                1.0 + t2 * (3.0 * k.k1 + t2 * (5.0 * k.k2 + t2 * (7.0 * k.k3 + t2 * 9.0 * k.k4)));
             if !(dd > 0.0) {
                 return fault(
                     "k1",
