@@ -572,3 +572,78 @@ fn config_files_are_capped_and_unknown_solver_keys_rejected() {
     );
     assert!(!p.exists());
 }
+
+#[test]
+fn a_huge_sweep_grid_is_counted_not_expanded() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let scales: Vec<String> = (1..=3000).map(|i| format!("{}", i as f64 * 1e-4)).collect();
+    let matches: Vec<String> = (1..=3000).map(|i| i.to_string()).collect();
+    let grid = tmp.path().join("grid.toml");
+    std::fs::write(
+        &grid,
+        format!(
+            "models = [\"se3\"]\nmetrics = [\"angle_plane\"]\nlosses = [\"cauchy\"]\n\
+             solvers = [\"levenberg_marquardt\"]\nmatches = [{}]\nloss_scales = [{}]\n",
+            matches.join(", "),
+            scales.join(", ")
+        ),
+    )
+    .expect("write");
+    let started = std::time::Instant::now();
+    let o = out(momo()
+        .arg("sweep")
+        .arg("--grid")
+        .arg(&grid)
+        .arg("--sequences")
+        .arg(&seq)
+        .arg("--output")
+        .arg(tmp.path().join("out"))
+        .arg("--quiet"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("9000000 combinations"), "{}", stderr(&o));
+    assert!(started.elapsed().as_secs() < 60);
+}
+
+#[test]
+fn too_many_restart_offsets_and_an_endless_font_are_bounded() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let offsets = vec!["0.0"; 100_000];
+    let cfg = tmp.path().join("c.toml");
+    let default = String::from_utf8(out(momo().arg("config")).stdout).expect("utf8");
+    let text: String = default
+        .lines()
+        .map(|l| {
+            if l.starts_with("restart_yaw_offsets") {
+                format!("restart_yaw_offsets = [{}]\n", offsets.join(", "))
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    assert!(text.len() > default.len(), "the default names restart_yaw_offsets");
+    std::fs::write(&cfg, text).expect("write");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-c")
+        .arg(&cfg)
+        .arg("-o")
+        .arg(tmp.path().join("p.txt")));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("restart_yaw_offsets has 100000 entries"), "{}", stderr(&o));
+    // MOMO_PLOT_FONT=/dev/zero: skipped after 64 MiB instead of read until memory runs out.
+    let gt = seq.join("poses.txt");
+    let o = out(momo()
+        .env("MOMO_PLOT_FONT", "/dev/zero")
+        .args(["plot", "trajectory", "--gt"])
+        .arg(&gt)
+        .arg("--est")
+        .arg(&gt)
+        .arg("-o")
+        .arg(tmp.path().join("t.svg")));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
