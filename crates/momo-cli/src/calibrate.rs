@@ -38,12 +38,16 @@ pub(crate) fn calibrate(args: CalibrateArgs) -> Result<(), Failure> {
         .with_model(Some(mount_model(&args.model)?))
         .with_frames(args.frames)
         .with_roll(args.estimate_roll.then_some(true));
+    let mut inputs = crate::common::sequence_files(&args.seq);
+    inputs.extend(args.config.clone());
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    crate::common::check_outputs(&inputs, &[args.output.as_path()])?;
     let config = load_config(args.config.as_deref())?;
     let sequence = momo_io::read_sequence(&args.seq).map_err(Failure::input)?;
     let est = calibrate_mount(&sequence, &config, &options, args.quiet)?;
     momo_io::write_rig(&args.output, &est.corrected_rig).map_err(Failure::other)?;
     if !args.quiet {
-        eprintln!("momo: wrote {}", args.output.display());
+        note!("momo: wrote {}", args.output.display());
     }
     Ok(())
 }
@@ -59,15 +63,15 @@ pub(crate) fn calibrate_mount(
     // Every calibration error is about the input (sequence, configuration, options).
     let est = momo_vo::calibrate_sequence(sequence, config, options).map_err(Failure::input)?;
     if !quiet {
-        print_mount_estimate(&est, started.elapsed().as_secs_f64());
+        print_mount_estimate(&est, started.elapsed().as_secs_f64())?;
     }
     Ok(est)
 }
 
 /// Prints a mount estimate: a summary on stderr, the angles on stdout.
-fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) {
+fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) -> Result<(), Failure> {
     let term = serde_json::to_string(&est.termination).unwrap_or_default();
-    eprintln!(
+    note!(
         "momo: mount calibration with {} over {} frame pairs ({} skipped: {} without matches, {} standstill, {} failed) in {:.2} s: {} iterations ({}), cost {:.6e} -> {:.6e}",
         est.model.name(),
         est.frames_used,
@@ -85,27 +89,35 @@ fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) {
     let s = est.sigma.map(f64::to_degrees);
     let (left, up) = est.travel_direction_deg();
     let held = if est.roll_estimated { "" } else { " (held)" };
-    println!(
+    outln!(
         "mount correction, degrees (rotation of the rig about camera 0, vehicle frame x forward, y left, z up; \u{b1} 1 sigma):"
     );
-    println!("  roll  (about x) {:+.4} \u{b1} {:.4}{held}", d.x, s.x);
-    println!(
+    outln!("  roll  (about x) {:+.4} \u{b1} {:.4}{held}", d.x, s.x);
+    outln!(
         "  pitch (about y) {:+.4} \u{b1} {:.4}  (positive: cameras nose down)",
-        d.y, s.y
+        d.y,
+        s.y
     );
-    println!(
+    outln!(
         "  yaw   (about z) {:+.4} \u{b1} {:.4}  (positive: cameras turned left)",
-        d.z, s.z
+        d.z,
+        s.z
     );
-    println!(
+    outln!(
         "the direction of travel lies {:.4} deg {} and {:.4} deg {} of where the nominal rig puts it",
         left.abs(),
         if left >= 0.0 { "left" } else { "right" },
         up.abs(),
         if up >= 0.0 { "above" } else { "below" }
     );
-    println!(
+    outln!(
         "delta_deg {:.6} {:.6} {:.6} sigma_deg {:.6} {:.6} {:.6}",
-        d.x, d.y, d.z, s.x, s.y, s.z
+        d.x,
+        d.y,
+        d.z,
+        s.x,
+        s.y,
+        s.z
     );
+    Ok(())
 }

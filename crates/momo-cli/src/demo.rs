@@ -23,11 +23,11 @@ pub(crate) struct DemoArgs {
 /// `momo demo`.
 pub(crate) fn demo(args: DemoArgs) -> Result<(), crate::common::Failure> {
     run_demo(args.frames, args.seed, args.quiet)
-        .map_err(|e| crate::common::Failure::other(e.context("demo failed")))
 }
 
 /// Runs the demo scenarios.
-fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
+fn run_demo(frames: usize, seed: u64, quiet: bool) -> Result<(), crate::common::Failure> {
+    let failed = |e: anyhow::Error| crate::common::Failure::other(e.context("demo failed"));
     let frames = frames.max(2);
     let scenarios: [(&str, SimConfig); 3] = [
         ("pinhole, clean", SimConfig::clean_pinhole()),
@@ -37,17 +37,24 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
             SimConfig::fisheye_surround(),
         ),
     ];
-    println!(
+    outln!(
         "momo demo: {frames} frames per scenario, seed {seed}, default configuration (momo config)"
     );
-    println!(
+    outln!(
         "{:<42} {:>9} {:>9} {:>9} {:>6} {:>9} {:>11} {:>9}",
-        "scenario", "rot med", "rot p95", "rot max", ">1deg", "t_err %", "r_err d/100m", "us/frame"
+        "scenario",
+        "rot med",
+        "rot p95",
+        "rot max",
+        ">1deg",
+        "t_err %",
+        "r_err d/100m",
+        "us/frame"
     );
     for (name, mut sim) in scenarios {
         sim.frames = frames;
         sim.seed = seed;
-        let simulation = simulate(&sim)?;
+        let simulation = simulate(&sim).map_err(|e| failed(e.into()))?;
         let seq = &simulation.sequence;
         let bar = if quiet || !std::io::stderr().is_terminal() {
             ProgressBar::hidden()
@@ -61,14 +68,15 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
         let gt = seq
             .ground_truth
             .as_ref()
-            .ok_or_else(|| anyhow::anyhow!("the simulation has no ground truth"))?;
+            .ok_or_else(|| failed(anyhow::anyhow!("the simulation has no ground truth")))?;
         for (label, kind) in [
             ("momo", EstimatorKind::Momo),
             ("5-point", EstimatorKind::FivePoint),
             ("5-point LO", EstimatorKind::FivePointRefined),
         ] {
             let (poses, diags) =
-                momo_vo::run_in_memory(seq, kind, Config::default(), |_| bar.inc(1))?;
+                momo_vo::run_in_memory(seq, kind, Config::default(), |_| bar.inc(1))
+                    .map_err(|e| failed(e.into()))?;
             let name = format!("{name} [{label}]");
             let scores = momo_eval::evaluate(gt, &poses);
             let rot = scores.rotation_deg;
@@ -98,11 +106,14 @@ fn run_demo(frames: usize, seed: u64, quiet: bool) -> anyhow::Result<()> {
                 }
             );
             // The bar is drawn on stderr below the table: hide it while a row is printed.
-            bar.suspend(|| println!("{row}"));
+            bar.suspend(|| -> Result<(), crate::common::Failure> {
+                outln!("{row}");
+                Ok(())
+            })?;
         }
         bar.finish_and_clear();
     }
-    println!(
+    outln!(
         "rot: frame-to-frame rotation error of camera 0 in degrees; t_err, r_err: KITTI devkit metric."
     );
     Ok(())

@@ -222,6 +222,13 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
         }
     };
     let ground_truth = momo_io::read_trajectory(gt_path, format).map_err(Failure::input)?;
+    if ground_truth.poses.len() < 2 {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "{}: {} pose(s); scoring needs at least 2 (one frame pair)",
+            gt_path.display(),
+            ground_truth.poses.len()
+        )));
+    }
     // bound.csv beside the ground truth (FORMAT.md version 3): the Cramér-Rao bound per frame.
     let bound_path = gt_path.with_file_name("bound.csv");
     let bounds = match std::fs::read_to_string(&bound_path) {
@@ -289,18 +296,18 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
             "frames": ground_truth.poses.len(),
             "estimates": rows,
         });
-        println!("{doc}");
+        outln!("{doc}");
         return Ok(());
     }
     let unit = match delta {
         Delta::Frames(d) => format!("{d} frame(s)"),
         Delta::Metres { metres, .. } => format!("{metres} m"),
     };
-    println!(
+    outln!(
         "{} frames; frame-to-frame rotation errors in degrees; KITTI devkit t_err in %, r_err in deg/100 m (\"-\": path shorter than 100 m); ATE RMSE in m after SE(3)/Sim(3) alignment; RPE RMSE at {unit} in m and deg",
         ground_truth.poses.len()
     );
-    println!(
+    outln!(
         "{:>8} {:>8} {:>8} {:>8} {:>8} {:>5} {:>9} {:>9} {:>9} {:>9}{}  estimate",
         "t_err",
         "r_err",
@@ -326,7 +333,7 @@ pub(crate) fn eval(args: EvalArgs) -> Result<(), Failure> {
             fmt(row.scores.r_err_deg_per_100m),
         );
         let s = &row.scores.rotation_deg;
-        println!(
+        outln!(
             "{t:>8} {r:>8} {:>8.4} {:>8.4} {:>8.4} {:>5} {:>9} {:>9} {:>9} {:>9}{}  {}",
             s.median,
             s.p95,

@@ -67,9 +67,14 @@ pub(crate) struct MatchArgs {
     /// odometry.csv (arc lengths) to copy into the sequence directory.
     #[arg(long)]
     odometry: Option<PathBuf>,
-    /// Output sequence directory (created).
+    /// Output sequence directory (created; an existing one must be empty unless --force;
+    /// removed again on failure if this created it).
     #[arg(short, long)]
     output: PathBuf,
+    /// Write into an existing, non-empty output directory (its files of the same names are
+    /// replaced).
+    #[arg(long)]
+    force: bool,
     #[command(flatten)]
     front: FrontEndArgs,
     /// No progress bar and no summary on stderr.
@@ -121,6 +126,15 @@ pub(crate) struct VoArgs {
 /// `momo match`.
 pub(crate) fn match_cmd(args: MatchArgs) -> Result<(), Failure> {
     let (output, quiet) = (&args.output, args.quiet);
+    let mut inputs = vec![args.rig.clone()];
+    inputs.extend(args.odometry.clone());
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let written = crate::common::sequence_files(output);
+    let written: Vec<&std::path::Path> = written.iter().map(PathBuf::as_path).collect();
+    if std::fs::metadata(output).is_ok() {
+        crate::common::check_outputs(&inputs, &written)?;
+    }
+    let dir = momo_io::OutputDir::prepare(output, args.force).map_err(Failure::input)?;
     let bar = progress_bar(quiet, None);
     let started = std::time::Instant::now();
     let stats = momo_match::match_to_sequence(
@@ -132,9 +146,10 @@ pub(crate) fn match_cmd(args: MatchArgs) -> Result<(), Failure> {
         |_| bar.inc(1),
     )
     .map_err(match_failure)?;
+    dir.keep();
     bar.finish_and_clear();
     if !quiet {
-        eprintln!(
+        note!(
             "momo: {} frames, {} matches in {:.2} s ({:.1} ms/frame matching, {:.1} ms/frame decoding); wrote {}",
             stats.frames,
             stats.matches,
@@ -150,8 +165,13 @@ pub(crate) fn match_cmd(args: MatchArgs) -> Result<(), Failure> {
 /// `momo vo`.
 pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
     let quiet = args.quiet;
-    let config = load_config(args.config.as_deref())?;
     let (folders, rig, odometry, times) = vo_inputs(&args)?;
+    let mut inputs = vec![rig.clone()];
+    inputs.extend(odometry.clone());
+    inputs.extend(args.config.clone());
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    crate::common::check_outputs(&inputs, &[args.output.as_path()])?;
+    let config = load_config(args.config.as_deref())?;
     let run = momo_match::VoRun {
         folders,
         rig,
@@ -179,7 +199,7 @@ pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
     crate::trajfmt::finish(args.format, &run.output, times.as_deref())?;
     if !quiet {
         let f = summary.front_end;
-        eprintln!(
+        note!(
             "momo: {} frames in {:.2} s ({:.1} ms/frame matching, {:.1} ms/frame decoding, {:.1} µs/frame estimating): {} estimated, {} not; {} matches; wrote {}",
             summary.poses,
             started.elapsed().as_secs_f64(),

@@ -13,12 +13,17 @@ pub(crate) struct ImportKittiArgs {
     /// A KITTI odometry sequence folder (calib.txt, image_0/, image_1/, times.txt), or the
     /// folder of the l1avgvo matches (calib.txt, poses*.txt, `i_to_{i+1}.txt` files).
     dir: PathBuf,
-    /// Output sequence directory (created).
+    /// Output sequence directory (created; an existing one must be empty unless --force;
+    /// removed again on failure if this created it).
     out_dir: PathBuf,
     /// Ground-truth poses of a sequence folder (KITTI's poses/NN.txt): written as poses.txt,
     /// and odometry.csv arc lengths from them (default: DIR/poses.txt if present).
     #[arg(long)]
     poses: Option<PathBuf>,
+    /// Write into an existing, non-empty output directory (its files of the same names are
+    /// replaced).
+    #[arg(long)]
+    force: bool,
     /// A stereo rig (left = camera 0, right = camera 1) instead of the left camera only.
     #[arg(long)]
     stereo: bool,
@@ -56,7 +61,7 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
             }
         })?;
         if !args.quiet {
-            eprintln!(
+            note!(
                 "momo: imported the KITTI sequence folder: {} frames, {} camera(s){}{}; wrote {} (run `momo vo {} -o est.txt`)",
                 done.frames,
                 done.cameras,
@@ -84,9 +89,11 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
         seed: args.seed,
     };
     let seq = import_l1avgvo(&args.dir, &options).map_err(Failure::input)?;
+    let out = momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)?;
     momo_io::write_sequence(&args.out_dir, &seq).map_err(Failure::other)?;
+    out.keep();
     if !args.quiet {
-        eprintln!(
+        note!(
             "momo: imported {} frames, {} camera(s), {} matches{}; wrote {}",
             seq.num_frames(),
             seq.rig.len(),

@@ -7,14 +7,18 @@
 //! accepts their types by name in configurations and grids.
 //!
 //! Exit codes: 0 the command did what was asked; 1 a failure that is not the input's (writing
-//! an output, an internal error); 2 bad input (a file, an option, a configuration).
+//! an output, an internal error); 2 bad input (a file, an option, a configuration, an output
+//! that is also an input or cannot be written safely); 130 / 143 interrupted by SIGINT /
+//! SIGTERM (temporary files and output directories created so far are removed first); 141
+//! standard output is a closed pipe (`momo demo | head`), nothing printed.
 
 use clap::{Parser, Subcommand};
 use std::ffi::OsString;
 use std::process::ExitCode;
 
-mod calibrate;
+#[macro_use]
 mod common;
+mod calibrate;
 mod demo;
 mod eval;
 mod images;
@@ -126,13 +130,14 @@ where
             return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
         }
     };
+    common::install_signal_cleanup();
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Calibrate(args) => calibrate::calibrate(args),
-        Command::Config { .. } => {
-            print!("{}", momo_vo::Config::default().to_commented_toml());
+        Command::Config { .. } => (|| {
+            out!("{}", momo_vo::Config::default().to_commented_toml());
             Ok(())
-        }
+        })(),
         Command::Simulate(args) => simulate::simulate(args),
         Command::ImportKitti(args) => import::import_kitti(args),
         Command::Eval(args) => eval::eval(args),

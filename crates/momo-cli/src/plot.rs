@@ -31,8 +31,8 @@ pub(crate) enum PlotCommand {
         /// Output image: .png or .svg (written atomically).
         #[arg(short, long)]
         output: PathBuf,
-        /// Frame rate in Hz (speed = displacement per frame × frame rate).
-        #[arg(long, default_value_t = 10.0)]
+        /// Frame rate in Hz (speed = displacement per frame × frame rate), in (0, 10000].
+        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
         frame_rate: f64,
     },
     /// The cost of one frame pair over a grid of yaw × arc length around its estimate, as a
@@ -113,6 +113,28 @@ pub(crate) fn plot(figure: PlotCommand) -> Result<(), Failure> {
         | PlotCommand::Landscape { output, .. } => output.clone(),
     };
     momo_plot::Format::from_path(&output).map_err(plot_failure)?;
+    let mut inputs: Vec<PathBuf> = match &figure {
+        PlotCommand::Trajectory { gt, est, .. } | PlotCommand::Errors { gt, est, .. } => {
+            std::iter::once(gt.clone())
+                .chain(est.iter().cloned())
+                .collect()
+        }
+        PlotCommand::Landscape { seq, config, .. } => {
+            let mut v = crate::common::sequence_files(seq);
+            v.extend(config.clone());
+            v
+        }
+    };
+    inputs.dedup();
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    crate::common::check_outputs(&inputs, &[output.as_path()])?;
+    if let PlotCommand::Errors { frame_rate, .. } = &figure
+        && !(frame_rate.is_finite() && *frame_rate > 0.0 && *frame_rate <= 10_000.0)
+    {
+        return Err(Failure::Input(anyhow::anyhow!(
+            "--frame-rate must be a positive number of Hz up to 10000, found {frame_rate}"
+        )));
+    }
     match figure {
         PlotCommand::Trajectory { gt, est, output } => {
             let (ground_truth, estimates) = read_trajectories(&gt, &est, false)?;
@@ -158,17 +180,17 @@ pub(crate) fn plot(figure: PlotCommand) -> Result<(), Failure> {
             momo_plot::plot_landscape(&landscape, &output).map_err(plot_failure)?;
             if let Some((yaw, arc, cost)) = landscape.minimum() {
                 let (ey, ea) = landscape.estimate_point();
-                eprintln!(
+                note!(
                     "momo: frame {frame}: estimate yaw {ey:.4} deg, arc length {ea:.4} m; grid minimum yaw {yaw:.4} deg, arc length {arc:.4} m, cost {cost:.6e}"
                 );
             }
         }
     }
     if !momo_plot::font_available() {
-        eprintln!(
+        note!(
             "momo: warning: no TrueType font found (set MOMO_PLOT_FONT to a .ttf file): drew without text"
         );
     }
-    eprintln!("momo: wrote {}", output.display());
+    note!("momo: wrote {}", output.display());
     Ok(())
 }

@@ -45,6 +45,7 @@ pub(crate) fn rig(command: RigCommand) -> Result<(), Failure> {
 }
 
 fn import(args: ImportArgs) -> Result<(), Failure> {
+    crate::common::check_outputs(&[args.calibration.as_path()], &[args.output.as_path()])?;
     let mount = parse_mount(&args.mount).map_err(|e| Failure::Input(anyhow::anyhow!(e)))?;
     let (rig, format) = import_calibration(&args.calibration, &mount).map_err(Failure::input)?;
     momo_io::write_rig(&args.output, &rig).map_err(Failure::other)?;
@@ -60,7 +61,7 @@ fn import(args: ImportArgs) -> Result<(), Failure> {
                 format!("{} ({tag})", c.name)
             })
             .collect();
-        eprintln!(
+        note!(
             "momo: {format}: {} camera(s): {}; wrote {}",
             rig.len(),
             models.join(", "),

@@ -1,7 +1,9 @@
 //! `momo run`.
 
 use crate::calibrate::calibrate_mount;
-use crate::common::{EstimatorArg, Failure, load_config, mount_model, progress_bar};
+use crate::common::{
+    EstimatorArg, Failure, check_outputs, load_config, mount_model, progress_bar, sequence_files,
+};
 use crate::trajfmt::OutputFormat;
 use momo_vo::{Config, RunError, RunOptions};
 use std::path::{Path, PathBuf};
@@ -56,6 +58,14 @@ pub(crate) struct RunArgs {
 
 /// `momo run`.
 pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
+    // Outputs are checked before anything is read: an output that is an input (any spelling
+    // or link of it), given twice, a directory / FIFO / device or in a missing directory.
+    let mut inputs = sequence_files(&args.seq);
+    inputs.extend(args.config.clone());
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let mut outputs = vec![args.output.as_path()];
+    outputs.extend(args.diagnostics.as_deref());
+    check_outputs(&inputs, &outputs)?;
     let config = load_config(args.config.as_deref())?;
     let estimator = args.estimator.into();
     let times =
@@ -94,7 +104,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
     crate::trajfmt::finish(args.format, &options.output, times.as_deref())?;
     if !quiet {
         let wall = started.elapsed().as_secs_f64();
-        eprintln!(
+        note!(
             "momo: {} frames in {:.2} s ({:.1} µs/frame estimating): {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
             summary.frames,
             wall,
@@ -137,23 +147,27 @@ fn run_calibrated(
     let (poses, diags) = momo_vo::run_in_memory(&sequence, estimator, config, |_| bar.inc(1))
         .map_err(Failure::input)?;
     bar.finish_and_clear();
-    momo_io::write_poses(output, &poses).map_err(Failure::other)?;
+    // Poses and diagnostics are committed together: both or neither.
+    let mut writer = momo_io::PoseWriter::create(output).map_err(Failure::other)?;
+    for p in &poses {
+        writer.push(p).map_err(Failure::other)?;
+    }
+    let mut files = vec![writer.into_file()];
     if let Some(path) = diagnostics {
-        let mut text = String::new();
+        let mut file = momo_io::AtomicFile::create(path).map_err(Failure::other)?;
         for d in &diags {
             let line = serde_json::to_string(d).map_err(Failure::other)?;
-            text.push_str(&line);
-            text.push('\n');
+            std::io::Write::write_all(file.writer(), line.as_bytes())
+                .and_then(|()| std::io::Write::write_all(file.writer(), b"\n"))
+                .map_err(|e| Failure::other(file.err(e)))?;
         }
-        let mut file = momo_io::AtomicFile::create(path).map_err(Failure::other)?;
-        std::io::Write::write_all(file.writer(), text.as_bytes())
-            .map_err(|e| Failure::other(file.err(e)))?;
-        file.commit().map_err(Failure::other)?;
+        files.push(file);
     }
+    momo_io::commit_all(files).map_err(Failure::other)?;
     if !quiet {
         let count = |s: momo_vo::FrameStatus| diags.iter().filter(|d| d.status == s).count();
         let compute: f64 = diags.iter().map(|d| d.time_us).sum();
-        eprintln!(
+        note!(
             "momo: {} frames in {:.2} s ({:.1} µs/frame estimating) with the calibrated rig: {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
             poses.len(),
             started.elapsed().as_secs_f64(),

@@ -26,11 +26,16 @@ pub(crate) struct SimulateArgs {
     /// Matches per camera and frame pair (default: the scenario's).
     #[arg(long)]
     matches: Option<usize>,
-    /// Output directory (created).
+    /// Output directory (created; an existing one must be empty unless --force; removed
+    /// again on failure if this created it).
     out_dir: PathBuf,
     /// No summary on stderr.
     #[arg(short, long)]
     quiet: bool,
+    /// Write into an existing, non-empty output directory (its files of the same names are
+    /// replaced).
+    #[arg(long)]
+    force: bool,
 }
 
 /// `momo simulate`.
@@ -59,13 +64,20 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
         cfg.matches_per_camera = m;
     }
     let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
+    if std::fs::metadata(&args.out_dir).is_ok() {
+        let written = crate::common::sequence_files(&args.out_dir);
+        let written: Vec<&std::path::Path> = written.iter().map(PathBuf::as_path).collect();
+        let inputs: Vec<&std::path::Path> = args.trajectory.as_deref().into_iter().collect();
+        crate::common::check_outputs(&inputs, &written)?;
+    }
+    let dir = momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)?;
     sim.write(&args.out_dir).map_err(Failure::other)?;
     // bound.csv (FORMAT.md version 3): the Cramér-Rao bound of every frame pair's rotation.
     let bounds = momo_sim::bound::rotation_bounds(&sim, cfg.pixel_noise);
     momo_sim::bound::write_bound_csv(&args.out_dir, &sim, &bounds).map_err(Failure::other)?;
     if !args.quiet {
         let seq = &sim.sequence;
-        eprintln!(
+        note!(
             "momo: simulated `{scenario}` (seed {}): {} frames, {} camera(s), {} matches, with ground truth; wrote {}",
             args.seed,
             seq.num_frames(),
@@ -74,5 +86,6 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
             args.out_dir.display()
         );
     }
+    dir.keep();
     Ok(())
 }

@@ -252,6 +252,14 @@ pub enum IoErrorKind {
         /// The value.
         value: f64,
     },
+    /// An arc length above [`MAX_ARC_LENGTH`](crate::odometry::MAX_ARC_LENGTH) in odometry.csv.
+    #[error("arc_length {value:.6e} m is above the supported maximum of {max} m per frame pair")]
+    ArcLengthTooLarge {
+        /// The value.
+        value: f64,
+        /// The limit.
+        max: f64,
+    },
     /// A KITTI pose whose rotation block is not orthonormal with determinant +1.
     #[error(
         "rotation is not orthonormal with determinant +1 (error {error:.3e}, tolerance {tolerance:e})"
@@ -265,6 +273,17 @@ pub enum IoErrorKind {
     /// A blank line between poses (line k of poses.txt is frame k, so gaps are ambiguous).
     #[error("blank line before the last pose (line k is the pose of frame k)")]
     BlankLine,
+    /// A symbolic link to a file that does not exist (an optional file such as `odometry.csv`
+    /// is then an error, not absent).
+    #[error(
+        "a symbolic link to a file that does not exist (remove the link if there is no such file)"
+    )]
+    DanglingLink,
+    /// An output that would destroy a file or cannot be written safely: it is also an input,
+    /// given twice, an existing directory / FIFO / device, in a missing directory, or a
+    /// non-empty output directory without `--force`. An input error (the command line's).
+    #[error("refused as an output: {0}")]
+    OutputRefused(String),
     /// Data that cannot be written so that it reads back (writers only).
     #[error("cannot write: {0}")]
     InvalidData(String),

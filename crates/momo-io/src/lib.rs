@@ -76,7 +76,7 @@ pub mod rig;
 mod text;
 pub mod tum;
 
-pub use atomic::AtomicFile;
+pub use atomic::{AtomicFile, OutputDir, check_outputs, commit_all, remove_temporaries};
 pub use error::{IoError, IoErrorKind};
 pub use matches::{
     MATCHES_HEADER, MAX_FRAME, MatchReader, MatchWriter, PIXEL_MARGIN_FRACTION, write_matches,
@@ -136,11 +136,16 @@ impl Sequence {
     }
 }
 
-/// Opens an optional file: `Ok(None)` if it does not exist.
+/// Opens an optional file: `Ok(None)` if it does not exist (a dangling symbolic link exists:
+/// it is an error, not a missing file).
 fn optional<T>(
     path: &Path,
     read: impl FnOnce(&Path) -> Result<T, IoError>,
 ) -> Result<Option<T>, IoError> {
+    let dangling = std::fs::symlink_metadata(path).is_ok() && std::fs::metadata(path).is_err();
+    if dangling {
+        return Err(IoError::file(path, IoErrorKind::DanglingLink));
+    }
     match read(path) {
         Ok(v) => Ok(Some(v)),
         Err(IoError {
@@ -222,8 +227,18 @@ pub fn write_sequence(dir: impl AsRef<Path>, seq: &Sequence) -> Result<(), IoErr
     let dir = dir.as_ref();
     check_matches(&seq.rig, &seq.frames).map_err(|k| IoError::file(dir.join(files::MATCHES), k))?;
     std::fs::create_dir_all(dir).map_err(|e| IoError::io(dir, e))?;
-    write_rig(dir.join(files::RIG), &seq.rig)?;
-    write_matches(dir.join(files::MATCHES), &seq.frames)?;
+    // Every file is written to a temporary first; all are committed together (all or none).
+    let mut staged = vec![
+        rig::stage_rig(&dir.join(files::RIG), &seq.rig)?,
+        matches::stage_matches(&dir.join(files::MATCHES), &seq.frames)?,
+    ];
+    if let Some(a) = &seq.arc_lengths {
+        staged.push(odometry::stage_odometry(&dir.join(files::ODOMETRY), a)?);
+    }
+    if let Some(g) = &seq.ground_truth {
+        staged.push(poses::stage_poses(&dir.join(files::POSES), g)?);
+    }
+    commit_all(staged)?;
     let remove = |name: &str| {
         let p = dir.join(name);
         match std::fs::remove_file(&p) {
@@ -231,13 +246,11 @@ pub fn write_sequence(dir: impl AsRef<Path>, seq: &Sequence) -> Result<(), IoErr
             _ => Ok(()),
         }
     };
-    match &seq.arc_lengths {
-        Some(a) => write_odometry(dir.join(files::ODOMETRY), a)?,
-        None => remove(files::ODOMETRY)?,
+    if seq.arc_lengths.is_none() {
+        remove(files::ODOMETRY)?;
     }
-    match &seq.ground_truth {
-        Some(g) => write_poses(dir.join(files::POSES), g)?,
-        None => remove(files::POSES)?,
+    if seq.ground_truth.is_none() {
+        remove(files::POSES)?;
     }
     Ok(())
 }

@@ -337,9 +337,17 @@ impl MatchWriter {
 /// Writes `matches.csv` atomically: `frames[k]` holds frame pair `(k-1, k)`; `frames[0]` must be
 /// empty.
 pub fn write_matches(path: impl AsRef<Path>, frames: &[FrameObservations]) -> Result<(), IoError> {
+    stage_matches(path.as_ref(), frames)?.commit()
+}
+
+/// [`write_matches`] without the commit.
+pub(crate) fn stage_matches(
+    path: &Path,
+    frames: &[FrameObservations],
+) -> Result<AtomicFile, IoError> {
     let mut w = MatchWriter::create(path)?;
     for (k, obs) in frames.iter().enumerate() {
         w.push(k, obs)?;
     }
-    w.finish()
+    Ok(w.file)
 }

@@ -1,7 +1,7 @@
 //! `poses.txt`: trajectories in the KITTI odometry format (`FORMAT.md`, section "poses.txt"):
 //! one line per frame, the first three rows of the 4x4 pose, row-major, 12 numbers.
 
-use crate::atomic::{AtomicFile, put, write_atomic};
+use crate::atomic::{AtomicFile, put, stage_atomic};
 use crate::error::{IoError, IoErrorKind};
 use crate::text::{Exact, LineReader, is_blank, parse_f64};
 use momo_core::Pose;
@@ -101,9 +101,12 @@ fn put_pose(f: &mut AtomicFile, p: &Pose<f64>) -> Result<(), IoError> {
 
 /// Writes a KITTI poses file atomically. Fails (writing nothing) on non-finite poses.
 pub fn write_poses(path: impl AsRef<Path>, poses: &[Pose<f64>]) -> Result<(), IoError> {
-    write_atomic(path.as_ref(), |f| {
-        poses.iter().try_for_each(|p| put_pose(f, p))
-    })
+    stage_poses(path.as_ref(), poses)?.commit()
+}
+
+/// [`write_poses`] without the commit.
+pub(crate) fn stage_poses(path: &Path, poses: &[Pose<f64>]) -> Result<AtomicFile, IoError> {
+    stage_atomic(path, |f| poses.iter().try_for_each(|p| put_pose(f, p)))
 }
 
 /// Writes a KITTI poses file one pose at a time, atomically: the file appears (replacing any old
@@ -142,5 +145,11 @@ impl PoseWriter {
     /// Flushes, syncs and renames the file into place.
     pub fn finish(self) -> Result<(), IoError> {
         self.file.commit()
+    }
+
+    /// The file being written, to commit it together with other outputs
+    /// ([`commit_all`](crate::commit_all)).
+    pub fn into_file(self) -> AtomicFile {
+        self.file
     }
 }

@@ -7,7 +7,7 @@
 //! 4x4 matrix with bottom row `0 0 0 1` and an orthonormal rotation with determinant +1 within
 //! [`ORTHONORMAL_TOLERANCE`]) and errors point at the line where that value starts.
 
-use crate::atomic::{put, write_atomic};
+use crate::atomic::{put, stage_atomic};
 use crate::error::{IoError, IoErrorKind, quote};
 use crate::text::Exact;
 use momo_core::rig::ORTHONORMAL_TOLERANCE;
@@ -48,19 +48,38 @@ struct Pos {
 
 impl Pos {
     const START: Pos = Pos { line: 1, column: 1 };
+}
 
-    /// Where `sub` (a slice of `text`) starts.
-    fn of(text: &str, sub: &str) -> Pos {
+/// The line starts of a text, to find the position of a slice in O(log lines). (Counting the
+/// newlines before each camera from the start of the file made parsing quadratic in the
+/// number of cameras: 8,000 cameras took 20 s.)
+struct Lines<'a> {
+    text: &'a str,
+    /// Byte offset of every line's first byte (line 1 at 0).
+    starts: Vec<usize>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Self {
+        let mut starts = vec![0];
+        starts.extend(
+            text.bytes()
+                .enumerate()
+                .filter(|&(_, b)| b == b'\n')
+                .map(|(i, _)| i + 1),
+        );
+        Self { text, starts }
+    }
+
+    /// Where `sub` (a slice of the text) starts.
+    fn of(&self, sub: &str) -> Pos {
         let offset = (sub.as_ptr() as usize)
-            .checked_sub(text.as_ptr() as usize)
-            .filter(|&o| o <= text.len())
+            .checked_sub(self.text.as_ptr() as usize)
+            .filter(|&o| o <= self.text.len())
             .unwrap_or(0);
-        let before = text.as_bytes().get(..offset).unwrap_or_default();
-        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
+        // The last line start at or before `offset`.
+        let line = self.starts.partition_point(|&s| s <= offset).max(1);
+        let line_start = self.starts.get(line - 1).copied().unwrap_or(0);
         Pos {
             line,
             column: 1 + offset - line_start,
@@ -193,7 +212,7 @@ pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
             );
         }
     }
-    for (name, v) in others {
+    for &(name, v) in &others {
         if !v.is_finite() {
             return fault(name, format!("`{name}` must be finite, found {v}"));
         }
@@ -224,6 +243,119 @@ pub(crate) fn check_camera(model: &Camera) -> Result<(), CameraFault> {
             return fault("xi", format!("unified `xi` must be >= 0, found {}", u.xi));
         }
         _ => {}
+    }
+    check_ranges(model, fx, fy, width, height, &others)
+}
+
+/// Largest image side accepted, pixels (the largest sensors have ~20,000 px a side).
+pub const MAX_IMAGE_SIDE: f64 = 100_000.0;
+/// Focal lengths are accepted within `[s / FOCAL_RANGE, s · FOCAL_RANGE]` of the larger image
+/// side `s`: from a field of view near 180° to a telescope's 0.06°.
+pub const FOCAL_RANGE: f64 = 1000.0;
+/// Largest distance of a camera from the motion centre, metres (a lever arm of a road vehicle is
+/// a few metres; 1 km is generous).
+pub const MAX_LEVER_ARM: f64 = 1000.0;
+/// Largest magnitude of a Kannala-Brandt coefficient.
+pub const MAX_KB_COEFFICIENT: f64 = 100.0;
+
+/// A number for a message: at most ~12 significant digits (a 444-digit literal stays short).
+fn short_number(v: f64) -> String {
+    let s = format!("{v}");
+    if s.len() > 20 { format!("{v:.6e}") } else { s }
+}
+
+/// The physical ranges (`FORMAT.md`, "Value ranges"): image size within
+/// `1..=`[`MAX_IMAGE_SIDE`], focal lengths within [`FOCAL_RANGE`] of the image size, the
+/// principal point within one image size of the image, Kannala-Brandt coefficients within
+/// ±[`MAX_KB_COEFFICIENT`] and a projection that does not fold back (`d'(θ) > 0`) for every
+/// angle up to the image's corners or 90°, whichever is less.
+fn check_ranges(
+    model: &Camera,
+    fx: f64,
+    fy: f64,
+    width: f64,
+    height: f64,
+    others: &[(&'static str, f64)],
+) -> Result<(), CameraFault> {
+    let fault = |field: &'static str, reason: String| Err(CameraFault { field, reason });
+    for (name, v) in [("width", width), ("height", height)] {
+        if !(1.0..=MAX_IMAGE_SIDE).contains(&v) {
+            return fault(
+                name,
+                format!(
+                    "`{name}` must be within 1..={MAX_IMAGE_SIDE} pixels, found {}",
+                    short_number(v)
+                ),
+            );
+        }
+    }
+    let side = width.max(height);
+    let (lo, hi) = (side / FOCAL_RANGE, side * FOCAL_RANGE);
+    for (name, v) in [("fx", fx), ("fy", fy)] {
+        if !(lo..=hi).contains(&v) {
+            return fault(
+                name,
+                format!(
+                    "`{name}` = {} pixels is outside {lo}..={hi} (1/{FOCAL_RANGE} to \
+                     {FOCAL_RANGE} times the larger image side)",
+                    short_number(v)
+                ),
+            );
+        }
+    }
+    let get = |n: &str| others.iter().find(|(k, _)| *k == n).map(|(_, v)| *v);
+    let (cx, cy) = (get("cx").unwrap_or(0.0), get("cy").unwrap_or(0.0));
+    for (name, v, size) in [("cx", cx, width), ("cy", cy, height)] {
+        if !(-size..=2.0 * size).contains(&v) {
+            return fault(
+                name,
+                format!(
+                    "`{name}` = {} is more than one image size ({size} px) outside the image",
+                    short_number(v)
+                ),
+            );
+        }
+    }
+    if let Camera::KannalaBrandt(k) = model {
+        for (name, v) in [("k1", k.k1), ("k2", k.k2), ("k3", k.k3), ("k4", k.k4)] {
+            if v.abs() > MAX_KB_COEFFICIENT {
+                return fault(
+                    name,
+                    format!(
+                        "`{name}` = {} is outside ±{MAX_KB_COEFFICIENT}",
+                        short_number(v)
+                    ),
+                );
+            }
+        }
+        // d(θ) must increase up to the farthest image corner or up to 90° off-axis, whichever
+        // comes first (a fisheye's image circle may end inside the image; any lens is
+        // monotonic over a hemisphere).
+        let corner = [(0.0, 0.0), (width, 0.0), (0.0, height), (width, height)]
+            .iter()
+            .map(|&(u, v)| ((u - cx) / fx).hypot((v - cy) / fy))
+            .fold(0.0, f64::max);
+        const STEPS: usize = 1000;
+        for i in 1..=STEPS {
+            let theta = std::f64::consts::FRAC_PI_2 * i as f64 / STEPS as f64;
+            let t2 = theta * theta;
+            let d = theta * (1.0 + t2 * (k.k1 + t2 * (k.k2 + t2 * (k.k3 + t2 * k.k4))));
+            let dd =
+                1.0 + t2 * (3.0 * k.k1 + t2 * (5.0 * k.k2 + t2 * (7.0 * k.k3 + t2 * 9.0 * k.k4)));
+            if !(dd > 0.0) {
+                return fault(
+                    "k1",
+                    format!(
+                        "the Kannala-Brandt projection folds back at {:.1}° off-axis \
+                         (d'(θ) <= 0) inside the image: check k1..k4",
+                        theta.to_degrees()
+                    ),
+                );
+            }
+            if d >= corner {
+                break;
+            }
+        }
     }
     Ok(())
 }
@@ -275,12 +407,36 @@ fn extrinsic(rows: &[Vec<f64>], camera: usize) -> Result<Pose<f64>, IoErrorKind>
             tolerance: ORTHONORMAL_TOLERANCE,
         });
     }
-    Ok(pose)
+    let lever = pose.translation.norm();
+    if lever > MAX_LEVER_ARM {
+        return Err(IoErrorKind::InvalidCamera {
+            camera,
+            reason: format!(
+                "T_vehicle_camera puts the camera {} m from the motion centre; at most \
+                 {MAX_LEVER_ARM} m is accepted",
+                short_number(lever)
+            ),
+        });
+    }
+    // What the tolerance accepts is re-orthonormalised (the nearest rotation, by SVD), so that
+    // every pose computed from it is orthonormal to rounding. A rotation orthonormal to
+    // rounding already is kept bit for bit (the writer's output reads back exactly).
+    if error <= 1e-12 {
+        return Ok(pose);
+    }
+    let svd = pose.rotation.svd(true, true);
+    let rotation = match (svd.u, svd.v_t) {
+        (Some(u), Some(v_t)) => u * v_t,
+        _ => pose.rotation,
+    };
+    Ok(Pose::new(rotation, pose.translation))
 }
 
 /// Parses the text of a `rig.json`; `path` only names the file in errors.
 pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoError> {
     let path = path.as_ref();
+    // A UTF-8 byte order mark (written by some Windows editors) is skipped, as in the CSV files.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let trimmed = text.trim_start();
     if !trimmed.is_empty() && !trimmed.starts_with('{') {
         let line = 1 + text[..text.len() - trimmed.len()].matches('\n').count();
@@ -300,8 +456,9 @@ pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoEr
             )),
         ));
     }
+    let lines = Lines::new(text);
     let file: RigFile = parse_at(text, Pos::START, path)?;
-    let list_pos = Pos::of(text, file.cameras.get());
+    let list_pos = lines.of(file.cameras.get());
     let list: Vec<&RawValue> = parse_at(file.cameras.get(), list_pos, path)?;
     if list.is_empty() {
         return Err(IoError::at(path, list_pos.line, IoErrorKind::EmptyRig));
@@ -309,8 +466,8 @@ pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoEr
     let mut cameras = Vec::with_capacity(list.len());
     for (i, raw) in list.iter().enumerate() {
         let raw = raw.get();
-        let cam: CameraFile = parse_at(raw, Pos::of(text, raw), path)?;
-        let model_pos = Pos::of(text, cam.model.get());
+        let cam: CameraFile = parse_at(raw, lines.of(raw), path)?;
+        let model_pos = lines.of(cam.model.get());
         let model: Camera = parse_at(cam.model.get(), model_pos, path)?;
         check_camera(&model).map_err(|f| {
             IoError::at(
@@ -322,7 +479,7 @@ pub fn read_rig_from_str(text: &str, path: impl AsRef<Path>) -> Result<Rig, IoEr
                 },
             )
         })?;
-        let t_pos = Pos::of(text, cam.t_vehicle_camera.get());
+        let t_pos = lines.of(cam.t_vehicle_camera.get());
         let rows: Vec<Vec<f64>> = parse_at(cam.t_vehicle_camera.get(), t_pos, path)?;
         let t_vehicle_camera = extrinsic(&rows, i).map_err(|k| IoError::at(path, t_pos.line, k))?;
         cameras.push(RigCamera {
@@ -408,9 +565,13 @@ fn json_number(v: f64) -> String {
 /// Writes `rig.json` atomically. Fails (writing nothing) on intrinsics or extrinsics that the
 /// reader would reject.
 pub fn write_rig(path: impl AsRef<Path>, rig: &Rig) -> Result<(), IoError> {
-    let path = path.as_ref();
+    stage_rig(path.as_ref(), rig)?.commit()
+}
+
+/// [`write_rig`] without the commit.
+pub(crate) fn stage_rig(path: &Path, rig: &Rig) -> Result<crate::AtomicFile, IoError> {
     let text = rig_to_json(rig).map_err(|k| IoError::file(path, k))?;
-    write_atomic(path, |f| put!(f, "{text}"))
+    stage_atomic(path, |f| put!(f, "{text}"))
 }
 
 #[cfg(test)]
@@ -442,7 +603,16 @@ mod tests {
     fn positions_map_to_the_file() {
         let text = "{\n  \"a\": [1,\n 2]\n}";
         let sub = &text[text.find('[').unwrap()..];
-        let p = Pos::of(text, sub);
+        let p = Lines::new(text).of(sub);
+        assert_eq!(Lines::new(text).of(text).line, 1);
+        let last = &text[text.len() - 1..];
+        assert_eq!(
+            (
+                Lines::new(text).of(last).line,
+                Lines::new(text).of(last).column
+            ),
+            (4, 1)
+        );
         assert_eq!((p.line, p.column), (2, 8));
     }
 }

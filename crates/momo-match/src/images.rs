@@ -14,6 +14,9 @@ pub const IMAGE_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
 pub struct ImageSequence {
     folders: Vec<PathBuf>,
     files: Vec<Vec<PathBuf>>,
+    /// Per camera, the size every image must have (checked from the file's header, before
+    /// decoding), with what set it.
+    expected: Vec<Option<(u32, u32)>>,
 }
 
 impl ImageSequence {
@@ -39,7 +42,18 @@ impl ImageSequence {
                 });
             }
         }
-        Ok(Self { folders, files })
+        Ok(Self {
+            folders,
+            files,
+            expected: Vec::new(),
+        })
+    }
+
+    /// Every image of camera `j` must be `sizes[j]` (width, height, e.g. the rig's): checked
+    /// from the file's header before the image is decoded, so that a small file declaring a
+    /// huge image is refused without allocating it.
+    pub fn expect_sizes(&mut self, sizes: Vec<Option<(u32, u32)>>) {
+        self.expected = sizes;
     }
 
     /// Number of frames (images per camera).
@@ -83,6 +97,22 @@ impl ImageSequence {
                         self.folders[j].display()
                     ))
                 })?;
+                if let Some(Some((ew, eh))) = self.expected.get(j) {
+                    let (w, h) = image::image_dimensions(path).map_err(|e| MatchError::Decode {
+                        path: path.to_path_buf(),
+                        reason: e.to_string(),
+                    })?;
+                    if (w, h) != (*ew, *eh) {
+                        return Err(MatchError::ImageSize {
+                            path: path.to_path_buf(),
+                            width: w,
+                            height: h,
+                            expected: format!("the rig's camera {j}"),
+                            expected_width: *ew,
+                            expected_height: *eh,
+                        });
+                    }
+                }
                 let mut img = load_gray(path)?;
                 if let Some(g) = gamma {
                     g.apply(&mut img);

@@ -81,7 +81,17 @@ impl ImageFrontEnd {
         }
         let gamma = options.gamma.map(GammaTable::new).transpose()?;
         let matcher = FrameMatcher::new(rig.len(), options.matching)?;
-        let images = ImageSequence::open(folders)?;
+        let mut images = ImageSequence::open(folders)?;
+        // Image headers are checked against the rig before decoding.
+        images.expect_sizes(
+            rig.cameras()
+                .iter()
+                .map(|c| {
+                    let (w, h) = c.model.size();
+                    Some((w as u32, h as u32))
+                })
+                .collect(),
+        );
         Ok(Self {
             images,
             rig: rig.clone(),

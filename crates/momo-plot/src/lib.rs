@@ -48,7 +48,7 @@ mod trajectory;
 
 pub use errors::{ErrorSample, plot_rotation_errors, rotation_error_samples};
 pub use landscape::{Landscape, LandscapeOptions, compute_landscape, plot_landscape};
-pub use render::{Format, font_available};
+pub use render::{Format, MAX_FONT_BYTES, font_available};
 pub use trajectory::plot_trajectories;
 
 use std::path::PathBuf;

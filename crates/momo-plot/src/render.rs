@@ -51,6 +51,19 @@ const FONT_CANDIDATES: &[&str] = &[
     "C:\\Windows\\Fonts\\arial.ttf",
 ];
 
+/// The largest font file read (64 MiB; DejaVu Sans is 0.7 MB, the largest CJK fonts ~20 MB):
+/// `MOMO_PLOT_FONT=/dev/zero` is skipped instead of read until memory runs out.
+pub const MAX_FONT_BYTES: u64 = 64 << 20;
+
+/// A font file's bytes, or `None` if it cannot be read or is larger than [`MAX_FONT_BYTES`].
+fn read_font(path: &std::path::Path) -> Option<Vec<u8>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).ok()?;
+    let mut bytes = Vec::new();
+    file.take(MAX_FONT_BYTES + 1).read_to_end(&mut bytes).ok()?;
+    (bytes.len() as u64 <= MAX_FONT_BYTES).then_some(bytes)
+}
+
 /// Whether a font was found (the first call registers it): with `false`, figures are drawn
 /// without text. Looks at `MOMO_PLOT_FONT` (a TrueType/OpenType file) first, then at the usual
 /// locations of DejaVu Sans, Liberation Sans, FreeSans, Noto Sans and Arial.
@@ -62,7 +75,7 @@ pub fn font_available() -> bool {
             .into_iter()
             .chain(FONT_CANDIDATES.iter().map(std::path::PathBuf::from));
         for path in candidates {
-            let Ok(bytes) = std::fs::read(&path) else {
+            let Some(bytes) = read_font(&path) else {
                 continue;
             };
             // plotters keeps registered fonts for the life of the process.

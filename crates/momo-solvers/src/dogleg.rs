@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 /// assert_eq!(dl.initial_radius, 1.0);
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Dogleg {
     /// Most iterations (trial steps, accepted or rejected).
     pub max_iterations: usize,

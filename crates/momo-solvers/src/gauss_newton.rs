@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 /// assert_eq!(gn.max_iterations, 20);
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct GaussNewton {
     /// Most iterations (Gauss-Newton steps).
     pub max_iterations: usize,

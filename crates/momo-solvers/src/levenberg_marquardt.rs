@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 /// assert_eq!(lm.initial_lambda, 1e-3);
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct LevenbergMarquardt {
     /// Most iterations (trial steps, accepted or rejected).
     pub max_iterations: usize,

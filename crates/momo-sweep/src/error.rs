@@ -8,12 +8,12 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum SweepError {
     /// A file could not be read.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Read {
         /// The file.
         path: String,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (not a `source`: the message already quotes it once).
+        error: std::io::Error,
     },
     /// The grid file is malformed or names something unknown.
     #[error("{path}:{line}: {reason}")]

@@ -345,13 +345,35 @@ fn scale_list(loc: &Locator<'_>, at: usize, v: &Value, what: &str) -> Result<Vec
     Ok(out)
 }
 
+/// The largest grid file read (1 MiB).
+pub const MAX_GRID_BYTES: u64 = 1 << 20;
+/// The most combinations a grid may have (counted before they are expanded); at seconds per
+/// job and sequence, more is weeks of computing, and each expanded combination holds its
+/// configuration in memory.
+pub const MAX_COMBINATIONS: usize = 20_000;
+
 impl Grid {
     /// Reads a grid file (TOML).
+    /// Files larger than [`MAX_GRID_BYTES`] are refused without reading them whole.
     pub fn from_file(path: &Path) -> Result<Self, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Read {
+        use std::io::Read;
+        let read_err = |error| SweepError::Read {
             path: path.display().to_string(),
-            source,
-        })?;
+            error,
+        };
+        let file = std::fs::File::open(path).map_err(read_err)?;
+        let mut bytes = Vec::new();
+        file.take(MAX_GRID_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(read_err)?;
+        if bytes.len() as u64 > MAX_GRID_BYTES {
+            return Err(SweepError::Input(format!(
+                "{}: larger than {MAX_GRID_BYTES} bytes (a grid is a few kB)",
+                path.display()
+            )));
+        }
+        let text = String::from_utf8(bytes)
+            .map_err(|_| SweepError::Input(format!("{}: invalid UTF-8", path.display())))?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
@@ -456,6 +478,18 @@ impl Grid {
             max_frames,
             odometry: raw.odometry.as_ref().map(|o| o.get_ref().clone()),
         };
+        // Counted before anything is expanded: a 3,000 x 3,000 grid was expanded until the
+        // kernel killed the process at 24 GB.
+        let count = grid.combination_count();
+        if count > MAX_COMBINATIONS {
+            return Err(loc.err(
+                0,
+                format!(
+                    "the grid has {count} combinations; at most {MAX_COMBINATIONS} are supported \
+                     (split it into several grids)"
+                ),
+            ));
+        }
         // The odometry options are checked by building the first combination.
         if let Some(first) = grid.combinations().first()
             && let Err(e) = first.build_config()
@@ -476,6 +510,28 @@ impl Grid {
             LossScales::PerMetric(m) => m.get(&metric.type_name).map_or(&[][..], Vec::as_slice),
         };
         list.iter().copied().map(Some).collect()
+    }
+
+    /// The number of combinations, counted without expanding them (saturating at `usize::MAX`).
+    pub fn combination_count(&self) -> usize {
+        let mut per_model = 0usize;
+        for metric in &self.metrics {
+            for loss in &self.losses {
+                let scales = if loss.table.contains_key("scale") || !takes_scale(&loss.table) {
+                    1
+                } else {
+                    match &self.loss_scales {
+                        LossScales::All(l) => l.len(),
+                        LossScales::PerMetric(m) => m.get(&metric.type_name).map_or(0, Vec::len),
+                    }
+                };
+                per_model = per_model.saturating_add(scales);
+            }
+        }
+        per_model
+            .saturating_mul(self.models.len())
+            .saturating_mul(self.solvers.len())
+            .saturating_mul(self.matches.len())
     }
 
     /// Every combination, in a fixed order: models, then metrics, losses, scales, solvers and

@@ -62,7 +62,9 @@ pub mod run;
 pub mod summary;
 
 pub use error::SweepError;
-pub use grid::{AxisEntry, Combination, Grid, LossScales, MatchCount};
+pub use grid::{
+    AxisEntry, Combination, Grid, LossScales, MAX_COMBINATIONS, MAX_GRID_BYTES, MatchCount,
+};
 pub use plan::{Job, Plan, Shard};
 pub use results::{COLUMNS, RankBy, Row, Status, TIMING_COLUMNS, merge, read_csv, write_csv};
 pub use run::{RunOptions, load_sequence, run_job, run_jobs, run_sweep, sequence_name, subsample};

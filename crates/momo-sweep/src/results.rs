@@ -210,9 +210,9 @@ pub fn write_csv(path: &Path, rows: &[Row]) -> Result<(), SweepError> {
 
 /// Reads a results CSV; errors name the file and line.
 pub fn read_csv(path: &Path) -> Result<Vec<Row>, SweepError> {
-    let file = std::fs::File::open(path).map_err(|source| SweepError::Read {
+    let file = std::fs::File::open(path).map_err(|error| SweepError::Read {
         path: path.display().to_string(),
-        source,
+        error,
     })?;
     let bad = |line: u64, reason: String| SweepError::Results {
         path: path.display().to_string(),

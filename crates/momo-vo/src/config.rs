@@ -10,13 +10,13 @@ use thiserror::Error;
 /// A configuration error (unreadable file, unknown type tag, bad value).
 #[derive(Debug, Error)]
 pub enum ConfigError {
-    /// The file could not be read.
-    #[error("{path}: {source}")]
+    /// The file could not be read (or is larger than [`MAX_CONFIG_BYTES`]).
+    #[error("{path}: {error}")]
     Read {
         /// The file.
         path: String,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (not a `source`: the message already quotes it once).
+        error: std::io::Error,
     },
     /// The file could not be parsed.
     #[error("{path}:{line}: {reason}")]
@@ -37,6 +37,12 @@ pub enum ConfigError {
         reason: String,
     },
 }
+
+/// The largest configuration file read (1 MiB): `--config /dev/zero` fails at once.
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
+/// The most `odometry.restart_yaw_offsets` (each is one more solve per frame).
+pub const MAX_RESTART_OFFSETS: usize = 64;
 
 /// Options of the odometry driver (everything that is not model, metric, loss or solver).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -289,10 +295,30 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
 
 impl Config {
     /// Parses TOML or JSON (chosen by the extension `.json`, otherwise TOML) from a file.
+    /// Files larger than [`MAX_CONFIG_BYTES`] are refused without reading them whole.
     pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        use std::io::Read;
+        let read_err = |error| ConfigError::Read {
             path: path.display().to_string(),
-            source,
+            error,
+        };
+        let file = std::fs::File::open(path).map_err(read_err)?;
+        let mut bytes = Vec::new();
+        file.take(MAX_CONFIG_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(read_err)?;
+        if bytes.len() as u64 > MAX_CONFIG_BYTES {
+            return Err(ConfigError::Invalid {
+                path: path.display().to_string(),
+                reason: format!(
+                    "larger than {MAX_CONFIG_BYTES} bytes (a configuration is a few kB)"
+                ),
+            });
+        }
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+        let text = String::from_utf8(bytes.to_vec()).map_err(|_| ConfigError::Invalid {
+            path: path.display().to_string(),
+            reason: "invalid UTF-8".into(),
         })?;
         let is_json = path
             .extension()
@@ -364,6 +390,13 @@ impl Config {
         }
         if let Some(Err(reason)) = o.separate.as_ref().map(|s| s.validate()) {
             return bad(reason);
+        }
+        // Every offset is one more solve per frame: 100,000 ran for minutes per frame.
+        if o.restart_yaw_offsets.len() > MAX_RESTART_OFFSETS {
+            return bad(format!(
+                "odometry.restart_yaw_offsets has {} entries; at most {MAX_RESTART_OFFSETS}",
+                o.restart_yaw_offsets.len()
+            ));
         }
         if !(o.prior_min_arc_length >= 0.0 && o.prior_min_arc_length.is_finite()) {
             return bad("odometry.prior_min_arc_length must be finite and >= 0".into());

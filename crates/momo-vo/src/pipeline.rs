@@ -182,8 +182,8 @@ impl DiagnosticsWriter {
         writeln!(w).map_err(err)
     }
 
-    fn finish(self) -> Result<(), IoError> {
-        self.file.commit()
+    fn into_file(self) -> AtomicFile {
+        self.file
     }
 }
 
@@ -201,7 +201,14 @@ pub fn run_sequence(
 ) -> Result<RunSummary, RunError> {
     let rig = momo_io::read_rig(dir.join("rig.json")).map_err(RunError::Input)?;
     let odometry_path = dir.join("odometry.csv");
-    let arc_lengths = if odometry_path.exists() {
+    // A dangling symbolic link is an odometry.csv that cannot be read, not a missing one.
+    let arc_lengths = if std::fs::symlink_metadata(&odometry_path).is_ok() {
+        if std::fs::metadata(&odometry_path).is_err() {
+            return Err(RunError::Input(IoError::file(
+                &odometry_path,
+                momo_io::IoErrorKind::DanglingLink,
+            )));
+        }
         Some(momo_io::read_odometry(&odometry_path).map_err(RunError::Input)?)
     } else {
         None
@@ -258,10 +265,10 @@ pub fn run_sequence(
     for k in last + 1..=total {
         step(k, &empty, &mut summary)?;
     }
-    poses.finish().map_err(RunError::Output)?;
-    if let Some(d) = diagnostics {
-        d.finish().map_err(RunError::Output)?;
-    }
+    // Poses and diagnostics are committed together: both or neither.
+    let mut outputs = vec![poses.into_file()];
+    outputs.extend(diagnostics.map(DiagnosticsWriter::into_file));
+    momo_io::commit_all(outputs).map_err(RunError::Output)?;
     Ok(summary)
 }
 

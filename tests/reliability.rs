@@ -1,0 +1,660 @@
+//! Reliability of the `momo` process (issue 16): no input is ever overwritten, no output is
+//! left half-written or behind on any error or signal, unwritable standard streams end cleanly,
+//! and oversized inputs are refused early. Every test runs the built binary.
+
+use momo::sim::{SimConfig, simulate};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn momo() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_momo"))
+}
+
+fn out(cmd: &mut Command) -> Output {
+    cmd.output().expect("momo starts")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A small simulated sequence (10 frames) with odometry and ground truth.
+fn sequence(dir: &Path) {
+    let mut cfg = SimConfig::clean_pinhole();
+    cfg.frames = 10;
+    cfg.matches_per_camera = 60;
+    simulate(&cfg)
+        .expect("simulates")
+        .write(dir)
+        .expect("writes");
+}
+
+/// Every file in a directory (name and content), to prove nothing changed.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut v: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| {
+            let p = e.expect("entry").path();
+            let data = std::fs::read(&p).unwrap_or_default();
+            (p, data)
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+fn assert_refused(o: &Output, what: &str) {
+    assert_eq!(o.status.code(), Some(2), "{what}: {}", stderr(o));
+    assert!(
+        stderr(o).contains("refused as an output"),
+        "{what}: {}",
+        stderr(o)
+    );
+}
+
+#[test]
+fn outputs_that_are_inputs_are_refused_and_nothing_is_touched() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    std::fs::create_dir(tmp.path().join("links")).expect("mkdir");
+    std::os::unix::fs::symlink(seq.join("matches.csv"), tmp.path().join("links/sym.csv"))
+        .expect("symlink");
+    std::fs::hard_link(seq.join("rig.json"), tmp.path().join("links/hard.json")).expect("link");
+    let before = snapshot(&seq);
+    let spellings = [
+        seq.join("matches.csv"),
+        seq.join("rig.json"),
+        seq.join("odometry.csv"),
+        seq.join("poses.txt"),
+        seq.join(".").join("matches.csv"),
+        tmp.path().join("seq/../seq/odometry.csv"),
+        tmp.path().join("links/sym.csv"),
+        tmp.path().join("links/hard.json"),
+    ];
+    for target in &spellings {
+        let o = out(momo().arg("run").arg(&seq).arg("-o").arg(target).arg("-q"));
+        assert_refused(&o, &target.display().to_string());
+        let o = out(momo()
+            .arg("run")
+            .arg(&seq)
+            .arg("-o")
+            .arg(tmp.path().join("p.txt"))
+            .arg("-d")
+            .arg(target)
+            .arg("-q"));
+        assert_refused(&o, &target.display().to_string());
+        // calibrate writes a rig: the same protection.
+        let o = out(momo()
+            .arg("calibrate")
+            .arg(&seq)
+            .arg("-o")
+            .arg(target)
+            .arg("-q"));
+        assert_refused(&o, &target.display().to_string());
+    }
+    // The configuration is an input too.
+    let cfg = tmp.path().join("c.toml");
+    std::fs::write(&cfg, "").expect("write");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-c")
+        .arg(&cfg)
+        .arg("-o")
+        .arg(&cfg));
+    assert_refused(&o, "config");
+    assert_eq!(std::fs::read(&cfg).expect("read"), b"");
+    assert_eq!(snapshot(&seq), before, "the sequence is untouched");
+    assert!(!tmp.path().join("p.txt").exists(), "no output was written");
+}
+
+#[test]
+fn an_output_given_twice_is_refused() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let a = tmp.path().join("same.txt");
+    let b = tmp.path().join("seq/../same.txt");
+    for (o1, o2) in [(&a, &a), (&a, &b)] {
+        let o = out(momo()
+            .arg("run")
+            .arg(&seq)
+            .arg("-o")
+            .arg(o1)
+            .arg("-d")
+            .arg(o2)
+            .arg("-q"));
+        assert_refused(&o, "twice");
+        assert!(stderr(&o).contains("given twice"), "{}", stderr(&o));
+        assert!(!a.exists());
+    }
+    // Also when the file exists already: it keeps its content.
+    std::fs::write(&a, "keep").expect("write");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-o")
+        .arg(&a)
+        .arg("-d")
+        .arg(&b)
+        .arg("-q"));
+    assert_refused(&o, "twice, existing");
+    assert_eq!(std::fs::read_to_string(&a).expect("read"), "keep");
+}
+
+#[test]
+fn fifo_device_and_directory_outputs_are_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let fifo = tmp.path().join("fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    let dir = tmp.path().join("adir");
+    std::fs::create_dir(&dir).expect("mkdir");
+    let mut targets = vec![dir.clone(), PathBuf::from("/dev/null")];
+    if made.is_ok_and(|s| s.success()) {
+        targets.push(fifo.clone());
+    } else {
+        eprintln!("mkfifo not available: FIFO case skipped");
+    }
+    for t in &targets {
+        let o = out(momo().arg("run").arg(&seq).arg("-o").arg(t).arg("-q"));
+        assert_refused(&o, &t.display().to_string());
+        // As diagnostics: the poses must not be left behind either (was: exit 1, p.txt left).
+        let p = tmp.path().join("p.txt");
+        let o = out(momo()
+            .arg("run")
+            .arg(&seq)
+            .arg("-o")
+            .arg(&p)
+            .arg("-d")
+            .arg(t)
+            .arg("-q"));
+        assert_refused(&o, &t.display().to_string());
+        assert!(!p.exists(), "p.txt left behind with -d {}", t.display());
+    }
+    if fifo.exists() {
+        let meta = std::fs::symlink_metadata(&fifo).expect("fifo");
+        assert!(meta.file_type().is_fifo(), "the FIFO is still a FIFO");
+    }
+    assert!(
+        std::fs::symlink_metadata("/dev/null")
+            .expect("dev null")
+            .file_type()
+            .is_char_device()
+    );
+    assert!(dir.is_dir());
+}
+
+#[test]
+fn a_missing_output_directory_is_an_input_error() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-o")
+        .arg(tmp.path().join("no/such/dir/p.txt"))
+        .arg("-q"));
+    assert_refused(&o, "missing dir");
+    assert!(stderr(&o).contains("does not exist"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_254_character_output_name_works() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let name = format!("{}.txt", "p".repeat(250));
+    assert_eq!(name.len(), 254);
+    let target = tmp.path().join(&name);
+    let o = out(momo().arg("run").arg(&seq).arg("-o").arg(&target).arg("-q"));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(
+        momo::io::read_poses(&target).expect("poses").len(),
+        10,
+        "one pose per frame"
+    );
+}
+
+/// No temporary file (`.NAME.XXXXXX.tmp`) in a directory.
+fn temporaries(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .expect("dir")
+        .filter_map(|e| {
+            let n = e.ok()?.file_name().to_string_lossy().into_owned();
+            (n.ends_with(".tmp") || n.ends_with(".bak")).then_some(n)
+        })
+        .collect()
+}
+
+/// `momo run` on a sequence whose matches.csv is a FIFO that this test holds open: the run
+/// has created its temporary outputs and waits for more rows when the signal arrives.
+fn signal_during_run(signal: &str, expected: i32) {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let matches = std::fs::read_to_string(seq.join("matches.csv")).expect("read");
+    std::fs::remove_file(seq.join("matches.csv")).expect("rm");
+    let ok = Command::new("mkfifo")
+        .arg(seq.join("matches.csv"))
+        .status()
+        .is_ok_and(|s| s.success());
+    if !ok {
+        eprintln!("mkfifo not available: skipped");
+        return;
+    }
+    let outdir = tmp.path().join("out");
+    std::fs::create_dir(&outdir).expect("mkdir");
+    let mut child = momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-o")
+        .arg(outdir.join("p.txt"))
+        .arg("-d")
+        .arg(outdir.join("d.csv"))
+        .arg("-q")
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    // Opening the FIFO for writing waits for momo to open it for reading.
+    let mut fifo = std::fs::OpenOptions::new()
+        .write(true)
+        .open(seq.join("matches.csv"))
+        .expect("fifo");
+    // The header and the rows of the first frame pairs, then nothing: momo waits.
+    let half: String = matches
+        .lines()
+        .take(100)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    fifo.write_all(half.as_bytes()).expect("write");
+    fifo.flush().expect("flush");
+    let start = std::time::Instant::now();
+    while temporaries(&outdir).len() < 2 {
+        assert!(
+            start.elapsed().as_secs() < 60,
+            "no temporary files appeared"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let pid = child.id().to_string();
+    let killed = Command::new("kill")
+        .arg(format!("-{signal}"))
+        .arg(&pid)
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let status = child.wait().expect("wait");
+    drop(fifo);
+    assert_eq!(status.code(), Some(expected), "exit code after SIG{signal}");
+    assert_eq!(
+        temporaries(&outdir),
+        Vec::<String>::new(),
+        "temporaries removed"
+    );
+    assert!(!outdir.join("p.txt").exists() && !outdir.join("d.csv").exists());
+}
+
+#[test]
+fn sigterm_removes_temporary_files_and_exits_143() {
+    signal_during_run("TERM", 143);
+}
+
+#[test]
+fn sigint_removes_temporary_files_and_exits_130() {
+    signal_during_run("INT", 130);
+}
+
+#[test]
+fn simulate_and_import_refuse_a_non_empty_directory_without_force() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let dir = tmp.path().join("sim");
+    std::fs::create_dir(&dir).expect("mkdir");
+    std::fs::write(dir.join("rig.json"), "mine").expect("write");
+    let o = out(momo().args(["simulate", "--frames", "5"]).arg(&dir));
+    assert_refused(&o, "non-empty");
+    assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("rig.json")).expect("r"),
+        "mine"
+    );
+    let o = out(momo()
+        .args(["simulate", "--frames", "5", "--force"])
+        .arg(&dir));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(momo::io::read_sequence(&dir).is_ok());
+    // A file as the output directory.
+    let file = tmp.path().join("file");
+    std::fs::write(&file, "x").expect("write");
+    let o = out(momo().args(["simulate", "--frames", "5"]).arg(&file));
+    assert_refused(&o, "file as directory");
+    // import-kitti too (its input is checked after the directory, so any input will do).
+    let o = out(momo().arg("import-kitti").arg(tmp.path()).arg(&dir));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[test]
+fn a_failed_simulate_leaves_no_directory() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let traj = tmp.path().join("traj.txt");
+    // Two poses 1e201 m apart: valid syntax, the simulation's pixels overflow.
+    std::fs::write(
+        &traj,
+        "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1e201 0 1 0 0 0 0 1 1e201\n1 0 0 2e201 0 1 0 0 0 0 1 2e201\n",
+    )
+    .expect("write");
+    let dir = tmp.path().join("new/sim");
+    let o = out(momo()
+        .args(["simulate", "--frames", "3", "--trajectory"])
+        .arg(&traj)
+        .arg(&dir));
+    assert_ne!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_ne!(o.status.code(), Some(101), "{}", stderr(&o));
+    assert!(
+        !tmp.path().join("new").exists(),
+        "created directories removed"
+    );
+    // Into an existing empty directory: it stays, empty.
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).expect("mkdir");
+    let o = out(momo()
+        .args(["simulate", "--frames", "3", "--trajectory"])
+        .arg(&traj)
+        .arg(&empty));
+    assert_ne!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(std::fs::read_dir(&empty).expect("dir").count(), 0);
+}
+
+#[test]
+fn a_failed_match_leaves_no_directory() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let images = tmp.path().join("images");
+    std::fs::create_dir(&images).expect("mkdir");
+    std::fs::write(images.join("000000.png"), "not a png").expect("write");
+    std::fs::write(images.join("000001.png"), "not a png").expect("write");
+    let dir = tmp.path().join("matched");
+    let o = out(momo()
+        .arg("match")
+        .arg(&images)
+        .arg("--rig")
+        .arg(seq.join("rig.json"))
+        .arg("-o")
+        .arg(&dir)
+        .arg("-q"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!dir.exists(), "the created output directory is removed");
+}
+
+#[test]
+fn a_closed_pipe_ends_quietly_with_141() {
+    for args in [&["config"][..], &["demo", "--frames", "3", "--quiet"][..]] {
+        let mut child = momo()
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        drop(child.stdout.take());
+        let o = child.wait_with_output().expect("wait");
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {}", stderr(&o));
+        assert_eq!(stderr(&o), "", "{args:?}: quiet");
+    }
+}
+
+#[test]
+fn a_full_standard_output_is_an_error_not_a_panic() {
+    let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
+        eprintln!("/dev/full not available: skipped");
+        return;
+    };
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let gt = seq.join("poses.txt");
+    let cases: Vec<Vec<std::ffi::OsString>> = vec![
+        vec!["config".into()],
+        vec![
+            "eval".into(),
+            "--gt".into(),
+            gt.clone().into(),
+            "--est".into(),
+            gt.clone().into(),
+        ],
+        vec![
+            "calibrate".into(),
+            seq.clone().into(),
+            "-o".into(),
+            tmp.path().join("rig.json").into(),
+        ],
+    ];
+    for args in cases {
+        let o = out(momo().args(&args).stdout(full.try_clone().expect("dup")));
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("cannot write to standard output"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
+    // Standard error full after the poses were written: the poses stand, no panic.
+    let p = tmp.path().join("p.txt");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-o")
+        .arg(&p)
+        .stderr(full.try_clone().expect("dup")));
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(momo::io::read_poses(&p).expect("poses").len(), 10);
+}
+
+#[test]
+fn a_dangling_odometry_link_is_an_error() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    std::fs::remove_file(seq.join("odometry.csv")).expect("rm");
+    std::os::unix::fs::symlink(tmp.path().join("gone.csv"), seq.join("odometry.csv"))
+        .expect("symlink");
+    let p = tmp.path().join("p.txt");
+    let o = out(momo().arg("run").arg(&seq).arg("-o").arg(&p).arg("-q"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("odometry.csv: a symbolic link"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!p.exists());
+    let o = out(momo()
+        .arg("calibrate")
+        .arg(&seq)
+        .arg("-o")
+        .arg(&p)
+        .arg("-q"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[test]
+fn eval_needs_two_poses() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let one = tmp.path().join("one.txt");
+    std::fs::write(&one, "1 0 0 0 0 1 0 0 0 0 1 0\n").expect("write");
+    let empty = tmp.path().join("empty.txt");
+    std::fs::write(&empty, "").expect("write");
+    for f in [&one, &empty] {
+        let o = out(momo().arg("eval").arg("--gt").arg(f).arg("--est").arg(f));
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("at least 2"), "{}", stderr(&o));
+        assert!(!String::from_utf8_lossy(&o.stdout).contains("NaN"));
+    }
+}
+
+#[test]
+fn a_negative_frame_rate_is_parsed_and_rejected() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let gt = seq.join("poses.txt");
+    let o = out(momo()
+        .args(["plot", "errors", "--gt"])
+        .arg(&gt)
+        .arg("--est")
+        .arg(&gt)
+        .arg("-o")
+        .arg(tmp.path().join("e.svg"))
+        .args(["--frame-rate", "-10"]));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--frame-rate must be a positive number"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn config_files_are_capped_and_unknown_solver_keys_rejected() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let p = tmp.path().join("p.txt");
+    // /dev/zero: refused after 1 MiB, not read until memory runs out.
+    let started = std::time::Instant::now();
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .args(["-c", "/dev/zero", "-o"])
+        .arg(&p));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("/dev/zero: larger than 1048576 bytes"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(started.elapsed().as_secs() < 30);
+    // A misspelt solver option is an error naming the file and the line.
+    let cfg = tmp.path().join("typo.toml");
+    std::fs::write(
+        &cfg,
+        "[solver]\ntype = \"levenberg_marquardt\"\nmax_iteratons = 0\n",
+    )
+    .expect("write");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-c")
+        .arg(&cfg)
+        .arg("-o")
+        .arg(&p));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("typo.toml:"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("max_iteratons"), "{}", stderr(&o));
+    // A missing file: the OS error once.
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-c")
+        .arg(tmp.path().join("none.toml"))
+        .arg("-o")
+        .arg(&p));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o).matches("No such file").count(),
+        1,
+        "{}",
+        stderr(&o)
+    );
+    assert!(!p.exists());
+}
+
+#[test]
+fn a_huge_sweep_grid_is_counted_not_expanded() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let scales: Vec<String> = (1..=3000).map(|i| format!("{}", i as f64 * 1e-4)).collect();
+    let matches: Vec<String> = (1..=3000).map(|i| i.to_string()).collect();
+    let grid = tmp.path().join("grid.toml");
+    std::fs::write(
+        &grid,
+        format!(
+            "models = [\"se3\"]\nmetrics = [\"angle_plane\"]\nlosses = [\"cauchy\"]\n\
+             solvers = [\"levenberg_marquardt\"]\nmatches = [{}]\nloss_scales = [{}]\n",
+            matches.join(", "),
+            scales.join(", ")
+        ),
+    )
+    .expect("write");
+    let started = std::time::Instant::now();
+    let o = out(momo()
+        .arg("sweep")
+        .arg("--grid")
+        .arg(&grid)
+        .arg("--sequences")
+        .arg(&seq)
+        .arg("--output")
+        .arg(tmp.path().join("out"))
+        .arg("--quiet"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("9000000 combinations"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(started.elapsed().as_secs() < 60);
+}
+
+#[test]
+fn too_many_restart_offsets_and_an_endless_font_are_bounded() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let offsets = vec!["0.0"; 100_000];
+    let cfg = tmp.path().join("c.toml");
+    let default = String::from_utf8(out(momo().arg("config")).stdout).expect("utf8");
+    let text: String = default
+        .lines()
+        .map(|l| {
+            if l.starts_with("restart_yaw_offsets") {
+                format!("restart_yaw_offsets = [{}]\n", offsets.join(", "))
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    assert!(
+        text.len() > default.len(),
+        "the default names restart_yaw_offsets"
+    );
+    std::fs::write(&cfg, text).expect("write");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-c")
+        .arg(&cfg)
+        .arg("-o")
+        .arg(tmp.path().join("p.txt")));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("restart_yaw_offsets has 100000 entries"),
+        "{}",
+        stderr(&o)
+    );
+    // MOMO_PLOT_FONT=/dev/zero: skipped after 64 MiB instead of read until memory runs out.
+    let gt = seq.join("poses.txt");
+    let o = out(momo()
+        .env("MOMO_PLOT_FONT", "/dev/zero")
+        .args(["plot", "trajectory", "--gt"])
+        .arg(&gt)
+        .arg("--est")
+        .arg(&gt)
+        .arg("-o")
+        .arg(tmp.path().join("t.svg")));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
