@@ -25,6 +25,7 @@ pub mod calibrate;
 pub mod config;
 pub mod odometry;
 pub mod pipeline;
+pub mod trust;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
 pub use calibrate::{
@@ -38,3 +39,4 @@ pub use odometry::{
 pub use pipeline::{
     EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_sequence,
 };
+pub use trust::{Constraint, Reason, TrustOptions};

@@ -1,0 +1,263 @@
+//! Trust: whether a frame's matches can determine its motion, and whether the answer is
+//! supported by them. The driver ([`crate::Odometry`]) runs these checks on every frame pair
+//! and reports the outcome in the diagnostics ([`Constraint`] and [`Reason`]): a frame whose
+//! answer cannot be trusted gets a status other than `estimated` that names the reason, and
+//! either holds the previous motion (`degenerate`) or keeps its estimate flagged (`weak`).
+//!
+//! The checks, in order:
+//! - repeated matches (the same pixel pair more than once) are counted once;
+//! - the spread of the matches' bearings in the vehicle frame (all cameras): every match in a
+//!   small region (the largest angular standard deviation below
+//!   [`TrustOptions::min_extent`]) is degenerate; every match along one line (the second
+//!   largest below [`TrustOptions::min_width`]) is weak;
+//! - too little flow (the median angle between the bearings of a match below
+//!   [`TrustOptions::min_flow`]) while the vehicle moves: weak (the direction of travel and the
+//!   scale are not seen);
+//! - after the solve: a rotation no vehicle makes between two frames (above
+//!   [`TrustOptions::max_rotation`]), no inlier, fewer inliers than
+//!   [`TrustOptions::min_inliers`], or inliers in a small region: degenerate.
+
+use momo_core::{FrameObservations, Observation, Rig};
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Thresholds of the trust checks and of the run's failure share (`[trust]` in the
+/// configuration).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrustOptions {
+    /// Largest rotation between two frames that a vehicle makes (radians); an estimate above it
+    /// is degenerate and the previous motion is held. Default 0.35 rad (20 deg).
+    pub max_rotation: f64,
+    /// Matches whose bearings (vehicle frame, all cameras) have an angular standard deviation
+    /// below this along their widest direction lie in a small region (radians; default 0.05,
+    /// about a 120 px wide patch at f = 700 px): degenerate.
+    pub min_extent: f64,
+    /// Matches whose angular standard deviation across their main direction is below this lie
+    /// along a line (radians; default 0.004, about 3 px at f = 700 px): weak.
+    pub min_width: f64,
+    /// Median flow (angle between a match's two bearings, radians) below which a moving frame
+    /// has too little flow to see its direction of travel (default 2e-4, 0.14 px at
+    /// f = 700 px): weak, and the scale is not estimated.
+    pub min_flow: f64,
+    /// Fewest inliers that support an estimate (default 10): fewer is degenerate.
+    pub min_inliers: usize,
+    /// A run in which more than this share of the frame pairs failed, were degenerate or held
+    /// their motion (no matches) ends with a warning and exit code 3 (`momo run`); default 0.5.
+    pub max_failed_share: f64,
+}
+
+impl Default for TrustOptions {
+    fn default() -> Self {
+        Self {
+            max_rotation: 20f64.to_radians(),
+            min_extent: 0.05,
+            min_width: 0.004,
+            min_flow: 2e-4,
+            min_inliers: 10,
+            max_failed_share: 0.5,
+        }
+    }
+}
+
+impl TrustOptions {
+    /// Values out of range: the keys concerned and the reason.
+    pub(crate) fn problems(&self) -> Vec<(Vec<&'static str>, String)> {
+        let mut out = Vec::new();
+        let pi = std::f64::consts::PI;
+        if !(self.max_rotation > 0.0 && self.max_rotation <= pi) {
+            out.push((
+                vec!["trust.max_rotation"],
+                format!(
+                    "trust.max_rotation must be within (0, pi] rad, got {}",
+                    self.max_rotation
+                ),
+            ));
+        }
+        for (key, v) in [
+            ("trust.min_extent", self.min_extent),
+            ("trust.min_width", self.min_width),
+            ("trust.min_flow", self.min_flow),
+        ] {
+            if !(v >= 0.0 && v < 1.0) {
+                out.push((vec![key], format!("{key} must be within 0..1 rad, got {v}")));
+            }
+        }
+        if !(0.0..=1.0).contains(&self.max_failed_share) {
+            out.push((
+                vec!["trust.max_failed_share"],
+                format!(
+                    "trust.max_failed_share must be within 0..=1, got {}",
+                    self.max_failed_share
+                ),
+            ));
+        }
+        out
+    }
+}
+
+/// How well a frame's matches constrained its motion.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Constraint {
+    /// Nothing found wrong.
+    #[default]
+    Well,
+    /// The matches constrain the motion only in part (a line of matches, too little flow): the
+    /// estimate is kept, flagged, and does not centre the next frame's prior.
+    Weak,
+    /// The matches do not determine the motion, or the answer is not supported by them: the
+    /// previous motion is held, the standard deviations are infinite.
+    Degenerate,
+}
+
+/// Why a frame is weak or degenerate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// Fewer distinct matches than `odometry.min_matches` once repeated matches count once.
+    RepeatedMatches,
+    /// Every match in a small region of the view.
+    SmallRegion,
+    /// Every match along one line.
+    AlongALine,
+    /// Too little flow for a moving frame.
+    LittleFlow,
+    /// The estimated rotation exceeds `trust.max_rotation`.
+    ImplausibleRotation,
+    /// No match is an inlier of the estimate.
+    NoInliers,
+    /// Fewer inliers than `trust.min_inliers`.
+    TooFewInliers,
+    /// The inliers lie in a small region.
+    InliersInSmallRegion,
+}
+
+impl Reason {
+    /// The snake_case name (as in the diagnostics).
+    pub fn name(self) -> &'static str {
+        match self {
+            Reason::RepeatedMatches => "repeated_matches",
+            Reason::SmallRegion => "small_region",
+            Reason::AlongALine => "along_a_line",
+            Reason::LittleFlow => "little_flow",
+            Reason::ImplausibleRotation => "implausible_rotation",
+            Reason::NoInliers => "no_inliers",
+            Reason::TooFewInliers => "too_few_inliers",
+            Reason::InliersInSmallRegion => "inliers_in_small_region",
+        }
+    }
+}
+
+/// Removes repeated matches (the same two pixels, bit for bit, in the same camera): each
+/// counts once. Returns the number removed.
+pub fn dedupe(obs: &mut FrameObservations) -> usize {
+    let mut removed = 0;
+    for matches in &mut obs.per_camera {
+        let before = matches.len();
+        let key = |o: &Observation| {
+            [
+                o.px0.x.to_bits(),
+                o.px0.y.to_bits(),
+                o.px1.x.to_bits(),
+                o.px1.y.to_bits(),
+            ]
+        };
+        let mut seen = std::collections::HashSet::with_capacity(before);
+        matches.retain(|o| seen.insert(key(o)));
+        removed += before - matches.len();
+    }
+    removed
+}
+
+/// The angular spread of a set of bearings in the vehicle frame: the standard deviations
+/// (radians, small-angle) along the widest and the second widest direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    /// Along the widest direction.
+    pub extent: f64,
+    /// Across it (the second widest).
+    pub width: f64,
+}
+
+/// The spread of the frame-(k-1) bearings of the selected matches (`keep(camera, index)`),
+/// rotated into the vehicle frame; `None` for fewer than 2 matches.
+pub fn spread(
+    rig: &Rig,
+    obs: &FrameObservations,
+    keep: impl Fn(usize, usize) -> bool,
+) -> Option<Spread> {
+    let mut n = 0usize;
+    let mut sum = Vector3::zeros();
+    let mut outer = Matrix3::zeros();
+    for (j, matches) in obs.per_camera.iter().enumerate() {
+        let Some(cam) = rig.cameras().get(j) else {
+            continue;
+        };
+        let r = cam.t_vehicle_camera.rotation;
+        for (i, o) in matches.iter().enumerate() {
+            if !keep(j, i) {
+                continue;
+            }
+            let f = r * o.f0.normalize();
+            sum += f;
+            outer += f * f.transpose();
+            n += 1;
+        }
+    }
+    if n < 2 {
+        return None;
+    }
+    let mean = sum / n as f64;
+    let cov = outer / n as f64 - mean * mean.transpose();
+    let mut ev: Vec<f64> = SymmetricEigen::new(cov)
+        .eigenvalues
+        .iter()
+        .map(|v| v.max(0.0))
+        .collect();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    Some(Spread {
+        extent: ev[0].sqrt(),
+        width: ev[1].sqrt(),
+    })
+}
+
+/// The median flow of a frame pair: the angle between a match's bearings in frame k-1 and k
+/// (radians, camera frame; includes the rotation's flow).
+pub fn median_flow(obs: &FrameObservations) -> Option<f64> {
+    let mut flows: Vec<f64> = obs
+        .per_camera
+        .iter()
+        .flatten()
+        .map(|o| {
+            let (a, b) = (o.f0.normalize(), o.f1.normalize());
+            a.cross(&b).norm().atan2(a.dot(&b))
+        })
+        .collect();
+    if flows.is_empty() {
+        return None;
+    }
+    let mid = flows.len() / 2;
+    let (_, m, _) = flows.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(*m)
+}
+
+/// The verdict on a frame's matches before the solve.
+pub fn before_solve(
+    options: &TrustOptions,
+    rig: &Rig,
+    obs: &FrameObservations,
+    moving: bool,
+) -> Option<(Constraint, Reason)> {
+    let s = spread(rig, obs, |_, _| true)?;
+    if s.extent < options.min_extent {
+        return Some((Constraint::Degenerate, Reason::SmallRegion));
+    }
+    if s.width < options.min_width {
+        return Some((Constraint::Weak, Reason::AlongALine));
+    }
+    if moving && median_flow(obs).is_some_and(|f| f < options.min_flow) {
+        return Some((Constraint::Weak, Reason::LittleFlow));
+    }
+    None
+}
