@@ -191,16 +191,19 @@ pub struct Config {
     /// ([`crate::trust`]).
     #[serde(default)]
     pub trust: TrustOptions,
-    /// Where the configuration was read from (its name and text), to point errors at a line.
+    /// Where the configuration was read from (its name and text), to point errors at a line;
+    /// empty for a configuration built in code.
     #[serde(skip)]
-    origin: Origin,
+    pub origin: Origin,
 }
 
 /// The name and text a configuration was read from.
 #[derive(Clone, Debug, Default)]
-struct Origin {
-    name: Option<String>,
-    text: Option<String>,
+pub struct Origin {
+    /// The file name (as given to the parser).
+    pub name: Option<String>,
+    /// The text.
+    pub text: Option<String>,
 }
 
 /// The default: `Se3` with the arc length from odometry, `AnglePlane`, Cauchy with scale 0.001

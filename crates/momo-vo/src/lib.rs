@@ -32,7 +32,7 @@ pub use calibrate::{
     CalibrationError, MountCalibration, MountEstimate, MountModel, Mounted, SkippedFrames,
     calibrate_mount, calibrate_sequence,
 };
-pub use config::{Config, ConfigError, FivePointOptions, OdometryOptions};
+pub use config::{Config, ConfigError, FivePointOptions, OdometryOptions, Origin};
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };

@@ -567,7 +567,7 @@ impl Odometry {
             return false;
         };
         let l = sol.params[arc_index];
-        let Some(cov) = covariance(sol) else {
+        let Some(cov) = self.covariance(sol) else {
             return false;
         };
         let sigma = cov[(k, k)].max(0.0).sqrt();
@@ -680,6 +680,30 @@ impl Odometry {
         starts
     }
 
+    /// The calibrated covariance of the free parameters ([`trust::calibrated_covariance`]).
+    fn covariance(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+        let n = sol.free.len();
+        let names = self.estimator.param_names();
+        let pos = |name: &str| {
+            let i = names.iter().position(|p| *p == name)?;
+            sol.free.iter().position(|&f| f == i)
+        };
+        let rotation = match (pos("rot_x"), pos("rot_y"), pos("rot_z")) {
+            (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+            _ => None,
+        };
+        let scale = self.config.loss.scale();
+        trust::calibrated_covariance(&trust::CovarianceInputs {
+            normal: sol.report.normal_matrix.view((0, 0), (n, n)).into_owned(),
+            cost: sol.report.final_cost,
+            inliers: sol.inliers(),
+            rotation,
+            prior_inv_sigma: self.motion_prior.rotation_inv_sigma,
+            prior_scale: self.motion_prior.scale,
+            sigma_floor: if scale.is_finite() { 0.05 * scale } else { 0.0 },
+        })
+    }
+
     fn fill_diagnostics(&self, sol: &FrameSolution, diag: &mut FrameDiagnostics) {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
@@ -688,22 +712,13 @@ impl Odometry {
         diag.inliers = sol.inliers();
         diag.inliers_per_camera = sol.inliers_per_camera.clone();
         diag.free = sol.free.clone();
-        if let Some(cov) = covariance(sol) {
+        if let Some(cov) = self.covariance(sol) {
             for (k, &i) in sol.free.iter().enumerate() {
                 diag.param_sigmas[i] = cov[(k, k)].max(0.0).sqrt();
             }
             diag.covariance = cov.transpose().iter().copied().collect();
         }
     }
-}
-
-/// Parameter covariance `σ² (JᵀJ)⁻¹` with `σ²` estimated from the final cost
-/// (`2 cost / (m - n)`, robust-weighted).
-fn covariance(sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
-    let n = sol.free.len();
-    let m: usize = sol.inliers_per_camera.iter().sum::<usize>().max(n + 1);
-    let sigma2 = 2.0 * sol.report.final_cost / (m - n) as f64;
-    sol.report.covariance(sigma2)
 }
 
 /// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:

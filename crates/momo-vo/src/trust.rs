@@ -18,7 +18,7 @@
 //!   [`TrustOptions::min_inliers`], or inliers in a small region: degenerate.
 
 use momo_core::{FrameObservations, Observation, Rig};
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Thresholds of the trust checks and of the run's failure share (`[trust]` in the
@@ -260,4 +260,84 @@ pub fn before_solve(
         return Some((Constraint::Weak, Reason::LittleFlow));
     }
     None
+}
+
+/// The inputs of [`calibrated_covariance`].
+#[derive(Clone, Debug)]
+pub struct CovarianceInputs {
+    /// The normal matrix `JᵀWJ` of the free parameters at the solution (robust weights; the
+    /// prior terms included, in the residual unit `s`).
+    pub normal: DMatrix<f64>,
+    /// The final cost `½ Σ ρ`.
+    pub cost: f64,
+    /// Inliers (matches within the loss scale).
+    pub inliers: usize,
+    /// Positions, among the free parameters, of the rotation vector (`se3`'s `rot_x..z`), if
+    /// all three are free.
+    pub rotation: Option<[usize; 3]>,
+    /// The rotation prior's inverse standard deviation `1/σ_w` if it was active, else 0.
+    pub prior_inv_sigma: f64,
+    /// The unit `s` of the prior terms (the loss scale).
+    pub prior_scale: f64,
+    /// The smallest residual standard deviation assumed (model error), in the metric's units.
+    pub sigma_floor: f64,
+}
+
+/// The covariance of the free parameters from the robust fit:
+/// `Σ = (H_data / σ² + H_prior)⁻¹`, where `H_data` is the normal matrix of the matches (the
+/// rotation prior's share `(s/σ_w)² I` taken out of the solver's normal matrix), `σ²` the
+/// residual variance of the inliers (`2 cost / (m - n)`, at least `sigma_floor²`: a noise-free
+/// fit still has model error), and `H_prior = I/σ_w²` on the rotation vector when the prior was
+/// active. Directions that the information does not constrain (eigenvalues below `1e-12` of
+/// the largest, or not positive) get infinite variance on every parameter they involve:
+/// an information-free frame reports an infinite sigma, never 0.
+pub fn calibrated_covariance(inp: &CovarianceInputs) -> Option<DMatrix<f64>> {
+    let n = inp.normal.nrows();
+    if n == 0 || inp.normal.ncols() != n || inp.normal.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let m = inp.inliers.max(n + 1);
+    let sigma2 = (2.0 * inp.cost / (m - n) as f64).max(inp.sigma_floor * inp.sigma_floor);
+    if !(sigma2 > 0.0 && sigma2.is_finite()) {
+        return None;
+    }
+    let mut info = inp.normal.clone();
+    let prior = inp.prior_inv_sigma * inp.prior_inv_sigma;
+    if let Some(rot) = inp.rotation.filter(|_| prior > 0.0) {
+        let in_h = prior * inp.prior_scale * inp.prior_scale;
+        for &i in &rot {
+            info[(i, i)] -= in_h;
+        }
+    }
+    info /= sigma2;
+    if let Some(rot) = inp.rotation.filter(|_| prior > 0.0) {
+        for &i in &rot {
+            info[(i, i)] += prior;
+        }
+    }
+    let info = (&info + info.transpose()) * 0.5;
+    let eig = SymmetricEigen::new(info);
+    let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    if !(max > 0.0) {
+        return Some(DMatrix::from_element(n, n, f64::INFINITY));
+    }
+    let mut cov = DMatrix::zeros(n, n);
+    let mut unconstrained = vec![false; n];
+    for (k, &l) in eig.eigenvalues.iter().enumerate() {
+        let v = eig.eigenvectors.column(k);
+        if l > 1e-12 * max {
+            cov += v * v.transpose() / l;
+        } else {
+            for i in 0..n {
+                unconstrained[i] |= v[i].abs() > 1e-3;
+            }
+        }
+    }
+    for i in 0..n {
+        if unconstrained[i] {
+            cov.row_mut(i).fill(f64::INFINITY);
+            cov.column_mut(i).fill(f64::INFINITY);
+        }
+    }
+    Some(cov)
 }
