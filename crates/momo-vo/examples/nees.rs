@@ -6,6 +6,9 @@
 //! `δw = w_est - w_true` (the first three parameters of `se3`). If the covariance is right,
 //! NEES follows chi-square with 3 degrees of freedom: mean 3, 95 % of frames below 7.815.
 //!
+//! Frames whose rotation covariance has an infinite direction (nothing constrains it) score
+//! NEES 0. Standstill, degenerate and held frames are not scored (column "not scored").
+//!
 //! Usage: `cargo run --release -p momo-vo --example nees [FRAMES] [SEEDS...]`
 //! (default 100 frames, seeds 1 2 3). Prints one Markdown row per scenario.
 
@@ -34,7 +37,7 @@ fn main() {
         "fisheye_surround",
     ];
     println!(
-        "| scenario | frames scored | held/degenerate | mean NEES | median NEES | inside 95 % chi2(3) | mean NEES per seed |"
+        "| scenario | frames scored | not scored | mean NEES | median NEES | inside 95 % chi2(3) | mean NEES per seed |"
     );
     println!("|---|---|---|---|---|---|---|");
     for name in scenarios {
@@ -124,6 +127,10 @@ fn rotation_nees(
         return None;
     }
     let cov = Matrix3::from_fn(|r, c| d.covariance[pos[r] * n + pos[c]]);
+    if cov.iter().any(|v| v.is_infinite()) {
+        // An unconstrained rotation direction: infinite sigma, no error is surprising.
+        return Some(0.0);
+    }
     let inv = cov.try_inverse()?;
     // Rotation parameters are a rotation vector w with R = exp(w): for small errors
     // w_est - w_true ≈ log(R_trueᵀ R_est) expressed in the same frame.
