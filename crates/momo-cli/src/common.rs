@@ -13,6 +13,9 @@ pub(crate) enum Failure {
     Input(anyhow::Error),
     /// Anything else: writing an output, an internal error.
     Other(anyhow::Error),
+    /// The run finished and wrote its outputs, but more than `trust.max_failed_share` of its
+    /// frame pairs failed or held their motion: exit code 3.
+    Untrusted(anyhow::Error),
 }
 
 impl From<anyhow::Error> for Failure {
@@ -44,6 +47,10 @@ pub(crate) fn exit_code(result: Result<(), Failure>) -> ExitCode {
         Err(Failure::Other(e)) => {
             eprintln!("momo: error: {e:#}");
             ExitCode::from(1)
+        }
+        Err(Failure::Untrusted(e)) => {
+            eprintln!("momo: warning: {e:#}");
+            ExitCode::from(3)
         }
     }
 }

@@ -191,11 +191,10 @@ impl Odometry {
             };
             inv_sigma[i] = 1.0 / sigma;
         }
-        let config_metric_is_angular = config
-            .metric
-            .as_any()
-            .downcast_ref::<momo_costs::AnglePlane>()
-            .is_some();
+        let config_metric_is_angular = serde_json::to_value(&config.metric)
+            .ok()
+            .and_then(|v| v.get("type").and_then(|t| t.as_str()).map(str::to_string))
+            .is_some_and(|t| t == "angle_plane");
         let has_params = inv_sigma.iter().any(|w| *w != 0.0);
         let sigma_w = config.odometry.rotation_change_sigma;
         let loss_scale = config.loss.scale();
