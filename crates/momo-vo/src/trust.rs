@@ -79,7 +79,7 @@ impl TrustOptions {
             ("trust.min_width", self.min_width),
             ("trust.min_flow", self.min_flow),
         ] {
-            if !(v >= 0.0 && v < 1.0) {
+            if !(0.0..1.0).contains(&v) {
                 out.push((vec![key], format!("{key} must be within 0..1 rad, got {v}")));
             }
         }
@@ -170,13 +170,15 @@ pub fn dedupe(obs: &mut FrameObservations) -> usize {
     removed
 }
 
-/// The angular spread of a set of bearings in the vehicle frame: the standard deviations
-/// (radians, small-angle) along the widest and the second widest direction.
+/// The angular spread of a set of bearings in the vehicle frame, from the eigenvalues
+/// `λ1 ≥ λ2 ≥ λ3` of their second moment `Σ f fᵀ / n`: `extent = √λ2` (the angular standard
+/// deviation along the widest direction, small-angle) and `width = √λ3` (across a great circle:
+/// zero for bearings on one image line).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Spread {
-    /// Along the widest direction.
+    /// `√λ2`: along the widest direction.
     pub extent: f64,
-    /// Across it (the second widest).
+    /// `√λ3`: across the great circle of the widest direction.
     pub width: f64,
 }
 
@@ -208,17 +210,21 @@ pub fn spread(
     if n < 2 {
         return None;
     }
-    let mean = sum / n as f64;
-    let cov = outer / n as f64 - mean * mean.transpose();
-    let mut ev: Vec<f64> = SymmetricEigen::new(cov)
+    let _ = sum;
+    // The second moment of the unit bearings (not centred): bearings near one direction d give
+    // `d dᵀ` plus their angular spread in the two smaller eigenvalues; bearings on one image
+    // line (a great circle, a plane through the centre) give a vanishing smallest eigenvalue,
+    // however long the line is.
+    let moment = outer / n as f64;
+    let mut ev: Vec<f64> = SymmetricEigen::new(moment)
         .eigenvalues
         .iter()
         .map(|v| v.max(0.0))
         .collect();
     ev.sort_by(|a, b| b.total_cmp(a));
     Some(Spread {
-        extent: ev[0].sqrt(),
-        width: ev[1].sqrt(),
+        extent: ev[1].sqrt(),
+        width: ev[2].sqrt(),
     })
 }
 
