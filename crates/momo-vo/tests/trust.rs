@@ -154,7 +154,7 @@ fn assert_held(r: &momo_vo::FrameResult, previous: &Pose<f64>, reason: Reason) {
         "the previous motion is held"
     );
     assert!(
-        d.param_sigmas.iter().any(|s| *s == f64::INFINITY),
+        d.param_sigmas.contains(&f64::INFINITY),
         "no confidence: {:?}",
         d.param_sigmas
     );
