@@ -542,12 +542,6 @@ impl Config {
                     .into(),
             );
         }
-        if o.min_matches == 0 {
-            bad(
-                &["odometry.min_matches"],
-                "odometry.min_matches must be at least 1".into(),
-            );
-        }
         if !(o.max_relative_scale_sigma > 0.0 && o.max_relative_scale_sigma.is_finite()) {
             bad(
                 &["odometry.max_relative_scale_sigma"],
