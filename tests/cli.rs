@@ -306,3 +306,53 @@ fn five_point_baseline_runs_behind_the_same_interface() {
     eprintln!("five-point: median {:.4} max {:.4}", s.median, s.max);
     assert!(s.median < 0.5 && s.above_one == 0, "{s:?}");
 }
+
+/// Issue 15: a configuration that cannot work with the rig is rejected before the first frame
+/// with `file:line: reason` and exit code 2 (before: geo_line on a fisheye rig failed every
+/// frame, exit 0); a run in which more than `trust.max_failed_share` of the frame pairs failed
+/// or held their motion ends with a warning and exit code 3.
+#[test]
+fn trust_rejects_configurations_and_flags_untrusted_runs() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    write_sim(
+        &seq,
+        &SimConfig {
+            frames: 6,
+            ..SimConfig::fisheye_surround()
+        },
+    );
+    let cfg = tmp.path().join("cfg.toml");
+    std::fs::write(
+        &cfg,
+        "[model]\ntype = \"se3\"\n[metric]\ntype = \"geo_line\"\n[loss]\ntype = \"cauchy\"\nscale = 1.0\n[solver]\ntype = \"levenberg_marquardt\"\n",
+    )
+    .expect("writes");
+    let out = run(
+        &seq,
+        &tmp.path().join("est.txt"),
+        &["--config", cfg.to_str().expect("utf-8")],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("cfg.toml:4: metric `geo_line`"), "{err}");
+
+    // Every frame pair without matches: held, 100 % > 50 %.
+    let empty = tmp.path().join("empty");
+    write_sim(
+        &empty,
+        &SimConfig {
+            frames: 6,
+            matches_per_camera: 0,
+            ..SimConfig::clean_pinhole()
+        },
+    );
+    let out = run(&empty, &tmp.path().join("est2.txt"), &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("trust.max_failed_share"), "{err}");
+    assert!(
+        tmp.path().join("est2.txt").exists(),
+        "the outputs are written"
+    );
+}

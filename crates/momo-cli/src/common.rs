@@ -13,6 +13,9 @@ pub(crate) enum Failure {
     Input(anyhow::Error),
     /// Anything else: writing an output, an internal error.
     Other(anyhow::Error),
+    /// The run finished and wrote its outputs, but more than `trust.max_failed_share` of its
+    /// frame pairs failed or held their motion: exit code 3.
+    Untrusted(anyhow::Error),
     /// Standard output is a closed pipe (the reader stopped reading, e.g. `| head`): the
     /// command ends quietly with [`EXIT_BROKEN_PIPE`].
     BrokenPipe,
@@ -145,6 +148,10 @@ pub(crate) fn exit_code(result: Result<(), Failure>) -> ExitCode {
             ExitCode::from(1)
         }
         Err(Failure::BrokenPipe) => ExitCode::from(EXIT_BROKEN_PIPE),
+        Err(Failure::Untrusted(e)) => {
+            note!("momo: warning: {e:#}");
+            ExitCode::from(3)
+        }
     }
 }
 

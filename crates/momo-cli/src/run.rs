@@ -93,6 +93,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
         diagnostics: args.diagnostics,
     };
     let started = std::time::Instant::now();
+    let max_failed_share = config.trust.max_failed_share;
     let summary = momo_vo::run_sequence(&args.seq, config, &options, |_| bar.inc(1)).map_err(
         |e| match e {
             RunError::Input(e) => Failure::input(e),
@@ -116,6 +117,37 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
             summary.restarts_won,
             options.output.display()
         );
+        eprintln!(
+            "momo: trust: {} degenerate (motion held), {} weak (flagged); scale: {} from odometry, {} estimated, {} held, {} unobservable",
+            summary.degenerate,
+            summary.weak,
+            summary.scale_odometry,
+            summary.scale_estimated,
+            summary.scale_held,
+            summary.scale_unobservable
+        );
+        if summary.scale_never_measured() {
+            eprintln!(
+                "momo: warning: the scale was never measured (no odometry.csv and no frame where the rig made it observable): the trajectory's scale is arbitrary"
+            );
+        }
+    }
+    untrusted(&summary, max_failed_share)
+}
+
+/// Exit code 3 (with a warning) when more than `max_share` of the frame pairs failed,
+/// were degenerate or held their motion for lack of matches.
+fn untrusted(summary: &momo_vo::RunSummary, max_share: f64) -> Result<(), Failure> {
+    let share = summary.failed_share();
+    if share > max_share {
+        return Err(Failure::Untrusted(anyhow::anyhow!(
+            "{} of {} frame pairs ({:.0} %) failed or held their motion, more than \
+             trust.max_failed_share = {:.0} %: the trajectory is not trustworthy (exit code 3)",
+            summary.failed_or_held(),
+            summary.frames.saturating_sub(1),
+            100.0 * share,
+            100.0 * max_share
+        )));
     }
     Ok(())
 }

@@ -145,14 +145,26 @@ impl Combination {
     /// The estimator configuration of this combination (validated).
     pub fn build_config(&self) -> Result<Config, momo_vo::ConfigError> {
         let name = self.label();
-        let config: Config =
-            Value::Table(self.config.clone())
-                .try_into()
-                .map_err(|e: toml::de::Error| momo_vo::ConfigError::Parse {
-                    path: name.clone(),
-                    line: 1,
-                    reason: e.message().trim().to_string(),
-                })?;
+        let mut table = self.config.clone();
+        if self.loss == "trivial" {
+            // The rotation prior is measured in units of the loss scale, which a trivial loss
+            // does not have (issue 15: momo_vo rejects the pair): off unless the grid sets it.
+            if let Value::Table(odometry) = table
+                .entry("odometry")
+                .or_insert_with(|| Value::Table(Default::default()))
+            {
+                odometry
+                    .entry("rotation_change_sigma")
+                    .or_insert(Value::Float(0.0));
+            }
+        }
+        let config: Config = Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| momo_vo::ConfigError::Parse {
+                path: name.clone(),
+                line: 1,
+                reason: e.message().trim().to_string(),
+            })?;
         config.validate(&name)?;
         Ok(config)
     }

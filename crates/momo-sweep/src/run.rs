@@ -194,10 +194,12 @@ pub fn run_job(plan: &Plan, job: Job, seq: &Sequence) -> Row {
     let (mut matches, mut inliers, mut iterations, mut micros) = (0usize, 0usize, 0usize, 0.0);
     for d in &diags {
         match d.status {
-            FrameStatus::Estimated => row.estimated += 1,
+            // Weak frames kept their (flagged) estimate; degenerate ones held the previous
+            // motion like a solver failure.
+            FrameStatus::Estimated | FrameStatus::Weak => row.estimated += 1,
             FrameStatus::Standstill => row.standstill += 1,
             FrameStatus::NoMatches => row.no_matches += 1,
-            FrameStatus::SolverFailure => row.solver_failures += 1,
+            FrameStatus::SolverFailure | FrameStatus::Degenerate => row.solver_failures += 1,
         }
         row.restarts_won += usize::from(d.restart_won);
         matches += d.matches;

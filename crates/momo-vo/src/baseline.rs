@@ -122,6 +122,8 @@ impl MotionDriver for FivePointBaseline {
             restarts: 0,
             restart_won: false,
             time_us: start.elapsed().as_secs_f64() * 1e6,
+            constraint: crate::trust::Constraint::Well,
+            reason: None,
         };
         FrameResult {
             motion,

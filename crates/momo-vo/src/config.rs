@@ -1,7 +1,8 @@
 //! The estimator configuration: model, metric, loss and solver named by type tag (typetag), plus
 //! the odometry driver's options. Read from TOML or JSON; `momo config` prints the default.
 
-use momo_core::{MetricSpec, ModelSpec, RobustLoss, Solver};
+use crate::trust::TrustOptions;
+use momo_core::{MetricSpec, ModelSpec, Rig, RobustLoss, Solver};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -201,6 +202,23 @@ pub struct Config {
     /// loss has brought the estimate near the answer: graduated non-convexity in two steps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refine_loss: Option<Box<dyn RobustLoss>>,
+    /// What the driver trusts: degeneracy thresholds and the run's failure share
+    /// ([`crate::trust`]).
+    #[serde(default)]
+    pub trust: TrustOptions,
+    /// Where the configuration was read from (its name and text), to point errors at a line;
+    /// empty for a configuration built in code.
+    #[serde(skip)]
+    pub origin: Origin,
+}
+
+/// The name and text a configuration was read from.
+#[derive(Clone, Debug, Default)]
+pub struct Origin {
+    /// The file name (as given to the parser).
+    pub name: Option<String>,
+    /// The text.
+    pub text: Option<String>,
 }
 
 /// The default: `Se3` with the arc length from odometry, `AnglePlane`, Cauchy with scale 0.001
@@ -226,6 +244,8 @@ impl Default for Config {
             odometry: OdometryOptions::default(),
             five_point: FivePointOptions::default(),
             refine_loss: None,
+            trust: TrustOptions::default(),
+            origin: Origin::default(),
         }
     }
 }
@@ -248,6 +268,70 @@ fn default_loss() -> Box<dyn RobustLoss> {
 /// The default `[solver]`: Levenberg-Marquardt with its default options.
 fn default_solver() -> Box<dyn Solver> {
     Box::new(momo_solvers::LevenbergMarquardt::default())
+}
+
+/// The largest arc length per frame that any configuration or odometry value may name
+/// (metres): 1 km per frame is far beyond any vehicle at any frame rate, so a larger number is
+/// a unit or typing error (1e200 m overflows the geometry).
+pub const MAX_ARC_LENGTH: f64 = 1000.0;
+
+/// `section.key` names of the solver options, in the order of `solver_problems`' list.
+const SOLVER_KEYS: &[&str] = &[
+    "solver.max_iterations",
+    "solver.function_tolerance",
+    "solver.gradient_tolerance",
+    "solver.parameter_tolerance",
+    "solver.initial_lambda",
+    "solver.lambda_increase",
+    "solver.lambda_decrease",
+    "solver.min_lambda",
+    "solver.max_lambda",
+    "solver.initial_radius",
+    "solver.max_radius",
+    "solver.min_radius",
+];
+
+/// The `type` tag of a tagged trait object (`""` if it has none).
+fn type_tag<T: Serialize + ?Sized>(value: &T) -> String {
+    serde_json::to_value(value)
+        .ok()
+        .and_then(|v| v.get("type").and_then(|t| t.as_str()).map(str::to_string))
+        .unwrap_or_default()
+}
+
+/// The 1-based line of `section.key` (or of the `[section]` header for a bare `section`) in a
+/// TOML or JSON text; `None` if absent.
+fn line_of_key(text: &str, key: &str) -> Option<usize> {
+    let (section, field) = match key.rsplit_once('.') {
+        Some((s, f)) => (s, Some(f)),
+        None => (key, None),
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    // TOML: `[section]`; JSON: `"section": {` (the last part of a dotted section).
+    let last = section.rsplit('.').next().unwrap_or(section);
+    let header = lines.iter().position(|l| {
+        let t = l.trim();
+        t == format!("[{section}]") || t.starts_with(&format!("\"{last}\""))
+    })?;
+    let Some(field) = field else {
+        return Some(header + 1);
+    };
+    for (i, l) in lines.iter().enumerate().skip(header + 1) {
+        let t = l.trim();
+        if t.starts_with('[') && t.ends_with(']') {
+            break;
+        }
+        let name = t
+            .split(['=', ':'])
+            .next()
+            .unwrap_or("")
+            .trim()
+            .trim_matches('"');
+        if name == field {
+            return Some(i + 1);
+        }
+    }
+    None
 }
 
 /// Comments printed above each section by [`Config::to_commented_toml`].
@@ -334,7 +418,7 @@ impl Config {
 
     /// Parses a TOML configuration; `name` is used in messages.
     pub fn from_toml_str(text: &str, name: &str) -> Result<Self, ConfigError> {
-        let config: Config = toml::from_str(text).map_err(|e| {
+        let mut config: Config = toml::from_str(text).map_err(|e| {
             let line = e
                 .span()
                 .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1)
@@ -345,91 +429,330 @@ impl Config {
                 reason: e.message().trim().to_string(),
             }
         })?;
+        config.origin = Origin {
+            name: Some(name.into()),
+            text: Some(text.into()),
+        };
         config.validate(name)?;
         Ok(config)
     }
 
     /// Parses a JSON configuration; `name` is used in messages.
     pub fn from_json_str(text: &str, name: &str) -> Result<Self, ConfigError> {
-        let config: Config = serde_json::from_str(text).map_err(|e| ConfigError::Parse {
+        let mut config: Config = serde_json::from_str(text).map_err(|e| ConfigError::Parse {
             path: name.into(),
             line: e.line().max(1),
             reason: e.to_string(),
         })?;
+        config.origin = Origin {
+            name: Some(name.into()),
+            text: Some(text.into()),
+        };
         config.validate(name)?;
         Ok(config)
     }
 
-    /// Checks value ranges that the types cannot express.
+    /// The name the configuration was read from (`<config>` if built in code).
+    pub fn source_name(&self) -> &str {
+        self.origin.name.as_deref().unwrap_or("<config>")
+    }
+
+    /// Checks value ranges that the types cannot express and parts that cannot work together
+    /// (before the first frame). `name` names the source in errors; when the configuration was
+    /// read from text, the error points at the line of the offending key (`file:line: reason`).
     pub fn validate(&self, name: &str) -> Result<(), ConfigError> {
-        let o = &self.odometry;
-        let bad = |reason: String| {
-            Err(ConfigError::Invalid {
+        match self.problems().into_iter().next() {
+            None => Ok(()),
+            Some((keys, reason)) => Err(self.error_at(name, &keys, reason)),
+        }
+    }
+
+    /// Checks that the configuration works with `rig` (e.g. a pixel metric that needs pinhole
+    /// cameras), then [`validate`](Self::validate). Errors name [`source_name`](Self::source_name)
+    /// and the line of the offending key.
+    pub fn validate_for_rig(&self, rig: &Rig) -> Result<(), ConfigError> {
+        let name = self.source_name().to_string();
+        self.validate(&name)?;
+        let metric = type_tag(&self.metric);
+        if metric == "geo_line"
+            && let Some((j, _)) = rig
+                .cameras()
+                .iter()
+                .enumerate()
+                .find(|(_, c)| c.model.as_pinhole().is_none())
+        {
+            return Err(self.error_at(
+                &name,
+                &["metric.type"],
+                format!(
+                    "metric `geo_line` measures pixel distances to epipolar lines and needs \
+                     pinhole cameras, but camera {j} of the rig is not a pinhole; use \
+                     `angle_plane` (any camera) or `sampson`"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// An error at the line of the first of `keys` (`section.key`) found in the source text.
+    fn error_at(&self, name: &str, keys: &[&str], reason: String) -> ConfigError {
+        match self.origin.text.as_deref() {
+            Some(text) => ConfigError::Parse {
+                path: name.into(),
+                line: keys
+                    .iter()
+                    .find_map(|k| line_of_key(text, k))
+                    .or_else(|| {
+                        keys.iter()
+                            .find_map(|k| line_of_key(text, k.split('.').next().unwrap_or(k)))
+                    })
+                    .unwrap_or(1),
+                reason,
+            },
+            None => ConfigError::Invalid {
                 path: name.into(),
                 reason,
-            })
+            },
+        }
+    }
+
+    /// Every problem found: the keys it concerns (the first one found in the text names the
+    /// line) and the reason.
+    fn problems(&self) -> Vec<(Vec<&'static str>, String)> {
+        let mut out: Vec<(Vec<&'static str>, String)> = Vec::new();
+        let mut bad = |keys: &[&'static str], reason: String| out.push((keys.to_vec(), reason));
+        let o = &self.odometry;
+        let metric = type_tag(&self.metric);
+        // The loss scale is in the metric's units: radians for angle_plane, pixels otherwise.
+        let (lo, hi, unit) = match metric.as_str() {
+            "angle_plane" => (1e-7, 0.5, "rad"),
+            "geo_line" | "sampson" | "focal_scaled" => (1e-4, 1e3, "px"),
+            _ => (1e-9, 1e6, "metric units"),
         };
-        let scale = self.loss.scale();
-        if !(scale > 0.0) {
-            return bad(format!("loss scale must be positive, got {scale}"));
+        for (section, loss) in std::iter::once(("loss", &self.loss))
+            .chain(self.refine_loss.as_ref().map(|l| ("refine_loss", l)))
+        {
+            let key: &'static str = if section == "loss" {
+                "loss.scale"
+            } else {
+                "refine_loss.scale"
+            };
+            let ty: &'static str = if section == "loss" {
+                "loss.type"
+            } else {
+                "refine_loss.type"
+            };
+            let scale = loss.scale();
+            if type_tag(loss) == "trivial" {
+                if section == "loss" && o.rotation_change_sigma > 0.0 {
+                    bad(
+                        &[ty, "odometry.rotation_change_sigma"],
+                        format!(
+                            "loss `trivial` has no scale, but the rotation prior \
+                             (odometry.rotation_change_sigma = {}) is measured in units of the \
+                             loss scale; use a robust loss (cauchy, huber, tukey) or set \
+                             odometry.rotation_change_sigma = 0",
+                            o.rotation_change_sigma
+                        ),
+                    );
+                }
+                continue;
+            }
+            if !(scale.is_finite() && scale >= lo && scale <= hi) {
+                bad(
+                    &[key, ty],
+                    format!(
+                        "{section} scale {scale} is outside the sane range {lo}..={hi} {unit} \
+                         for metric `{metric}`"
+                    ),
+                );
+            }
         }
-        if !(o.standstill_arc_length >= 0.0 && o.standstill_arc_length.is_finite()) {
-            return bad("odometry.standstill_arc_length must be finite and >= 0".into());
+        self.solver_problems(&mut bad);
+        let finite_nonneg = |v: f64| v >= 0.0 && v.is_finite();
+        if !(finite_nonneg(o.standstill_arc_length) && o.standstill_arc_length <= MAX_ARC_LENGTH) {
+            bad(
+                &["odometry.standstill_arc_length"],
+                format!("odometry.standstill_arc_length must be within 0..={MAX_ARC_LENGTH} m"),
+            );
         }
-        if !(o.initial_arc_length > 0.0 && o.initial_arc_length.is_finite()) {
-            return bad("odometry.initial_arc_length must be finite and > 0".into());
+        if !(o.initial_arc_length > 0.0 && o.initial_arc_length <= MAX_ARC_LENGTH) {
+            bad(
+                &["odometry.initial_arc_length"],
+                format!(
+                    "odometry.initial_arc_length must be within (0, {MAX_ARC_LENGTH}] m per \
+                     frame, got {}",
+                    o.initial_arc_length
+                ),
+            );
         }
-        if !(o.max_arc_length_ratio > 1.0) {
-            return bad("odometry.max_arc_length_ratio must be above 1".into());
+        if o.initial_arc_length <= o.standstill_arc_length {
+            bad(
+                &[
+                    "odometry.initial_arc_length",
+                    "odometry.standstill_arc_length",
+                ],
+                "odometry.initial_arc_length must be above odometry.standstill_arc_length \
+                 (otherwise every frame without odometry is a standstill)"
+                    .into(),
+            );
+        }
+        if !(o.max_relative_scale_sigma > 0.0 && o.max_relative_scale_sigma.is_finite()) {
+            bad(
+                &["odometry.max_relative_scale_sigma"],
+                "odometry.max_relative_scale_sigma must be finite and > 0".into(),
+            );
+        }
+        if !(o.max_arc_length_ratio > 1.0 && o.max_arc_length_ratio.is_finite()) {
+            bad(
+                &["odometry.max_arc_length_ratio"],
+                "odometry.max_arc_length_ratio must be finite and above 1".into(),
+            );
         }
         if !(0.0..=1.0).contains(&o.restart_inlier_ratio) {
-            return bad("odometry.restart_inlier_ratio must be within 0..=1".into());
+            bad(
+                &["odometry.restart_inlier_ratio"],
+                "odometry.restart_inlier_ratio must be within 0..=1".into(),
+            );
         }
-        if o.restart_yaw_offsets.iter().any(|v| !v.is_finite()) {
-            return bad("odometry.restart_yaw_offsets must be finite".into());
+        if o.restart_yaw_offsets
+            .iter()
+            .any(|v| !(v.is_finite() && v.abs() <= std::f64::consts::PI))
+        {
+            bad(
+                &["odometry.restart_yaw_offsets"],
+                "odometry.restart_yaw_offsets must be finite radians within -pi..=pi".into(),
+            );
         }
         if let Some(Err(reason)) = o.separate.as_ref().map(|s| s.validate()) {
-            return bad(reason);
+            bad(&["odometry.separate"], reason);
         }
         // Every offset is one more solve per frame: 100,000 ran for minutes per frame.
         if o.restart_yaw_offsets.len() > MAX_RESTART_OFFSETS {
-            return bad(format!(
-                "odometry.restart_yaw_offsets has {} entries; at most {MAX_RESTART_OFFSETS}",
-                o.restart_yaw_offsets.len()
-            ));
+            bad(
+                &["odometry.restart_yaw_offsets"],
+                format!(
+                    "odometry.restart_yaw_offsets has {} entries; at most {MAX_RESTART_OFFSETS}",
+                    o.restart_yaw_offsets.len()
+                ),
+            );
         }
-        if !(o.prior_min_arc_length >= 0.0 && o.prior_min_arc_length.is_finite()) {
-            return bad("odometry.prior_min_arc_length must be finite and >= 0".into());
+        if !finite_nonneg(o.prior_min_arc_length) {
+            bad(
+                &["odometry.prior_min_arc_length"],
+                "odometry.prior_min_arc_length must be finite and >= 0".into(),
+            );
         }
         if !(0.0..=1.0).contains(&o.prior_min_inlier_ratio) {
-            return bad("odometry.prior_min_inlier_ratio must be within 0..=1".into());
+            bad(
+                &["odometry.prior_min_inlier_ratio"],
+                "odometry.prior_min_inlier_ratio must be within 0..=1".into(),
+            );
         }
-        if !(o.rotation_change_sigma >= 0.0 && o.rotation_change_sigma.is_finite()) {
-            return bad(format!(
-                "odometry.rotation_change_sigma must be finite and >= 0 (0: none), got {}",
-                o.rotation_change_sigma
-            ));
+        if !(finite_nonneg(o.rotation_change_sigma) && o.rotation_change_sigma <= 1.0) {
+            bad(
+                &["odometry.rotation_change_sigma"],
+                format!(
+                    "odometry.rotation_change_sigma must be within 0..=1 rad per frame (0: \
+                     none), got {}",
+                    o.rotation_change_sigma
+                ),
+            );
         }
         if let Some((name, s)) = o
             .motion_prior_sigmas
             .iter()
             .find(|(_, s)| !(s.is_finite() && **s > 0.0))
         {
-            return bad(format!(
-                "odometry.motion_prior_sigmas.{name} must be finite and > 0, got {s}"
-            ));
+            bad(
+                &["odometry.motion_prior_sigmas"],
+                format!("odometry.motion_prior_sigmas.{name} must be finite and > 0, got {s}"),
+            );
         }
         let f = &self.five_point;
         if !(f.threshold > 0.0 && f.threshold.is_finite()) {
-            return bad("five_point.threshold must be finite and > 0".into());
+            bad(
+                &["five_point.threshold"],
+                "five_point.threshold must be finite and > 0".into(),
+            );
         }
         if !(f.confidence > 0.0 && f.confidence < 1.0) {
-            return bad("five_point.confidence must be within (0, 1)".into());
+            bad(
+                &["five_point.confidence"],
+                "five_point.confidence must be within (0, 1)".into(),
+            );
         }
         if f.max_iterations == 0 {
-            return bad("five_point.max_iterations must be at least 1".into());
+            bad(
+                &["five_point.max_iterations"],
+                "five_point.max_iterations must be at least 1".into(),
+            );
         }
-        Ok(())
+        for (keys, reason) in self.trust.problems() {
+            bad(&keys, reason);
+        }
+        out
+    }
+
+    /// Solver options, whatever the solver: every number finite and >= 0,
+    /// `max_iterations >= 1`, each `min_x <= max_x`, growth factors above 1.
+    fn solver_problems(&self, bad: &mut impl FnMut(&[&'static str], String)) {
+        let Ok(serde_json::Value::Object(map)) = serde_json::to_value(&self.solver) else {
+            return;
+        };
+        // Keys must be `'static` for the line lookup: leak-free by matching known names.
+        let key_of = |k: &str| -> &'static str {
+            const KNOWN: &[&str] = &[
+                "max_iterations",
+                "function_tolerance",
+                "gradient_tolerance",
+                "parameter_tolerance",
+                "initial_lambda",
+                "lambda_increase",
+                "lambda_decrease",
+                "min_lambda",
+                "max_lambda",
+                "initial_radius",
+                "max_radius",
+                "min_radius",
+            ];
+            KNOWN
+                .iter()
+                .position(|n| *n == k)
+                .map_or("solver", |i| SOLVER_KEYS[i])
+        };
+        for (k, v) in &map {
+            let Some(x) = v.as_f64() else { continue };
+            if !(x.is_finite() && x >= 0.0) {
+                bad(
+                    &[key_of(k), "solver"],
+                    format!("solver.{k} must be finite and >= 0, got {v}"),
+                );
+            }
+            if k == "max_iterations" && x < 1.0 {
+                bad(
+                    &[key_of(k), "solver"],
+                    "solver.max_iterations must be at least 1 (0 would return the start as the \
+                     answer)"
+                        .into(),
+                );
+            }
+            if (k.ends_with("_increase") || k.ends_with("_decrease")) && !(x > 1.0) {
+                bad(
+                    &[key_of(k), "solver"],
+                    format!("solver.{k} must be above 1, got {v}"),
+                );
+            }
+            if let Some(rest) = k.strip_prefix("min_")
+                && let Some(hi) = map.get(&format!("max_{rest}")).and_then(|h| h.as_f64())
+                && x > hi
+            {
+                bad(
+                    &[key_of(k), "solver"],
+                    format!("solver.{k} ({x}) must not exceed solver.max_{rest} ({hi})"),
+                );
+            }
+        }
     }
 
     /// The configuration as TOML with a comment above each section.

@@ -26,16 +26,20 @@ pub mod config;
 pub mod odometry;
 pub mod pipeline;
 pub mod separate;
+pub mod trust;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
 pub use calibrate::{
     CalibrationError, MountCalibration, MountEstimate, MountModel, Mounted, SkippedFrames,
     calibrate_mount, calibrate_sequence,
 };
-pub use config::{Config, ConfigError, FivePointOptions, MAX_CONFIG_BYTES, OdometryOptions};
+pub use config::{
+    Config, ConfigError, FivePointOptions, MAX_CONFIG_BYTES, OdometryOptions, Origin,
+};
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };
 pub use pipeline::{
     EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_sequence,
 };
+pub use trust::{Constraint, Reason, TrustOptions};

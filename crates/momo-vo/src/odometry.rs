@@ -2,9 +2,10 @@
 //! warm-started from the previous motion (the paper's prior).
 
 use crate::config::{Config, ConfigError};
+use crate::trust::{self, Constraint, Reason};
 use momo_core::{
     CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, Rig,
-    SolveRequest, Termination, so3_log,
+    SolveRequest, Termination, camera_motion, so3_log,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -34,6 +35,14 @@ pub enum FrameStatus {
     NoMatches,
     /// The solver failed (non-finite cost, no step): the previous motion was held.
     SolverFailure,
+    /// The matches cannot determine the motion or do not support the estimate (the reason is
+    /// in [`FrameDiagnostics::reason`]): the previous motion was held, with infinite standard
+    /// deviations.
+    Degenerate,
+    /// The matches constrain the motion only in part (the reason is in
+    /// [`FrameDiagnostics::reason`]): the estimate is kept but flagged, and it does not centre
+    /// the next frame's prior.
+    Weak,
 }
 
 /// Where the frame's arc length (scale) came from.
@@ -92,6 +101,10 @@ pub struct FrameDiagnostics {
     pub restart_won: bool,
     /// Compute time of the frame in microseconds.
     pub time_us: f64,
+    /// How well the matches constrained the motion (well / weak / degenerate).
+    pub constraint: Constraint,
+    /// Why the frame is weak or degenerate (`None` if well constrained).
+    pub reason: Option<Reason>,
 }
 
 /// The result of one frame pair.
@@ -151,12 +164,14 @@ pub struct Odometry {
     soft_center: Vec<f64>,
     /// Moving frames that went into `soft_center`.
     soft_count: usize,
+    /// The metric's residual is an angle (radians): `angle_plane`.
+    metric_is_angular: bool,
 }
 
 impl Odometry {
     /// A driver for a rig and a configuration.
     pub fn new(rig: Rig, config: Config) -> Result<Self, VoError> {
-        config.validate("<config>")?;
+        config.validate_for_rig(&rig)?;
         let estimator = config.model.build(config.metric.as_ref())?;
         let observable = estimator.observable(&rig);
         let scale_observable = estimator.arc_length_index().is_some_and(|i| observable[i]);
@@ -176,6 +191,10 @@ impl Odometry {
             };
             inv_sigma[i] = 1.0 / sigma;
         }
+        let config_metric_is_angular = serde_json::to_value(&config.metric)
+            .ok()
+            .and_then(|v| v.get("type").and_then(|t| t.as_str()).map(str::to_string))
+            .is_some_and(|t| t == "angle_plane");
         let has_params = inv_sigma.iter().any(|w| *w != 0.0);
         let sigma_w = config.odometry.rotation_change_sigma;
         let loss_scale = config.loss.scale();
@@ -203,6 +222,7 @@ impl Odometry {
             prior_ready: false,
             soft_center,
             soft_count: 0,
+            metric_is_angular: config_metric_is_angular,
         })
     }
 
@@ -242,10 +262,15 @@ impl Odometry {
     /// length travelled (odometry).
     pub fn process(&mut self, obs: &FrameObservations, arc_length: Option<f64>) -> FrameResult {
         let start = Instant::now();
+        // Repeated matches count once.
+        let mut unique = obs.clone();
+        let repeated = trust::dedupe(&mut unique);
+        let obs = &unique;
         self.frame += 1;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();
-        let arc_length = arc_length.filter(|l| l.is_finite() && *l >= 0.0);
+        let arc_length = arc_length
+            .filter(|l| l.is_finite() && *l >= 0.0 && *l <= crate::config::MAX_ARC_LENGTH);
 
         let mut init = self.previous.clone();
         let mut fixed = vec![false; n_params];
@@ -310,6 +335,8 @@ impl Odometry {
             restarts: 0,
             restart_won: false,
             time_us: 0.0,
+            constraint: Constraint::Well,
+            reason: None,
         };
 
         {
@@ -336,11 +363,51 @@ impl Odometry {
             }
             prior.soft_center.clone_from(&self.soft_center);
         }
-        let result = if matches < self.config.odometry.min_matches.max(1) {
-            diag.status = FrameStatus::NoMatches;
+        let enough = matches >= self.config.odometry.min_matches.max(1);
+        let verdict = if !enough && repeated > 0 {
+            Some((Constraint::Degenerate, Reason::RepeatedMatches))
+        } else if enough && !standstill {
+            trust::before_solve(&self.config.trust, &self.rig, obs, true)
+        } else {
+            None
+        };
+        if let Some((c, r)) = verdict {
+            diag.constraint = c;
+            diag.reason = Some(r);
+        }
+        if verdict.is_some_and(|(_, r)| r == Reason::LittleFlow)
+            && let Some(i) = arc_index
+            && diag.scale == ScaleSource::Estimated
+        {
+            // No flow, no direction of travel and no scale: hold the last arc length.
+            fixed[i] = true;
+            diag.scale = ScaleSource::Held;
+        }
+        let result = if !enough {
+            diag.status = if repeated > 0 {
+                FrameStatus::Degenerate
+            } else {
+                FrameStatus::NoMatches
+            };
+            None
+        } else if diag.constraint == Constraint::Degenerate {
+            diag.status = FrameStatus::Degenerate;
             None
         } else {
-            self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag)
+            let sol = self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag);
+            match sol {
+                Some(sol) if !standstill => match self.after_solve(obs, &sol) {
+                    Some(reason) => {
+                        diag.status = FrameStatus::Degenerate;
+                        diag.constraint = Constraint::Degenerate;
+                        diag.reason = Some(reason);
+                        self.fill_diagnostics(&sol, &mut diag);
+                        None
+                    }
+                    None => Some(sol),
+                },
+                other => other,
+            }
         };
         // Motion separation (issue 14, crate::separate; off by default).
         let (result, competing) = match (result, &self.config.odometry.separate) {
@@ -386,6 +453,9 @@ impl Odometry {
                     }
                 }
                 self.fill_diagnostics(&sol, &mut diag);
+                if diag.constraint == Constraint::Weak {
+                    diag.status = FrameStatus::Weak;
+                }
                 // Standstill frames score another residual (rotation only): they do not count
                 // towards the running inlier ratio of the moving frames.
                 if !standstill {
@@ -411,6 +481,13 @@ impl Odometry {
                 }
                 if diag.scale == ScaleSource::Estimated {
                     diag.scale = ScaleSource::Held;
+                }
+                if diag.status == FrameStatus::Degenerate {
+                    // Nothing was learnt from the matches: no confidence at all.
+                    for k in (0..n_params).filter(|&k| !fixed[k]) {
+                        diag.param_sigmas[k] = f64::INFINITY;
+                    }
+                    diag.covariance.clear();
                 }
                 held
             }
@@ -450,12 +527,65 @@ impl Odometry {
         }
     }
 
+    /// The checks after a solve (`crate::trust`): a rotation no vehicle makes, no or too few
+    /// inliers, inliers in a small region.
+    fn after_solve(&self, obs: &FrameObservations, sol: &FrameSolution) -> Option<Reason> {
+        let t = &self.config.trust;
+        let motion = self.estimator.motion(&sol.params);
+        if so3_log(&motion.rotation).norm() > t.max_rotation {
+            return Some(Reason::ImplausibleRotation);
+        }
+        let inliers = sol.inliers();
+        if inliers == 0 {
+            return Some(Reason::NoInliers);
+        }
+        if inliers < t.min_inliers {
+            return Some(Reason::TooFewInliers);
+        }
+        // Where the inliers are: residuals on the angle to the epipolar plane.
+        let threshold = self.inlier_angle();
+        let cams: Vec<Option<Pose<f64>>> = self
+            .rig
+            .cameras()
+            .iter()
+            .map(|c| {
+                let m = camera_motion(&motion, &c.t_vehicle_camera);
+                (m.translation.norm() > 1e-9).then_some(m)
+            })
+            .collect();
+        let is_inlier = |j: usize, i: usize| {
+            let (Some(Some(c)), Some(o)) = (cams.get(j), obs.per_camera[j].get(i)) else {
+                return true;
+            };
+            let n = c.translation.cross(&(c.rotation * o.f1));
+            let nn = n.norm();
+            nn == 0.0 || (o.f0.dot(&n) / (nn * o.f0.norm())).abs() <= threshold
+        };
+        if let Some(s) = trust::spread(&self.rig, obs, is_inlier)
+            && s.extent < t.min_extent
+        {
+            return Some(Reason::InliersInSmallRegion);
+        }
+        None
+    }
+
+    /// The angle (radians) within which a match counts as an inlier for the spread check: the
+    /// loss scale for `angle_plane`, else 2 px at a 700 px focal length.
+    fn inlier_angle(&self) -> f64 {
+        let s = self.config.loss.scale();
+        if s.is_finite() && s < 0.5 && self.metric_is_angular {
+            s
+        } else {
+            3e-3
+        }
+    }
+
     fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
         let Some(k) = sol.free.iter().position(|&f| f == arc_index) else {
             return false;
         };
         let l = sol.params[arc_index];
-        let Some(cov) = covariance(sol) else {
+        let Some(cov) = self.covariance(sol) else {
             return false;
         };
         let sigma = cov[(k, k)].max(0.0).sqrt();
@@ -568,6 +698,30 @@ impl Odometry {
         starts
     }
 
+    /// The calibrated covariance of the free parameters ([`trust::calibrated_covariance`]).
+    fn covariance(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+        let n = sol.free.len();
+        let names = self.estimator.param_names();
+        let pos = |name: &str| {
+            let i = names.iter().position(|p| *p == name)?;
+            sol.free.iter().position(|&f| f == i)
+        };
+        let rotation = match (pos("rot_x"), pos("rot_y"), pos("rot_z")) {
+            (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+            _ => None,
+        };
+        let scale = self.config.loss.scale();
+        trust::calibrated_covariance(&trust::CovarianceInputs {
+            normal: sol.report.normal_matrix.view((0, 0), (n, n)).into_owned(),
+            cost: sol.report.final_cost,
+            inliers: sol.inliers(),
+            rotation,
+            prior_inv_sigma: self.motion_prior.rotation_inv_sigma,
+            prior_scale: self.motion_prior.scale,
+            sigma_floor: if scale.is_finite() { 0.05 * scale } else { 0.0 },
+        })
+    }
+
     fn fill_diagnostics(&self, sol: &FrameSolution, diag: &mut FrameDiagnostics) {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
@@ -576,22 +730,13 @@ impl Odometry {
         diag.inliers = sol.inliers();
         diag.inliers_per_camera = sol.inliers_per_camera.clone();
         diag.free = sol.free.clone();
-        if let Some(cov) = covariance(sol) {
+        if let Some(cov) = self.covariance(sol) {
             for (k, &i) in sol.free.iter().enumerate() {
                 diag.param_sigmas[i] = cov[(k, k)].max(0.0).sqrt();
             }
             diag.covariance = cov.transpose().iter().copied().collect();
         }
     }
-}
-
-/// Parameter covariance `σ² (JᵀJ)⁻¹` with `σ²` estimated from the final cost
-/// (`2 cost / (m - n)`, robust-weighted).
-fn covariance(sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
-    let n = sol.free.len();
-    let m: usize = sol.inliers_per_camera.iter().sum::<usize>().max(n + 1);
-    let sigma2 = 2.0 * sol.report.final_cost / (m - n) as f64;
-    sol.report.covariance(sigma2)
 }
 
 /// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:

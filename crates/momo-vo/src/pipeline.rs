@@ -4,7 +4,9 @@
 
 use crate::baseline::{FivePointBaseline, MotionDriver};
 use crate::config::Config;
-use crate::odometry::{FrameDiagnostics, FrameResult, FrameStatus, Odometry, Trajectory, VoError};
+use crate::odometry::{
+    FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
+};
 use momo_core::FrameObservations;
 use momo_core::Rig;
 use momo_fivepoint::FivePointRansac;
@@ -87,6 +89,18 @@ pub struct RunSummary {
     pub no_matches: usize,
     /// Frame pairs where the solver failed.
     pub solver_failures: usize,
+    /// Degenerate frame pairs (previous motion held; the reason is in the diagnostics).
+    pub degenerate: usize,
+    /// Weak frame pairs (estimate kept, flagged).
+    pub weak: usize,
+    /// Frame pairs whose scale came from odometry.csv.
+    pub scale_odometry: usize,
+    /// Frame pairs whose scale was estimated from the matches.
+    pub scale_estimated: usize,
+    /// Frame pairs whose scale was held (not observable in that frame).
+    pub scale_held: usize,
+    /// Frame pairs whose scale the rig can never observe.
+    pub scale_unobservable: usize,
     /// Frame pairs where an extra start won.
     pub restarts_won: usize,
     /// Sum of per-frame compute times, seconds.
@@ -94,12 +108,41 @@ pub struct RunSummary {
 }
 
 impl RunSummary {
+    /// Frame pairs that failed, were degenerate or held their motion for lack of matches.
+    pub fn failed_or_held(&self) -> usize {
+        self.no_matches + self.solver_failures + self.degenerate
+    }
+
+    /// The share of frame pairs that failed or were held (0 for a run without frame pairs).
+    pub fn failed_share(&self) -> f64 {
+        let pairs = self.frames.saturating_sub(1);
+        if pairs == 0 {
+            0.0
+        } else {
+            self.failed_or_held() as f64 / pairs as f64
+        }
+    }
+
+    /// Whether the scale was never measured: no frame pair took it from odometry or estimated
+    /// it (the trajectory's scale is arbitrary).
+    pub fn scale_never_measured(&self) -> bool {
+        self.frames > 1 && self.scale_odometry == 0 && self.scale_estimated == 0
+    }
+
     fn add(&mut self, d: &FrameDiagnostics) {
         match d.status {
             FrameStatus::Estimated => self.estimated += 1,
             FrameStatus::Standstill => self.standstill += 1,
             FrameStatus::NoMatches => self.no_matches += 1,
             FrameStatus::SolverFailure => self.solver_failures += 1,
+            FrameStatus::Degenerate => self.degenerate += 1,
+            FrameStatus::Weak => self.weak += 1,
+        }
+        match d.scale {
+            ScaleSource::Odometry => self.scale_odometry += 1,
+            ScaleSource::Estimated => self.scale_estimated += 1,
+            ScaleSource::Held => self.scale_held += 1,
+            ScaleSource::Unobservable => self.scale_unobservable += 1,
         }
         self.restarts_won += usize::from(d.restart_won);
         self.compute_seconds += d.time_us * 1e-6;
@@ -145,6 +188,7 @@ impl DiagnosticsWriter {
             for n in &d.param_names {
                 write!(w, ",sigma_{n}").map_err(err)?;
             }
+            write!(w, ",constraint,reason").map_err(err)?;
             writeln!(w).map_err(err)?;
             self.header_written = true;
         }
@@ -179,6 +223,14 @@ impl DiagnosticsWriter {
         for v in d.params.iter().chain(&d.param_sigmas) {
             write!(w, ",{v}").map_err(err)?;
         }
+        let constraint = serde_json::to_string(&d.constraint).unwrap_or_default();
+        write!(
+            w,
+            ",{},{}",
+            constraint.trim_matches('"'),
+            d.reason.map_or("", |r| r.name())
+        )
+        .map_err(err)?;
         writeln!(w).map_err(err)
     }
 
@@ -209,7 +261,9 @@ pub fn run_sequence(
                 momo_io::IoErrorKind::DanglingLink,
             )));
         }
-        Some(momo_io::read_odometry(&odometry_path).map_err(RunError::Input)?)
+        let arcs = momo_io::read_odometry(&odometry_path).map_err(RunError::Input)?;
+        check_arc_lengths(&odometry_path, &arcs).map_err(RunError::Input)?;
+        Some(arcs)
     } else {
         None
     };
@@ -270,6 +324,42 @@ pub fn run_sequence(
     outputs.extend(diagnostics.map(DiagnosticsWriter::into_file));
     momo_io::commit_all(outputs).map_err(RunError::Output)?;
     Ok(summary)
+}
+
+/// Rejects arc lengths no vehicle travels between two frames (above
+/// [`crate::config::MAX_ARC_LENGTH`], e.g. 1e200 m), at the line of the first one.
+fn check_arc_lengths(path: &Path, arcs: &[Option<f64>]) -> Result<(), IoError> {
+    let limit = crate::config::MAX_ARC_LENGTH;
+    let Some(frame) = arcs.iter().position(|a| a.is_some_and(|l| l.abs() > limit)) else {
+        return Ok(());
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let header: Vec<&str> = lines
+        .next()
+        .map(|(_, h)| h.split(',').map(str::trim).collect())
+        .unwrap_or_default();
+    let col = |name: &str| header.iter().position(|h| *h == name);
+    let (fc, ac) = (col("frame").unwrap_or(0), col("arc_length").unwrap_or(1));
+    let (line, value) = lines
+        .find_map(|(i, l)| {
+            let f: Vec<&str> = l.split(',').map(str::trim).collect();
+            (f.get(fc)?.parse::<usize>().ok()? == frame)
+                .then(|| (i + 1, f.get(ac).unwrap_or(&"").to_string()))
+        })
+        .unwrap_or((1, String::new()));
+    Err(IoError::at(
+        path,
+        line,
+        momo_io::IoErrorKind::BadNumber {
+            field: "arc_length".into(),
+            value: value.chars().take(40).collect(),
+            expected: "an arc length within -1000..=1000 m per frame",
+        },
+    ))
 }
 
 /// Runs the odometry over an in-memory sequence (simulations, tests, `momo demo`); returns

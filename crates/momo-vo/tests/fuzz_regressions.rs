@@ -21,7 +21,7 @@ const CONFIGS: &[(EstimatorKind, &str)] = &[
     ),
     (
         EstimatorKind::Momo,
-        "[model]\ntype = \"se3\"\n[metric]\ntype = \"geo_line\"\n[loss]\ntype = \"trivial\"\n[solver]\ntype = \"levenberg_marquardt\"\n[odometry]\nmin_matches = 0\nstandstill_arc_length = 0.0\n",
+        "[model]\ntype = \"se3\"\n[metric]\ntype = \"geo_line\"\n[loss]\ntype = \"trivial\"\n[solver]\ntype = \"levenberg_marquardt\"\n[odometry]\nmin_matches = 0\nstandstill_arc_length = 0.0\nrotation_change_sigma = 0.0\n",
     ),
     (EstimatorKind::FivePoint, ""),
     (EstimatorKind::FivePointRefined, ""),

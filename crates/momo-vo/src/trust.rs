@@ -1,0 +1,349 @@
+//! Trust: whether a frame's matches can determine its motion, and whether the answer is
+//! supported by them. The driver ([`crate::Odometry`]) runs these checks on every frame pair
+//! and reports the outcome in the diagnostics ([`Constraint`] and [`Reason`]): a frame whose
+//! answer cannot be trusted gets a status other than `estimated` that names the reason, and
+//! either holds the previous motion (`degenerate`) or keeps its estimate flagged (`weak`).
+//!
+//! The checks, in order:
+//! - repeated matches (the same pixel pair more than once) are counted once;
+//! - the spread of the matches' bearings in the vehicle frame (all cameras): every match in a
+//!   small region (the largest angular standard deviation below
+//!   [`TrustOptions::min_extent`]) is degenerate; every match along one line (the second
+//!   largest below [`TrustOptions::min_width`]) is weak;
+//! - too little flow (the median angle between the bearings of a match below
+//!   [`TrustOptions::min_flow`]) while the vehicle moves: weak (the direction of travel and the
+//!   scale are not seen);
+//! - after the solve: a rotation no vehicle makes between two frames (above
+//!   [`TrustOptions::max_rotation`]), no inlier, fewer inliers than
+//!   [`TrustOptions::min_inliers`], or inliers in a small region: degenerate.
+
+use momo_core::{FrameObservations, Observation, Rig};
+use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// Thresholds of the trust checks and of the run's failure share (`[trust]` in the
+/// configuration).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrustOptions {
+    /// Largest rotation between two frames that a vehicle makes (radians); an estimate above it
+    /// is degenerate and the previous motion is held. Default 0.35 rad (20 deg).
+    pub max_rotation: f64,
+    /// Matches whose bearings (vehicle frame, all cameras) have an angular standard deviation
+    /// below this along their widest direction lie in a small region (radians; default 0.05,
+    /// about a 120 px wide patch at f = 700 px): degenerate.
+    pub min_extent: f64,
+    /// Matches whose angular standard deviation across their main direction is below this lie
+    /// along a line (radians; default 0.004, about 3 px at f = 700 px): weak.
+    pub min_width: f64,
+    /// Median flow (angle between a match's two bearings, radians) below which a moving frame
+    /// has too little flow to see its direction of travel (default 2e-4, 0.14 px at
+    /// f = 700 px): weak, and the scale is not estimated.
+    pub min_flow: f64,
+    /// Fewest inliers that support an estimate (default 10): fewer is degenerate.
+    pub min_inliers: usize,
+    /// A run in which more than this share of the frame pairs failed, were degenerate or held
+    /// their motion (no matches) ends with a warning and exit code 3 (`momo run`); default 0.5.
+    pub max_failed_share: f64,
+}
+
+impl Default for TrustOptions {
+    fn default() -> Self {
+        Self {
+            max_rotation: 20f64.to_radians(),
+            min_extent: 0.05,
+            min_width: 0.004,
+            min_flow: 2e-4,
+            min_inliers: 10,
+            max_failed_share: 0.5,
+        }
+    }
+}
+
+impl TrustOptions {
+    /// Values out of range: the keys concerned and the reason.
+    pub(crate) fn problems(&self) -> Vec<(Vec<&'static str>, String)> {
+        let mut out = Vec::new();
+        let pi = std::f64::consts::PI;
+        if !(self.max_rotation > 0.0 && self.max_rotation <= pi) {
+            out.push((
+                vec!["trust.max_rotation"],
+                format!(
+                    "trust.max_rotation must be within (0, pi] rad, got {}",
+                    self.max_rotation
+                ),
+            ));
+        }
+        for (key, v) in [
+            ("trust.min_extent", self.min_extent),
+            ("trust.min_width", self.min_width),
+            ("trust.min_flow", self.min_flow),
+        ] {
+            if !(0.0..1.0).contains(&v) {
+                out.push((vec![key], format!("{key} must be within 0..1 rad, got {v}")));
+            }
+        }
+        if !(0.0..=1.0).contains(&self.max_failed_share) {
+            out.push((
+                vec!["trust.max_failed_share"],
+                format!(
+                    "trust.max_failed_share must be within 0..=1, got {}",
+                    self.max_failed_share
+                ),
+            ));
+        }
+        out
+    }
+}
+
+/// How well a frame's matches constrained its motion.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Constraint {
+    /// Nothing found wrong.
+    #[default]
+    Well,
+    /// The matches constrain the motion only in part (a line of matches, too little flow): the
+    /// estimate is kept, flagged, and does not centre the next frame's prior.
+    Weak,
+    /// The matches do not determine the motion, or the answer is not supported by them: the
+    /// previous motion is held, the standard deviations are infinite.
+    Degenerate,
+}
+
+/// Why a frame is weak or degenerate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// Fewer distinct matches than `odometry.min_matches` once repeated matches count once.
+    RepeatedMatches,
+    /// Every match in a small region of the view.
+    SmallRegion,
+    /// Every match along one line.
+    AlongALine,
+    /// Too little flow for a moving frame.
+    LittleFlow,
+    /// The estimated rotation exceeds `trust.max_rotation`.
+    ImplausibleRotation,
+    /// No match is an inlier of the estimate.
+    NoInliers,
+    /// Fewer inliers than `trust.min_inliers`.
+    TooFewInliers,
+    /// The inliers lie in a small region.
+    InliersInSmallRegion,
+}
+
+impl Reason {
+    /// The snake_case name (as in the diagnostics).
+    pub fn name(self) -> &'static str {
+        match self {
+            Reason::RepeatedMatches => "repeated_matches",
+            Reason::SmallRegion => "small_region",
+            Reason::AlongALine => "along_a_line",
+            Reason::LittleFlow => "little_flow",
+            Reason::ImplausibleRotation => "implausible_rotation",
+            Reason::NoInliers => "no_inliers",
+            Reason::TooFewInliers => "too_few_inliers",
+            Reason::InliersInSmallRegion => "inliers_in_small_region",
+        }
+    }
+}
+
+/// Removes repeated matches (the same two pixels, bit for bit, in the same camera): each
+/// counts once. Returns the number removed.
+pub fn dedupe(obs: &mut FrameObservations) -> usize {
+    let mut removed = 0;
+    for matches in &mut obs.per_camera {
+        let before = matches.len();
+        let key = |o: &Observation| {
+            [
+                o.px0.x.to_bits(),
+                o.px0.y.to_bits(),
+                o.px1.x.to_bits(),
+                o.px1.y.to_bits(),
+            ]
+        };
+        let mut seen = std::collections::HashSet::with_capacity(before);
+        matches.retain(|o| seen.insert(key(o)));
+        removed += before - matches.len();
+    }
+    removed
+}
+
+/// The angular spread of a set of bearings in the vehicle frame, from the eigenvalues
+/// `λ1 ≥ λ2 ≥ λ3` of their second moment `Σ f fᵀ / n`: `extent = √λ2` (the angular standard
+/// deviation along the widest direction, small-angle) and `width = √λ3` (across a great circle:
+/// zero for bearings on one image line).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    /// `√λ2`: along the widest direction.
+    pub extent: f64,
+    /// `√λ3`: across the great circle of the widest direction.
+    pub width: f64,
+}
+
+/// The spread of the frame-(k-1) bearings of the selected matches (`keep(camera, index)`),
+/// rotated into the vehicle frame; `None` for fewer than 2 matches.
+pub fn spread(
+    rig: &Rig,
+    obs: &FrameObservations,
+    keep: impl Fn(usize, usize) -> bool,
+) -> Option<Spread> {
+    let mut n = 0usize;
+    let mut sum = Vector3::zeros();
+    let mut outer = Matrix3::zeros();
+    for (j, matches) in obs.per_camera.iter().enumerate() {
+        let Some(cam) = rig.cameras().get(j) else {
+            continue;
+        };
+        let r = cam.t_vehicle_camera.rotation;
+        for (i, o) in matches.iter().enumerate() {
+            if !keep(j, i) {
+                continue;
+            }
+            let f = r * o.f0.normalize();
+            sum += f;
+            outer += f * f.transpose();
+            n += 1;
+        }
+    }
+    if n < 2 {
+        return None;
+    }
+    let _ = sum;
+    // The second moment of the unit bearings (not centred): bearings near one direction d give
+    // `d dᵀ` plus their angular spread in the two smaller eigenvalues; bearings on one image
+    // line (a great circle, a plane through the centre) give a vanishing smallest eigenvalue,
+    // however long the line is.
+    let moment = outer / n as f64;
+    let mut ev: Vec<f64> = SymmetricEigen::new(moment)
+        .eigenvalues
+        .iter()
+        .map(|v| v.max(0.0))
+        .collect();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    Some(Spread {
+        extent: ev[1].sqrt(),
+        width: ev[2].sqrt(),
+    })
+}
+
+/// The median flow of a frame pair: the angle between a match's bearings in frame k-1 and k
+/// (radians, camera frame; includes the rotation's flow).
+pub fn median_flow(obs: &FrameObservations) -> Option<f64> {
+    let mut flows: Vec<f64> = obs
+        .per_camera
+        .iter()
+        .flatten()
+        .map(|o| {
+            let (a, b) = (o.f0.normalize(), o.f1.normalize());
+            a.cross(&b).norm().atan2(a.dot(&b))
+        })
+        .collect();
+    if flows.is_empty() {
+        return None;
+    }
+    let mid = flows.len() / 2;
+    let (_, m, _) = flows.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(*m)
+}
+
+/// The verdict on a frame's matches before the solve.
+pub fn before_solve(
+    options: &TrustOptions,
+    rig: &Rig,
+    obs: &FrameObservations,
+    moving: bool,
+) -> Option<(Constraint, Reason)> {
+    let s = spread(rig, obs, |_, _| true)?;
+    if s.extent < options.min_extent {
+        return Some((Constraint::Degenerate, Reason::SmallRegion));
+    }
+    if s.width < options.min_width {
+        return Some((Constraint::Weak, Reason::AlongALine));
+    }
+    if moving && median_flow(obs).is_some_and(|f| f < options.min_flow) {
+        return Some((Constraint::Weak, Reason::LittleFlow));
+    }
+    None
+}
+
+/// The inputs of [`calibrated_covariance`].
+#[derive(Clone, Debug)]
+pub struct CovarianceInputs {
+    /// The normal matrix `JᵀWJ` of the free parameters at the solution (robust weights; the
+    /// prior terms included, in the residual unit `s`).
+    pub normal: DMatrix<f64>,
+    /// The final cost `½ Σ ρ`.
+    pub cost: f64,
+    /// Inliers (matches within the loss scale).
+    pub inliers: usize,
+    /// Positions, among the free parameters, of the rotation vector (`se3`'s `rot_x..z`), if
+    /// all three are free.
+    pub rotation: Option<[usize; 3]>,
+    /// The rotation prior's inverse standard deviation `1/σ_w` if it was active, else 0.
+    pub prior_inv_sigma: f64,
+    /// The unit `s` of the prior terms (the loss scale).
+    pub prior_scale: f64,
+    /// The smallest residual standard deviation assumed (model error), in the metric's units.
+    pub sigma_floor: f64,
+}
+
+/// The covariance of the free parameters from the robust fit:
+/// `Σ = (H_data / σ² + H_prior)⁻¹`, where `H_data` is the normal matrix of the matches (the
+/// rotation prior's share `(s/σ_w)² I` taken out of the solver's normal matrix), `σ²` the
+/// residual variance of the inliers (`2 cost / (m - n)`, at least `sigma_floor²`: a noise-free
+/// fit still has model error), and `H_prior = I/σ_w²` on the rotation vector when the prior was
+/// active. Directions that the information does not constrain (eigenvalues below `1e-12` of
+/// the largest, or not positive) get infinite variance on every parameter they involve:
+/// an information-free frame reports an infinite sigma, never 0.
+pub fn calibrated_covariance(inp: &CovarianceInputs) -> Option<DMatrix<f64>> {
+    let n = inp.normal.nrows();
+    if n == 0 || inp.normal.ncols() != n || inp.normal.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let m = inp.inliers.max(n + 1);
+    let sigma2 = (2.0 * inp.cost / (m - n) as f64).max(inp.sigma_floor * inp.sigma_floor);
+    if !(sigma2 > 0.0 && sigma2.is_finite()) {
+        return None;
+    }
+    let mut info = inp.normal.clone();
+    let prior = inp.prior_inv_sigma * inp.prior_inv_sigma;
+    if let Some(rot) = inp.rotation.filter(|_| prior > 0.0) {
+        let in_h = prior * inp.prior_scale * inp.prior_scale;
+        for &i in &rot {
+            info[(i, i)] -= in_h;
+        }
+    }
+    info /= sigma2;
+    if let Some(rot) = inp.rotation.filter(|_| prior > 0.0) {
+        for &i in &rot {
+            info[(i, i)] += prior;
+        }
+    }
+    let info = (&info + info.transpose()) * 0.5;
+    let eig = SymmetricEigen::new(info);
+    let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    if !(max > 0.0) {
+        return Some(DMatrix::from_element(n, n, f64::INFINITY));
+    }
+    let mut cov = DMatrix::zeros(n, n);
+    let mut unconstrained = vec![false; n];
+    for (k, &l) in eig.eigenvalues.iter().enumerate() {
+        let v = eig.eigenvectors.column(k);
+        if l > 1e-12 * max {
+            cov += v * v.transpose() / l;
+        } else {
+            for i in 0..n {
+                unconstrained[i] |= v[i].abs() > 1e-3;
+            }
+        }
+    }
+    for i in 0..n {
+        if unconstrained[i] {
+            cov.row_mut(i).fill(f64::INFINITY);
+            cov.column_mut(i).fill(f64::INFINITY);
+        }
+    }
+    Some(cov)
+}
