@@ -3,7 +3,7 @@
 //! simulated sequences (noise, outliers, stops, blinded cameras, a moving object, with or
 //! without odometry), written in the `FORMAT.md` layout and run by the `momo run` binary, the
 //! run
-//! - exits successfully (no panic),
+//! - exits successfully (no panic; exit 3 when most frame pairs were held, with its warning),
 //! - writes exactly one pose per frame (and one diagnostics row per frame pair),
 //! - every pose finite with an orthonormal rotation (the reader's 1e-6 check, and 1e-9 here).
 //!
@@ -229,7 +229,13 @@ proptest! {
             args.extend(["--config".as_ref(), config.as_os_str()]);
         }
         let o = momo_run(&seq, &out, &args);
-        prop_assert!(o.status.success(), "{:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
+        // Exit 0, or 3 when most frame pairs of a random sequence failed or held their motion
+        // (the run still writes every pose, and says so on stderr).
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        prop_assert!(
+            o.status.success() || (o.status.code() == Some(3) && stderr.contains("not trustworthy")),
+            "{:?}: {}", o.status, stderr
+        );
         // Frames as the format defines them (trailing frame pairs with neither a match nor an
         // arc length are not representable, see `momo_io::write_sequence`).
         let n = momo::io::read_sequence(&seq).expect("reads back").num_frames();

@@ -117,7 +117,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
             summary.restarts_won,
             options.output.display()
         );
-        eprintln!(
+        note!(
             "momo: trust: {} degenerate (motion held), {} weak (flagged); scale: {} from odometry, {} estimated, {} held, {} unobservable",
             summary.degenerate,
             summary.weak,
@@ -127,7 +127,7 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
             summary.scale_unobservable
         );
         if summary.scale_never_measured() {
-            eprintln!(
+            note!(
                 "momo: warning: the scale was never measured (no odometry.csv and no frame where the rig made it observable): the trajectory's scale is arbitrary"
             );
         }
@@ -220,6 +220,11 @@ fn run_calibrated(
 fn frame_pairs(seq: &Path) -> Option<u64> {
     use std::io::{Read, Seek, SeekFrom};
     let last_frame = |name: &str| -> Option<u64> {
+        // Regular files only: opening a FIFO here would consume (or break) the stream that
+        // the run reads next.
+        if !std::fs::metadata(seq.join(name)).ok()?.is_file() {
+            return None;
+        }
         let mut f = std::fs::File::open(seq.join(name)).ok()?;
         let len = f.metadata().ok()?.len();
         f.seek(SeekFrom::Start(len.saturating_sub(4096))).ok()?;
