@@ -3,124 +3,13 @@
 //! configuration cases show the `file:line: reason` error they are rejected with before the
 //! first frame.
 
-use momo_core::{
-    Camera, CameraModel, FrameObservations, Observation, Pose, Rig, camera_motion, so3_log,
-};
+use momo_core::{CameraModel, FrameObservations, Observation, Pose, Rig};
 use momo_costs::canned;
 use momo_vo::{Config, Constraint, FrameStatus, Odometry, Reason, RunOptions, run_sequence};
 use nalgebra::{Vector2, Vector3};
 
-/// SplitMix64 with uniform and Gaussian draws: deterministic test data without dependencies.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-
-    fn gauss(&mut self) -> f64 {
-        let u = self.uniform(1e-12, 1.0);
-        let v = self.uniform(0.0, std::f64::consts::TAU);
-        (-2.0 * u.ln()).sqrt() * v.cos()
-    }
-}
-
-/// Matches of camera `j` of `rig` under the vehicle motion `motion`, as a reader delivers them:
-/// a bearing drawn by `bearing` (camera frame k-1) at a depth in `depth`, projected into both
-/// frames, both pixels inside the image and within `accept`, Gaussian pixel noise `noise`,
-/// bearings unprojected from the noisy pixels.
-fn matches(
-    rig: &Rig,
-    j: usize,
-    motion: &Pose<f64>,
-    n: usize,
-    noise: f64,
-    rng: &mut Rng,
-    mut bearing: impl FnMut(&mut Rng) -> Vector3<f64>,
-    depth: (f64, f64),
-    accept: impl Fn(&Vector2<f64>) -> bool,
-) -> Vec<Observation> {
-    let cam = &rig.cameras()[j];
-    let model = cam.model;
-    let c = camera_motion(motion, &cam.t_vehicle_camera);
-    let mut out = Vec::with_capacity(n);
-    for _ in 0..200 * n {
-        if out.len() == n {
-            break;
-        }
-        let x0 = bearing(rng).normalize() * rng.uniform(depth.0, depth.1);
-        let x1 = c.inverse().transform_point(&x0);
-        let (Some(p0), Some(p1)) = (model.project(&x0), model.project(&x1)) else {
-            continue;
-        };
-        if x1.norm() < 0.5 || !(model.contains(&p0, 0.0) && model.contains(&p1, 0.0)) {
-            continue;
-        }
-        if !(accept(&p0) && accept(&p1)) {
-            continue;
-        }
-        let p0 = p0 + Vector2::new(rng.gauss(), rng.gauss()) * noise;
-        let p1 = p1 + Vector2::new(rng.gauss(), rng.gauss()) * noise;
-        if let Some(o) = Observation::new(&model, p0, p1) {
-            out.push(o);
-        }
-    }
-    assert_eq!(out.len(), n, "the scene allows {n} matches");
-    out
-}
-
-/// A bearing through a uniformly drawn pixel of `model`.
-fn through_pixel(model: Camera) -> impl FnMut(&mut Rng) -> Vector3<f64> {
-    move |rng| {
-        let (w, h) = model.size();
-        let px = Vector2::new(rng.uniform(0.0, w - 1.0), rng.uniform(0.0, h - 1.0));
-        model.unproject(&px).unwrap_or_else(Vector3::z)
-    }
-}
-
-fn anywhere(_: &Vector2<f64>) -> bool {
-    true
-}
-
-/// Matches spread over the whole image of every camera.
-fn frame(rig: &Rig, motion: &Pose<f64>, n: usize, noise: f64, rng: &mut Rng) -> FrameObservations {
-    let mut obs = FrameObservations::new(rig.len());
-    for j in 0..rig.len() {
-        let model = rig.cameras()[j].model;
-        obs.per_camera[j] = matches(
-            rig,
-            j,
-            motion,
-            n,
-            noise,
-            rng,
-            through_pixel(model),
-            (4.0, 40.0),
-            anywhere,
-        );
-    }
-    obs
-}
-
-/// A planar vehicle motion: yaw and arc length (the single-track model).
-fn drive(yaw: f64, l: f64) -> Pose<f64> {
-    use momo_core::Manifold;
-    momo_models::SingleTrack2d.motion(&[yaw, l])
-}
-
-fn rot_err_deg(a: &Pose<f64>, b: &Pose<f64>) -> f64 {
-    so3_log(&(a.rotation.transpose() * b.rotation))
-        .norm()
-        .to_degrees()
-}
+mod support;
+use support::*;
 
 /// The default estimator, warmed up on `frames` ordinary frames of `warm` (each estimated).
 fn warmed_up(
