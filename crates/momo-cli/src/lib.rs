@@ -8,7 +8,9 @@
 //!
 //! Exit codes: 0 the command did what was asked; 1 a failure that is not the input's (writing
 //! an output, an internal error); 2 bad input (a file, an option, a configuration, an output
-//! that is also an input or cannot be written safely); 130 / 143 interrupted by SIGINT /
+//! that is also an input or cannot be written safely); 3 a run that wrote its outputs but in
+//! which more than `trust.max_failed_share` of the frame pairs failed or held their motion;
+//! 130 / 143 interrupted by SIGINT /
 //! SIGTERM (temporary files and output directories created so far are removed first); 141
 //! standard output is a closed pipe (`momo demo | head`), nothing printed.
 
