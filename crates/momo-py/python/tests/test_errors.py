@@ -164,13 +164,14 @@ def test_rig_bad_intrinsics_and_model():
 
 
 def test_metric_does_not_fit_rig():
-    """geo_line needs pinhole cameras: a stateless estimate raises, the odometry says so."""
+    """geo_line needs pinhole cameras: rejected before the first frame is estimated, by the
+    stateless estimate and by the odometry (momo's configuration validation)."""
     seq = momo.simulate("fisheye_surround", frames=2, seed=1, matches=20)
-    with pytest.raises(momo.EstimationError, match="pinhole"):
+    with pytest.raises(momo.ConfigError, match="pinhole"):
         momo.estimate(seq.rig, seq.frame(1), metric="geo_line", loss={"scale": 1.0}, arc_length=1.0)
-    vo = momo.Odometry(seq.rig, momo.Config(metric="geo_line", loss={"scale": 1.0}))
-    _, d = vo.process(seq.frame(1), 1.0)
-    assert d.status == "solver_failure"
+    with pytest.raises(momo.ConfigError, match="pinhole"):
+        vo = momo.Odometry(seq.rig, momo.Config(metric="geo_line", loss={"scale": 1.0}))
+        vo.process(seq.frame(1), 1.0)
 
 
 # MatchError: malformed matches; the odometry is unchanged after one.
