@@ -154,7 +154,8 @@ impl PyDiagnostics {
     fn frame(&self) -> usize {
         self.inner.frame
     }
-    /// What happened: `"estimated"`, `"standstill"`, `"no_matches"` or `"solver_failure"`.
+    /// What happened: `"estimated"`, `"standstill"`, `"no_matches"`, `"solver_failure"`,
+    /// `"degenerate"` or `"weak"`.
     #[getter]
     fn status(&self) -> String {
         tag(&self.inner.status)

@@ -95,7 +95,7 @@ class Rig:
     def __len__(self) -> int: ...
     def __eq__(self, other: object) -> bool: ...
 
-Status = Literal["estimated", "standstill", "no_matches", "solver_failure"]
+Status = Literal["estimated", "standstill", "no_matches", "solver_failure", "degenerate", "weak"]
 ScaleSource = Literal["odometry", "estimated", "held", "unobservable"]
 
 class Diagnostics:

@@ -164,10 +164,10 @@ def test_rig_bad_intrinsics_and_model():
 
 
 def test_metric_does_not_fit_rig():
-    """geo_line needs pinhole cameras: rejected before the first frame is estimated, by the
-    stateless estimate and by the odometry (momo's configuration validation)."""
+    """geo_line needs pinhole cameras: the stateless estimate raises when it solves; the
+    odometry rejects the configuration before the first frame (momo's validation)."""
     seq = momo.simulate("fisheye_surround", frames=2, seed=1, matches=20)
-    with pytest.raises(momo.ConfigError, match="pinhole"):
+    with pytest.raises(momo.EstimationError, match="pinhole"):
         momo.estimate(seq.rig, seq.frame(1), metric="geo_line", loss={"scale": 1.0}, arc_length=1.0)
     with pytest.raises(momo.ConfigError, match="pinhole"):
         vo = momo.Odometry(seq.rig, momo.Config(metric="geo_line", loss={"scale": 1.0}))
