@@ -193,6 +193,7 @@ pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
     };
     let bar = progress_bar(quiet, Some(frames.saturating_sub(1) as u64));
     let started = std::time::Instant::now();
+    let max_failed_share = config.trust.max_failed_share;
     let summary = momo_match::vo_from_images(&run, config, &args.front.into(), |_| bar.inc(1))
         .map_err(match_failure)?;
     bar.finish_and_clear();
@@ -200,19 +201,14 @@ pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
     if !quiet {
         let f = summary.front_end;
         note!(
-            "momo: {} frames in {:.2} s ({:.1} ms/frame matching, {:.1} ms/frame decoding, {:.1} µs/frame estimating): {} estimated, {} not; {} matches; wrote {}",
-            summary.poses,
-            started.elapsed().as_secs_f64(),
+            "momo: front end: {:.1} ms/frame matching, {:.1} ms/frame decoding, {} matches",
             f.match_ms_per_frame(),
             f.decode_ms_per_frame(),
-            1e6 * summary.estimate_seconds / (summary.poses.max(2) - 1) as f64,
-            summary.estimated,
-            summary.not_estimated,
-            f.matches,
-            run.output.display()
+            f.matches
         );
+        crate::run::print_summary(&summary.run, started.elapsed(), &run.output);
     }
-    Ok(())
+    crate::run::untrusted(&summary.run, max_failed_share)
 }
 
 /// The image folders, rig, odometry and timestamps of `momo vo`: as given, or from one sequence

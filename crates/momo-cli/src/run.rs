@@ -5,7 +5,7 @@ use crate::common::{
     EstimatorArg, Failure, check_outputs, load_config, mount_model, progress_bar, sequence_files,
 };
 use crate::trajfmt::OutputFormat;
-use momo_vo::{Config, RunError, RunOptions};
+use momo_vo::{RunError, RunOptions};
 use std::path::{Path, PathBuf};
 
 /// The arguments of `momo run`.
@@ -40,7 +40,7 @@ pub(crate) struct RunArgs {
     estimator: EstimatorArg,
     /// Calibrate the rig's mount rotation on the sequence first (as `momo calibrate`),
     /// then run with the corrected rig: two passes over the sequence, not online filtering.
-    /// Reads the whole sequence into memory; --diagnostics is then written as JSON lines.
+    /// The calibration reads the whole sequence into memory.
     #[arg(long)]
     calibrate_mount: bool,
     /// The model of the mount calibration (with --calibrate-mount): the type tag of any
@@ -70,27 +70,24 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
     let estimator = args.estimator.into();
     let times =
         crate::trajfmt::check_times(args.format, &args.seq.join(momo_io::files::TIMES), None)?;
-    if args.calibrate_mount {
+    // With --calibrate-mount the mount is calibrated on the sequence first (a pass over all
+    // frames in memory), then the run streams the sequence with the corrected rig.
+    let rig = if args.calibrate_mount {
         let options = momo_vo::MountCalibration::default()
             .with_model(Some(mount_model(&args.mount_model)?))
             .with_frames(args.mount_frames);
-        run_calibrated(
-            &args.seq,
-            &args.output,
-            config,
-            args.diagnostics.as_deref(),
-            args.quiet,
-            estimator,
-            &options,
-        )?;
-        return crate::trajfmt::finish(args.format, &args.output, times.as_deref());
-    }
+        let sequence = momo_io::read_sequence(&args.seq).map_err(Failure::input)?;
+        Some(calibrate_mount(&sequence, &config, &options, args.quiet)?.corrected_rig)
+    } else {
+        None
+    };
     let quiet = args.quiet;
     let bar = progress_bar(quiet, frame_pairs(&args.seq));
     let options = RunOptions {
         estimator,
         output: args.output,
         diagnostics: args.diagnostics,
+        rig,
     };
     let started = std::time::Instant::now();
     let max_failed_share = config.trust.max_failed_share;
@@ -99,45 +96,54 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
             RunError::Input(e) => Failure::input(e),
             RunError::Vo(e) => Failure::input(e),
             RunError::Output(e) => Failure::other(e),
+            e @ RunError::RigMismatch { .. } => Failure::other(e),
         },
     )?;
     bar.finish_and_clear();
     crate::trajfmt::finish(args.format, &options.output, times.as_deref())?;
     if !quiet {
-        let wall = started.elapsed().as_secs_f64();
-        note!(
-            "momo: {} frames in {:.2} s ({:.1} µs/frame estimating): {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
-            summary.frames,
-            wall,
-            1e6 * summary.compute_seconds / (summary.frames.max(2) - 1) as f64,
-            summary.estimated,
-            summary.standstill,
-            summary.no_matches,
-            summary.solver_failures,
-            summary.restarts_won,
-            options.output.display()
-        );
-        note!(
-            "momo: trust: {} degenerate (motion held), {} weak (flagged); scale: {} from odometry, {} estimated, {} held, {} unobservable",
-            summary.degenerate,
-            summary.weak,
-            summary.scale_odometry,
-            summary.scale_estimated,
-            summary.scale_held,
-            summary.scale_unobservable
-        );
-        if summary.scale_never_measured() {
-            note!(
-                "momo: warning: the scale was never measured (no odometry.csv and no frame where the rig made it observable): the trajectory's scale is arbitrary"
-            );
-        }
+        print_summary(&summary, started.elapsed(), &options.output);
     }
     untrusted(&summary, max_failed_share)
 }
 
+/// The summary of a run on stderr (`momo run`, `momo vo`): frames, statuses, scale sources.
+pub(crate) fn print_summary(
+    summary: &momo_vo::RunSummary,
+    wall: std::time::Duration,
+    output: &Path,
+) {
+    note!(
+        "momo: {} frames in {:.2} s ({:.1} µs/frame estimating): {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
+        summary.frames,
+        wall.as_secs_f64(),
+        1e6 * summary.compute_seconds / (summary.frames.max(2) - 1) as f64,
+        summary.estimated,
+        summary.standstill,
+        summary.no_matches,
+        summary.solver_failures,
+        summary.restarts_won,
+        output.display()
+    );
+    note!(
+        "momo: trust: {} degenerate (motion held), {} weak (flagged); scale: {} from odometry, {} estimated, {} held, {} unobservable",
+        summary.degenerate,
+        summary.weak,
+        summary.scale_odometry,
+        summary.scale_estimated,
+        summary.scale_held,
+        summary.scale_unobservable
+    );
+    if summary.scale_never_measured() {
+        note!(
+            "momo: warning: the scale was never measured (no odometry.csv and no frame where the rig made it observable): the trajectory's scale is arbitrary"
+        );
+    }
+}
+
 /// Exit code 3 (with a warning) when more than `max_share` of the frame pairs failed,
 /// were degenerate or held their motion for lack of matches.
-fn untrusted(summary: &momo_vo::RunSummary, max_share: f64) -> Result<(), Failure> {
+pub(crate) fn untrusted(summary: &momo_vo::RunSummary, max_share: f64) -> Result<(), Failure> {
     let share = summary.failed_share();
     if share > max_share {
         return Err(Failure::Untrusted(anyhow::anyhow!(
@@ -148,69 +154,6 @@ fn untrusted(summary: &momo_vo::RunSummary, max_share: f64) -> Result<(), Failur
             100.0 * share,
             100.0 * max_share
         )));
-    }
-    Ok(())
-}
-
-/// `momo run --calibrate-mount`: calibrate on the sequence, then run it with the corrected rig
-/// (in memory: the calibration needs every frame anyway).
-fn run_calibrated(
-    seq: &Path,
-    output: &Path,
-    config: Config,
-    diagnostics: Option<&Path>,
-    quiet: bool,
-    estimator: momo_vo::EstimatorKind,
-    options: &momo_vo::MountCalibration,
-) -> Result<(), Failure> {
-    if let Some(d) = diagnostics
-        && d.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
-    {
-        return Err(Failure::Input(anyhow::anyhow!(
-            "{}: with --calibrate-mount the diagnostics are written as JSON lines; give a name not ending in .csv",
-            d.display()
-        )));
-    }
-    let mut sequence = momo_io::read_sequence(seq).map_err(Failure::input)?;
-    let est = calibrate_mount(&sequence, &config, options, quiet)?;
-    sequence.rig = est.corrected_rig;
-    let bar = progress_bar(quiet, Some(sequence.num_frames().saturating_sub(1) as u64));
-    let started = std::time::Instant::now();
-    let (poses, diags) = momo_vo::run_in_memory(&sequence, estimator, config, |_| bar.inc(1))
-        .map_err(Failure::input)?;
-    bar.finish_and_clear();
-    // Poses and diagnostics are committed together: both or neither.
-    let mut writer = momo_io::PoseWriter::create(output).map_err(Failure::other)?;
-    for p in &poses {
-        writer.push(p).map_err(Failure::other)?;
-    }
-    let mut files = vec![writer.into_file()];
-    if let Some(path) = diagnostics {
-        let mut file = momo_io::AtomicFile::create(path).map_err(Failure::other)?;
-        for d in &diags {
-            let line = serde_json::to_string(d).map_err(Failure::other)?;
-            std::io::Write::write_all(file.writer(), line.as_bytes())
-                .and_then(|()| std::io::Write::write_all(file.writer(), b"\n"))
-                .map_err(|e| Failure::other(file.err(e)))?;
-        }
-        files.push(file);
-    }
-    momo_io::commit_all(files).map_err(Failure::other)?;
-    if !quiet {
-        let count = |s: momo_vo::FrameStatus| diags.iter().filter(|d| d.status == s).count();
-        let compute: f64 = diags.iter().map(|d| d.time_us).sum();
-        note!(
-            "momo: {} frames in {:.2} s ({:.1} µs/frame estimating) with the calibrated rig: {} estimated, {} standstill, {} without matches, {} solver failures, {} restarts won; wrote {}",
-            poses.len(),
-            started.elapsed().as_secs_f64(),
-            compute / diags.len().max(1) as f64,
-            count(momo_vo::FrameStatus::Estimated),
-            count(momo_vo::FrameStatus::Standstill),
-            count(momo_vo::FrameStatus::NoMatches),
-            count(momo_vo::FrameStatus::SolverFailure),
-            diags.iter().filter(|d| d.restart_won).count(),
-            output.display()
-        );
     }
     Ok(())
 }

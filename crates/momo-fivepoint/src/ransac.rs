@@ -5,8 +5,14 @@ use crate::decompose::recover_pose;
 use crate::solver::solve_five_point;
 use crate::vehicle::vehicle_motion_from_camera;
 use momo_core::num_dual::DualSVec64;
-use momo_core::{FrameObservations, Observation, Pose, Rig, Scalar, essential, so3_exp};
-use nalgebra::{Matrix3, SMatrix, SVector, U1, U5, Vector3};
+use momo_core::{
+    FrameObservations, Linearization, NormalMatrix, Observation, ParamVec, Pose, Rig, RobustLoss,
+    Scalar, Termination, TrivialLoss, essential, so3_exp,
+};
+use momo_costs::Cauchy;
+use momo_solvers::linalg::solve_damped;
+use momo_solvers::{LevenbergMarquardt, LmProblem};
+use nalgebra::{Matrix3, U1, U5, Vector3};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 
@@ -258,91 +264,120 @@ fn tangent_basis(t: &Vector3<f64>) -> [Vector3<f64>; 2] {
     [u, v]
 }
 
-/// Cauchy loss `b² ln(1 + s/b²)` of a squared residual `s` (plain `s` for `b = ∞`).
-fn cauchy(s: f64, b: f64) -> f64 {
-    if b.is_finite() {
-        b * b * (s / (b * b)).ln_1p()
-    } else {
-        s
-    }
+/// The refinement of [`refine_motion`] as a Levenberg-Marquardt problem ([`LmProblem`]): the
+/// point is a camera motion with unit translation, a step `(w, a, b)` moves it by
+/// [`perturbed`] in the tangent basis of its own translation, and the cost is
+/// `½ Σ ρ(rᵢ²)` with `rᵢ²` the squared angular Sampson errors. The normal equations are those of
+/// iteratively reweighted least squares (weights `ρ'(rᵢ²)`), the Jacobian of `rᵢ` by num-dual.
+struct Refinement<'a, 'o> {
+    obs: &'a [&'o Observation],
+    loss: &'a dyn RobustLoss,
 }
 
-fn cost(motion: &Pose<f64>, obs: &[&Observation], b: f64) -> f64 {
-    let e = essential(motion);
-    obs.iter().map(|o| cauchy(sampson_angle_sq(&e, o), b)).sum()
-}
+impl LmProblem for Refinement<'_, '_> {
+    type Point = Pose<f64>;
+    type Lin = Linearization;
+    type Step = ParamVec;
 
-/// Levenberg-Marquardt on `Σ ρ(r²)` (`r` the angular Sampson errors, [`sampson_angle_sq`];
-/// `ρ` the Cauchy loss `b² ln(1 + r²/b²)` with scale `b = loss_scale`, or plain least squares
-/// for `loss_scale = f64::INFINITY`) over the rotation and the translation direction of a
-/// camera motion (unit translation), starting from `motion`. The robust loss enters through
-/// IRLS weights `1 / (1 + r²/b²)`. Returns the start if it cannot improve.
-pub fn refine_motion(
-    motion: &Pose<f64>,
-    obs: &[&Observation],
-    loss_scale: f64,
-    max_iterations: usize,
-) -> Pose<f64> {
-    let b = loss_scale;
-    let Some(t0) = motion.translation.try_normalize(0.0) else {
-        return *motion;
-    };
-    let mut current = Pose::new(motion.rotation, t0);
-    let mut current_cost = cost(&current, obs, b);
-    if !current_cost.is_finite() {
-        return *motion;
-    }
-    let mut mu = 1e-4;
-    for _ in 0..max_iterations {
-        let basis = tangent_basis(&current.translation);
+    fn linearize(&self, x: &Pose<f64>) -> Linearization {
+        let basis = tangent_basis(&x.translation);
         let p: [D5; 5] = std::array::from_fn(|i| D5::from_re(0.0).derivative(i));
-        let e = essential(&perturbed(&current, &basis, &p));
-        let mut jtj = SMatrix::<f64, 5, 5>::zeros();
-        let mut jtr = SVector::<f64, 5>::zeros();
-        for o in obs {
+        let e = essential(&perturbed(x, &basis, &p));
+        let mut lin = Linearization {
+            cost: 0.0,
+            gradient: ParamVec::zeros(),
+            hessian: NormalMatrix::zeros(),
+        };
+        for o in self.obs {
             let r2 = sampson_angle_sq(&e, o);
+            lin.cost += 0.5 * self.loss.evaluate(r2.re)[0];
             if !(r2.re > 0.0) || !r2.re.is_finite() {
                 continue;
             }
             // r = sqrt(r²): dr = d(r²) / (2 r).
             let r = r2.re.sqrt();
             let g = r2.eps.unwrap_generic(U5, U1) / (2.0 * r);
-            let w = if b.is_finite() {
-                1.0 / (1.0 + r2.re / (b * b))
-            } else {
-                1.0
-            };
-            jtj += g * g.transpose() * w;
-            jtr += g * (r * w);
-        }
-        let mut improved = false;
-        for _ in 0..10 {
-            let mut a = jtj;
+            let w = self.loss.weights(r2.re)[0];
             for i in 0..5 {
-                a[(i, i)] += mu * (jtj[(i, i)] + 1e-12);
+                lin.gradient[i] += g[i] * r * w;
+                for j in 0..5 {
+                    lin.hessian[(i, j)] += g[i] * g[j] * w;
+                }
             }
-            let Some(step) = a.cholesky().map(|c| c.solve(&(-jtr))) else {
-                mu *= 10.0;
-                continue;
-            };
-            let q: [f64; 5] = std::array::from_fn(|i| step[i]);
-            let cand = perturbed(&current, &basis, &q);
-            let c = cost(&cand, obs, b);
-            if c < current_cost {
-                let rel = (current_cost - c) / current_cost.max(f64::MIN_POSITIVE);
-                current = cand;
-                current_cost = c;
-                mu = (mu * 0.1).max(1e-12);
-                improved = rel > 1e-12;
-                break;
-            }
-            mu *= 10.0;
         }
-        if !improved {
-            break;
-        }
+        lin
     }
-    current
+
+    fn cost(&self, x: &Pose<f64>) -> f64 {
+        let e = essential(x);
+        let rho = |o: &&Observation| 0.5 * self.loss.evaluate(sampson_angle_sq(&e, o))[0];
+        self.obs.iter().map(rho).sum()
+    }
+
+    fn lin_cost(&self, lin: &Linearization) -> f64 {
+        lin.cost
+    }
+
+    fn is_finite(&self, lin: &Linearization) -> bool {
+        lin.cost.is_finite()
+            && lin.gradient.iter().all(|v| v.is_finite())
+            && lin.hessian.iter().all(|v| v.is_finite())
+    }
+
+    fn gradient_max_norm(&self, lin: &Linearization) -> f64 {
+        lin.gradient.amax()
+    }
+
+    fn solve_damped(&self, lin: &Linearization, lambda: f64, scaled: bool) -> Option<ParamVec> {
+        solve_damped(&lin.hessian, &lin.gradient, 5, lambda, scaled).map(|(x, _)| x)
+    }
+
+    fn predicted_decrease(&self, lin: &Linearization, step: &ParamVec) -> f64 {
+        -(lin.gradient.dot(step) + 0.5 * step.dot(&(lin.hessian * step)))
+    }
+
+    fn step_is_small(&self, step: &ParamVec, _x: &Pose<f64>, tol: f64) -> bool {
+        // The step is a local perturbation of a rotation and a unit vector: |x| is 1.
+        step.norm() <= tol * (1.0 + tol)
+    }
+
+    fn retract(&self, x: &Pose<f64>, step: &ParamVec) -> Pose<f64> {
+        let basis = tangent_basis(&x.translation);
+        perturbed(x, &basis, &[step[0], step[1], step[2], step[3], step[4]])
+    }
+}
+
+/// Levenberg-Marquardt (momo-solvers' [`LevenbergMarquardt`], at most `max_iterations` trial
+/// steps) on `½ Σ ρ(r²)` (`r` the angular Sampson errors, [`sampson_angle_sq`]; `ρ` the Cauchy
+/// loss `b² ln(1 + r²/b²)` with scale `b = loss_scale`, or plain least squares for a scale that
+/// is not finite and positive) over the rotation and the translation direction of a camera
+/// motion (unit translation), starting from `motion`. The robust loss enters through IRLS
+/// weights `ρ' = 1 / (1 + r²/b²)`. Returns the start if it cannot improve.
+pub fn refine_motion(
+    motion: &Pose<f64>,
+    obs: &[&Observation],
+    loss_scale: f64,
+    max_iterations: usize,
+) -> Pose<f64> {
+    let Some(t0) = motion.translation.try_normalize(0.0) else {
+        return *motion;
+    };
+    let cauchy;
+    let loss: &dyn RobustLoss = if loss_scale.is_finite() && loss_scale > 0.0 {
+        cauchy = Cauchy::new(loss_scale);
+        &cauchy
+    } else {
+        &TrivialLoss
+    };
+    let problem = Refinement { obs, loss };
+    let lm = LevenbergMarquardt::default()
+        .with_max_iterations(max_iterations)
+        .with_function_tolerance(1e-10);
+    let run = lm.minimize(&problem, Pose::new(motion.rotation, t0));
+    if run.termination == Termination::NumericalFailure && run.iterations == 0 {
+        return *motion;
+    }
+    run.x
 }
 
 #[cfg(test)]

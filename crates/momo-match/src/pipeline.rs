@@ -7,7 +7,7 @@ use crate::images::{GammaTable, ImageSequence};
 use crate::matcher::{FrameMatcher, MatchOptions};
 use momo_core::{CameraModel, FrameObservations, Observation, Rig};
 use momo_io::{AtomicFile, IoError, MatchWriter, PoseWriter, files};
-use momo_vo::{Config, EstimatorKind, FrameResult, FrameStatus, Trajectory};
+use momo_vo::{Config, EstimatorKind, FrameResult, RunSummary};
 use nalgebra::Vector2;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -248,12 +248,8 @@ pub struct VoSummary {
     pub front_end: FrontEndStats,
     /// Poses written (one per frame).
     pub poses: usize,
-    /// Frame pairs estimated from matches.
-    pub estimated: usize,
-    /// Frame pairs at standstill, without matches, or where the solver failed.
-    pub not_estimated: usize,
-    /// Seconds spent estimating (the estimator's own per-frame times).
-    pub estimate_seconds: f64,
+    /// The run's totals (statuses, scale sources, estimating time), as `momo run`'s.
+    pub run: RunSummary,
 }
 
 /// Where `momo vo` reads and writes.
@@ -287,25 +283,25 @@ pub fn vo_from_images(
         .transpose()?;
     let mut front = ImageFrontEnd::new(&run.folders, &rig, &run.rig, options)?;
     let mut vo = momo_vo::driver(run.estimator, &rig, config)?;
-    let mut trajectory = Trajectory::new(&rig);
     let mut poses = PoseWriter::create(&run.output)?;
-    poses.push(&trajectory.camera0())?;
-    let mut summary = VoSummary::default();
-    for item in &mut front {
-        let (k, obs) = item?;
-        let arc = arc_lengths
-            .as_ref()
-            .and_then(|a| a.get(k).copied().flatten());
-        let result = vo.process(&obs, arc);
-        poses.push(&trajectory.push(&result.motion))?;
-        if result.diagnostics.status == FrameStatus::Estimated {
-            summary.estimated += 1;
-        } else {
-            summary.not_estimated += 1;
-        }
-        summary.estimate_seconds += result.diagnostics.time_us * 1e-6;
-        on_frame(&result);
-    }
+    let totals = momo_vo::run_loop(
+        vo.as_mut(),
+        &rig,
+        &mut front,
+        arc_lengths.as_deref(),
+        0,
+        |pose, result| {
+            poses.push(pose)?;
+            if let Some(result) = result {
+                on_frame(result);
+            }
+            Ok(())
+        },
+    )?;
+    let mut summary = VoSummary {
+        run: totals,
+        ..VoSummary::default()
+    };
     summary.poses = poses.len();
     poses.finish()?;
     summary.front_end = front.stats();

@@ -2,7 +2,7 @@
 
 use crate::common;
 use crate::linalg::solve_damped;
-use momo_core::{LeastSquares, ParamVec, Solver, SolverReport, Termination};
+use momo_core::{LeastSquares, Linearization, ParamVec, Solver, SolverReport, Termination};
 use serde::{Deserialize, Serialize};
 
 /// Levenberg-Marquardt: the step solves `(H + λ diag H) δ = -g` (Marquardt's scaling, so that λ
@@ -81,15 +81,136 @@ with_setters!(LevenbergMarquardt {
     with_max_lambda => max_lambda: f64,
 });
 
-#[typetag::serde(name = "levenberg_marquardt")]
-impl Solver for LevenbergMarquardt {
-    fn solve(&self, problem: &dyn LeastSquares, x0: &ParamVec) -> SolverReport {
-        let common::Start { mut x, mut lin, n } =
-            match common::start(problem, x0, self.gradient_tolerance, self.max_iterations) {
-                common::Begin::Go(s) => s,
-                common::Begin::Done(report) => return report,
-            };
-        let initial_cost = lin.cost;
+/// A least-squares problem as Levenberg-Marquardt sees it, for problems whose normal equations
+/// the solver does not hold itself: a block-structured system solved by a Schur complement (the
+/// mount calibration: one block per frame plus the mount), or a point on a manifold moved by a
+/// retraction (the five-point refinement: a rotation and a unit translation). The dense
+/// problems of momo ([`LeastSquares`], at most [`MAX_PARAMS`](momo_core::MAX_PARAMS) unknowns)
+/// go through the same algorithm ([`Solver::solve`]), so there is one Levenberg-Marquardt.
+///
+/// The cost is `½ Σ ρ(rᵢ²)`; a linearisation holds that cost, its gradient `g` and a normal
+/// matrix `H` (Gauss-Newton, or robustified), each in the problem's own layout.
+pub trait LmProblem {
+    /// A point: the unknowns.
+    type Point: Clone;
+    /// A linearisation at a point: cost, gradient, normal matrix.
+    type Lin;
+    /// A step in the tangent space of a point.
+    type Step;
+    /// Linearises at `x`. A point where the problem is not defined gives a linearisation that
+    /// is not finite ([`is_finite`](Self::is_finite)); it is then rejected.
+    fn linearize(&self, x: &Self::Point) -> Self::Lin;
+    /// The cost at `x` alone (not finite where the problem is not defined).
+    fn cost(&self, x: &Self::Point) -> f64;
+    /// [`linearize`](Self::linearize) at a point whose cost is known already.
+    fn linearize_known_cost(&self, x: &Self::Point, _cost: f64) -> Self::Lin {
+        self.linearize(x)
+    }
+    /// The cost of a linearisation.
+    fn lin_cost(&self, lin: &Self::Lin) -> f64;
+    /// Cost, gradient and normal matrix are finite.
+    fn is_finite(&self, lin: &Self::Lin) -> bool;
+    /// The gradient's largest absolute entry.
+    fn gradient_max_norm(&self, lin: &Self::Lin) -> f64;
+    /// The step solving `(H + λ D) δ = -g`, with `D = diag H` if `scaled` (Marquardt) and no
+    /// damping for `λ = 0`; `None` if the system cannot be solved.
+    fn solve_damped(&self, lin: &Self::Lin, lambda: f64, scaled: bool) -> Option<Self::Step>;
+    /// The decrease of the quadratic model, `-(gᵀδ + ½ δᵀHδ)`.
+    fn predicted_decrease(&self, lin: &Self::Lin, step: &Self::Step) -> f64;
+    /// The step is below `tol · (|x| + tol)` (Ceres' parameter tolerance).
+    fn step_is_small(&self, step: &Self::Step, x: &Self::Point, tol: f64) -> bool;
+    /// The point reached from `x` by `step` (`x + δ` in a vector space).
+    fn retract(&self, x: &Self::Point, step: &Self::Step) -> Self::Point;
+}
+
+/// The outcome of [`LevenbergMarquardt::minimize`]: the final point, its linearisation (for a
+/// covariance), the start's cost, the iterations and why it stopped. The point is never worse
+/// than the start.
+#[derive(Clone, Debug)]
+pub struct LmRun<X, L> {
+    /// The final point.
+    pub x: X,
+    /// Its linearisation.
+    pub lin: L,
+    /// The cost at the start.
+    pub initial_cost: f64,
+    /// Trial steps taken (accepted or rejected).
+    pub iterations: usize,
+    /// Why the solve stopped.
+    pub termination: Termination,
+}
+
+impl LevenbergMarquardt {
+    /// Minimises `problem` from `x0`: the same algorithm, options and stopping rules as
+    /// [`Solver::solve`] (the start is linearised; a start that is not finite is a
+    /// [`Termination::NumericalFailure`], one that satisfies the gradient tolerance is
+    /// converged).
+    ///
+    /// ```
+    /// use momo_solvers::{LevenbergMarquardt, LmProblem};
+    /// // min ½ (x² - 2)² over x > 0 on the log scale: x = exp(u), steps in u.
+    /// struct Sqrt2;
+    /// impl LmProblem for Sqrt2 {
+    ///     type Point = f64; // x
+    ///     type Lin = (f64, f64, f64); // cost, gradient, normal "matrix" in u
+    ///     type Step = f64;
+    ///     fn linearize(&self, x: &f64) -> (f64, f64, f64) {
+    ///         let r = x * x - 2.0;
+    ///         let j = 2.0 * x * x; // dr/du
+    ///         (0.5 * r * r, j * r, j * j)
+    ///     }
+    ///     fn cost(&self, x: &f64) -> f64 { 0.5 * (x * x - 2.0).powi(2) }
+    ///     fn lin_cost(&self, l: &(f64, f64, f64)) -> f64 { l.0 }
+    ///     fn is_finite(&self, l: &(f64, f64, f64)) -> bool {
+    ///         l.0.is_finite() && l.1.is_finite() && l.2.is_finite()
+    ///     }
+    ///     fn gradient_max_norm(&self, l: &(f64, f64, f64)) -> f64 { l.1.abs() }
+    ///     fn solve_damped(&self, l: &(f64, f64, f64), lambda: f64, scaled: bool) -> Option<f64> {
+    ///         let h = l.2 + if scaled { lambda * l.2 } else { lambda };
+    ///         (h > 0.0).then(|| -l.1 / h)
+    ///     }
+    ///     fn predicted_decrease(&self, l: &(f64, f64, f64), d: &f64) -> f64 {
+    ///         -(l.1 * d + 0.5 * d * l.2 * d)
+    ///     }
+    ///     fn step_is_small(&self, d: &f64, x: &f64, tol: f64) -> bool {
+    ///         d.abs() <= tol * (x.ln().abs() + tol)
+    ///     }
+    ///     fn retract(&self, x: &f64, d: &f64) -> f64 { x * d.exp() }
+    /// }
+    /// let run = LevenbergMarquardt::default().with_function_tolerance(1e-12).minimize(&Sqrt2, 5.0);
+    /// assert!(run.termination.is_converged());
+    /// assert!((run.x - 2f64.sqrt()).abs() < 1e-6, "{}", run.x);
+    /// ```
+    pub fn minimize<P: LmProblem>(&self, problem: &P, x0: P::Point) -> LmRun<P::Point, P::Lin> {
+        let lin = problem.linearize(&x0);
+        let cost = problem.lin_cost(&lin);
+        let done = |termination, lin| LmRun {
+            x: x0.clone(),
+            lin,
+            initial_cost: cost,
+            iterations: 0,
+            termination,
+        };
+        if !problem.is_finite(&lin) {
+            return done(Termination::NumericalFailure, lin);
+        }
+        if problem.gradient_max_norm(&lin) <= self.gradient_tolerance {
+            return done(Termination::GradientConverged, lin);
+        }
+        if self.max_iterations == 0 {
+            return done(Termination::MaxIterations, lin);
+        }
+        self.iterate(problem, x0.clone(), lin)
+    }
+
+    /// The iterations from a linearised start that is finite and not converged.
+    fn iterate<P: LmProblem>(
+        &self,
+        problem: &P,
+        mut x: P::Point,
+        mut lin: P::Lin,
+    ) -> LmRun<P::Point, P::Lin> {
+        let initial_cost = problem.lin_cost(&lin);
         let increase = self.lambda_increase.max(1.0 + f64::EPSILON);
         let min_factor = 1.0 / self.lambda_decrease.max(1.0);
         let mut lambda = self.initial_lambda.max(self.min_lambda).max(0.0);
@@ -101,8 +222,9 @@ impl Solver for LevenbergMarquardt {
             if fresh {
                 fresh = false;
                 // The undamped (Gauss-Newton) step only serves the model test: one small solve.
-                if let Some((gn, _)) = solve_damped(&lin.hessian, &lin.gradient, n, 0.0, false) {
-                    if common::model_converged(&lin, &gn, self.function_tolerance) {
+                if let Some(gn) = problem.solve_damped(&lin, 0.0, false) {
+                    let predicted = problem.predicted_decrease(&lin, &gn);
+                    if predicted <= self.function_tolerance * problem.lin_cost(&lin) {
                         break 'outer Termination::CostConverged;
                     }
                 }
@@ -114,30 +236,29 @@ impl Solver for LevenbergMarquardt {
             // The block ends only for a rejected trial; it says whether the rejection was
             // numerical (non-finite cost or linearisation, unsolvable system).
             let rejected_non_finite = 'trial: {
-                let Some((step, _)) = solve_damped(&lin.hessian, &lin.gradient, n, lambda, true)
-                else {
+                let Some(step) = problem.solve_damped(&lin, lambda, true) else {
                     break 'trial true;
                 };
-                if common::step_is_small(&step, &x, self.parameter_tolerance) {
-                    break 'outer common::take_final_step(problem, &mut x, &mut lin, &step, n);
+                if problem.step_is_small(&step, &x, self.parameter_tolerance) {
+                    break 'outer take_final_step(problem, &mut x, &mut lin, &step);
                 }
-                let trial = x + step;
+                let trial = problem.retract(&x, &step);
                 // Steps are rarely rejected here (the damping starts small and follows the
                 // gain ratio), so the trial point is linearised right away: one pass over the
                 // matches gives its cost and, when it is accepted, the next normal equations.
-                let new = common::sanitize(problem.linearize(&trial), n);
-                let c = new.cost;
-                let predicted = common::predicted_decrease(&lin, &step);
-                if !(c.is_finite() && c < lin.cost) {
-                    if common::at_noise_floor(lin.cost, c, predicted, self.function_tolerance) {
+                let new = problem.linearize(&trial);
+                let c = problem.lin_cost(&new);
+                let old_cost = problem.lin_cost(&lin);
+                let predicted = problem.predicted_decrease(&lin, &step);
+                if !(c.is_finite() && c < old_cost) {
+                    if common::at_noise_floor(old_cost, c, predicted, self.function_tolerance) {
                         break 'outer Termination::CostConverged;
                     }
                     break 'trial !c.is_finite();
                 }
-                if !common::is_finite(&new) {
+                if !problem.is_finite(&new) {
                     break 'trial true;
                 }
-                let old_cost = lin.cost;
                 x = trial;
                 lin = new;
                 let rho = if predicted > 0.0 {
@@ -148,7 +269,7 @@ impl Solver for LevenbergMarquardt {
                 let t = 2.0 * rho - 1.0;
                 lambda = (lambda * (1.0 - t * t * t).max(min_factor)).max(self.min_lambda);
                 nu = increase;
-                if common::gradient_converged(&lin, self.gradient_tolerance) {
+                if problem.gradient_max_norm(&lin) <= self.gradient_tolerance {
                     break 'outer Termination::GradientConverged;
                 }
                 fresh = true;
@@ -165,14 +286,103 @@ impl Solver for LevenbergMarquardt {
                 };
             }
         };
-        common::report(
+        LmRun {
             x,
-            n,
+            lin,
             initial_cost,
-            lin.cost,
             iterations,
             termination,
-            lin.hessian,
+        }
+    }
+}
+
+/// A step below the parameter tolerance ends the solve, but it is still the best guess: it is
+/// taken if it decreases the cost (and the new point is linearised, for the report). Returns
+/// [`Termination::StepConverged`], or [`Termination::NumericalFailure`] if the cost at the
+/// trial point is not finite.
+fn take_final_step<P: LmProblem>(
+    problem: &P,
+    x: &mut P::Point,
+    lin: &mut P::Lin,
+    step: &P::Step,
+) -> Termination {
+    let trial = problem.retract(x, step);
+    let c = problem.cost(&trial);
+    if !c.is_finite() {
+        return Termination::NumericalFailure;
+    }
+    let current = problem.lin_cost(lin);
+    if c < current {
+        let new = problem.linearize_known_cost(&trial, c);
+        // Rounding between `cost` and `linearize` may put the new point above the old one.
+        if problem.is_finite(&new) && problem.lin_cost(&new) <= current {
+            *x = trial;
+            *lin = new;
+        }
+    }
+    Termination::StepConverged
+}
+
+/// A dense problem of at most [`MAX_PARAMS`](momo_core::MAX_PARAMS) unknowns as an
+/// [`LmProblem`]: fixed-size vectors, the leading `n` entries used.
+struct Dense<'a> {
+    problem: &'a dyn LeastSquares,
+    n: usize,
+}
+
+impl LmProblem for Dense<'_> {
+    type Point = ParamVec;
+    type Lin = Linearization;
+    type Step = ParamVec;
+    fn linearize(&self, x: &ParamVec) -> Linearization {
+        common::sanitize(self.problem.linearize(x), self.n)
+    }
+    fn cost(&self, x: &ParamVec) -> f64 {
+        self.problem.cost(x)
+    }
+    fn linearize_known_cost(&self, x: &ParamVec, cost: f64) -> Linearization {
+        common::sanitize(self.problem.linearize_known_cost(x, cost), self.n)
+    }
+    fn lin_cost(&self, lin: &Linearization) -> f64 {
+        lin.cost
+    }
+    fn is_finite(&self, lin: &Linearization) -> bool {
+        common::is_finite(lin)
+    }
+    fn gradient_max_norm(&self, lin: &Linearization) -> f64 {
+        common::max_norm(&lin.gradient)
+    }
+    fn solve_damped(&self, lin: &Linearization, lambda: f64, scaled: bool) -> Option<ParamVec> {
+        solve_damped(&lin.hessian, &lin.gradient, self.n, lambda, scaled).map(|(x, _)| x)
+    }
+    fn predicted_decrease(&self, lin: &Linearization, step: &ParamVec) -> f64 {
+        common::predicted_decrease(lin, step)
+    }
+    fn step_is_small(&self, step: &ParamVec, x: &ParamVec, tol: f64) -> bool {
+        common::step_is_small(step, x, tol)
+    }
+    fn retract(&self, x: &ParamVec, step: &ParamVec) -> ParamVec {
+        x + step
+    }
+}
+
+#[typetag::serde(name = "levenberg_marquardt")]
+impl Solver for LevenbergMarquardt {
+    fn solve(&self, problem: &dyn LeastSquares, x0: &ParamVec) -> SolverReport {
+        let common::Start { x, lin, n } =
+            match common::start(problem, x0, self.gradient_tolerance, self.max_iterations) {
+                common::Begin::Go(s) => s,
+                common::Begin::Done(report) => return report,
+            };
+        let run = self.iterate(&Dense { problem, n }, x, lin);
+        common::report(
+            run.x,
+            n,
+            run.initial_cost,
+            run.lin.cost,
+            run.iterations,
+            run.termination,
+            run.lin.hessian,
         )
     }
 }

@@ -5,7 +5,9 @@
 //! their robustified normal equations ([`momo_core::LeastSquares`]):
 //!
 //! - [`GaussNewton`]: Gauss-Newton steps with a backtracking line search;
-//! - [`LevenbergMarquardt`]: Marquardt's diagonal scaling, Nielsen's damping update;
+//! - [`LevenbergMarquardt`]: Marquardt's diagonal scaling, Nielsen's damping update; also for
+//!   problems with their own linear algebra ([`LmProblem`]: the mount calibration's Schur
+//!   complement, the five-point refinement on its manifold), so momo has one LM;
 //! - [`Dogleg`]: Powell's dogleg in a Jacobi-scaled trust region.
 //!
 //! Each is a plain struct of options (`Default`, builder-style `with_*` methods, `serde` with
@@ -162,4 +164,4 @@ pub mod linalg;
 
 pub use dogleg::Dogleg;
 pub use gauss_newton::GaussNewton;
-pub use levenberg_marquardt::LevenbergMarquardt;
+pub use levenberg_marquardt::{LevenbergMarquardt, LmProblem, LmRun};

@@ -17,7 +17,8 @@
 //!
 //! `min_{p_1..p_K, δ} Σ_k ½ Σ_i ρ(|r_ki(p_k, δ)|²)`.
 //!
-//! It is solved by Levenberg-Marquardt on the Schur complement (the bundle-adjustment
+//! It is solved by momo-solvers' Levenberg-Marquardt (the same algorithm as every frame's solve,
+//! through [`LmProblem`]) on the Schur complement (the bundle-adjustment
 //! "reduced camera system" with the roles swapped): each frame's robustified normal equations
 //! `[H_pp H_pδ; H_δp H_δδ]`, `[g_p; g_δ]` are reduced to
 //! `S = Σ_k (H_δδ − H_δp H_pp⁻¹ H_pδ)`, `b = Σ_k (g_δ − H_δp H_pp⁻¹ g_p)`; the 3x3 damped system
@@ -35,6 +36,7 @@ use momo_core::{
     CoreError, DynManifold, ErasedScalar, FrameObservations, MAX_PARAMS, MetricSpec, ModelSpec,
     Pose, Rig, RigCamera, RuntimeManifold, Scalar, SolveRequest, Termination, so3_exp,
 };
+use momo_solvers::{LevenbergMarquardt, LmProblem};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use rayon::prelude::*;
 use thiserror::Error;
@@ -301,9 +303,11 @@ pub struct MountCalibration {
     pub frames: Option<usize>,
     /// Most Levenberg-Marquardt iterations of the joint solve (accepted or rejected steps).
     pub max_iterations: usize,
-    /// Stop when the relative cost decrease of an accepted step is below this.
+    /// Stop when the Gauss-Newton model predicts that at most this fraction of the cost can
+    /// still be gained ([`LevenbergMarquardt::function_tolerance`]).
     pub cost_tolerance: f64,
-    /// Stop when the mount step's largest component is below this (radians).
+    /// Stop when the joint step (every frame's and the mount's) is at most
+    /// `step_tolerance · (|x| + step_tolerance)` ([`LevenbergMarquardt::parameter_tolerance`]).
     pub step_tolerance: f64,
     /// Estimate the mount's roll (about the vehicle's x axis)? `None`: the model's default
     /// ([`MountModel::observes_roll`]); otherwise the roll correction is held at zero.
@@ -525,11 +529,11 @@ fn full_vector(params: &[f64], delta: &Vector3<f64>) -> Vec<f64> {
     p
 }
 
-fn calibrate_with<'a>(
+fn calibrate_with(
     which: MountModel,
     metric: &dyn MetricSpec,
     rig: &Rig,
-    frames: &'a [FrameObservations],
+    frames: &[FrameObservations],
     arc_lengths: Option<&[Option<f64>]>,
     config: &Config,
     options: &MountCalibration,
@@ -624,98 +628,32 @@ fn calibrate_with<'a>(
     // --- joint Levenberg-Marquardt on the Schur complement ----------------------------------
     let pivot = rig.cameras()[0].t_vehicle_camera.translation;
     let mounted = metric.estimator(Box::new(Mounted::new(spec.manifold(), pivot)));
-    let linearize = |s: &FrameState<'a>, delta: &Vector3<f64>| -> Result<FrameBlocks, CoreError> {
-        let full = full_vector(&s.params, delta);
-        let lin = mounted.linearize(&frame_request(rig, config, s), &full)?;
-        let n = s.fixed.iter().filter(|f| !**f).count();
-        let m = n - nd;
-        let h = &lin.hessian;
-        Ok(FrameBlocks {
-            cost: lin.cost,
-            h_pp: DMatrix::from_fn(m, m, |r, c| h[(r, c)]),
-            h_pd: DMatrix::from_fn(m, nd, |r, c| h[(r, m + c)]),
-            h_dd: DMatrix::from_fn(nd, nd, |r, c| h[(m + r, m + c)]),
-            g_p: DVector::from_fn(m, |r, _| lin.gradient[r]),
-            g_d: DVector::from_fn(nd, |r, _| lin.gradient[m + r]),
-        })
+    let joint = Joint {
+        states: &states,
+        estimator: mounted.as_ref(),
+        rig,
+        config,
+        np,
+        mount_free: &mount_free,
+        error: std::sync::Mutex::new(None),
     };
-    let frame_cost =
-        |s: &FrameState<'a>, params: &[f64], delta: &Vector3<f64>| -> Result<f64, CoreError> {
-            mounted.cost(&frame_request(rig, config, s), &full_vector(params, delta))
-        };
-    let linearize_all = |states: &[FrameState<'a>], delta: &Vector3<f64>| {
-        states
-            .par_iter()
-            .map(|s| linearize(s, delta))
-            .collect::<Result<Vec<_>, _>>()
+    let start = JointPoint {
+        params: states.iter().map(|s| s.params.clone()).collect(),
+        delta: Vector3::zeros(),
     };
-
-    let mut delta = Vector3::zeros();
-    let mut blocks = linearize_all(&states, &delta)?;
-    let mut cost: f64 = blocks.iter().map(|b| b.cost).sum();
-    let mut lambda = 1e-4;
-    let mut iterations = 0;
-    let mut termination = Termination::MaxIterations;
-    while iterations < options.max_iterations {
-        iterations += 1;
-        let Some((step_free, steps_p)) = schur_step(&blocks, nd, lambda) else {
-            lambda *= 10.0;
-            if lambda > 1e12 {
-                termination = Termination::NumericalFailure;
-                break;
-            }
-            continue;
-        };
-        let mut step_d = Vector3::zeros();
-        for (k, &i) in mount_free.iter().enumerate() {
-            step_d[i] = step_free[k];
-        }
-        let trial_delta = delta + step_d;
-        let trial: Vec<Vec<f64>> = states
-            .iter()
-            .zip(&steps_p)
-            .map(|(s, dp)| {
-                let mut p = s.params.clone();
-                let free = s.fixed[..np].iter().enumerate().filter(|(_, f)| !**f);
-                for ((i, _), d) in free.zip(dp.iter()) {
-                    p[i] += d;
-                }
-                p
-            })
-            .collect();
-        let trial_cost: f64 = states
-            .par_iter()
-            .zip(trial.par_iter())
-            .map(|(s, p)| frame_cost(s, p, &trial_delta))
-            .collect::<Result<Vec<_>, _>>()?
-            .iter()
-            .sum();
-        if trial_cost.is_finite() && trial_cost < cost {
-            let decrease = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
-            delta = trial_delta;
-            for (s, p) in states.iter_mut().zip(trial) {
-                s.params = p;
-            }
-            cost = trial_cost;
-            blocks = linearize_all(&states, &delta)?;
-            lambda = (lambda / 3.0).max(1e-12);
-            if decrease < options.cost_tolerance {
-                termination = Termination::CostConverged;
-                break;
-            }
-            if step_d.amax() < options.step_tolerance {
-                termination = Termination::StepConverged;
-                break;
-            }
-        } else {
-            lambda *= 4.0;
-            if lambda > 1e12 {
-                // No step of any length lowers the cost: a minimum to numerical precision.
-                termination = Termination::StepConverged;
-                break;
-            }
-        }
+    let lm = LevenbergMarquardt::default()
+        .with_max_iterations(options.max_iterations)
+        .with_function_tolerance(options.cost_tolerance)
+        .with_parameter_tolerance(options.step_tolerance);
+    let run = lm.minimize(&joint, start);
+    if let Some(e) = joint.error.into_inner().ok().flatten() {
+        return Err(e.into());
     }
+    let (delta, blocks, cost) = (run.x.delta, run.lin.blocks, run.lin.cost);
+    for (s, p) in states.iter_mut().zip(run.x.params) {
+        s.params = p;
+    }
+    let (iterations, termination) = (run.iterations, run.termination);
 
     // --- covariance of δ: σ² S⁻¹ (undamped) ------------------------------------------------
     let mut inliers = 0usize;
@@ -758,6 +696,183 @@ fn calibrate_with<'a>(
         frames_used: states.len(),
         skipped,
     })
+}
+
+/// The joint problem's unknowns: every frame's model parameters and the mount correction.
+#[derive(Clone)]
+struct JointPoint {
+    params: Vec<Vec<f64>>,
+    delta: Vector3<f64>,
+}
+
+/// The joint problem's linearisation: each frame's blocks and the total cost.
+struct JointLin {
+    blocks: Vec<FrameBlocks>,
+    cost: f64,
+}
+
+/// A step of the joint problem: the free mount angles' step and each frame's free parameters'.
+struct JointStep {
+    mount: DVector<f64>,
+    frames: Vec<DVector<f64>>,
+}
+
+/// The joint calibration problem as Levenberg-Marquardt ([`LmProblem`]) sees it: the frames are
+/// linearised in parallel, the damped system is solved by the Schur complement
+/// ([`schur_step`]). The first error of an evaluation is kept in `error` (the evaluation then
+/// reads as not finite and the solver stops); the caller reports it.
+struct Joint<'s, 'a> {
+    states: &'s [FrameState<'a>],
+    estimator: &'s dyn momo_core::FrameEstimator,
+    rig: &'s Rig,
+    config: &'s Config,
+    np: usize,
+    mount_free: &'s [usize],
+    error: std::sync::Mutex<Option<CoreError>>,
+}
+
+impl Joint<'_, '_> {
+    fn keep<T>(&self, r: Result<T, CoreError>) -> Option<T> {
+        r.map_err(|e| {
+            if let Ok(mut slot) = self.error.lock() {
+                slot.get_or_insert(e);
+            }
+        })
+        .ok()
+    }
+
+    fn frame_blocks(
+        &self,
+        s: &FrameState<'_>,
+        params: &[f64],
+        delta: &Vector3<f64>,
+    ) -> Result<FrameBlocks, CoreError> {
+        let nd = self.mount_free.len();
+        let full = full_vector(params, delta);
+        let lin = self
+            .estimator
+            .linearize(&frame_request(self.rig, self.config, s), &full)?;
+        let n = s.fixed.iter().filter(|f| !**f).count();
+        let m = n - nd;
+        let h = &lin.hessian;
+        Ok(FrameBlocks {
+            cost: lin.cost,
+            h_pp: DMatrix::from_fn(m, m, |r, c| h[(r, c)]),
+            h_pd: DMatrix::from_fn(m, nd, |r, c| h[(r, m + c)]),
+            h_dd: DMatrix::from_fn(nd, nd, |r, c| h[(m + r, m + c)]),
+            g_p: DVector::from_fn(m, |r, _| lin.gradient[r]),
+            g_d: DVector::from_fn(nd, |r, _| lin.gradient[m + r]),
+        })
+    }
+}
+
+impl LmProblem for Joint<'_, '_> {
+    type Point = JointPoint;
+    type Lin = JointLin;
+    type Step = JointStep;
+
+    fn linearize(&self, x: &JointPoint) -> JointLin {
+        let blocks = self.states.par_iter().zip(x.params.par_iter());
+        let blocks = blocks
+            .map(|(s, p)| self.frame_blocks(s, p, &x.delta))
+            .collect::<Result<Vec<_>, _>>();
+        match self.keep(blocks) {
+            Some(blocks) => JointLin {
+                cost: blocks.iter().map(|b| b.cost).sum(),
+                blocks,
+            },
+            None => JointLin {
+                blocks: Vec::new(),
+                cost: f64::NAN,
+            },
+        }
+    }
+
+    fn cost(&self, x: &JointPoint) -> f64 {
+        let costs = self.states.par_iter().zip(x.params.par_iter());
+        let costs = costs
+            .map(|(s, p)| {
+                let request = frame_request(self.rig, self.config, s);
+                self.estimator.cost(&request, &full_vector(p, &x.delta))
+            })
+            .collect::<Result<Vec<_>, _>>();
+        self.keep(costs).map_or(f64::NAN, |c| c.iter().sum())
+    }
+
+    fn lin_cost(&self, lin: &JointLin) -> f64 {
+        lin.cost
+    }
+
+    fn is_finite(&self, lin: &JointLin) -> bool {
+        let finite = |m: &[f64]| m.iter().all(|v| v.is_finite());
+        lin.cost.is_finite()
+            && lin.blocks.iter().all(|b| {
+                finite(b.h_pp.as_slice())
+                    && finite(b.h_pd.as_slice())
+                    && finite(b.h_dd.as_slice())
+                    && finite(b.g_p.as_slice())
+                    && finite(b.g_d.as_slice())
+            })
+    }
+
+    fn gradient_max_norm(&self, lin: &JointLin) -> f64 {
+        let nd = self.mount_free.len();
+        let mut g_d = DVector::zeros(nd);
+        let mut m = 0.0_f64;
+        for b in &lin.blocks {
+            g_d += &b.g_d;
+            m = m.max(b.g_p.amax());
+        }
+        m.max(g_d.amax())
+    }
+
+    /// The damping is Marquardt's (scaled by the diagonal) for every `λ`; with `λ = 0` scaled
+    /// and unscaled coincide.
+    fn solve_damped(&self, lin: &JointLin, lambda: f64, _scaled: bool) -> Option<JointStep> {
+        schur_step(&lin.blocks, self.mount_free.len(), lambda)
+            .map(|(mount, frames)| JointStep { mount, frames })
+    }
+
+    fn predicted_decrease(&self, lin: &JointLin, step: &JointStep) -> f64 {
+        let dd = &step.mount;
+        let mut linear = 0.0;
+        let mut quadratic = 0.0;
+        for (b, dp) in lin.blocks.iter().zip(&step.frames) {
+            linear += b.g_p.dot(dp) + b.g_d.dot(dd);
+            quadratic +=
+                dp.dot(&(&b.h_pp * dp)) + 2.0 * dp.dot(&(&b.h_pd * dd)) + dd.dot(&(&b.h_dd * dd));
+        }
+        -(linear + 0.5 * quadratic)
+    }
+
+    fn step_is_small(&self, step: &JointStep, x: &JointPoint, tol: f64) -> bool {
+        let step_sq =
+            step.mount.norm_squared() + step.frames.iter().map(|d| d.norm_squared()).sum::<f64>();
+        let x_sq = x.delta.norm_squared() + x.params.iter().flatten().map(|v| v * v).sum::<f64>();
+        step_sq.sqrt() <= tol * (x_sq.sqrt() + tol)
+    }
+
+    fn retract(&self, x: &JointPoint, step: &JointStep) -> JointPoint {
+        let mut delta = x.delta;
+        for (k, &i) in self.mount_free.iter().enumerate() {
+            delta[i] += step.mount[k];
+        }
+        let params = self
+            .states
+            .iter()
+            .zip(&x.params)
+            .zip(&step.frames)
+            .map(|((s, p), dp)| {
+                let mut p = p.clone();
+                let free = s.fixed[..self.np].iter().enumerate().filter(|(_, f)| !**f);
+                for ((i, _), d) in free.zip(dp.iter()) {
+                    p[i] += d;
+                }
+                p
+            })
+            .collect();
+        JointPoint { params, delta }
+    }
 }
 
 /// The reduced (Schur complement) system at damping `lambda`: `S`, `b` and each frame's

@@ -40,6 +40,6 @@ pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };
 pub use pipeline::{
-    EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_sequence,
+    EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_loop, run_sequence,
 };
 pub use trust::{Constraint, Reason, TrustOptions};

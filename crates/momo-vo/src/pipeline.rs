@@ -7,10 +7,10 @@ use crate::config::Config;
 use crate::odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };
-use momo_core::FrameObservations;
-use momo_core::Rig;
+use momo_core::{FrameObservations, Pose, Rig};
 use momo_fivepoint::FivePointRansac;
 use momo_io::{AtomicFile, IoError, MatchReader, PoseWriter};
+use std::borrow::Borrow;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -27,6 +27,16 @@ pub enum RunError {
     /// The configuration does not fit the rig.
     #[error(transparent)]
     Vo(#[from] VoError),
+    /// The rig given in [`RunOptions::rig`] has another number of cameras than `rig.json`.
+    #[error("{}: the run was given a rig of {given} cameras for this rig of {file}", path.display())]
+    RigMismatch {
+        /// The sequence's rig.json.
+        path: PathBuf,
+        /// Cameras of the rig given.
+        given: usize,
+        /// Cameras of rig.json.
+        file: usize,
+    },
 }
 
 /// Which estimator runs the sequence.
@@ -74,10 +84,14 @@ pub struct RunOptions {
     pub output: PathBuf,
     /// Per-frame diagnostics: CSV if the name ends in `.csv`, JSON lines otherwise.
     pub diagnostics: Option<PathBuf>,
+    /// The rig to run with instead of the sequence's `rig.json` (which is still read and
+    /// checked, and must have as many cameras): e.g. the mount-calibrated rig of
+    /// `momo run --calibrate-mount`.
+    pub rig: Option<Rig>,
 }
 
 /// Totals of a run.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RunSummary {
     /// Frames written (poses), including frame 0.
     pub frames: usize,
@@ -239,6 +253,70 @@ impl DiagnosticsWriter {
     }
 }
 
+/// The one run loop of momo: `momo run` ([`run_sequence`]), `momo vo` (momo-match's
+/// `vo_from_images`), the in-memory runs ([`run_in_memory`]: `--calibrate-mount`, the sweep,
+/// `momo demo`, the Python bindings) all go through it, so every frame pair is processed,
+/// chained and counted the same way.
+///
+/// `frames` yields `(k, observations)` with `k ≥ 1` increasing: the matches between frames
+/// `k - 1` and `k`. A frame pair that is skipped (a gap in `k`), and every frame after the last
+/// item up to `last_frame`, is processed without matches (the motion is held and the
+/// diagnostics say so). The arc length of frame pair `k` is `arc_lengths[k]`. `sink` sees every
+/// frame in order: camera 0's pose (frame 0's is the identity, with no result) and the frame
+/// pair's result. The first error (of `frames` or of `sink`) ends the run.
+///
+/// ```
+/// use momo_core::{FrameObservations, Pose};
+/// use momo_vo::{Config, EstimatorKind, driver, run_loop};
+/// let rig = momo_sim::Scenario::clean_pinhole().rig();
+/// let mut vo = driver(EstimatorKind::Momo, &rig, Config::default()).unwrap();
+/// // Frame pairs 1 and 3 without matches, frame 4 from `last_frame`.
+/// let frames = [1, 3].map(|k| Ok::<_, String>((k, FrameObservations::new(rig.len()))));
+/// let mut poses: Vec<Pose<f64>> = Vec::new();
+/// let summary = run_loop(vo.as_mut(), &rig, frames, None, 4, |pose, _| {
+///     poses.push(*pose);
+///     Ok(())
+/// })
+/// .unwrap();
+/// assert_eq!((poses.len(), summary.frames, summary.no_matches), (5, 5, 4));
+/// ```
+pub fn run_loop<E, B: Borrow<FrameObservations>>(
+    driver: &mut dyn MotionDriver,
+    rig: &Rig,
+    frames: impl IntoIterator<Item = Result<(usize, B), E>>,
+    arc_lengths: Option<&[Option<f64>]>,
+    last_frame: usize,
+    mut sink: impl FnMut(&Pose<f64>, Option<&FrameResult>) -> Result<(), E>,
+) -> Result<RunSummary, E> {
+    let mut trajectory = Trajectory::new(rig);
+    sink(&trajectory.camera0(), None)?;
+    let mut summary = RunSummary {
+        frames: 1,
+        ..Default::default()
+    };
+    let arc = |k: usize| arc_lengths.and_then(|a| a.get(k).copied().flatten());
+    let empty = FrameObservations::new(rig.len());
+    let mut step = |k: usize, obs: &FrameObservations, summary: &mut RunSummary| {
+        let result = driver.process(obs, arc(k));
+        summary.add(&result.diagnostics);
+        summary.frames += 1;
+        sink(&trajectory.push(&result.motion), Some(&result))
+    };
+    let mut last = 0;
+    for item in frames {
+        let (k, obs) = item?;
+        for gap in last + 1..k {
+            step(gap, &empty, &mut summary)?;
+        }
+        step(k, obs.borrow(), &mut summary)?;
+        last = last.max(k);
+    }
+    for k in last + 1..=last_frame {
+        step(k, &empty, &mut summary)?;
+    }
+    Ok(summary)
+}
+
 /// Runs the odometry over the sequence in `dir` (`rig.json`, `matches.csv`, optional
 /// `odometry.csv`), writing camera 0's trajectory and, if asked, the diagnostics. `on_frame` is
 /// called after every frame pair (progress bars, live plots).
@@ -251,7 +329,18 @@ pub fn run_sequence(
     options: &RunOptions,
     mut on_frame: impl FnMut(&FrameResult),
 ) -> Result<RunSummary, RunError> {
-    let rig = momo_io::read_rig(dir.join("rig.json")).map_err(RunError::Input)?;
+    let rig_path = dir.join("rig.json");
+    let mut rig = momo_io::read_rig(&rig_path).map_err(RunError::Input)?;
+    if let Some(other) = &options.rig {
+        if other.len() != rig.len() {
+            return Err(RunError::RigMismatch {
+                path: rig_path,
+                given: other.len(),
+                file: rig.len(),
+            });
+        }
+        rig = other.clone();
+    }
     let odometry_path = dir.join("odometry.csv");
     // A dangling symbolic link is an odometry.csv that cannot be read, not a missing one.
     let arc_lengths = if std::fs::symlink_metadata(&odometry_path).is_ok() {
@@ -270,55 +359,33 @@ pub fn run_sequence(
     let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunError::Input)?;
 
     let mut vo = driver(options.estimator, &rig, config)?;
-    let mut trajectory = Trajectory::new(&rig);
     let mut poses = PoseWriter::create(&options.output).map_err(RunError::Output)?;
     let mut diagnostics = match &options.diagnostics {
         Some(p) => Some(DiagnosticsWriter::create(p).map_err(RunError::Output)?),
         None => None,
     };
-    poses
-        .push(&trajectory.camera0())
-        .map_err(RunError::Output)?;
-    let mut summary = RunSummary {
-        frames: 1,
-        ..Default::default()
-    };
-
-    let arc = |k: usize| {
-        arc_lengths
-            .as_ref()
-            .and_then(|a| a.get(k).copied().flatten())
-    };
-    let mut step =
-        |k: usize, obs: &FrameObservations, summary: &mut RunSummary| -> Result<(), RunError> {
-            let result = vo.process(obs, arc(k));
-            poses
-                .push(&trajectory.push(&result.motion))
-                .map_err(RunError::Output)?;
-            if let Some(d) = diagnostics.as_mut() {
-                d.push(&result.diagnostics).map_err(RunError::Output)?;
-            }
-            summary.add(&result.diagnostics);
-            summary.frames += 1;
-            on_frame(&result);
-            Ok(())
-        };
-
-    let mut last = 0;
-    for item in reader {
-        let (k, obs) = item.map_err(RunError::Input)?;
-        step(k, &obs, &mut summary)?;
-        last = k;
-    }
-    // Frames beyond the last match row but within odometry.csv.
-    let total = arc_lengths
+    // Frames beyond the last match row but within odometry.csv are run without matches.
+    let last_frame = arc_lengths
         .as_ref()
-        .map_or(0, |a| a.len().saturating_sub(1))
-        .max(last);
-    let empty = FrameObservations::new(rig.len());
-    for k in last + 1..=total {
-        step(k, &empty, &mut summary)?;
-    }
+        .map_or(0, |a| a.len().saturating_sub(1));
+    let frames = reader.map(|item| item.map_err(RunError::Input));
+    let summary = run_loop(
+        vo.as_mut(),
+        &rig,
+        frames,
+        arc_lengths.as_deref(),
+        last_frame,
+        |pose, result| {
+            poses.push(pose).map_err(RunError::Output)?;
+            if let Some(result) = result {
+                if let Some(d) = diagnostics.as_mut() {
+                    d.push(&result.diagnostics).map_err(RunError::Output)?;
+                }
+                on_frame(result);
+            }
+            Ok(())
+        },
+    )?;
     // Poses and diagnostics are committed together: both or neither.
     let mut outputs = vec![poses.into_file()];
     outputs.extend(diagnostics.map(DiagnosticsWriter::into_file));
@@ -371,22 +438,24 @@ pub fn run_in_memory(
     mut on_frame: impl FnMut(&FrameResult),
 ) -> Result<(Vec<momo_core::Pose<f64>>, Vec<FrameDiagnostics>), VoError> {
     let mut vo = driver(estimator, &sequence.rig, config)?;
-    let mut trajectory = Trajectory::new(&sequence.rig);
     let n = sequence.num_frames();
     let mut poses = Vec::with_capacity(n);
     let mut diagnostics = Vec::with_capacity(n);
-    poses.push(trajectory.camera0());
-    let empty = FrameObservations::new(sequence.rig.len());
-    for k in 1..n {
-        let obs = sequence.frames.get(k).unwrap_or(&empty);
-        let arc = sequence
-            .arc_lengths
-            .as_ref()
-            .and_then(|a| a.get(k).copied().flatten());
-        let result = vo.process(obs, arc);
-        poses.push(trajectory.push(&result.motion));
-        on_frame(&result);
-        diagnostics.push(result.diagnostics);
-    }
+    let frames = sequence.frames.iter().enumerate().skip(1);
+    run_loop(
+        vo.as_mut(),
+        &sequence.rig,
+        frames.map(Ok::<_, VoError>),
+        sequence.arc_lengths.as_deref(),
+        n.saturating_sub(1),
+        |pose, result| {
+            poses.push(*pose);
+            if let Some(result) = result {
+                on_frame(result);
+                diagnostics.push(result.diagnostics.clone());
+            }
+            Ok(())
+        },
+    )?;
     Ok((poses, diagnostics))
 }

@@ -164,6 +164,7 @@ fn an_arc_length_of_1e200_in_odometry_csv_is_rejected_at_its_line() {
         estimator: momo_vo::EstimatorKind::Momo,
         output: dir.join("est.txt"),
         diagnostics: None,
+        rig: None,
     };
     let e = run_sequence(&dir, Config::default(), &options, |_| {})
         .expect_err("1e200 m per frame is rejected")
