@@ -268,7 +268,7 @@ impl DiagnosticsWriter {
 /// ```
 /// use momo_core::{FrameObservations, Pose};
 /// use momo_vo::{Config, EstimatorKind, driver, run_loop};
-/// let rig = momo_sim::Scenario::clean_pinhole().rig();
+/// let rig = momo_sim::kitti_mono();
 /// let mut vo = driver(EstimatorKind::Momo, &rig, Config::default()).unwrap();
 /// // Frame pairs 1 and 3 without matches, frame 4 from `last_frame`.
 /// let frames = [1, 3].map(|k| Ok::<_, String>((k, FrameObservations::new(rig.len()))));
