@@ -15,7 +15,6 @@
 //!
 //! ```text
 //! cargo bench --bench matrix -- targets                 # the speed targets only
-//! cargo bench --bench matrix -- evaluations             # process time in cost evaluations
 //! cargo bench --bench matrix -- 'matrix/fisheye4/100/'  # one slice of the matrix
 //! cargo bench --bench matrix                            # everything (about 10 minutes)
 //! ```
@@ -290,107 +289,6 @@ fn floor(c: &mut Criterion) {
     group.finish();
 }
 
-/// The issue's measure of the driver's cost: the time of `Odometry::process` (a primed driver,
-/// one previous frame) divided by the time of one cost evaluation (`Problem::cost`, all
-/// residuals and the loss) of the same frame, for the two target cases. Both are measured in
-/// one group (`evaluations/{case}/odometry` and `.../cost`), and the ratio is also printed from
-/// an interleaved timing (medians of 31 alternating rounds), which the machine's load affects
-/// far less than two separate measurements.
-fn evaluations(c: &mut Criterion) {
-    let mut group = c.benchmark_group("evaluations");
-    group
-        .sample_size(40)
-        .warm_up_time(Duration::from_millis(300))
-        .measurement_time(Duration::from_secs(2));
-    let cases: [(&str, Rig, Box<dyn ModelSpec>, usize); 2] = [
-        (
-            "default_pinhole_300",
-            canned::pinhole_rig(),
-            Box::new(momo_models::Se3),
-            300,
-        ),
-        (
-            "single_track_3d_fisheye4x100",
-            canned::fisheye_rig(),
-            Box::new(momo_models::SingleTrack3d::default()),
-            100,
-        ),
-    ];
-    let loss = momo_costs::Cauchy::new(0.001);
-    for (name, rig, model, n) in cases {
-        let obs = frame(&rig, n, 7);
-        let prev = frame(&rig, n, 8);
-        let est = model.build(&momo_costs::AnglePlane).expect("registered");
-        let (init, fixed) = start(est.as_ref());
-        let manifold = model.manifold();
-        let p = Problem::new(
-            manifold.as_ref(),
-            &momo_costs::AnglePlane,
-            &loss,
-            &rig,
-            &obs,
-            &init,
-        )
-        .expect("fits")
-        .with_fixed(&fixed);
-        let x = p.free_params();
-        let config_toml = format!(
-            "[model]\ntype = \"{}\"\n[metric]\ntype = \"angle_plane\"\n[loss]\ntype = \"cauchy\"\nscale = 0.001\n[solver]\ntype = \"levenberg_marquardt\"\n",
-            model.typetag_name()
-        );
-        let arc = truth().translation.norm();
-        let primed = || {
-            let config = momo_vo::Config::from_toml_str(&config_toml, "bench").expect("valid");
-            let mut vo = momo_vo::Odometry::new(rig.clone(), config).expect("fits");
-            vo.process(&prev, Some(arc));
-            vo
-        };
-        // Interleaved: per round, 200 cost evaluations and 50 processes, each timed in bulk.
-        let (mut per_cost, mut per_process, mut iterations) = (Vec::new(), Vec::new(), 0);
-        for _ in 0..31 {
-            let t = std::time::Instant::now();
-            for _ in 0..200 {
-                black_box(p.cost(black_box(&x)));
-            }
-            per_cost.push(t.elapsed().as_secs_f64() / 200.0);
-            let mut drivers: Vec<_> = (0..50).map(|_| primed()).collect();
-            let t = std::time::Instant::now();
-            for vo in &mut drivers {
-                let r = vo.process(&obs, Some(arc));
-                iterations = r.diagnostics.iterations;
-                black_box(r.motion);
-            }
-            per_process.push(t.elapsed().as_secs_f64() / 50.0);
-        }
-        let median = |v: &mut Vec<f64>| {
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
-        let (tc, tp) = (median(&mut per_cost), median(&mut per_process));
-        eprintln!(
-            "evaluations/{name}: Odometry::process {:.1} us = {:.2} cost evaluations of {:.2} us \
-             ({iterations} solver iterations)",
-            tp * 1e6,
-            tp / tc,
-            tc * 1e6
-        );
-        group.bench_function(format!("{name}/cost"), |b| {
-            b.iter(|| black_box(p.cost(black_box(&x))))
-        });
-        group.bench_function(format!("{name}/linearize"), |b| {
-            b.iter(|| black_box(p.linearize(black_box(&x)).cost))
-        });
-        group.bench_function(format!("{name}/odometry"), |b| {
-            b.iter_batched(
-                primed,
-                |mut vo| black_box(vo.process(&obs, Some(arc)).motion),
-                BatchSize::SmallInput,
-            )
-        });
-    }
-    group.finish();
-}
-
 /// Every model x metric x loss x solver x match count x rig.
 fn matrix(c: &mut Criterion) {
     let mut group = c.benchmark_group("matrix");
@@ -442,5 +340,5 @@ fn matrix(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, targets, floor, evaluations, matrix);
+criterion_group!(benches, targets, floor, matrix);
 criterion_main!(benches);
