@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Runs two momo binaries on the same inputs and reports whether their poses are bit-identical
-# (and the largest rotation difference otherwise): the check of a refactoring that must not
-# change numbers. Usage: scripts/compare_binaries.sh OLD_MOMO NEW_MOMO [WORK_DIR]
+# and, for those that are not, the largest difference of a pose's rotation (degrees) and
+# position (metres) over the run: the check of a refactoring that must not change numbers
+# (or, for a change of rounding, by how little).
+# Usage: scripts/compare_binaries.sh OLD_MOMO NEW_MOMO [WORK_DIR]
 # Inputs: simulated scenarios (150 frames, seed 3) and, when $MOMO_DATA (default
 # ../shared/data) has them, the real KITTI 00 matches (mono 100/200/300, stereo 200); each with
 # the default configuration and with single_track_3d, soft_single_track and
@@ -41,6 +43,21 @@ for sec in re.findall(r'^\[(\w+)\]', part, re.M):
 open(sys.argv[1],'w').write(full)
 PY
 done
+# Largest rotation (degrees) and position (metres) difference between two pose files.
+pose_diff() {
+  python3 - "$1" "$2" <<'PY'
+import sys, math
+worst_r = worst_t = 0.0
+for a, b in zip(open(sys.argv[1]), open(sys.argv[2])):
+    a = [float(v) for v in a.split()]; b = [float(v) for v in b.split()]
+    ra = [a[0:3], a[4:7], a[8:11]]; rb = [b[0:3], b[4:7], b[8:11]]
+    # |Ra - Rb|_F = 2 sqrt(2) sin(angle / 2): exact for tiny angles (acos of the trace is not).
+    f = math.sqrt(sum((ra[i][j] - rb[i][j]) ** 2 for i in range(3) for j in range(3)))
+    worst_r = max(worst_r, math.degrees(2 * math.asin(min(1.0, f / (2 * math.sqrt(2))))))
+    worst_t = max(worst_t, math.dist([a[3], a[7], a[11]], [b[3], b[7], b[11]]))
+print(f"max rotation difference {worst_r:.3e} deg, position {worst_t:.3e} m")
+PY
+}
 same=0; diff=0
 for s in "${seqs[@]}"; do
   for c in default st3 soft st2s; do
@@ -50,7 +67,7 @@ for s in "${seqs[@]}"; do
     if cmp -s "old_${s}_$c.txt" "new_${s}_$c.txt"; then
       same=$((same+1))
     else
-      diff=$((diff+1)); echo "DIFFERENT: $s $c"
+      diff=$((diff+1)); echo "DIFFERENT: $s $c: $(pose_diff "old_${s}_$c.txt" "new_${s}_$c.txt")"
     fi
   done
 done

@@ -63,7 +63,7 @@ pub use lie::{Pose, hat, so3_exp, so3_log, vee};
 pub use loss::RobustLoss;
 pub use loss_trivial::TrivialLoss;
 pub use manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior, ROTATION_PRIOR_CAUCHY};
-pub use metric::{MAX_RESIDUALS, ResidualMetric, RotationOnly, essential};
+pub use metric::{MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric, RotationOnly, essential};
 pub use problem::{Problem, camera_motion};
 pub use rig::{FrameObservations, Observation, Rig, RigCamera};
 pub use scalar::{Scalar, cosc, dot_const, mul_const, sinc, tr_mul_const};

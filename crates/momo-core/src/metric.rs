@@ -9,12 +9,35 @@ use std::fmt::Debug;
 /// Most residuals one match may produce.
 pub const MAX_RESIDUALS: usize = 3;
 
+/// Most per-camera inputs of a fused kernel ([`ResidualMetric::KERNEL_INPUTS`]).
+pub const MAX_KERNEL_INPUTS: usize = 9;
+
 /// A residual metric: the residuals of one match given the camera motion `C = [R | t]`
 /// (the pose of the camera at frame k in the camera at k-1), generic over the scalar.
 ///
 /// Evaluation has two steps so that per-camera work (e.g. the essential matrix
 /// `E = Rᵀ [t]_x`) is done once per camera and not once per match:
 /// [`prepare`](Self::prepare) per camera and motion, then [`residuals`](Self::residuals) per match.
+///
+/// # Fused kernel (optional)
+///
+/// By default the solver differentiates [`residuals`](Self::residuals) with dual numbers, one
+/// derivative per free parameter, for every match. A metric may instead provide a *fused
+/// kernel* in plain `f64` by the chain rule through a few per-camera inputs `q(C)` (for
+/// [`RotationOnly`] the rotation matrix, for AnglePlane the essential matrix):
+///
+/// - [`KERNEL_INPUTS`](Self::KERNEL_INPUTS) `> 0` switches it on;
+/// - [`kernel_inputs`](Self::kernel_inputs) writes `q(C)`, generic over the scalar: the
+///   problem evaluates it on dual numbers once per camera and linearisation, which gives
+///   `dq/dp` without hand-written derivatives of the motion model;
+/// - [`kernel`](Self::kernel) returns, per match, the residuals and their derivatives `dr/dq`
+///   in plain `f64`; the problem forms `J = (dr/dq)(dq/dp)`.
+///
+/// The automatic path stays the oracle: `Problem::with_automatic(true)` forces it, and the
+/// property tests of each kernel check that both agree to about `1e-12` relative. The cost
+/// (`LeastSquares::cost`) always uses [`residuals`](Self::residuals) on `f64`; a kernel should
+/// compute its residuals in the same order of operations, so that the linearisation's cost is
+/// the cost.
 pub trait ResidualMetric: Clone + Debug + Send + Sync + 'static {
     /// Number of residuals per match (1..=[`MAX_RESIDUALS`]).
     const RESIDUALS: usize;
@@ -32,6 +55,29 @@ pub trait ResidualMetric: Clone + Debug + Send + Sync + 'static {
 
     /// Writes the `RESIDUALS` residuals of one match into `out[..RESIDUALS]`.
     fn residuals<T: Scalar>(&self, prepared: &Self::Prepared<T>, obs: &Observation, out: &mut [T]);
+
+    /// Number of per-camera inputs `q` of the fused kernel (`0..=`[`MAX_KERNEL_INPUTS`]); 0,
+    /// the default, means no fused kernel: Jacobians by automatic differentiation of
+    /// [`residuals`](Self::residuals).
+    const KERNEL_INPUTS: usize = 0;
+
+    /// Writes the fused kernel's per-camera inputs `q(C)` into `out[..KERNEL_INPUTS]` for the
+    /// camera motion `C` (generic: the problem differentiates it on dual numbers).
+    fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, _motion: &Pose<T>, _out: &mut [T]) {}
+
+    /// The fused kernel of one match, in plain `f64`: the `RESIDUALS` residuals into
+    /// `r[..RESIDUALS]` and their derivatives with respect to the inputs `q`
+    /// (`q.len() == KERNEL_INPUTS`) into `dr_dq[i][..KERNEL_INPUTS]` for residual `i`. Only
+    /// called when [`KERNEL_INPUTS`](Self::KERNEL_INPUTS) `> 0`.
+    fn kernel(
+        &self,
+        _camera: &Camera,
+        _q: &[f64],
+        _obs: &Observation,
+        _r: &mut [f64],
+        _dr_dq: &mut [[f64; MAX_KERNEL_INPUTS]],
+    ) {
+    }
 }
 
 /// The essential matrix `E = Rᵀ [t]_x` of a camera motion `C = [R | t]`, so that
@@ -67,5 +113,46 @@ impl ResidualMetric for RotationOnly {
         out[0] = rf1.z * f0.y - rf1.y * f0.z;
         out[1] = rf1.x * f0.z - rf1.z * f0.x;
         out[2] = rf1.y * f0.x - rf1.x * f0.y;
+    }
+
+    const KERNEL_INPUTS: usize = 9;
+
+    /// The rotation `R`, row-major.
+    fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, motion: &Pose<T>, out: &mut [T]) {
+        for a in 0..3 {
+            for b in 0..3 {
+                out[3 * a + b] = motion.rotation[(a, b)];
+            }
+        }
+    }
+
+    /// `r = f0 × (R f1)`; `∂r_i/∂R_ab = [f0]ₓ-row entry times f1_b`.
+    #[inline(always)]
+    fn kernel(
+        &self,
+        _camera: &Camera,
+        q: &[f64],
+        obs: &Observation,
+        out: &mut [f64],
+        dr_dq: &mut [[f64; MAX_KERNEL_INPUTS]],
+    ) {
+        let (f0, f1) = (&obs.f0, &obs.f1);
+        let rf1 = [
+            q[0] * f1.x + q[1] * f1.y + q[2] * f1.z,
+            q[3] * f1.x + q[4] * f1.y + q[5] * f1.z,
+            q[6] * f1.x + q[7] * f1.y + q[8] * f1.z,
+        ];
+        out[0] = rf1[2] * f0.y - rf1[1] * f0.z;
+        out[1] = rf1[0] * f0.z - rf1[2] * f0.x;
+        out[2] = rf1[1] * f0.x - rf1[0] * f0.y;
+        // ∂r_i/∂(R f1)_a: the rows of -[f0]ₓ; ∂(R f1)_a/∂R_ab = f1_b.
+        let c = [[0.0, -f0.z, f0.y], [f0.z, 0.0, -f0.x], [-f0.y, f0.x, 0.0]];
+        for i in 0..3 {
+            for a in 0..3 {
+                for b in 0..3 {
+                    dr_dq[i][3 * a + b] = c[i][a] * f1[b];
+                }
+            }
+        }
     }
 }

@@ -6,7 +6,7 @@ use crate::error::CoreError;
 use crate::lie::{Pose, so3_log};
 use crate::loss::RobustLoss;
 use crate::manifold::{MAX_PRIOR_RESIDUALS, MotionPrior, ROTATION_PRIOR_CAUCHY};
-use crate::metric::{MAX_RESIDUALS, ResidualMetric};
+use crate::metric::{MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric};
 use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
 use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
@@ -26,7 +26,9 @@ use num_dual::DualSVec64;
 /// Some parameters may be held fixed (the arc length from odometry); the solver sees only the
 /// free ones. Residuals and Jacobians are evaluated with fixed-size dual numbers whose width is
 /// the number of free parameters (monomorphised for 1..=8), with no heap allocation in the
-/// per-match loop.
+/// per-match loop. A metric with a fused kernel ([`ResidualMetric::KERNEL_INPUTS`] `> 0`) is
+/// instead differentiated on dual numbers only at its per-camera inputs, and its per-match
+/// residuals and Jacobians are plain `f64` ([`Problem::with_automatic`] forces the dual path).
 #[derive(Debug, Clone)]
 pub struct Problem<'a, R: ResidualMetric> {
     /// The motion model, erased ([`DynManifold`]): one virtual call per evaluation.
@@ -48,6 +50,9 @@ pub struct Problem<'a, R: ResidualMetric> {
     motion_prior: Option<&'a MotionPrior>,
     /// The unit `s` of the prior terms (the loss scale unless the motion prior names one).
     prior_scale: f64,
+    /// Differentiate the per-match residuals on dual numbers even if the metric has a fused
+    /// kernel (the oracle of the kernels' tests).
+    automatic: bool,
 }
 
 /// The rotation prior's loss `ρ(z) = c² ln(1 + z / c²)` and its derivative `ρ'(z)`, with `c` =
@@ -113,7 +118,21 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             n_free: np,
             motion_prior: None,
             prior_scale: loss.scale(),
+            automatic: false,
         })
+    }
+
+    /// With `true`, linearises by automatic differentiation of
+    /// [`ResidualMetric::residuals`] even if the metric has a fused kernel: the reference the
+    /// kernels are tested against. Metrics without a kernel always take that path.
+    pub fn with_automatic(mut self, automatic: bool) -> Self {
+        self.automatic = automatic;
+        self
+    }
+
+    /// Whether linearisations use the metric's fused kernel.
+    pub fn uses_kernel(&self) -> bool {
+        R::KERNEL_INPUTS > 0 && !self.automatic
     }
 
     /// Adds a prior on the change of motion (ignored if it does not constrain anything; its
@@ -390,6 +409,9 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
     where
         DualSVec64<N>: ErasedScalar,
     {
+        if self.uses_kernel() {
+            return self.linearize_kernel_n::<N>(x, known_cost);
+        }
         let mut h = SMatrix::<f64, N, N>::zeros();
         let mut g = SVector::<f64, N>::zeros();
         let mut cost = 0.0;
@@ -449,6 +471,101 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                 }
             }
         });
+        self.finish_linearization(x, known_cost, cost, h, g)
+    }
+
+    /// The fused path of `linearize_n` ([`ResidualMetric::KERNEL_INPUTS`] `> 0`): the
+    /// kernel's per-camera inputs `q(C_j(p))` and `dq/dp` on dual numbers once per camera, then
+    /// per match the metric's [`kernel`](ResidualMetric::kernel) in plain `f64`,
+    /// `J = (dr/dq)(dq/dp)` and the same robust accumulation as the automatic path.
+    fn linearize_kernel_n<const N: usize>(
+        &self,
+        x: &ParamVec,
+        known_cost: Option<f64>,
+    ) -> Linearization
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
+        const {
+            assert!(R::KERNEL_INPUTS <= MAX_KERNEL_INPUTS);
+            assert!(R::RESIDUALS <= MAX_RESIDUALS);
+        }
+        let k_in = R::KERNEL_INPUTS;
+        let n_res = R::RESIDUALS;
+        let mut h = SMatrix::<f64, N, N>::zeros();
+        let mut g = SVector::<f64, N>::zeros();
+        let mut cost = 0.0;
+        let p = self.seeded::<N>(x);
+        let m = self.model.motion_of(&p[..self.np]);
+        let mut q_dual = [DualSVec64::<N>::from_re(0.0); MAX_KERNEL_INPUTS];
+        let mut q = [0.0; MAX_KERNEL_INPUTS];
+        let mut dq = [[0.0; N]; MAX_KERNEL_INPUTS];
+        let mut r = [0.0; MAX_RESIDUALS];
+        let mut dr_dq = [[0.0; MAX_KERNEL_INPUTS]; MAX_RESIDUALS];
+        let mut jac = [[0.0; N]; MAX_RESIDUALS];
+        for (j, cam) in self.rig.cameras().iter().enumerate() {
+            let Some(obs) = self.obs.per_camera.get(j) else {
+                continue;
+            };
+            if obs.is_empty() {
+                continue;
+            }
+            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            self.metric
+                .kernel_inputs(&cam.model, &c, &mut q_dual[..k_in]);
+            for i in 0..k_in {
+                q[i] = q_dual[i].re;
+                dq[i] = match &q_dual[i].eps.0 {
+                    Some(e) => std::array::from_fn(|k| e[k]),
+                    None => [0.0; N],
+                };
+            }
+            for o in obs {
+                self.metric.kernel(
+                    &cam.model,
+                    &q[..k_in],
+                    o,
+                    &mut r[..n_res],
+                    &mut dr_dq[..n_res],
+                );
+                for i in 0..n_res {
+                    let mut row = [0.0; N];
+                    for a in 0..k_in {
+                        let d = dr_dq[i][a];
+                        for k in 0..N {
+                            row[k] += d * dq[a][k];
+                        }
+                    }
+                    jac[i] = row;
+                }
+                accumulate_robust(
+                    self.loss,
+                    known_cost.is_some(),
+                    &r[..n_res],
+                    &jac[..n_res],
+                    &mut cost,
+                    &mut h,
+                    &mut g,
+                );
+            }
+        }
+        self.finish_linearization(x, known_cost, cost, h, g)
+    }
+
+    /// Mirrors the upper triangle of the normal matrix, adds the prior terms and packs the
+    /// result.
+    #[inline(always)]
+    fn finish_linearization<const N: usize>(
+        &self,
+        x: &ParamVec,
+        known_cost: Option<f64>,
+        mut cost: f64,
+        mut h: SMatrix<f64, N, N>,
+        mut g: SVector<f64, N>,
+    ) -> Linearization
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
         for a in 0..N {
             for b in 0..a {
                 h[(a, b)] = h[(b, a)];
@@ -512,6 +629,67 @@ impl<R: ResidualMetric> Problem<'_, R> {
             6 => self.linearize_n::<6>(x, known_cost),
             7 => self.linearize_n::<7>(x, known_cost),
             _ => self.linearize_n::<8>(x, known_cost),
+        }
+    }
+}
+
+/// Adds one match's robustified Gauss-Newton terms (upper triangle of `h`) for residuals `r`
+/// with Jacobian rows `jac` (plain `f64`), as the automatic path does: the loss's weights
+/// `ρ'`, `ρ''` at `s = |r|²` with Ceres' corrector (Triggs et al.); with `weights_only` the
+/// loss is not asked for `ρ` and `cost` is left alone.
+#[inline(always)]
+fn accumulate_robust<const N: usize>(
+    loss: &dyn RobustLoss,
+    weights_only: bool,
+    r: &[f64],
+    jac: &[[f64; N]],
+    cost: &mut f64,
+    h: &mut SMatrix<f64, N, N>,
+    g: &mut SVector<f64, N>,
+) {
+    let mut s = 0.0;
+    for v in r {
+        s += v * v;
+    }
+    let [rho1, rho2] = if weights_only {
+        loss.weights(s)
+    } else {
+        let [rho, rho1, rho2] = loss.evaluate(s);
+        *cost += 0.5 * rho;
+        [rho1, rho2]
+    };
+    if rho1 <= 0.0 {
+        return;
+    }
+    let sqrt_rho1 = rho1.sqrt();
+    let (residual_scaling, alpha_sq_norm) = if s == 0.0 || rho2 <= 0.0 {
+        (sqrt_rho1, 0.0)
+    } else {
+        let d = 1.0 + 2.0 * s * rho2 / rho1;
+        let alpha = 1.0 - d.sqrt();
+        (sqrt_rho1 / (1.0 - alpha), alpha / s)
+    };
+    let mut rtj = [0.0; N];
+    if alpha_sq_norm != 0.0 {
+        for (v, e) in r.iter().zip(jac) {
+            for k in 0..N {
+                rtj[k] += e[k] * v;
+            }
+        }
+    }
+    for (v, e) in r.iter().zip(jac) {
+        let c = alpha_sq_norm * v;
+        let mut jt = [0.0; N];
+        for k in 0..N {
+            jt[k] = (e[k] - rtj[k] * c) * sqrt_rho1;
+        }
+        let gr = residual_scaling * v;
+        for a in 0..N {
+            let ja = jt[a];
+            g[a] += ja * gr;
+            for b in a..N {
+                h[(a, b)] += ja * jt[b];
+            }
         }
     }
 }

@@ -2,7 +2,8 @@
 
 use crate::NORM_EPS_SQ;
 use momo_core::{
-    Camera, Observation, Pose, ResidualMetric, Scalar, dot_const, essential, mul_const,
+    Camera, MAX_KERNEL_INPUTS, Observation, Pose, ResidualMetric, Scalar, dot_const, essential,
+    mul_const,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -21,6 +22,12 @@ use serde::{Deserialize, Serialize};
 /// baseline (`E f0 = 0`) or a standstill (`t = 0`) gives a finite residual and finite derivatives
 /// (no NaN, also on dual numbers) instead of `0 / 0`. At a standstill the residual carries no
 /// information; the odometry driver switches to [`momo_core::RotationOnly`] there.
+///
+/// Fused kernel ([`ResidualMetric::kernel`]): the inputs are the nine entries of `E`
+/// (row-major); per match, with `n = E f0`, `d = sqrt(‖n‖² + 1e-24)` and `r = (f1 · n) / d`,
+/// the derivatives are `∂r/∂E_ab = g_a f0_b` with `g = (f1 − r n / d) / d`, all in plain `f64`
+/// (the same order of operations as the dual-number path's real part, so the linearisation's
+/// cost is bit-identical to it).
 ///
 /// ```
 /// use momo_core::{Camera, Observation, Pose, ResidualMetric, Pinhole};
@@ -55,6 +62,49 @@ impl ResidualMetric for AnglePlane {
         // Constants stay f64: dual x f64 products are cheap (the per-match hot path).
         let n = mul_const(e, &obs.f0);
         out[0] = dot_const(&n, &obs.f1) / (n.norm_squared() + T::c(NORM_EPS_SQ)).sqrt();
+    }
+
+    const KERNEL_INPUTS: usize = 9;
+
+    /// The essential matrix `E = Rᵀ [t]ₓ`, row-major.
+    fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, motion: &Pose<T>, out: &mut [T]) {
+        let e = essential(motion);
+        for a in 0..3 {
+            for b in 0..3 {
+                out[3 * a + b] = e[(a, b)];
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn kernel(
+        &self,
+        _camera: &Camera,
+        e: &[f64],
+        obs: &Observation,
+        r: &mut [f64],
+        dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
+    ) {
+        let (f0, f1) = (&obs.f0, &obs.f1);
+        let n = [
+            e[0] * f0.x + e[1] * f0.y + e[2] * f0.z,
+            e[3] * f0.x + e[4] * f0.y + e[5] * f0.z,
+            e[6] * f0.x + e[7] * f0.y + e[8] * f0.z,
+        ];
+        let num = n[0] * f1.x + n[1] * f1.y + n[2] * f1.z;
+        let d = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] + NORM_EPS_SQ).sqrt();
+        // As num-dual divides: times the reciprocal.
+        let inv_d = d.recip();
+        let res = num * inv_d;
+        r[0] = res;
+        let k = res * inv_d;
+        let row = &mut dr_de[0];
+        for a in 0..3 {
+            let ga = (f1[a] - k * n[a]) * inv_d;
+            row[3 * a] = ga * f0.x;
+            row[3 * a + 1] = ga * f0.y;
+            row[3 * a + 2] = ga * f0.z;
+        }
     }
 }
 

@@ -21,6 +21,7 @@
 //! ```
 
 pub mod baseline;
+pub mod batch;
 pub mod calibrate;
 pub mod config;
 pub mod odometry;
@@ -29,6 +30,7 @@ pub mod separate;
 pub mod trust;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
+pub use batch::{BatchError, FramePair, estimate_batch};
 pub use calibrate::{
     CalibrationError, MountCalibration, MountEstimate, MountModel, Mounted, SkippedFrames,
     calibrate_mount, calibrate_sequence,

@@ -258,6 +258,34 @@ impl Odometry {
         &self.previous
     }
 
+    /// Forgets every frame seen: the driver is as [`Odometry::new`] left it, except that the
+    /// next frame starts from `previous` (a full parameter vector of the model) when given and
+    /// of the right length. No change-of-motion prior is active for that frame (it has no
+    /// estimated predecessor). Used by [`crate::batch`] to estimate independent frame pairs.
+    pub fn reset(&mut self, previous: Option<&[f64]>) {
+        let n = self.estimator.param_names().len();
+        self.previous = match previous {
+            Some(p) if p.len() == n => p.to_vec(),
+            _ => self
+                .estimator
+                .initial_params(self.config.odometry.initial_arc_length),
+        };
+        self.last_arc_length = None;
+        self.after_standstill = false;
+        self.frame = 0;
+        self.inlier_ratio_average = None;
+        self.prior_ready = false;
+        self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
+            let neutral = self
+                .estimator
+                .initial_params(self.config.odometry.initial_arc_length);
+            self.estimator.prior_residuals(&neutral)
+        } else {
+            Vec::new()
+        };
+        self.soft_count = 0;
+    }
+
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
     /// length travelled (odometry).
     pub fn process(&mut self, obs: &FrameObservations, arc_length: Option<f64>) -> FrameResult {

@@ -1,0 +1,241 @@
+//! The issue's measure of the driver's cost: the time of `Odometry::process` divided by the
+//! time of one cost evaluation (`Problem::cost`: every residual and the loss) of the same frame
+//! pair, for the two speed targets (the default configuration on one pinhole camera x 300
+//! matches; `single_track_3d` on four fisheye cameras x 100), plus one linearisation with the
+//! metric's fused kernel and with automatic differentiation (`Problem::with_automatic`).
+//! Same data as `benches/matrix.rs` (a curve, 90 % inliers with 0.5 px noise, 10 % outliers,
+//! the arc length known, warm-started by a previous frame).
+//!
+//! Two measurements of the same quantities:
+//!
+//! - criterion: `evaluations/{case}/{cost,linearize,linearize_automatic,odometry}`;
+//! - printed ratios from an interleaved timing (per round, bulk-timed cost evaluations then
+//!   processes; medians over the rounds), which the machine's load moves far less than two
+//!   separate measurements. `MOMO_EVAL_ROUNDS` sets the rounds (31 by default).
+//!
+//! For instruction counts (repeatable on a loaded machine), run under callgrind with few
+//! rounds and a filter that matches no criterion benchmark, and read the inclusive counts of
+//! `evaluations::timed_cost`, `timed_linearize`, `timed_linearize_automatic` and
+//! `timed_process` per call (`MOMO_EVAL_CASE` keeps the cases whose name contains it):
+//!
+//! ```text
+//! cargo bench --bench evaluations                       # criterion and printed ratios
+//! MOMO_EVAL_ROUNDS=3 MOMO_EVAL_CASE=pinhole valgrind --tool=callgrind \
+//!     target/release/deps/evaluations-* --bench none
+//! ```
+
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use momo_core::{
+    CameraModel, FrameEstimator, FrameObservations, LeastSquares, ModelSpec, ParamVec, Pose,
+    Problem, ResidualMetric, Rig, so3_exp,
+};
+use momo_costs::canned;
+use nalgebra::{Vector2, Vector3};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+/// The true vehicle motion: 2° of yaw over 1 m with a little pitch and roll.
+fn truth() -> Pose<f64> {
+    let yaw = 2.0_f64.to_radians();
+    Pose::new(
+        so3_exp(&Vector3::new(0.002, -0.003, yaw)),
+        Vector3::new(yaw.cos(), 0.5 * yaw, 0.004),
+    )
+}
+
+/// The previous frame's motion (the warm start).
+fn previous() -> Pose<f64> {
+    let yaw = 1.6_f64.to_radians();
+    Pose::new(
+        so3_exp(&Vector3::new(0.0, 0.0, yaw)),
+        Vector3::new(yaw.cos(), 0.5 * yaw, 0.0),
+    )
+}
+
+/// Uniform noise in [-0.5, 0.5) px on the inliers' frame-k pixels (SplitMix64, deterministic).
+fn add_noise(rig: &Rig, obs: &mut FrameObservations, inliers: usize, seed: u64) {
+    let mut state = seed;
+    let mut next = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for (cam, list) in rig.cameras().iter().zip(obs.per_camera.iter_mut()) {
+        for o in list.iter_mut().take(inliers) {
+            let px1 = o.px1 + Vector2::new(next(), next());
+            if let Some(f1) = cam.model.unproject(&px1) {
+                o.px1 = px1;
+                o.f1 = f1;
+            }
+        }
+    }
+}
+
+/// `n` matches per camera of the rig (90 % inliers with noise, 10 % outliers).
+fn frame(rig: &Rig, n: usize, seed: u64) -> FrameObservations {
+    let outliers = n / 10;
+    let mut obs = canned::synthetic_observations(rig, &truth(), n - outliers, outliers, seed);
+    add_noise(rig, &mut obs, n - outliers, seed ^ 0xABCD);
+    obs
+}
+
+/// Warm start (the previous motion's parameters, the true arc length) and the fixed mask.
+fn start(est: &dyn FrameEstimator) -> (Vec<f64>, Vec<bool>) {
+    let arc = truth().translation.norm();
+    let mut init = est
+        .params_from_motion(&previous())
+        .unwrap_or_else(|| est.initial_params(arc));
+    let mut fixed = vec![false; init.len()];
+    if let Some(i) = est.arc_length_index() {
+        init[i] = arc;
+        fixed[i] = true;
+    }
+    (init, fixed)
+}
+
+#[inline(never)]
+fn timed_cost<R: ResidualMetric>(p: &Problem<'_, R>, x: &ParamVec) -> f64 {
+    p.cost(black_box(x))
+}
+
+#[inline(never)]
+fn timed_linearize<R: ResidualMetric>(p: &Problem<'_, R>, x: &ParamVec) -> f64 {
+    p.linearize(black_box(x)).cost
+}
+
+#[inline(never)]
+fn timed_linearize_automatic<R: ResidualMetric>(p: &Problem<'_, R>, x: &ParamVec) -> f64 {
+    // Not the same body as `timed_linearize`, which the compiler would merge it with.
+    p.linearize(black_box(x)).gradient[0]
+}
+
+#[inline(never)]
+fn timed_process(vo: &mut momo_vo::Odometry, obs: &FrameObservations, arc: f64) -> usize {
+    vo.process(obs, Some(arc)).diagnostics.iterations
+}
+
+fn evaluations(c: &mut Criterion) {
+    let rounds: usize = std::env::var("MOMO_EVAL_ROUNDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(31)
+        .max(1);
+    let mut group = c.benchmark_group("evaluations");
+    group
+        .sample_size(40)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+    let cases: [(&str, Rig, Box<dyn ModelSpec>, usize); 2] = [
+        (
+            "default_pinhole_300",
+            canned::pinhole_rig(),
+            Box::new(momo_models::Se3),
+            300,
+        ),
+        (
+            "single_track_3d_fisheye4x100",
+            canned::fisheye_rig(),
+            Box::new(momo_models::SingleTrack3d::default()),
+            100,
+        ),
+    ];
+    let loss = momo_costs::Cauchy::new(0.001);
+    let only = std::env::var("MOMO_EVAL_CASE").unwrap_or_default();
+    for (name, rig, model, n) in cases {
+        if !name.contains(&only) {
+            continue;
+        }
+        let obs = frame(&rig, n, 7);
+        let prev = frame(&rig, n, 8);
+        let est = model.build(&momo_costs::AnglePlane).expect("registered");
+        let (init, fixed) = start(est.as_ref());
+        let manifold = model.manifold();
+        let p = Problem::new(
+            manifold.as_ref(),
+            &momo_costs::AnglePlane,
+            &loss,
+            &rig,
+            &obs,
+            &init,
+        )
+        .expect("fits")
+        .with_fixed(&fixed);
+        let auto = p.clone().with_automatic(true);
+        let x = p.free_params();
+        let config_toml = format!(
+            "[model]\ntype = \"{}\"\n[metric]\ntype = \"angle_plane\"\n[loss]\ntype = \"cauchy\"\nscale = 0.001\n[solver]\ntype = \"levenberg_marquardt\"\n",
+            model.typetag_name()
+        );
+        let arc = truth().translation.norm();
+        let primed = || {
+            let config = momo_vo::Config::from_toml_str(&config_toml, "bench").expect("valid");
+            let mut vo = momo_vo::Odometry::new(rig.clone(), config).expect("fits");
+            vo.process(&prev, Some(arc));
+            vo
+        };
+        // Interleaved rounds: bulk-timed cost evaluations, linearisations (fused and
+        // automatic) and processes of primed drivers.
+        let mut t = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
+        let mut iterations = 0;
+        for _ in 0..rounds {
+            let clock = Instant::now();
+            for _ in 0..200 {
+                black_box(timed_cost(&p, &x));
+            }
+            t[0].push(clock.elapsed().as_secs_f64() / 200.0);
+            let clock = Instant::now();
+            for _ in 0..50 {
+                black_box(timed_linearize(&p, &x));
+            }
+            t[1].push(clock.elapsed().as_secs_f64() / 50.0);
+            let clock = Instant::now();
+            for _ in 0..50 {
+                black_box(timed_linearize_automatic(&auto, &x));
+            }
+            t[2].push(clock.elapsed().as_secs_f64() / 50.0);
+            let mut drivers: Vec<_> = (0..50).map(|_| primed()).collect();
+            let clock = Instant::now();
+            for vo in &mut drivers {
+                iterations = black_box(timed_process(vo, &obs, arc));
+            }
+            t[3].push(clock.elapsed().as_secs_f64() / 50.0);
+        }
+        let [tc, tl, ta, tp] = t.map(|mut v| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        });
+        eprintln!(
+            "evaluations/{name}: cost {:.2} us; linearisation {:.2} us fused, {:.2} us automatic \
+             ({:.2}x); Odometry::process {:.1} us = {:.2} cost evaluations ({iterations} solver \
+             iterations)",
+            tc * 1e6,
+            tl * 1e6,
+            ta * 1e6,
+            ta / tl,
+            tp * 1e6,
+            tp / tc
+        );
+        group.bench_function(format!("{name}/cost"), |b| {
+            b.iter(|| black_box(timed_cost(&p, &x)))
+        });
+        group.bench_function(format!("{name}/linearize"), |b| {
+            b.iter(|| black_box(timed_linearize(&p, &x)))
+        });
+        group.bench_function(format!("{name}/linearize_automatic"), |b| {
+            b.iter(|| black_box(timed_linearize_automatic(&auto, &x)))
+        });
+        group.bench_function(format!("{name}/odometry"), |b| {
+            b.iter_batched(
+                primed,
+                |mut vo| black_box(timed_process(&mut vo, &obs, arc)),
+                BatchSize::SmallInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, evaluations);
+criterion_main!(benches);
