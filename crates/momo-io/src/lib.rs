@@ -79,7 +79,8 @@ pub mod tum;
 pub use atomic::{AtomicFile, OutputDir, check_outputs, commit_all, remove_temporaries};
 pub use error::{IoError, IoErrorKind};
 pub use matches::{
-    MATCHES_HEADER, MAX_FRAME, MatchReader, MatchWriter, PIXEL_MARGIN_FRACTION, write_matches,
+    MATCHES_HEADER, MATCHES_HEADER_CROSS, MAX_FRAME, MatchReader, MatchWriter,
+    PIXEL_MARGIN_FRACTION, write_matches,
 };
 pub use odometry::{ODOMETRY_HEADER, read_odometry, read_odometry_from, write_odometry};
 pub use poses::{POSE_ORTHONORMAL_TOLERANCE, PoseWriter, read_poses, read_poses_from, write_poses};
