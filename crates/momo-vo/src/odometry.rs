@@ -274,11 +274,21 @@ impl Odometry {
 
         let mut init = self.previous.clone();
         let mut fixed = vec![false; n_params];
+        // Cross-camera matches measure the arc length (crate::stereo_scale): solve with the
+        // last arc length held, then measure it and solve again.
+        let cross_scale = arc_length.is_none()
+            && arc_index.is_some()
+            && self.config.odometry.estimate_scale
+            && obs.cross_camera.len() >= crate::stereo_scale::MIN_CROSS_INLIERS;
         let scale = match (arc_index, arc_length) {
             (Some(i), Some(l)) => {
                 init[i] = l;
                 fixed[i] = true;
                 ScaleSource::Odometry
+            }
+            (Some(i), None) if cross_scale => {
+                fixed[i] = true;
+                ScaleSource::Estimated
             }
             (Some(i), None) => {
                 if !self.scale_observable {
@@ -437,7 +447,27 @@ impl Odometry {
                 }
                 // Scale: accept an estimated arc length only where it is well determined.
                 let mut sol = sol;
+                let mut cross_sigma = None;
+                if cross_scale
+                    && !standstill
+                    && let Some(i) = arc_index
+                {
+                    match self.measure_cross_scale(obs, &sol.params, i) {
+                        Some(m) => {
+                            let mut at = sol.params.clone();
+                            at[i] = m.arc_length;
+                            if let Some(s2) = self.solve_once(obs, &at, &fixed, false) {
+                                sol = s2;
+                            } else {
+                                sol.params[i] = m.arc_length;
+                            }
+                            cross_sigma = Some(m.sigma);
+                        }
+                        None => diag.scale = ScaleSource::Held,
+                    }
+                }
                 if scale == ScaleSource::Estimated
+                    && !cross_scale
                     && let Some(i) = arc_index
                     && !self.scale_ok(&sol, i)
                 {
@@ -453,6 +483,9 @@ impl Odometry {
                     }
                 }
                 self.fill_diagnostics(&sol, &mut diag);
+                if let (Some(i), Some(sigma)) = (arc_index, cross_sigma) {
+                    diag.param_sigmas[i] = sigma;
+                }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;
                 }
@@ -578,6 +611,41 @@ impl Odometry {
         } else {
             3e-3
         }
+    }
+
+    /// The arc length measured from the frame's cross-camera matches with every other
+    /// parameter at `params` ([`crate::stereo_scale`]), if it is well determined (relative
+    /// sigma within `odometry.max_relative_scale_sigma`, above the standstill threshold, within
+    /// `odometry.max_arc_length_ratio` of the last arc length).
+    fn measure_cross_scale(
+        &self,
+        obs: &FrameObservations,
+        params: &[f64],
+        arc_index: usize,
+    ) -> Option<crate::stereo_scale::CrossScale> {
+        let last = self.last_arc_length.unwrap_or(self.previous[arc_index]);
+        let max = (20.0 * last.abs().max(1.0)).min(crate::config::MAX_ARC_LENGTH);
+        let m = crate::stereo_scale::measure_arc_length(
+            &self.rig,
+            &obs.cross_camera,
+            |l| {
+                let mut p = params.to_vec();
+                p[arc_index] = l;
+                self.estimator.motion(&p)
+            },
+            self.inlier_angle(),
+            max,
+            false,
+        )?;
+        let l = m.arc_length;
+        let ratio = self.config.odometry.max_arc_length_ratio;
+        let plausible = self
+            .last_arc_length
+            .is_none_or(|last| l <= ratio * last && l * ratio >= last);
+        (l > self.config.odometry.standstill_arc_length
+            && plausible
+            && m.sigma <= self.config.odometry.max_relative_scale_sigma * l)
+            .then_some(m)
     }
 
     fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
