@@ -461,7 +461,7 @@ impl Odometry {
                             } else {
                                 sol.params[i] = m.arc_length;
                             }
-                            cross_sigma = Some(m.sigma);
+                            cross_sigma = Some(self.cross_scale_sigma(obs, &sol, i, &m));
                         }
                         None => diag.scale = ScaleSource::Held,
                     }
@@ -646,6 +646,52 @@ impl Odometry {
             && plausible
             && m.sigma <= self.config.odometry.max_relative_scale_sigma * l)
             .then_some(m)
+    }
+
+    /// The standard deviation of the arc length measured from cross-camera matches: the fit's
+    /// own (other parameters known) and the other parameters' uncertainty (their calibrated
+    /// covariance at `sol`, propagated through a refit along each principal axis).
+    fn cross_scale_sigma(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        arc_index: usize,
+        m: &crate::stereo_scale::CrossScale,
+    ) -> f64 {
+        let Some(cov) = self.covariance(sol) else {
+            return f64::INFINITY;
+        };
+        let l = sol.params[arc_index];
+        let eig = cov.symmetric_eigen();
+        let mut var = m.sigma * m.sigma;
+        let (lo, hi) = (0.5 * l.min(m.arc_length), 2.0 * l.max(m.arc_length));
+        for (k, &lambda) in eig.eigenvalues.iter().enumerate() {
+            if !(lambda > 0.0) {
+                continue;
+            }
+            let step = eig.eigenvectors.column(k) * lambda.sqrt();
+            let refit = |sign: f64| {
+                let mut p = sol.params.clone();
+                for (a, &f) in sol.free.iter().enumerate() {
+                    p[f] += sign * step[a];
+                }
+                crate::stereo_scale::refit_arc_length(
+                    &self.rig,
+                    &obs.cross_camera,
+                    |l| {
+                        let mut q = p.clone();
+                        q[arc_index] = l;
+                        self.estimator.motion(&q)
+                    },
+                    self.inlier_angle(),
+                    lo,
+                    hi,
+                )
+            };
+            let d = 0.5 * (refit(1.0) - refit(-1.0));
+            var += d * d;
+        }
+        var.sqrt()
     }
 
     fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {

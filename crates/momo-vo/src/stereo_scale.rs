@@ -10,7 +10,10 @@
 //! `f0`, with `C_ij = [R | t]`), under a Cauchy loss: a grid over `l` (both signs if asked),
 //! then golden-section refinement around the best grid point. Its standard deviation is the
 //! Gauss-Newton one of the robust fit: `σ_l² = σ_r² / Σ w_i (∂r_i/∂l)²`, `w_i` the Cauchy
-//! weights and `σ_r²` the weighted residual variance.
+//! weights and `σ_r²` the weighted residual variance. That is the sigma with the other
+//! parameters known; the odometry adds their uncertainty (their covariance from the
+//! per-camera solve, propagated through [`refit_arc_length`] along its principal axes), which
+//! on simulated stereo data is the larger part.
 
 use momo_core::{CrossObservation, Pose, Rig, cross_camera_motion};
 
@@ -101,31 +104,7 @@ pub fn measure_arc_length(
     if best == 0 || best + 1 == grid.len() {
         return None;
     }
-    // Golden-section search between the neighbours of the best grid point.
-    let (mut a, mut b) = (grid[best - 1], grid[best + 1]);
-    let g = 0.5 * (5.0_f64.sqrt() - 1.0);
-    let mut c = b - g * (b - a);
-    let mut d = a + g * (b - a);
-    let (mut fc, mut fd) = (cost(c), cost(d));
-    for _ in 0..60 {
-        if (b - a).abs() <= 1e-6 * (1.0 + a.abs().max(b.abs())) {
-            break;
-        }
-        if fc < fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - g * (b - a);
-            fc = cost(c);
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + g * (b - a);
-            fd = cost(d);
-        }
-    }
-    let l = 0.5 * (a + b);
+    let l = golden(&mut cost, grid[best - 1], grid[best + 1]);
     // Gauss-Newton standard deviation of the robust fit.
     let h = 1e-4 * (1.0 + l.abs());
     let (mut r0, mut rp, mut rm) = (Vec::new(), Vec::new(), Vec::new());
@@ -154,4 +133,64 @@ pub fn measure_arc_length(
         inliers,
         matches: usable.len(),
     })
+}
+
+/// The robust fit of [`measure_arc_length`] restricted to `lo..=hi` (golden-section search
+/// only, no grid): how the arc length moves when the other parameters move, for propagating
+/// their uncertainty.
+pub fn refit_arc_length(
+    rig: &Rig,
+    cross: &[CrossObservation],
+    motion_of: impl Fn(f64) -> Pose<f64>,
+    inlier_angle: f64,
+    lo: f64,
+    hi: f64,
+) -> f64 {
+    let cams = rig.cameras();
+    let b2 = inlier_angle * inlier_angle;
+    let mut cost = |l: f64| {
+        let m = motion_of(l);
+        cross
+            .iter()
+            .filter(|x| x.camera < cams.len() && x.camera_to < cams.len())
+            .map(|x| {
+                let c = cross_camera_motion(
+                    &m,
+                    &cams[x.camera].t_vehicle_camera,
+                    &cams[x.camera_to].t_vehicle_camera,
+                );
+                let r = residual(&c, x);
+                b2 * (r * r / b2).ln_1p()
+            })
+            .sum::<f64>()
+    };
+    golden(&mut cost, lo, hi)
+}
+
+/// Golden-section search for the minimum of `cost` in `a..=b`.
+fn golden(cost: &mut impl FnMut(f64) -> f64, a: f64, b: f64) -> f64 {
+    let (mut a, mut b) = (a, b);
+    let g = 0.5 * (5.0_f64.sqrt() - 1.0);
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (cost(c), cost(d));
+    for _ in 0..60 {
+        if (b - a).abs() <= 1e-6 * (1.0 + a.abs().max(b.abs())) {
+            break;
+        }
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = cost(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = cost(d);
+        }
+    }
+    0.5 * (a + b)
 }
