@@ -269,8 +269,8 @@ impl Odometry {
         self.frame += 1;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();
-        let arc_length = arc_length
-            .filter(|l| l.is_finite() && *l >= 0.0 && *l <= crate::config::MAX_ARC_LENGTH);
+        let arc_length =
+            arc_length.filter(|l| l.is_finite() && l.abs() <= crate::config::MAX_ARC_LENGTH);
 
         let mut init = self.previous.clone();
         let mut fixed = vec![false; n_params];
@@ -303,8 +303,9 @@ impl Odometry {
             }
             (None, _) => ScaleSource::Estimated,
         };
-        let standstill = arc_index
-            .is_some_and(|i| init[i] < self.config.odometry.standstill_arc_length && fixed[i]);
+        let standstill = arc_index.is_some_and(|i| {
+            init[i].abs() < self.config.odometry.standstill_arc_length && fixed[i]
+        });
         if standstill && let Some(i) = arc_index {
             init[i] = 0.0;
         } else if self.after_standstill {
@@ -353,8 +354,8 @@ impl Odometry {
             // Slow frames see the direction of travel and the yaw only together (a short
             // baseline): their errors are correlated from frame to frame, and a prior centred
             // on the previous one carries them on.
-            let fast =
-                arc_index.is_none_or(|i| init[i] >= self.config.odometry.prior_min_arc_length);
+            let fast = arc_index
+                .is_none_or(|i| init[i].abs() >= self.config.odometry.prior_min_arc_length);
             let use_prior = self.prior_ready && fast;
             let prior = &mut self.motion_prior;
             if use_prior && !self.param_inv_sigma.is_empty() {
@@ -527,7 +528,7 @@ impl Odometry {
         };
 
         if let Some(i) = arc_index
-            && params[i] > self.config.odometry.standstill_arc_length
+            && params[i].abs() > self.config.odometry.standstill_arc_length
         {
             self.last_arc_length = Some(params[i]);
         }
@@ -549,7 +550,7 @@ impl Odometry {
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
         if let (Some(i), Some(l)) = (arc_index, self.last_arc_length)
-            && self.previous[i] <= self.config.odometry.standstill_arc_length
+            && self.previous[i].abs() <= self.config.odometry.standstill_arc_length
         {
             self.previous[i] = l;
         }
@@ -635,12 +636,13 @@ impl Odometry {
             },
             self.inlier_angle(),
             max,
-            false,
+            true,
         )?;
-        let l = m.arc_length;
+        let l = m.arc_length.abs();
         let ratio = self.config.odometry.max_arc_length_ratio;
         let plausible = self
             .last_arc_length
+            .map(f64::abs)
             .is_none_or(|last| l <= ratio * last && l * ratio >= last);
         (l > self.config.odometry.standstill_arc_length
             && plausible
@@ -664,7 +666,8 @@ impl Odometry {
         let l = sol.params[arc_index];
         let eig = cov.symmetric_eigen();
         let mut var = m.sigma * m.sigma;
-        let (lo, hi) = (0.5 * l.min(m.arc_length), 2.0 * l.max(m.arc_length));
+        let half = 0.5 * l.abs().max(m.arc_length.abs());
+        let (lo, hi) = (l.min(m.arc_length) - half, l.max(m.arc_length) + half);
         for (k, &lambda) in eig.eigenvalues.iter().enumerate() {
             if !(lambda > 0.0) {
                 continue;
@@ -698,7 +701,7 @@ impl Odometry {
         let Some(k) = sol.free.iter().position(|&f| f == arc_index) else {
             return false;
         };
-        let l = sol.params[arc_index];
+        let l = sol.params[arc_index].abs();
         let Some(cov) = self.covariance(sol) else {
             return false;
         };
@@ -709,6 +712,7 @@ impl Odometry {
         let ratio = self.config.odometry.max_arc_length_ratio;
         let plausible = self
             .last_arc_length
+            .map(f64::abs)
             .is_none_or(|last| l <= ratio * last && l * ratio >= last);
         l > self.config.odometry.standstill_arc_length
             && l.is_finite()

@@ -175,3 +175,50 @@ fn cross_camera_matches_without_information_hold_the_scale() {
         assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
     }
 }
+
+/// Reversing: a negative arc length in odometry.csv drives backwards; without odometry a stereo
+/// rig's cross-camera matches give the sign. Forward at 1 m per frame, slowing down, then
+/// backwards up to 1 m per frame.
+#[test]
+fn reversing_is_signed_with_odometry_and_measured_without() {
+    let rig = stereo_rig();
+    let plan = |k: usize| match k {
+        0..5 => 1.0,
+        5 => 0.6,
+        6 => 0.3,
+        7 => -0.3,
+        8 => -0.6,
+        _ => -1.0,
+    };
+    for with_odometry in [true, false] {
+        let mut rng = Rng(11);
+        let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+        let mut backwards = 0;
+        for k in 0..14 {
+            let l = plan(k);
+            let m = drive(if k >= 9 { -0.03 } else { 0.0 }, l);
+            let obs = stereo_frame(&rig, &m, 0.1, 0.1, &mut rng);
+            let r = vo.process(&obs, with_odometry.then_some(l));
+            let err = (r.motion.translation - m.translation).norm();
+            eprintln!(
+                "odometry {with_odometry}, frame {k}: arc {l:+.2} m, estimated x {:+.3} m, error {err:.3} m, {:?}/{:?}",
+                r.motion.translation.x, r.diagnostics.status, r.diagnostics.scale
+            );
+            if with_odometry {
+                assert_eq!(r.diagnostics.scale, ScaleSource::Odometry);
+                assert!(err < 0.02, "frame {k}: {err}");
+            } else if r.diagnostics.scale == ScaleSource::Estimated {
+                assert!(err < 0.05 * l.abs().max(0.3), "frame {k}: {err}");
+            }
+            // Backwards motion comes out backwards, in every frame with a scale.
+            if l < 0.0 && r.diagnostics.scale != ScaleSource::Held {
+                assert!(r.motion.translation.x < 0.0, "frame {k}");
+                backwards += 1;
+            }
+        }
+        assert_eq!(
+            backwards, 7,
+            "every reversing frame has a measured, negative arc length"
+        );
+    }
+}
