@@ -58,9 +58,11 @@
 //! assert_eq!(back.num_frames(), 2);
 //!
 //! // Errors name file, line and reason.
-//! std::fs::write(dir.path().join("odometry.csv"), "frame,arc_length\n1,-2\n")?;
+//! std::fs::write(dir.path().join("odometry.csv"), "frame,arc_length\n1,-2000\n")?;
 //! let err = read_sequence(dir.path()).unwrap_err();
-//! assert!(err.to_string().ends_with("odometry.csv:2: arc_length must be >= 0, found -2"));
+//! assert!(err.to_string().ends_with(
+//!     "odometry.csv:2: arc_length -2.000000e3 m is beyond the supported -1000..=1000 m per frame pair"
+//! ));
 //! # Ok(())
 //! # }
 //! ```
