@@ -178,6 +178,7 @@ fn sweep_subsampling_equals_the_kitti_import() {
                 stereo: false,
                 matches_per_frame: n,
                 seed: 1,
+                cross_camera: false,
             },
         )
         .expect("imports")

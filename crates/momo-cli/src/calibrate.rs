@@ -72,13 +72,14 @@ pub(crate) fn calibrate_mount(
 fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) -> Result<(), Failure> {
     let term = serde_json::to_string(&est.termination).unwrap_or_default();
     note!(
-        "momo: mount calibration with {} over {} frame pairs ({} skipped: {} without matches, {} standstill, {} failed) in {:.2} s: {} iterations ({}), cost {:.6e} -> {:.6e}",
+        "momo: mount calibration with {} over {} frame pairs ({} skipped: {} without matches, {} standstill, {} failed, {} degenerate) in {:.2} s: {} iterations ({}), cost {:.6e} -> {:.6e}",
         est.model.name(),
         est.frames_used,
         est.skipped.total(),
         est.skipped.no_matches,
         est.skipped.standstill,
         est.skipped.failed,
+        est.skipped.degenerate,
         seconds,
         est.iterations,
         term.trim_matches('"'),

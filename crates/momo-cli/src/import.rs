@@ -27,6 +27,11 @@ pub(crate) struct ImportKittiArgs {
     /// A stereo rig (left = camera 0, right = camera 1) instead of the left camera only.
     #[arg(long)]
     stereo: bool,
+    /// With --stereo, do not write the cross-camera matches (left at k-1 with right at k and
+    /// the reverse; matches.csv column `camera_to`) that measure the metric scale (l1avgvo
+    /// matches only).
+    #[arg(long)]
+    no_cross_camera: bool,
     /// Keep at most this many matches per frame pair and camera, spread over the image
     /// (default: all; l1avgvo matches only).
     #[arg(long)]
@@ -87,6 +92,7 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
         stereo: args.stereo,
         matches_per_frame: args.matches,
         seed: args.seed,
+        cross_camera: args.stereo && !args.no_cross_camera,
     };
     let seq = import_l1avgvo(&args.dir, &options).map_err(Failure::input)?;
     let out = momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)?;

@@ -702,3 +702,18 @@ pub fn camera_motion<T: Scalar>(vehicle_motion: &Pose<T>, t_vehicle_camera: &Pos
     let p_inv = Pose::<T>::lift(&t_vehicle_camera.inverse());
     p_inv.compose(&vehicle_motion.compose(&p))
 }
+
+/// The camera motion `C_ij = P_i⁻¹ M P_j` of a cross-camera match ([`CrossObservation`]): the
+/// pose of camera j at frame k in camera i at frame k-1.
+///
+/// [`CrossObservation`]: crate::CrossObservation
+#[inline]
+pub fn cross_camera_motion<T: Scalar>(
+    vehicle_motion: &Pose<T>,
+    t_vehicle_camera_i: &Pose<f64>,
+    t_vehicle_camera_j: &Pose<f64>,
+) -> Pose<T> {
+    let p_j = Pose::<T>::lift(t_vehicle_camera_j);
+    let p_i_inv = Pose::<T>::lift(&t_vehicle_camera_i.inverse());
+    p_i_inv.compose(&vehicle_motion.compose(&p_j))
+}

@@ -102,11 +102,31 @@ impl Observation {
     }
 }
 
+/// A match between two different cameras (`FORMAT.md` version 5, column `camera_to`): the
+/// pixel `px0` of camera `camera` at frame k-1 and the pixel `px1` of camera `camera_to` at frame
+/// k. Its camera motion is `P_i⁻¹ M P_j` (`i = camera`, `j = camera_to`); on a stereo rig these
+/// matches carry the metric scale (the baseline).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CrossObservation {
+    /// Camera `i` of the pixel in frame k-1 (`f0` is in its coordinates).
+    pub camera: usize,
+    /// Camera `j` of the pixel in frame k (`f1` is in its coordinates).
+    pub camera_to: usize,
+    /// The pixels and bearings.
+    pub obs: Observation,
+}
+
 /// The matches of one frame pair, per camera (index = camera id).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameObservations {
     /// `per_camera[j]` holds camera j's matches.
     pub per_camera: Vec<Vec<Observation>>,
+    /// Matches between two different cameras (empty unless the sequence has them). They are
+    /// not counted by [`len`](Self::len) and not used by the per-frame [`Problem`]; the
+    /// odometry estimates the arc length from them.
+    ///
+    /// [`Problem`]: crate::Problem
+    pub cross_camera: Vec<CrossObservation>,
 }
 
 impl FrameObservations {
@@ -114,10 +134,11 @@ impl FrameObservations {
     pub fn new(n: usize) -> Self {
         Self {
             per_camera: vec![Vec::new(); n],
+            cross_camera: Vec::new(),
         }
     }
 
-    /// Total number of matches over all cameras.
+    /// Total number of matches over all cameras (without [`cross_camera`](Self::cross_camera)).
     pub fn len(&self) -> usize {
         self.per_camera.iter().map(Vec::len).sum()
     }
@@ -130,5 +151,6 @@ impl FrameObservations {
     /// Removes all matches, keeping the allocations.
     pub fn clear(&mut self) {
         self.per_camera.iter_mut().for_each(Vec::clear);
+        self.cross_camera.clear();
     }
 }

@@ -299,6 +299,7 @@ fn noisy_vehicle_translation_error(refine: bool) -> f64 {
         let obs = noisy_matches(&rig, m, 140, 60, 0.5, 500 + k as u64);
         let frame = FrameObservations {
             per_camera: vec![obs],
+            ..Default::default()
         };
         let arc = Se3.params_from_motion(m).expect("params")[5];
         let ransac = FivePointRansac {
@@ -350,6 +351,7 @@ fn degenerate_frames_give_none() {
     let one = frame.per_camera[0][0];
     let same = FrameObservations {
         per_camera: vec![vec![one; 100]],
+        ..Default::default()
     };
     assert!(r.estimate_vehicle_motion(&rig, &same, Some(1.0)).is_none());
 }

@@ -253,7 +253,7 @@ pub enum IoErrorKind {
         value: f64,
     },
     /// An arc length above [`MAX_ARC_LENGTH`](crate::odometry::MAX_ARC_LENGTH) in odometry.csv.
-    #[error("arc_length {value:.6e} m is above the supported maximum of {max} m per frame pair")]
+    #[error("arc_length {value:.6e} m is beyond the supported -{max}..={max} m per frame pair")]
     ArcLengthTooLarge {
         /// The value.
         value: f64,

@@ -28,6 +28,9 @@
 //!   used), `ground_truth` is set, and `arc_lengths` holds the arc length travelled by the
 //!   vehicle's motion centre ([`vehicle_arc_length`]). Without it the sequence has one frame
 //!   more than there are pair files and neither ground truth nor arc lengths.
+//! - With [`KittiImport::cross_camera`] (and `stereo`) each chosen 4-view match also gives two
+//!   cross-camera matches, left(k-1)-right(k) and right(k-1)-left(k)
+//!   ([`FrameObservations::cross_camera`]), from which the odometry measures the arc length.
 //! - Matches with a pixel outside the image (of either camera used) are dropped. Pixels are
 //!   integers in the source and are kept as they are.
 //! - [`KittiImport::matches_per_frame`] sub-samples each frame pair to at most `N` matches
@@ -43,8 +46,8 @@
 use crate::error::{IoError, IoErrorKind};
 use crate::text::{LineReader, parse_f64};
 use momo_core::{
-    Camera, CameraModel, FrameObservations, Observation, Pinhole, Pose, Rig, RigCamera, sinc,
-    so3_log,
+    Camera, CameraModel, CrossObservation, FrameObservations, Observation, Pinhole, Pose, Rig,
+    RigCamera, sinc, so3_log,
 };
 use nalgebra::{Matrix3, Vector2, Vector3};
 use std::fs::File;
@@ -70,6 +73,11 @@ pub struct KittiImport {
     pub matches_per_frame: Option<usize>,
     /// Seed of the (deterministic) sub-sampling.
     pub seed: u64,
+    /// With [`stereo`](Self::stereo): also write each chosen 4-view match's two cross-camera
+    /// matches (`FORMAT.md` version 5, column `camera_to`): left at `k-1` with right at `k`
+    /// (camera 0 to 1) and right at `k-1` with left at `k` (camera 1 to 0). They carry the
+    /// metric scale (the baseline) when no odometry is given.
+    pub cross_camera: bool,
 }
 
 /// The calibration of `calib.txt`: `f cu cv B`.
@@ -530,6 +538,17 @@ pub fn import_l1avgvo(dir: &Path, options: &KittiImport) -> Result<crate::Sequen
             if options.stereo {
                 let Some(right) = right else { continue };
                 obs.per_camera[1].push(right);
+                if options.cross_camera {
+                    let cross = |camera, camera_to, f0, f1, px0, px1| CrossObservation {
+                        camera,
+                        camera_to,
+                        obs: Observation { px0, px1, f0, f1 },
+                    };
+                    obs.cross_camera
+                        .push(cross(0, 1, left.f0, right.f1, left.px0, right.px1));
+                    obs.cross_camera
+                        .push(cross(1, 0, right.f0, left.f1, right.px0, left.px1));
+                }
             }
             obs.per_camera[0].push(left);
         }
@@ -613,6 +632,7 @@ mod tests {
                 stereo: false,
                 matches_per_frame: Some(n),
                 seed: 7,
+                cross_camera: false,
             },
         )
         .expect("import");
@@ -661,6 +681,7 @@ mod tests {
             stereo: true,
             matches_per_frame: Some(n),
             seed: 1,
+            cross_camera: true,
         };
         let seq = import_l1avgvo(&dir, &options).expect("import");
         assert_eq!(seq.frames.len(), 301);
@@ -669,6 +690,7 @@ mod tests {
         assert!((right.translation - Vector3::new(1.0, -0.5372, 1.65)).norm() < 1e-12);
         let gt = seq.ground_truth.as_ref().expect("ground truth");
         let mut res = Vec::new();
+        let (mut cross, mut cross_swapped) = (Vec::new(), Vec::new());
         for k in 1..301 {
             let f = &seq.frames[k];
             assert_eq!(f.per_camera[0].len(), n, "frame {k}");
@@ -678,10 +700,28 @@ mod tests {
                 let c = momo_core::camera_motion(&m, &cam.t_vehicle_camera);
                 res.extend(epipolar_residuals(&f.per_camera[j], &c));
             }
+            // Two cross-camera matches per 4-view match, under C_ij = P_i⁻¹ M P_j; with the
+            // cameras swapped (the wrong convention) the residuals are much larger.
+            assert_eq!(f.cross_camera.len(), 2 * n, "frame {k}");
+            let cams = seq.rig.cameras();
+            for x in &f.cross_camera {
+                let (pi, pj) = (
+                    &cams[x.camera].t_vehicle_camera,
+                    &cams[x.camera_to].t_vehicle_camera,
+                );
+                let c = momo_core::cross_camera_motion(&m, pi, pj);
+                cross.extend(epipolar_residuals(&[x.obs], &c));
+                let swapped = momo_core::cross_camera_motion(&m, pj, pi);
+                cross_swapped.extend(epipolar_residuals(&[x.obs], &swapped));
+            }
         }
         let med = median(res);
         eprintln!("stereo: median epipolar residual {med:.2e}");
         assert!(med < 0.003, "{med}");
+        let (cross, swapped) = (median(cross), median(cross_swapped));
+        eprintln!("cross-camera: median epipolar residual {cross:.2e} (swapped {swapped:.2e})");
+        assert!(cross < 0.003, "{cross}");
+        assert!(swapped > 3.0 * cross, "{swapped} vs {cross}");
         // Deterministic for a seed.
         let again = import_l1avgvo(&dir, &options).expect("import");
         assert_eq!(again, seq);
@@ -745,6 +785,7 @@ mod tests {
                 stereo: true,
                 matches_per_frame: Some(10),
                 seed: 3,
+                cross_camera: false,
             },
         )
         .unwrap();

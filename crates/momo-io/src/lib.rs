@@ -58,9 +58,11 @@
 //! assert_eq!(back.num_frames(), 2);
 //!
 //! // Errors name file, line and reason.
-//! std::fs::write(dir.path().join("odometry.csv"), "frame,arc_length\n1,-2\n")?;
+//! std::fs::write(dir.path().join("odometry.csv"), "frame,arc_length\n1,-2000\n")?;
 //! let err = read_sequence(dir.path()).unwrap_err();
-//! assert!(err.to_string().ends_with("odometry.csv:2: arc_length must be >= 0, found -2"));
+//! assert!(err.to_string().ends_with(
+//!     "odometry.csv:2: arc_length -2.000000e3 m is beyond the supported -1000..=1000 m per frame pair"
+//! ));
 //! # Ok(())
 //! # }
 //! ```
@@ -79,7 +81,8 @@ pub mod tum;
 pub use atomic::{AtomicFile, OutputDir, check_outputs, commit_all, remove_temporaries};
 pub use error::{IoError, IoErrorKind};
 pub use matches::{
-    MATCHES_HEADER, MAX_FRAME, MatchReader, MatchWriter, PIXEL_MARGIN_FRACTION, write_matches,
+    MATCHES_HEADER, MATCHES_HEADER_CROSS, MAX_FRAME, MatchReader, MatchWriter,
+    PIXEL_MARGIN_FRACTION, write_matches,
 };
 pub use odometry::{ODOMETRY_HEADER, read_odometry, read_odometry_from, write_odometry};
 pub use poses::{POSE_ORTHONORMAL_TOLERANCE, PoseWriter, read_poses, read_poses_from, write_poses};

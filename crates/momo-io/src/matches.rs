@@ -5,7 +5,7 @@
 use crate::atomic::{AtomicFile, put};
 use crate::error::{IoError, IoErrorKind};
 use crate::text::{Exact, LineReader, is_blank, parse_f64, parse_header, parse_index, split_row};
-use momo_core::{Camera, CameraModel, FrameObservations, Observation, Rig};
+use momo_core::{Camera, CameraModel, CrossObservation, FrameObservations, Observation, Rig};
 use nalgebra::{Vector2, Vector3};
 use std::fs::File;
 use std::io::{BufRead, BufReader};
@@ -14,6 +14,9 @@ use std::path::{Path, PathBuf};
 /// The header line of `matches.csv`. Readers accept these names in any order.
 pub const MATCHES_HEADER: &str = "frame,camera,u0,v0,u1,v1";
 const MATCH_COLUMNS: [&str; 6] = ["frame", "camera", "u0", "v0", "u1", "v1"];
+/// The header line of `matches.csv` with the optional `camera_to` column (version 5).
+pub const MATCHES_HEADER_CROSS: &str = "frame,camera,u0,v0,u1,v1,camera_to";
+const MATCH_COLUMNS_CROSS: [&str; 7] = ["frame", "camera", "u0", "v0", "u1", "v1", "camera_to"];
 
 /// Pixels more than this fraction of `max(width, height)` outside the image border are rejected
 /// as input errors (a wrong camera id or a mix-up of cameras). Points slightly outside the image
@@ -63,6 +66,8 @@ pub(crate) fn check_pixel(
 struct Row {
     frame: usize,
     camera: usize,
+    /// The camera of `(u1, v1)` (`camera` unless the row is a cross-camera match).
+    camera_to: usize,
     obs: Observation,
 }
 
@@ -70,14 +75,18 @@ struct Row {
 /// `k = 1..=last` (contiguous, with empty observations for frame pairs without rows), holding at
 /// most one frame pair in memory. Stops after the first error.
 ///
-/// Every row is validated: six fields, finite numbers, `frame >= 1` and non-decreasing, a camera
-/// id of the rig, pixels within [`PIXEL_MARGIN_FRACTION`] of the image and unprojectable by the
-/// camera model.
+/// Every row is validated: six fields (seven with the optional `camera_to` column), finite
+/// numbers, `frame >= 1` and non-decreasing, camera ids of the rig, pixels within
+/// [`PIXEL_MARGIN_FRACTION`] of the image and unprojectable by their camera's model. A row whose
+/// `camera_to` names another camera than `camera` goes to
+/// [`FrameObservations::cross_camera`]; an empty `camera_to` means `camera`.
 pub struct MatchReader<R> {
     lines: LineReader<R>,
     path: PathBuf,
     cameras: Vec<(Camera, f64)>,
-    columns: [usize; 6],
+    /// Positions of the columns of [`MATCH_COLUMNS_CROSS`]; `camera_to` is `usize::MAX` when
+    /// the file has no such column.
+    columns: [usize; 7],
     next_frame: usize,
     current: FrameObservations,
     pending: Option<Row>,
@@ -113,8 +122,17 @@ impl<R: BufRead> MatchReader<R> {
                 }
                 Ok(Some(l)) if is_blank(l) => continue,
                 Ok(Some(l)) => {
-                    break parse_header(l, &MATCH_COLUMNS, MATCHES_HEADER)
-                        .map_err(|k| IoError::at(&path, lines.line(), k))?;
+                    let cross = l.split(',').any(|n| n.trim() == "camera_to");
+                    let parsed = if cross {
+                        parse_header(l, &MATCH_COLUMNS_CROSS, MATCHES_HEADER_CROSS)
+                    } else {
+                        parse_header(l, &MATCH_COLUMNS, MATCHES_HEADER).map(|c| {
+                            let mut all = [usize::MAX; 7];
+                            all[..6].copy_from_slice(&c);
+                            all
+                        })
+                    };
+                    break parsed.map_err(|k| IoError::at(&path, lines.line(), k))?;
                 }
             }
         };
@@ -154,11 +172,20 @@ impl<R: BufRead> MatchReader<R> {
 
     fn parse_row(
         line: &str,
-        c: &[usize; 6],
+        c: &[usize; 7],
         cameras: &[(Camera, f64)],
         last_row_frame: usize,
     ) -> Result<Row, IoErrorKind> {
-        let fields: [&str; 6] = split_row(line)?;
+        let with_to = c[6] != usize::MAX;
+        let seven: [&str; 7];
+        let six: [&str; 6];
+        let fields: &[&str] = if with_to {
+            seven = split_row(line)?;
+            &seven
+        } else {
+            six = split_row(line)?;
+            &six
+        };
         let frame = parse_index("frame", fields[c[0]])?;
         let camera = parse_index("camera", fields[c[1]])?;
         let u0 = parse_f64("u0", fields[c[2]])?;
@@ -187,11 +214,28 @@ impl<R: BufRead> MatchReader<R> {
                 count: cameras.len(),
             });
         };
+        let camera_to = match fields.get(c[6]) {
+            Some(t) if !t.is_empty() => parse_index("camera_to", t)?,
+            _ => camera,
+        };
+        let Some((model_to, margin_to)) = cameras.get(camera_to) else {
+            return Err(IoErrorKind::UnknownCamera {
+                camera: camera_to,
+                count: cameras.len(),
+            });
+        };
         let f0 = check_pixel(model, *margin, camera, "u0,v0", Vector2::new(u0, v0))?;
-        let f1 = check_pixel(model, *margin, camera, "u1,v1", Vector2::new(u1, v1))?;
+        let f1 = check_pixel(
+            model_to,
+            *margin_to,
+            camera_to,
+            "u1,v1",
+            Vector2::new(u1, v1),
+        )?;
         Ok(Row {
             frame,
             camera,
+            camera_to,
             obs: Observation {
                 px0: Vector2::new(u0, v0),
                 px1: Vector2::new(u1, v1),
@@ -251,7 +295,15 @@ impl<R: BufRead> Iterator for MatchReader<R> {
             };
             match row {
                 Some(r) if r.frame == self.next_frame => {
-                    self.current.per_camera[r.camera].push(r.obs)
+                    if r.camera_to == r.camera {
+                        self.current.per_camera[r.camera].push(r.obs)
+                    } else {
+                        self.current.cross_camera.push(CrossObservation {
+                            camera: r.camera,
+                            camera_to: r.camera_to,
+                            obs: r.obs,
+                        })
+                    }
                 }
                 Some(r) => {
                     // r.frame > next_frame (order is checked while parsing).
@@ -274,6 +326,8 @@ impl<R: BufRead> Iterator for MatchReader<R> {
 pub struct MatchWriter {
     file: AtomicFile,
     last_frame: usize,
+    /// The file has the `camera_to` column ([`MatchWriter::create_cross`]).
+    cross: bool,
 }
 
 impl MatchWriter {
@@ -284,15 +338,38 @@ impl MatchWriter {
         Ok(Self {
             file,
             last_frame: 0,
+            cross: false,
+        })
+    }
+
+    /// Like [`create`](Self::create), with the `camera_to` column (`FORMAT.md` version 5), so
+    /// that [`FrameObservations::cross_camera`] can be written.
+    pub fn create_cross(path: impl AsRef<Path>) -> Result<Self, IoError> {
+        let mut file = AtomicFile::create(path.as_ref())?;
+        put!(&mut file, "{MATCHES_HEADER_CROSS}\n")?;
+        Ok(Self {
+            file,
+            last_frame: 0,
+            cross: true,
         })
     }
 
     /// Writes the matches of frame pair `frame` (>= 1, at least the previous frame). Numbers are
-    /// printed so that they parse back to the same bits. Fails on non-finite pixels.
+    /// printed so that they parse back to the same bits. Fails on non-finite pixels, and on
+    /// cross-camera matches in a file without the `camera_to` column.
     pub fn push(&mut self, frame: usize, obs: &FrameObservations) -> Result<(), IoError> {
         let bad = |f: &AtomicFile, m: String| IoError::file(f.path(), IoErrorKind::InvalidData(m));
-        if obs.is_empty() {
+        if obs.is_empty() && obs.cross_camera.is_empty() {
             return Ok(());
+        }
+        if !self.cross && !obs.cross_camera.is_empty() {
+            return Err(bad(
+                &self.file,
+                format!(
+                    "frame {frame} has cross-camera matches; they need the camera_to column \
+                     (MatchWriter::create_cross)"
+                ),
+            ));
         }
         if frame == 0 {
             return Err(bad(
@@ -306,22 +383,35 @@ impl MatchWriter {
                 format!("frame {frame} after frame {}", self.last_frame),
             ));
         }
-        for (camera, list) in obs.per_camera.iter().enumerate() {
-            for o in list {
-                if !(o.px0.iter().chain(o.px1.iter()).all(|v| v.is_finite())) {
-                    return Err(bad(
-                        &self.file,
-                        format!("non-finite pixel in frame {frame}, camera {camera}"),
-                    ));
-                }
-                put!(
-                    &mut self.file,
-                    "{frame},{camera},{},{},{},{}\n",
-                    Exact(o.px0.x),
-                    Exact(o.px0.y),
-                    Exact(o.px1.x),
-                    Exact(o.px1.y)
-                )?;
+        let rows = obs
+            .per_camera
+            .iter()
+            .enumerate()
+            .flat_map(|(camera, list)| list.iter().map(move |o| (camera, camera, o)))
+            .chain(
+                obs.cross_camera
+                    .iter()
+                    .map(|c| (c.camera, c.camera_to, &c.obs)),
+            );
+        for (camera, camera_to, o) in rows {
+            if !(o.px0.iter().chain(o.px1.iter()).all(|v| v.is_finite())) {
+                return Err(bad(
+                    &self.file,
+                    format!("non-finite pixel in frame {frame}, camera {camera}"),
+                ));
+            }
+            put!(
+                &mut self.file,
+                "{frame},{camera},{},{},{},{}",
+                Exact(o.px0.x),
+                Exact(o.px0.y),
+                Exact(o.px1.x),
+                Exact(o.px1.y)
+            )?;
+            if self.cross {
+                put!(&mut self.file, ",{camera_to}\n")?;
+            } else {
+                put!(&mut self.file, "\n")?;
             }
         }
         self.last_frame = frame;
@@ -335,7 +425,7 @@ impl MatchWriter {
 }
 
 /// Writes `matches.csv` atomically: `frames[k]` holds frame pair `(k-1, k)`; `frames[0]` must be
-/// empty.
+/// empty. The `camera_to` column is written only if some frame has cross-camera matches.
 pub fn write_matches(path: impl AsRef<Path>, frames: &[FrameObservations]) -> Result<(), IoError> {
     stage_matches(path.as_ref(), frames)?.commit()
 }
@@ -345,7 +435,11 @@ pub(crate) fn stage_matches(
     path: &Path,
     frames: &[FrameObservations],
 ) -> Result<AtomicFile, IoError> {
-    let mut w = MatchWriter::create(path)?;
+    let mut w = if frames.iter().any(|f| !f.cross_camera.is_empty()) {
+        MatchWriter::create_cross(path)?
+    } else {
+        MatchWriter::create(path)?
+    };
     for (k, obs) in frames.iter().enumerate() {
         w.push(k, obs)?;
     }

@@ -22,7 +22,8 @@ const ODOMETRY_COLUMNS: [&str; 2] = ["frame", "arc_length"];
 /// Returns the arc lengths indexed by frame: `v[k]` for frame pair `(k-1, k)`, `v[0] = None`,
 /// `None` for frames without a row, `v.len() = last frame + 1` (just `[None]` without rows).
 /// Rejects: a missing or wrong header, rows without exactly two fields, unparsable or non-finite
-/// numbers, negative arc lengths, frame 0, frames above [`MAX_FRAME`], frames that do not increase
+/// numbers, arc lengths beyond ±[`MAX_ARC_LENGTH`] (negative ones, reversing, are accepted
+/// since format version 5), frame 0, frames above [`MAX_FRAME`], frames that do not increase
 /// (duplicates included).
 pub fn read_odometry_from<R: BufRead>(
     reader: R,
@@ -71,10 +72,7 @@ pub fn read_odometry_from<R: BufRead>(
                 order: "increasing",
             }));
         }
-        if value < 0.0 {
-            return Err(at(IoErrorKind::NegativeArcLength { value }));
-        }
-        if value > MAX_ARC_LENGTH {
+        if value.abs() > MAX_ARC_LENGTH {
             return Err(at(IoErrorKind::ArcLengthTooLarge {
                 value,
                 max: MAX_ARC_LENGTH,
@@ -102,7 +100,8 @@ pub fn read_odometry(path: impl AsRef<Path>) -> Result<Vec<Option<f64>>, IoError
 }
 
 /// Writes `odometry.csv` atomically: one row per `Some` entry of `arc_lengths` (indexed by
-/// frame). Fails on an arc length for frame 0, negative or non-finite values.
+/// frame). Fails on an arc length for frame 0, non-finite values or values beyond
+/// ±[`MAX_ARC_LENGTH`] (negative values, reversing, are written).
 pub fn write_odometry(path: impl AsRef<Path>, arc_lengths: &[Option<f64>]) -> Result<(), IoError> {
     stage_odometry(path.as_ref(), arc_lengths)?.commit()
 }
@@ -117,11 +116,11 @@ pub(crate) fn stage_odometry(
         return Err(bad("an arc length for frame 0 (frames start at 1)".into()));
     }
     if let Some((k, v)) = arc_lengths.iter().enumerate().find_map(|(k, v)| {
-        v.filter(|v| !(v.is_finite() && *v >= 0.0 && *v <= MAX_ARC_LENGTH))
+        v.filter(|v| !(v.is_finite() && v.abs() <= MAX_ARC_LENGTH))
             .map(|v| (k, v))
     }) {
         return Err(bad(format!(
-            "arc length {v:.6e} of frame {k} is not a number within 0..={MAX_ARC_LENGTH} m"
+            "arc length {v:.6e} of frame {k} is not a number within -{MAX_ARC_LENGTH}..={MAX_ARC_LENGTH} m"
         )));
     }
     stage_atomic(path, |f| {

@@ -596,8 +596,8 @@ fn odometry_rules() {
             Some(2),
         ),
         (
-            "frame,arc_length\n1,-0.1\n",
-            |k| matches!(k, IoErrorKind::NegativeArcLength { .. }),
+            "frame,arc_length\n1,-1000.5\n",
+            |k| matches!(k, IoErrorKind::ArcLengthTooLarge { .. }),
             Some(2),
         ),
         (

@@ -231,11 +231,12 @@ fn failed_writes_leave_no_partial_file() {
     let mut gt = seq.ground_truth.clone().unwrap();
     gt[3].translation.y = f64::INFINITY;
     assert!(write_poses(dir.path().join("poses.txt"), &gt).is_err());
-    // Odometry: a negative value; an arc length for frame 0.
+    // Odometry: a value beyond ±1000 m (negative values, reversing, are written); an arc
+    // length for frame 0.
     assert!(
         write_odometry(
             dir.path().join("odometry.csv"),
-            &[None, Some(1.0), Some(-1.0)]
+            &[None, Some(1.0), Some(-1000.5)]
         )
         .is_err()
     );

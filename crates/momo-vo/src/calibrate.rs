@@ -58,12 +58,20 @@ pub enum CalibrationError {
     /// Every frame pair was skipped.
     #[error(
         "mount calibration: no usable frame pairs ({} without enough matches, {} at standstill, \
-         {} whose start solve failed)",
-        skipped.no_matches, skipped.standstill, skipped.failed
+         {} whose start solve failed, {} degenerate: repeated matches, matches in a small \
+         region, too little flow or parallax)",
+        skipped.no_matches, skipped.standstill, skipped.failed, skipped.degenerate
     )]
     NoUsableFrames {
         /// How many were skipped, and why.
         skipped: SkippedFrames,
+    },
+    /// The matches do not observe the mount: a free component's standard deviation is zero
+    /// (no residual left), not finite, or above [`MAX_MOUNT_SIGMA_DEG`].
+    #[error("mount calibration: the matches cannot observe the mount: {reason}")]
+    Unobservable {
+        /// Which component, and its sigma.
+        reason: String,
     },
     /// The rig, model and metric do not fit (e.g. a metric that does not support a camera).
     #[error(transparent)]
@@ -363,12 +371,16 @@ pub struct SkippedFrames {
     pub standstill: usize,
     /// The per-frame start solve failed (non-finite cost or parameters).
     pub failed: usize,
+    /// Degenerate matches (`crate::trust`): fewer than `odometry.min_matches` distinct
+    /// matches, matches in a small region (`trust.min_extent`), too little flow
+    /// (`trust.min_flow`) or too little parallax ([`MIN_MOUNT_PARALLAX`]).
+    pub degenerate: usize,
 }
 
 impl SkippedFrames {
     /// All skipped frame pairs.
     pub fn total(&self) -> usize {
-        self.no_matches + self.standstill + self.failed
+        self.no_matches + self.standstill + self.failed + self.degenerate
     }
 }
 
@@ -471,7 +483,7 @@ pub fn calibrate_mount(
         }
         None => MountModel::from_spec(config.model.as_ref())?,
     };
-    calibrate_with(
+    let est = calibrate_with(
         model,
         config.metric.as_ref(),
         rig,
@@ -479,7 +491,79 @@ pub fn calibrate_mount(
         arc_lengths,
         config,
         options,
-    )
+    )?;
+    check_observable(&est)?;
+    Ok(est)
+}
+
+/// The largest standard deviation of a mount component (degrees) that `calibrate_mount`
+/// accepts: above it the matches do not observe the mount and the estimate is refused (mount
+/// errors worth correcting are a few degrees; `single_track_3d` with the roll estimated gives
+/// about 1.1 deg for the roll on the simulated test drive).
+pub const MAX_MOUNT_SIGMA_DEG: f64 = 3.0;
+
+/// The smallest median parallax (radians: the angle between `f0` and `R f1` after the start
+/// solve's rotation `R` is removed) of a frame pair used by the mount calibration. Below it
+/// the flow is the rotation's alone (a far scene, a turn on the spot), the direction of travel
+/// and with it the mount are not seen, and the frame pair is skipped as degenerate (2e-3 rad
+/// is 1.4 px at a 700 px focal length; a car at 1 m per frame sees 0.025 to 0.25 rad at 4 to
+/// 40 m).
+pub const MIN_MOUNT_PARALLAX: f64 = 2e-3;
+
+/// The median over all matches of the angle between `f0` and `R_j f1` (camera j's rotation
+/// under `motion` removed): the parallax the translation leaves.
+fn median_parallax(rig: &Rig, obs: &FrameObservations, motion: &Pose<f64>) -> Option<f64> {
+    let mut angles = Vec::with_capacity(obs.len());
+    for (cam, list) in rig.cameras().iter().zip(&obs.per_camera) {
+        let c = momo_core::camera_motion(motion, &cam.t_vehicle_camera);
+        for o in list {
+            let g = c.rotation * o.f1;
+            angles.push(o.f0.cross(&g).norm().atan2(o.f0.dot(&g)));
+        }
+    }
+    if angles.is_empty() {
+        return None;
+    }
+    let mid = angles.len() / 2;
+    let (_, m, _) = angles.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(*m)
+}
+
+/// Refuses an estimate whose free components are not observed (see
+/// [`CalibrationError::Unobservable`]).
+fn check_observable(est: &MountEstimate) -> Result<(), CalibrationError> {
+    let names = ["roll", "pitch", "yaw"];
+    for (i, name) in names.iter().enumerate() {
+        if i == 0 && !est.roll_estimated {
+            continue;
+        }
+        let sigma = est.sigma[i].to_degrees();
+        let reason = if !sigma.is_finite() || est.covariance[(i, i)].is_nan() {
+            format!("the {name} is not determined (singular information)")
+        } else if sigma == 0.0 {
+            format!(
+                "the {name} has a standard deviation of exactly 0 (the cost is {:.3e}: the \
+                 matches leave no residual to measure noise against)",
+                est.cost_after
+            )
+        } else if sigma > MAX_MOUNT_SIGMA_DEG {
+            format!(
+                "the {name}'s standard deviation is {sigma:.3} deg (more than \
+                 {MAX_MOUNT_SIGMA_DEG} deg)"
+            )
+        } else {
+            continue;
+        };
+        return Err(CalibrationError::Unobservable {
+            reason: format!(
+                "{reason}; {} frame pairs used, {} skipped ({} degenerate)",
+                est.frames_used,
+                est.skipped.total(),
+                est.skipped.degenerate
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The solve request of one frame pair of the joint problem (its fixed parameters, no prior).
@@ -567,6 +651,20 @@ fn calibrate_with(
             skipped.no_matches += 1;
             continue;
         }
+        // Matches that cannot determine a motion say nothing about the mount either.
+        let mut unique = obs.clone();
+        crate::trust::dedupe(&mut unique);
+        let degenerate = unique.len() < odo.min_matches.max(1)
+            || crate::trust::before_solve(&config.trust, rig, &unique, true).is_some_and(
+                |(c, r)| {
+                    c == crate::trust::Constraint::Degenerate
+                        || r == crate::trust::Reason::LittleFlow
+                },
+            );
+        if degenerate {
+            skipped.degenerate += 1;
+            continue;
+        }
         let mut fixed = vec![false; np];
         let mut init = previous.clone();
         if let Some(a) = arc_index {
@@ -611,6 +709,12 @@ fn calibrate_with(
             skipped.failed += 1;
             continue;
         };
+        if median_parallax(rig, obs, &model.motion_of(&params))
+            .is_none_or(|p| p < MIN_MOUNT_PARALLAX)
+        {
+            skipped.degenerate += 1;
+            continue;
+        }
         cost_before += cost;
         previous.clone_from(&params);
         let mut mounted_fixed = fixed;

@@ -27,6 +27,7 @@ pub mod config;
 pub mod odometry;
 pub mod pipeline;
 pub mod separate;
+pub mod stereo_scale;
 pub mod trust;
 
 pub use baseline::{FivePointBaseline, MotionDriver};

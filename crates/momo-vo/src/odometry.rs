@@ -297,16 +297,26 @@ impl Odometry {
         self.frame += 1;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();
-        let arc_length = arc_length
-            .filter(|l| l.is_finite() && *l >= 0.0 && *l <= crate::config::MAX_ARC_LENGTH);
+        let arc_length =
+            arc_length.filter(|l| l.is_finite() && l.abs() <= crate::config::MAX_ARC_LENGTH);
 
         let mut init = self.previous.clone();
         let mut fixed = vec![false; n_params];
+        // Cross-camera matches measure the arc length (crate::stereo_scale): solve with the
+        // last arc length held, then measure it and solve again.
+        let cross_scale = arc_length.is_none()
+            && arc_index.is_some()
+            && self.config.odometry.estimate_scale
+            && obs.cross_camera.len() >= crate::stereo_scale::MIN_CROSS_INLIERS;
         let scale = match (arc_index, arc_length) {
             (Some(i), Some(l)) => {
                 init[i] = l;
                 fixed[i] = true;
                 ScaleSource::Odometry
+            }
+            (Some(i), None) if cross_scale => {
+                fixed[i] = true;
+                ScaleSource::Estimated
             }
             (Some(i), None) => {
                 if !self.scale_observable {
@@ -321,8 +331,9 @@ impl Odometry {
             }
             (None, _) => ScaleSource::Estimated,
         };
-        let standstill = arc_index
-            .is_some_and(|i| init[i] < self.config.odometry.standstill_arc_length && fixed[i]);
+        let standstill = arc_index.is_some_and(|i| {
+            init[i].abs() < self.config.odometry.standstill_arc_length && fixed[i]
+        });
         if standstill && let Some(i) = arc_index {
             init[i] = 0.0;
         } else if self.after_standstill {
@@ -371,8 +382,8 @@ impl Odometry {
             // Slow frames see the direction of travel and the yaw only together (a short
             // baseline): their errors are correlated from frame to frame, and a prior centred
             // on the previous one carries them on.
-            let fast =
-                arc_index.is_none_or(|i| init[i] >= self.config.odometry.prior_min_arc_length);
+            let fast = arc_index
+                .is_none_or(|i| init[i].abs() >= self.config.odometry.prior_min_arc_length);
             let use_prior = self.prior_ready && fast;
             let prior = &mut self.motion_prior;
             if use_prior && !self.param_inv_sigma.is_empty() {
@@ -465,7 +476,27 @@ impl Odometry {
                 }
                 // Scale: accept an estimated arc length only where it is well determined.
                 let mut sol = sol;
+                let mut cross_sigma = None;
+                if cross_scale
+                    && !standstill
+                    && let Some(i) = arc_index
+                {
+                    match self.measure_cross_scale(obs, &sol.params, i) {
+                        Some(m) => {
+                            let mut at = sol.params.clone();
+                            at[i] = m.arc_length;
+                            if let Some(s2) = self.solve_once(obs, &at, &fixed, false) {
+                                sol = s2;
+                            } else {
+                                sol.params[i] = m.arc_length;
+                            }
+                            cross_sigma = Some(self.cross_scale_sigma(obs, &sol, i, &m));
+                        }
+                        None => diag.scale = ScaleSource::Held,
+                    }
+                }
                 if scale == ScaleSource::Estimated
+                    && !cross_scale
                     && let Some(i) = arc_index
                     && !self.scale_ok(&sol, i)
                 {
@@ -481,6 +512,9 @@ impl Odometry {
                     }
                 }
                 self.fill_diagnostics(&sol, &mut diag);
+                if let (Some(i), Some(sigma)) = (arc_index, cross_sigma) {
+                    diag.param_sigmas[i] = sigma;
+                }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;
                 }
@@ -522,7 +556,7 @@ impl Odometry {
         };
 
         if let Some(i) = arc_index
-            && params[i] > self.config.odometry.standstill_arc_length
+            && params[i].abs() > self.config.odometry.standstill_arc_length
         {
             self.last_arc_length = Some(params[i]);
         }
@@ -544,7 +578,7 @@ impl Odometry {
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
         if let (Some(i), Some(l)) = (arc_index, self.last_arc_length)
-            && self.previous[i] <= self.config.odometry.standstill_arc_length
+            && self.previous[i].abs() <= self.config.odometry.standstill_arc_length
         {
             self.previous[i] = l;
         }
@@ -608,11 +642,94 @@ impl Odometry {
         }
     }
 
+    /// The arc length measured from the frame's cross-camera matches with every other
+    /// parameter at `params` ([`crate::stereo_scale`]), if it is well determined (relative
+    /// sigma within `odometry.max_relative_scale_sigma`, above the standstill threshold, within
+    /// `odometry.max_arc_length_ratio` of the last arc length).
+    fn measure_cross_scale(
+        &self,
+        obs: &FrameObservations,
+        params: &[f64],
+        arc_index: usize,
+    ) -> Option<crate::stereo_scale::CrossScale> {
+        let last = self.last_arc_length.unwrap_or(self.previous[arc_index]);
+        let max = (20.0 * last.abs().max(1.0)).min(crate::config::MAX_ARC_LENGTH);
+        let m = crate::stereo_scale::measure_arc_length(
+            &self.rig,
+            &obs.cross_camera,
+            |l| {
+                let mut p = params.to_vec();
+                p[arc_index] = l;
+                self.estimator.motion(&p)
+            },
+            self.inlier_angle(),
+            max,
+            true,
+        )?;
+        let l = m.arc_length.abs();
+        let ratio = self.config.odometry.max_arc_length_ratio;
+        let plausible = self
+            .last_arc_length
+            .map(f64::abs)
+            .is_none_or(|last| l <= ratio * last && l * ratio >= last);
+        (l > self.config.odometry.standstill_arc_length
+            && plausible
+            && m.sigma <= self.config.odometry.max_relative_scale_sigma * l)
+            .then_some(m)
+    }
+
+    /// The standard deviation of the arc length measured from cross-camera matches: the fit's
+    /// own (other parameters known) and the other parameters' uncertainty (their calibrated
+    /// covariance at `sol`, propagated through a refit along each principal axis).
+    fn cross_scale_sigma(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        arc_index: usize,
+        m: &crate::stereo_scale::CrossScale,
+    ) -> f64 {
+        let Some(cov) = self.covariance(sol) else {
+            return f64::INFINITY;
+        };
+        let l = sol.params[arc_index];
+        let eig = cov.symmetric_eigen();
+        let mut var = m.sigma * m.sigma;
+        let half = 0.5 * l.abs().max(m.arc_length.abs());
+        let (lo, hi) = (l.min(m.arc_length) - half, l.max(m.arc_length) + half);
+        for (k, &lambda) in eig.eigenvalues.iter().enumerate() {
+            if !(lambda > 0.0) {
+                continue;
+            }
+            let step = eig.eigenvectors.column(k) * lambda.sqrt();
+            let refit = |sign: f64| {
+                let mut p = sol.params.clone();
+                for (a, &f) in sol.free.iter().enumerate() {
+                    p[f] += sign * step[a];
+                }
+                crate::stereo_scale::refit_arc_length(
+                    &self.rig,
+                    &obs.cross_camera,
+                    |l| {
+                        let mut q = p.clone();
+                        q[arc_index] = l;
+                        self.estimator.motion(&q)
+                    },
+                    self.inlier_angle(),
+                    lo,
+                    hi,
+                )
+            };
+            let d = 0.5 * (refit(1.0) - refit(-1.0));
+            var += d * d;
+        }
+        var.sqrt()
+    }
+
     fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
         let Some(k) = sol.free.iter().position(|&f| f == arc_index) else {
             return false;
         };
-        let l = sol.params[arc_index];
+        let l = sol.params[arc_index].abs();
         let Some(cov) = self.covariance(sol) else {
             return false;
         };
@@ -623,6 +740,7 @@ impl Odometry {
         let ratio = self.config.odometry.max_arc_length_ratio;
         let plausible = self
             .last_arc_length
+            .map(f64::abs)
             .is_none_or(|last| l <= ratio * last && l * ratio >= last);
         l > self.config.odometry.standstill_arc_length
             && l.is_finite()

@@ -118,6 +118,7 @@ fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObservations {
                     .collect()
             })
             .collect(),
+        cross_camera: obs.cross_camera.clone(),
     }
 }
 

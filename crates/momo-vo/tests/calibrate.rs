@@ -337,3 +337,100 @@ fn typed_errors_and_skipped_frames() {
     let e = calibrate_mount(&fisheye, &sim.frames, Some(&sim.arcs), &geo, &options);
     assert!(matches!(e, Err(CalibrationError::Core(_))), "{e:?}");
 }
+
+/// Matches that cannot observe the mount are refused with a reason, never answered with
+/// "0 ± 0": one match repeated in every frame (issue 15), and a scene so far away that the
+/// flow is rotation only (the direction of travel, and with it the mount, is not seen).
+#[test]
+fn matches_that_cannot_observe_the_mount_are_refused() {
+    let sim = simulate(12, false, 4);
+    let rig = nominal(&sim.rig, &mount_error());
+    let config = Config::default();
+    let options = MountCalibration::default();
+    // One match repeated 300 times per frame.
+    let repeated: Vec<FrameObservations> = sim
+        .frames
+        .iter()
+        .map(|f| {
+            let mut r = FrameObservations::new(1);
+            r.per_camera[0] = vec![f.per_camera[0][0]; 300];
+            r
+        })
+        .collect();
+    let e = calibrate_mount(&rig, &repeated, Some(&sim.arcs), &config, &options);
+    match &e {
+        Err(CalibrationError::NoUsableFrames { skipped }) => {
+            assert_eq!(skipped.degenerate, 12);
+            eprintln!("{}", e.as_ref().unwrap_err());
+        }
+        other => panic!("expected NoUsableFrames, got {other:?}"),
+    }
+    // Every match in a 100 x 60 px corner.
+    let corner: Vec<FrameObservations> = sim
+        .frames
+        .iter()
+        .map(|f| {
+            let mut r = FrameObservations::new(1);
+            r.per_camera[0] = f.per_camera[0]
+                .iter()
+                .map(|o| {
+                    let px0 = Vector2::new(10.0 + o.px0.x % 100.0, 10.0 + o.px0.y % 60.0);
+                    let px1 = px0 + (o.px1 - o.px0) * 0.01;
+                    let cam = &rig.cameras()[0].model;
+                    momo_core::Observation::new(cam, px0, px1).expect("inside")
+                })
+                .collect();
+            r
+        })
+        .collect();
+    let e = calibrate_mount(&rig, &corner, Some(&sim.arcs), &config, &options);
+    assert!(
+        matches!(&e, Err(CalibrationError::NoUsableFrames { skipped }) if skipped.degenerate == 12),
+        "{e:?}"
+    );
+    // A scene at 100 km: the flow is the rotation's alone.
+    let far: Vec<FrameObservations> = sim
+        .motions
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let cam = &sim.rig.cameras()[0];
+            let c = momo_core::camera_motion(m, &cam.t_vehicle_camera);
+            let mut rng = Rng(77 + k as u64);
+            let mut r = FrameObservations::new(1);
+            while r.per_camera[0].len() < 150 {
+                let px0 = Vector2::new(rng.uniform() * 1200.0 + 20.0, rng.uniform() * 340.0 + 18.0);
+                let Some(f) = cam.model.unproject(&px0) else {
+                    continue;
+                };
+                let x1 = c.inverse().transform_point(&(f.normalize() * 1e5));
+                let Some(px1) = cam.model.project(&x1) else {
+                    continue;
+                };
+                let px1 = px1 + Vector2::new(rng.normal(0.5), rng.normal(0.5));
+                if let Some(o) = momo_core::Observation::new(&cam.model, px0, px1) {
+                    r.per_camera[0].push(o);
+                }
+            }
+            r
+        })
+        .collect();
+    let e = calibrate_mount(&rig, &far, Some(&sim.arcs), &config, &options);
+    match &e {
+        Err(CalibrationError::Unobservable { reason }) => eprintln!("far scene: {reason}"),
+        Err(CalibrationError::NoUsableFrames { skipped }) => {
+            eprintln!("far scene: {skipped:?}")
+        }
+        Ok(est) => panic!(
+            "far scene accepted: {:?} ± {:?} deg",
+            deg(&est.delta),
+            deg(&est.sigma)
+        ),
+        Err(other) => panic!("unexpected error {other}"),
+    }
+    // The ordinary simulation still calibrates.
+    let est = calibrate(&sim, &rig, MountModel::default());
+    assert!(deg(&est.sigma).amax() < MAX_SIGMA_CHECK);
+}
+
+const MAX_SIGMA_CHECK: f64 = momo_vo::calibrate::MAX_MOUNT_SIGMA_DEG;
