@@ -58,6 +58,15 @@ fn parse_options(args: &[String]) -> Result<MatchOptions, String> {
             "candidates" => o.candidates_per_cell = v.parse().map_err(|e| bad(&e))?,
             "nms" => o.detector.nms_radius = v.parse().map_err(|e| bad(&e))?,
             "threshold" => o.detector.threshold = v.parse().map_err(|e| bad(&e))?,
+            "refine" => match v {
+                "klt" => o.klt = Some(o.klt.unwrap_or_default()),
+                "none" => o.klt = None,
+                _ => return Err(format!("refine: klt or none, found {v}")),
+            },
+            "patch" => o.klt.get_or_insert_with(Default::default).half = v.parse().map_err(|e| bad(&e))?,
+            "iterations" => o.klt.get_or_insert_with(Default::default).iterations = v.parse().map_err(|e| bad(&e))?,
+            "max_shift" => o.klt.get_or_insert_with(Default::default).max_shift = v.parse().map_err(|e| bad(&e))?,
+            "fb" => o.klt.get_or_insert_with(Default::default).fb_threshold = v.parse().map_err(|e| bad(&e))?,
             "threads" => {}
             _ => return Err(format!("unknown option {k}")),
         }

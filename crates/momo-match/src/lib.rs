@@ -59,6 +59,7 @@ pub mod images;
 pub mod kitti;
 pub mod matcher;
 pub mod pipeline;
+pub mod refine;
 pub mod synthetic;
 
 pub use error::MatchError;
@@ -67,6 +68,7 @@ pub use features::{DetectorOptions, FrameFeatures};
 pub use image::GrayImage;
 pub use images::{GammaTable, ImageSequence, load_gray};
 pub use matcher::{FrameMatcher, Match, MatchOptions, match_features, match_images};
+pub use refine::KltOptions;
 pub use pipeline::{
     FrontEndOptions, FrontEndStats, ImageFrontEnd, VoRun, VoSummary, match_to_sequence,
     vo_from_images,

@@ -18,6 +18,7 @@
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, FrameFeatures, MIN_SIDE};
+use crate::refine::{KltOptions, MAX_HALF, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
 
@@ -40,6 +41,10 @@ pub struct MatchOptions {
     /// Sub-pixel positions: both pixels at the vertex of the parabola through their filter
     /// response (else the integer pixels of the detector).
     pub subpixel: bool,
+    /// KLT refinement of the chosen matches (`refine`): frame k-1's patch around the feature's
+    /// integer pixel aligned with frame k; replaces the parabola vertices (`subpixel`). `None`:
+    /// off.
+    pub klt: Option<KltOptions>,
     /// The detector.
     pub detector: DetectorOptions,
 }
@@ -54,6 +59,7 @@ impl Default for MatchOptions {
             max_sad: 32 * 40,
             uniqueness: 0.8,
             subpixel: true,
+            klt: None,
             detector: DetectorOptions::default(),
         }
     }
@@ -88,6 +94,31 @@ impl MatchOptions {
                 "the non-maximum suppression radius must be in 1..=20, found {}",
                 self.detector.nms_radius
             )));
+        }
+        if let Some(k) = &self.klt {
+            if k.half == 0 || k.half > MAX_HALF {
+                return Err(MatchError::Option(format!(
+                    "the KLT patch half-width must be in 1..={MAX_HALF}, found {}",
+                    k.half
+                )));
+            }
+            if k.iterations == 0 {
+                return Err(MatchError::Option(
+                    "the KLT refinement needs at least one iteration".into(),
+                ));
+            }
+            if !(k.max_shift > 0.0 && k.max_shift.is_finite()) {
+                return Err(MatchError::Option(format!(
+                    "the KLT largest shift must be a positive number, found {}",
+                    k.max_shift
+                )));
+            }
+            if !(k.fb_threshold >= 0.0 && k.fb_threshold.is_finite()) {
+                return Err(MatchError::Option(format!(
+                    "the forward-backward threshold must be a number >= 0, found {}",
+                    k.fb_threshold
+                )));
+            }
         }
         if self.detector.threshold <= 0 {
             return Err(MatchError::Option(format!(
@@ -205,7 +236,7 @@ pub fn match_features(
             if !prev.classes[class].is_best_in_window(&g.desc, u1, v1, ru, rv, i, s) {
                 return None;
             }
-            Some(if options.subpixel {
+            Some(if options.subpixel && options.klt.is_none() {
                 Match {
                     u0: f64::from(f.x),
                     v0: f64::from(f.y),
@@ -226,7 +257,34 @@ pub fn match_features(
         .collect();
 
     // 5. Bucketing.
-    bucket(matches, &grid, options.matches_per_frame)
+    let chosen = bucket(matches, &grid, options.matches_per_frame);
+
+    // 6. KLT refinement of the chosen matches (integer pixels so far).
+    match &options.klt {
+        None => chosen,
+        Some(klt) => {
+            let (p, c) = (prev.plane(), cur.plane());
+            chosen
+                .par_iter()
+                .filter_map(|m| {
+                    let [u0, v0, u1, v1] = refine_match(
+                        p,
+                        c,
+                        (m.u0 as usize, m.v0 as usize),
+                        (m.u1 as usize, m.v1 as usize),
+                        klt,
+                    )?;
+                    Some(Match {
+                        u0,
+                        v0,
+                        u1,
+                        v1,
+                        sad: m.sad,
+                    })
+                })
+                .collect()
+        }
+    }
 }
 
 /// At most `n` matches, spread over the grid: one per cell and round, best SAD first; in the last
