@@ -43,7 +43,7 @@ pub struct MatchOptions {
     pub subpixel: bool,
     /// KLT refinement of the chosen matches (`refine`): frame k-1's patch around the feature's
     /// integer pixel aligned with frame k; replaces the parabola vertices (`subpixel`). `None`:
-    /// off.
+    /// off. On by default (11x11 patches, forward-backward check at 0.3 px).
     pub klt: Option<KltOptions>,
     /// The detector.
     pub detector: DetectorOptions,
@@ -59,7 +59,7 @@ impl Default for MatchOptions {
             max_sad: 32 * 40,
             uniqueness: 0.8,
             subpixel: true,
-            klt: None,
+            klt: Some(KltOptions::default()),
             detector: DetectorOptions::default(),
         }
     }
@@ -257,14 +257,20 @@ pub fn match_features(
         .collect();
 
     // 5. Bucketing.
-    let chosen = bucket(matches, &grid, options.matches_per_frame);
+    // With the forward-backward check, a quarter more are chosen so that the matches it drops
+    // are replaced (bucketed again after the refinement).
+    let spare = match &options.klt {
+        Some(k) if k.fb_threshold > 0.0 => options.matches_per_frame.div_ceil(4),
+        _ => 0,
+    };
+    let chosen = bucket(matches, &grid, options.matches_per_frame + spare);
 
     // 6. KLT refinement of the chosen matches (integer pixels so far).
     match &options.klt {
         None => chosen,
         Some(klt) => {
             let (p, c) = (prev.plane(), cur.plane());
-            chosen
+            let refined: Vec<Match> = chosen
                 .par_iter()
                 .filter_map(|m| {
                     let [u0, v0, u1, v1] = refine_match(
@@ -282,7 +288,8 @@ pub fn match_features(
                         sad: m.sad,
                     })
                 })
-                .collect()
+                .collect();
+            bucket(refined, &grid, options.matches_per_frame)
         }
     }
 }

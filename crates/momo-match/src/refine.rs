@@ -34,10 +34,10 @@ pub const MAX_HALF: usize = BORDER - 1;
 impl Default for KltOptions {
     fn default() -> Self {
         Self {
-            half: 4,
+            half: 5,
             iterations: 8,
             max_shift: 2.0,
-            fb_threshold: 0.0,
+            fb_threshold: 0.3,
         }
     }
 }
