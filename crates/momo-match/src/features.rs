@@ -289,8 +289,9 @@ impl ClassFeatures {
 }
 
 /// The sum of absolute differences of two descriptors (written so that the compiler uses the
-/// SAD instruction of the target, `psadbw` on x86-64).
-#[inline(always)]
+/// SAD instruction of the target, `psadbw` on x86-64; not inlined, because inside the window
+/// scans the compiler vectorises the loop around it instead and does not use `psadbw`).
+#[inline(never)]
 pub fn sad(a: &Descriptor, b: &Descriptor) -> u32 {
     let mut s = 0u32;
     for k in 0..32 {
