@@ -7,8 +7,9 @@
 //! ```
 //!
 //! `DATA_DIR` holds `kitti_stereo_snippets/`. `KEY=VALUE` set matcher options:
-//! `matches`, `refine` (none | klt), `patch` (KLT half-width), `fb` (forward-backward
-//! threshold, pixels; 0 = off), `subpixel` (true | false), `threads`. Accuracy: the
+//! `matches`, `refine` (none | klt), `patch` (KLT half-width), `iterations`, `max_shift`, `fb`
+//! (forward-backward threshold, pixels; 0 = off), `subpixel` (true | false), `uniqueness`,
+//! `candidates`, `nms`, `threshold`, `threads` (accuracy only). Accuracy: the
 //! frame-to-frame rotation error of camera 0 against `poses.txt` (as `momo eval`), median /
 //! p95 / max / count above 1 degree, and the front end's ms per frame as `momo vo` reports it.
 //! Timing: one thread, mean CPU ms per frame and stage
@@ -63,11 +64,22 @@ fn parse_options(args: &[String]) -> Result<MatchOptions, String> {
                 "none" => o.klt = None,
                 _ => return Err(format!("refine: klt or none, found {v}")),
             },
-            "patch" => o.klt.get_or_insert_with(Default::default).half = v.parse().map_err(|e| bad(&e))?,
-            "iterations" => o.klt.get_or_insert_with(Default::default).iterations = v.parse().map_err(|e| bad(&e))?,
-            "max_shift" => o.klt.get_or_insert_with(Default::default).max_shift = v.parse().map_err(|e| bad(&e))?,
-            "fb" => o.klt.get_or_insert_with(Default::default).fb_threshold = v.parse().map_err(|e| bad(&e))?,
-            "threads" => {}
+            "patch" => {
+                o.klt.get_or_insert_with(Default::default).half = v.parse().map_err(|e| bad(&e))?
+            }
+            "iterations" => {
+                o.klt.get_or_insert_with(Default::default).iterations =
+                    v.parse().map_err(|e| bad(&e))?
+            }
+            "max_shift" => {
+                o.klt.get_or_insert_with(Default::default).max_shift =
+                    v.parse().map_err(|e| bad(&e))?
+            }
+            "fb" => {
+                o.klt.get_or_insert_with(Default::default).fb_threshold =
+                    v.parse().map_err(|e| bad(&e))?
+            }
+            "threads" => o.threads = v.parse().map_err(|e| bad(&e))?,
             _ => return Err(format!("unknown option {k}")),
         }
     }
@@ -221,22 +233,10 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let threads = args
-        .iter()
-        .find_map(|a| a.strip_prefix("threads="))
-        .and_then(|t| t.parse::<usize>().ok());
     let result = match args.first().map(String::as_str) {
         Some("accuracy") if args.len() >= 3 => parse_options(&args[3..])
             .map_err(MatchError::Option)
-            .and_then(|o| {
-                if let Some(t) = threads {
-                    rayon::ThreadPoolBuilder::new()
-                        .num_threads(t)
-                        .build_global()
-                        .map_err(|e| MatchError::Option(e.to_string()))?;
-                }
-                accuracy(Path::new(&args[1]), Path::new(&args[2]), o)
-            }),
+            .and_then(|o| accuracy(Path::new(&args[1]), Path::new(&args[2]), o)),
         Some("timing") if args.len() >= 2 => parse_options(&args[2..])
             .map_err(MatchError::Option)
             .and_then(|o| {

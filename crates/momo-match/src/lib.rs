@@ -68,8 +68,8 @@ pub use features::{DetectorOptions, FrameFeatures};
 pub use image::GrayImage;
 pub use images::{GammaTable, ImageSequence, load_gray};
 pub use matcher::{FrameMatcher, Match, MatchOptions, match_features, match_images};
-pub use refine::KltOptions;
 pub use pipeline::{
     FrontEndOptions, FrontEndStats, ImageFrontEnd, VoRun, VoSummary, match_to_sequence,
     vo_from_images,
 };
+pub use refine::KltOptions;

@@ -45,6 +45,10 @@ pub struct MatchOptions {
     /// integer pixel aligned with frame k; replaces the parabola vertices (`subpixel`). `None`:
     /// off. On by default (11x11 patches, forward-backward check at 0.3 px).
     pub klt: Option<KltOptions>,
+    /// Threads of the front end (cameras, filter rows and matches in parallel with rayon): 0
+    /// uses rayon's global pool (all cores), `n` a pool of its own with `n` threads. The
+    /// matches do not depend on it.
+    pub threads: usize,
     /// The detector.
     pub detector: DetectorOptions,
 }
@@ -60,6 +64,7 @@ impl Default for MatchOptions {
             uniqueness: 0.8,
             subpixel: true,
             klt: Some(KltOptions::default()),
+            threads: 0,
             detector: DetectorOptions::default(),
         }
     }
@@ -82,6 +87,12 @@ impl MatchOptions {
             return Err(MatchError::Option(
                 "the search window (max flow) must be at least 1 pixel".into(),
             ));
+        }
+        if self.threads > 256 {
+            return Err(MatchError::Option(format!(
+                "threads must be at most 256, found {}",
+                self.threads
+            )));
         }
         if !(self.uniqueness > 0.0 && self.uniqueness <= 1.0) {
             return Err(MatchError::Option(format!(
@@ -338,12 +349,18 @@ pub fn match_images(
             img1.dimensions()
         )));
     }
-    let (mut f0, mut f1) = (FrameFeatures::default(), FrameFeatures::default());
-    rayon::join(
-        || f0.extract(img0, &options.detector),
-        || f1.extract(img1, &options.detector),
-    );
-    Ok(match_features(&f0, &f1, options))
+    let run = || {
+        let (mut f0, mut f1) = (FrameFeatures::default(), FrameFeatures::default());
+        rayon::join(
+            || f0.extract(img0, &options.detector),
+            || f1.extract(img1, &options.detector),
+        );
+        match_features(&f0, &f1, options)
+    };
+    Ok(match thread_pool(options.threads)? {
+        Some(pool) => pool.install(run),
+        None => run(),
+    })
 }
 
 /// Streaming matcher of a multi-camera sequence: [`push`](Self::push) the images of frame k (one
@@ -356,6 +373,19 @@ pub struct FrameMatcher {
     prev: Vec<Option<FrameFeatures>>,
     spare: Vec<FrameFeatures>,
     frames: usize,
+    pool: Option<rayon::ThreadPool>,
+}
+
+/// A pool of `threads` threads, or `None` for rayon's global pool (`threads == 0`).
+fn thread_pool(threads: usize) -> Result<Option<rayon::ThreadPool>, MatchError> {
+    if threads == 0 {
+        return Ok(None);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map(Some)
+        .map_err(|e| MatchError::Option(format!("cannot start {threads} threads: {e}")))
 }
 
 impl FrameMatcher {
@@ -367,6 +397,7 @@ impl FrameMatcher {
             prev: vec![None; cameras],
             spare: vec![FrameFeatures::default(); cameras],
             frames: 0,
+            pool: thread_pool(options.threads)?,
         })
     }
 
@@ -404,21 +435,28 @@ impl FrameMatcher {
             }
         }
         let options = self.options;
-        let results: Vec<Option<Vec<Match>>> = images
-            .par_iter()
-            .zip(self.prev.par_iter_mut())
-            .zip(self.spare.par_iter_mut())
-            .map(|((img, prev), spare)| {
-                spare.extract(img, &options.detector);
-                let matches = prev.as_ref().map(|p| match_features(p, spare, &options));
-                // The current frame becomes the previous one; the old buffers are reused.
-                let old = prev.replace(std::mem::take(spare));
-                if let Some(old) = old {
-                    *spare = old;
-                }
-                matches
-            })
-            .collect();
+        let (prev, spare) = (&mut self.prev, &mut self.spare);
+        let mut work = || -> Vec<Option<Vec<Match>>> {
+            images
+                .par_iter()
+                .zip(prev.par_iter_mut())
+                .zip(spare.par_iter_mut())
+                .map(|((img, prev), spare)| {
+                    spare.extract(img, &options.detector);
+                    let matches = prev.as_ref().map(|p| match_features(p, spare, &options));
+                    // The current frame becomes the previous one; the old buffers are reused.
+                    let old = prev.replace(std::mem::take(spare));
+                    if let Some(old) = old {
+                        *spare = old;
+                    }
+                    matches
+                })
+                .collect()
+        };
+        let results = match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        };
         self.frames += 1;
         Ok(if self.frames == 1 {
             None

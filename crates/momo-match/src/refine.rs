@@ -135,7 +135,8 @@ pub fn align(
         let (mut bx, mut by, mut bb) = (0f32, 0f32, 0f32);
         for j in 0..side {
             let row0 = &to.px[(iy + j) * to.width + ix..(iy + j) * to.width + ix + side + 1];
-            let row1 = &to.px[(iy + j + 1) * to.width + ix..(iy + j + 1) * to.width + ix + side + 1];
+            let row1 =
+                &to.px[(iy + j + 1) * to.width + ix..(iy + j + 1) * to.width + ix + side + 1];
             for i in 0..side {
                 let s = w00 * f32::from(row0[i])
                     + w01 * f32::from(row0[i + 1])
@@ -190,10 +191,5 @@ pub fn refine_match(
         }
         out = [0.5 * (d[0] - back[0]), 0.5 * (d[1] - back[1])];
     }
-    Some([
-        u0 as f64,
-        v0 as f64,
-        u0 as f64 + out[0],
-        v0 as f64 + out[1],
-    ])
+    Some([u0 as f64, v0 as f64, u0 as f64 + out[0], v0 as f64 + out[1]])
 }
