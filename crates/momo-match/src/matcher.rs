@@ -15,6 +15,10 @@
 //!    around the detected pixels (per axis), so a feature moves with the image content.
 //! 5. *Bucketing*: each grid cell gives at most one match per round, best SAD first, rounds
 //!    repeat until `matches_per_frame` matches are chosen or none are left.
+//! 6. *KLT refinement* (`klt`, on by default; [`crate::refine`]): the chosen matches start from
+//!    the integer pixels, frame k's end is aligned to frame k-1's patch and checked backward;
+//!    a quarter more matches are chosen in step 5 so that those the check drops are replaced
+//!    (bucketed again). Step 4 is then skipped.
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, FrameFeatures, MIN_SIDE};
