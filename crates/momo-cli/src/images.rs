@@ -25,6 +25,14 @@ pub(crate) struct FrontEndArgs {
     /// Minimum filter response of a feature.
     #[arg(long, default_value_t = 50)]
     threshold: i32,
+    /// Threads of the front end (cameras, image rows, matches); 0: all cores. The matches do
+    /// not depend on it.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// No KLT refinement of the matches (the detector's sub-pixel vertices instead, as before
+    /// 2026-11-24).
+    #[arg(long)]
+    no_klt: bool,
 }
 
 impl From<FrontEndArgs> for momo_match::FrontEndOptions {
@@ -39,6 +47,8 @@ impl From<FrontEndArgs> for momo_match::FrontEndOptions {
                     nms_radius: a.nms_radius,
                     threshold: a.threshold,
                 },
+                threads: a.threads,
+                klt: if a.no_klt { None } else { d.klt },
                 ..d
             },
             gamma: a.gamma,

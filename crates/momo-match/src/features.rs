@@ -289,8 +289,9 @@ impl ClassFeatures {
 }
 
 /// The sum of absolute differences of two descriptors (written so that the compiler uses the
-/// SAD instruction of the target, `psadbw` on x86-64).
-#[inline(always)]
+/// SAD instruction of the target, `psadbw` on x86-64; not inlined, because inside the window
+/// scans the compiler vectorises the loop around it instead and does not use `psadbw`).
+#[inline(never)]
 pub fn sad(a: &Descriptor, b: &Descriptor) -> u32 {
     let mut s = 0u32;
     for k in 0..32 {
@@ -308,6 +309,8 @@ pub struct FrameFeatures {
     pub height: usize,
     du: Vec<u8>,
     dv: Vec<u8>,
+    /// The image's pixels (row-major), kept for the KLT refinement.
+    pixels: Vec<u8>,
     blob: Vec<i16>,
     corner: Vec<i16>,
     /// The features per class: blob max, blob min, corner max, corner min.
@@ -324,6 +327,7 @@ impl FrameFeatures {
         for c in &mut self.classes {
             c.points.clear();
         }
+        self.pixels.clear();
         if w < MIN_SIDE || h < MIN_SIDE {
             for c in &mut self.classes {
                 c.build_index(w, h);
@@ -331,6 +335,8 @@ impl FrameFeatures {
             return;
         }
         let px = img.as_raw().as_slice();
+        self.pixels.clear();
+        self.pixels.extend_from_slice(&px[..w * h]);
         self.du.resize(w * h, 128);
         self.dv.resize(w * h, 128);
         self.blob.resize(w * h, 0);
@@ -354,6 +360,16 @@ impl FrameFeatures {
     #[inline]
     pub fn descriptor_at(&self, u: usize, v: usize) -> Descriptor {
         descriptor(&self.du, &self.dv, self.width, u, v)
+    }
+
+    /// The image the features were extracted from (empty if it was smaller than
+    /// [`MIN_SIDE`]).
+    pub fn plane(&self) -> crate::refine::Plane<'_> {
+        crate::refine::Plane {
+            px: &self.pixels,
+            width: self.width,
+            height: self.height,
+        }
     }
 
     /// Total number of features.

@@ -15,10 +15,14 @@
 //! - **Description**: Sobel du/dv at 16 positions of an 11x11 window (32 bytes), compared by the
 //!   sum of absolute differences (SAD).
 //! - **Matching**: per grid cell the strongest features of frame k-1 are matched into a search
-//!   window of frame k, checked back (circular consistency), refined to sub-pixel, and
-//!   bucketed so that at most `matches_per_frame` matches per camera spread over the image.
+//!   window of frame k, checked back (circular consistency), and bucketed so that at most
+//!   `matches_per_frame` matches per camera spread over the image.
+//! - **Refinement** ([`refine`]): each chosen match is refined by aligning frame k-1's patch
+//!   around the feature with frame k (KLT: translation and brightness offset, Gauss-Newton),
+//!   checked forward-backward; without it, both ends are the detector's sub-pixel vertices.
 //! - **Streaming**: [`FrameMatcher`] keeps only the previous frame's features; cameras run in
-//!   parallel (rayon), as do the filter rows.
+//!   parallel (rayon), as do the filter rows and the matches (`MatchOptions::threads`: a pool
+//!   of its own, or rayon's global one; the matches do not depend on it).
 //!
 //! Why not a general crate for the detector and descriptor: `image` decodes the files;
 //! `imageproc` has FAST corners and BRIEF descriptors, but its binary-descriptor matcher is
@@ -59,6 +63,7 @@ pub mod images;
 pub mod kitti;
 pub mod matcher;
 pub mod pipeline;
+pub mod refine;
 pub mod synthetic;
 
 pub use error::MatchError;
@@ -71,3 +76,4 @@ pub use pipeline::{
     FrontEndOptions, FrontEndStats, ImageFrontEnd, VoRun, VoSummary, match_to_sequence,
     vo_from_images,
 };
+pub use refine::KltOptions;

@@ -15,9 +15,14 @@
 //!    around the detected pixels (per axis), so a feature moves with the image content.
 //! 5. *Bucketing*: each grid cell gives at most one match per round, best SAD first, rounds
 //!    repeat until `matches_per_frame` matches are chosen or none are left.
+//! 6. *KLT refinement* (`klt`, on by default; [`crate::refine`]): the chosen matches start from
+//!    the integer pixels, frame k's end is aligned to frame k-1's patch and checked backward;
+//!    a quarter more matches are chosen in step 5 so that those the check drops are replaced
+//!    (bucketed again). Step 4 is then skipped.
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, FrameFeatures, MIN_SIDE};
+use crate::refine::{KltOptions, MAX_HALF, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
 
@@ -40,6 +45,14 @@ pub struct MatchOptions {
     /// Sub-pixel positions: both pixels at the vertex of the parabola through their filter
     /// response (else the integer pixels of the detector).
     pub subpixel: bool,
+    /// KLT refinement of the chosen matches (`refine`): frame k-1's patch around the feature's
+    /// integer pixel aligned with frame k; replaces the parabola vertices (`subpixel`). `None`:
+    /// off. On by default (11x11 patches, forward-backward check at 0.3 px).
+    pub klt: Option<KltOptions>,
+    /// Threads of the front end (cameras, filter rows and matches in parallel with rayon): 0
+    /// uses rayon's global pool (all cores), `n` a pool of its own with `n` threads. The
+    /// matches do not depend on it.
+    pub threads: usize,
     /// The detector.
     pub detector: DetectorOptions,
 }
@@ -54,6 +67,8 @@ impl Default for MatchOptions {
             max_sad: 32 * 40,
             uniqueness: 0.8,
             subpixel: true,
+            klt: Some(KltOptions::default()),
+            threads: 0,
             detector: DetectorOptions::default(),
         }
     }
@@ -77,6 +92,12 @@ impl MatchOptions {
                 "the search window (max flow) must be at least 1 pixel".into(),
             ));
         }
+        if self.threads > 256 {
+            return Err(MatchError::Option(format!(
+                "threads must be at most 256, found {}",
+                self.threads
+            )));
+        }
         if !(self.uniqueness > 0.0 && self.uniqueness <= 1.0) {
             return Err(MatchError::Option(format!(
                 "uniqueness must be in (0, 1], found {}",
@@ -88,6 +109,31 @@ impl MatchOptions {
                 "the non-maximum suppression radius must be in 1..=20, found {}",
                 self.detector.nms_radius
             )));
+        }
+        if let Some(k) = &self.klt {
+            if k.half == 0 || k.half > MAX_HALF {
+                return Err(MatchError::Option(format!(
+                    "the KLT patch half-width must be in 1..={MAX_HALF}, found {}",
+                    k.half
+                )));
+            }
+            if k.iterations == 0 {
+                return Err(MatchError::Option(
+                    "the KLT refinement needs at least one iteration".into(),
+                ));
+            }
+            if !(k.max_shift > 0.0 && k.max_shift.is_finite()) {
+                return Err(MatchError::Option(format!(
+                    "the KLT largest shift must be a positive number, found {}",
+                    k.max_shift
+                )));
+            }
+            if !(k.fb_threshold >= 0.0 && k.fb_threshold.is_finite()) {
+                return Err(MatchError::Option(format!(
+                    "the forward-backward threshold must be a number >= 0, found {}",
+                    k.fb_threshold
+                )));
+            }
         }
         if self.detector.threshold <= 0 {
             return Err(MatchError::Option(format!(
@@ -205,7 +251,7 @@ pub fn match_features(
             if !prev.classes[class].is_best_in_window(&g.desc, u1, v1, ru, rv, i, s) {
                 return None;
             }
-            Some(if options.subpixel {
+            Some(if options.subpixel && options.klt.is_none() {
                 Match {
                     u0: f64::from(f.x),
                     v0: f64::from(f.y),
@@ -226,7 +272,41 @@ pub fn match_features(
         .collect();
 
     // 5. Bucketing.
-    bucket(matches, &grid, options.matches_per_frame)
+    // With the forward-backward check, a quarter more are chosen so that the matches it drops
+    // are replaced (bucketed again after the refinement).
+    let spare = match &options.klt {
+        Some(k) if k.fb_threshold > 0.0 => options.matches_per_frame.div_ceil(4),
+        _ => 0,
+    };
+    let chosen = bucket(matches, &grid, options.matches_per_frame + spare);
+
+    // 6. KLT refinement of the chosen matches (integer pixels so far).
+    match &options.klt {
+        None => chosen,
+        Some(klt) => {
+            let (p, c) = (prev.plane(), cur.plane());
+            let refined: Vec<Match> = chosen
+                .par_iter()
+                .filter_map(|m| {
+                    let [u0, v0, u1, v1] = refine_match(
+                        p,
+                        c,
+                        (m.u0 as usize, m.v0 as usize),
+                        (m.u1 as usize, m.v1 as usize),
+                        klt,
+                    )?;
+                    Some(Match {
+                        u0,
+                        v0,
+                        u1,
+                        v1,
+                        sad: m.sad,
+                    })
+                })
+                .collect();
+            bucket(refined, &grid, options.matches_per_frame)
+        }
+    }
 }
 
 /// At most `n` matches, spread over the grid: one per cell and round, best SAD first; in the last
@@ -273,12 +353,18 @@ pub fn match_images(
             img1.dimensions()
         )));
     }
-    let (mut f0, mut f1) = (FrameFeatures::default(), FrameFeatures::default());
-    rayon::join(
-        || f0.extract(img0, &options.detector),
-        || f1.extract(img1, &options.detector),
-    );
-    Ok(match_features(&f0, &f1, options))
+    let run = || {
+        let (mut f0, mut f1) = (FrameFeatures::default(), FrameFeatures::default());
+        rayon::join(
+            || f0.extract(img0, &options.detector),
+            || f1.extract(img1, &options.detector),
+        );
+        match_features(&f0, &f1, options)
+    };
+    Ok(match thread_pool(options.threads)? {
+        Some(pool) => pool.install(run),
+        None => run(),
+    })
 }
 
 /// Streaming matcher of a multi-camera sequence: [`push`](Self::push) the images of frame k (one
@@ -291,6 +377,19 @@ pub struct FrameMatcher {
     prev: Vec<Option<FrameFeatures>>,
     spare: Vec<FrameFeatures>,
     frames: usize,
+    pool: Option<rayon::ThreadPool>,
+}
+
+/// A pool of `threads` threads, or `None` for rayon's global pool (`threads == 0`).
+fn thread_pool(threads: usize) -> Result<Option<rayon::ThreadPool>, MatchError> {
+    if threads == 0 {
+        return Ok(None);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map(Some)
+        .map_err(|e| MatchError::Option(format!("cannot start {threads} threads: {e}")))
 }
 
 impl FrameMatcher {
@@ -302,6 +401,7 @@ impl FrameMatcher {
             prev: vec![None; cameras],
             spare: vec![FrameFeatures::default(); cameras],
             frames: 0,
+            pool: thread_pool(options.threads)?,
         })
     }
 
@@ -339,21 +439,28 @@ impl FrameMatcher {
             }
         }
         let options = self.options;
-        let results: Vec<Option<Vec<Match>>> = images
-            .par_iter()
-            .zip(self.prev.par_iter_mut())
-            .zip(self.spare.par_iter_mut())
-            .map(|((img, prev), spare)| {
-                spare.extract(img, &options.detector);
-                let matches = prev.as_ref().map(|p| match_features(p, spare, &options));
-                // The current frame becomes the previous one; the old buffers are reused.
-                let old = prev.replace(std::mem::take(spare));
-                if let Some(old) = old {
-                    *spare = old;
-                }
-                matches
-            })
-            .collect();
+        let (prev, spare) = (&mut self.prev, &mut self.spare);
+        let mut work = || -> Vec<Option<Vec<Match>>> {
+            images
+                .par_iter()
+                .zip(prev.par_iter_mut())
+                .zip(spare.par_iter_mut())
+                .map(|((img, prev), spare)| {
+                    spare.extract(img, &options.detector);
+                    let matches = prev.as_ref().map(|p| match_features(p, spare, &options));
+                    // The current frame becomes the previous one; the old buffers are reused.
+                    let old = prev.replace(std::mem::take(spare));
+                    if let Some(old) = old {
+                        *spare = old;
+                    }
+                    matches
+                })
+                .collect()
+        };
+        let results = match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        };
         self.frames += 1;
         Ok(if self.frames == 1 {
             None

@@ -1,0 +1,195 @@
+//! KLT-style refinement of a match (Lucas and Kanade 1981; the inverse compositional form of
+//! Baker and Matthews 2004): the square patch of frame k-1 around the feature's integer pixel
+//! `p0` is aligned with frame k by a translation `d` and a brightness offset `b`, minimising
+//! `Σ_x (I_k(p0 + x + d) - I_{k-1}(p0 + x) - b)²` from the descriptor match as the start. The
+//! match becomes `(p0, p0 + d)`: both ends describe the same image content to a small fraction
+//! of a pixel, where the detector's sub-pixel vertices (one per frame, from the filter response
+//! alone) each carry their own error.
+//!
+//! With the forward-backward check the patch of frame k around the integer pixel nearest
+//! `p0 + d` is aligned back into frame k-1 as well; a match whose two displacements disagree by
+//! more than `fb_threshold` pixels is dropped, and the match keeps the mean of the two (the
+//! errors of the two directions are partly independent).
+
+use crate::features::BORDER;
+
+/// Options of the KLT refinement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KltOptions {
+    /// Half-width `r` of the square patch (`(2r+1)²` pixels), at most [`MAX_HALF`].
+    pub half: usize,
+    /// Most Gauss-Newton iterations per direction.
+    pub iterations: usize,
+    /// Largest move away from the descriptor match, pixels; a match that moves further (or
+    /// leaves the image) is dropped.
+    pub max_shift: f64,
+    /// Forward-backward check: the largest disagreement of the two directions, pixels (0: no
+    /// backward pass).
+    pub fb_threshold: f64,
+}
+
+/// The largest patch half-width (the feature border leaves one pixel for the gradients).
+pub const MAX_HALF: usize = BORDER - 1;
+
+impl Default for KltOptions {
+    fn default() -> Self {
+        Self {
+            half: 5,
+            iterations: 8,
+            max_shift: 2.0,
+            fb_threshold: 0.3,
+        }
+    }
+}
+
+/// A gray image borrowed as rows of bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct Plane<'a> {
+    /// Row-major pixels.
+    pub px: &'a [u8],
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+}
+
+impl Plane<'_> {
+    #[inline]
+    fn at(&self, u: usize, v: usize) -> f32 {
+        f32::from(self.px[v * self.width + u])
+    }
+}
+
+/// The largest patch: `(2 MAX_HALF + 1)²` pixels.
+const MAX_PATCH: usize = (2 * MAX_HALF + 1) * (2 * MAX_HALF + 1);
+
+/// Aligns the patch of `from` around the integer pixel `(u, v)` with `to`, starting at the
+/// displacement `d0`: the displacement `d` with `to(p + d) ≈ from(p) + b`, or `None` if the
+/// patch is flat, the iteration leaves `to`'s interior or moves more than `max_shift` from `d0`.
+pub fn align(
+    from: Plane<'_>,
+    to: Plane<'_>,
+    u: usize,
+    v: usize,
+    d0: [f64; 2],
+    options: &KltOptions,
+) -> Option<[f64; 2]> {
+    let r = options.half.clamp(1, MAX_HALF);
+    if u < r + 1 || v < r + 1 || u + r + 1 >= from.width || v + r + 1 >= from.height {
+        return None;
+    }
+    // The template and its gradients (central differences), and the 3x3 normal matrix of
+    // (du, dv, b).
+    let mut t = [0f32; MAX_PATCH];
+    let mut gx = [0f32; MAX_PATCH];
+    let mut gy = [0f32; MAX_PATCH];
+    let mut h = [0f64; 6]; // xx, xy, yy, x1, y1, 11
+    let mut n = 0;
+    for y in v - r..=v + r {
+        for x in u - r..=u + r {
+            t[n] = from.at(x, y);
+            gx[n] = 0.5 * (from.at(x + 1, y) - from.at(x - 1, y));
+            gy[n] = 0.5 * (from.at(x, y + 1) - from.at(x, y - 1));
+            let (a, b) = (f64::from(gx[n]), f64::from(gy[n]));
+            h[0] += a * a;
+            h[1] += a * b;
+            h[2] += b * b;
+            h[3] += a;
+            h[4] += b;
+            n += 1;
+        }
+    }
+    h[5] = n as f64;
+    let m = nalgebra::Matrix3::new(h[0], h[1], h[3], h[1], h[2], h[4], h[3], h[4], h[5]);
+    // A flat or one-dimensional patch has no well-defined position.
+    let (e_min, e_max) = {
+        let g = nalgebra::Matrix2::new(h[0], h[1], h[1], h[2]);
+        let e = g.symmetric_eigenvalues();
+        (e.min(), e.max())
+    };
+    if !(e_min > 1e-3 * e_max && e_min > n as f64) {
+        return None;
+    }
+    let inv = m.try_inverse()?;
+    let side = 2 * r + 1;
+    let mut d = d0;
+    for _ in 0..options.iterations.max(1) {
+        let (cx, cy) = (u as f64 + d[0], v as f64 + d[1]);
+        // The patch in `to` must stay inside with one pixel for bilinear sampling.
+        let (x0, y0) = (cx - r as f64, cy - r as f64);
+        if !(x0 >= 0.0
+            && y0 >= 0.0
+            && cx + r as f64 + 1.0 < to.width as f64
+            && cy + r as f64 + 1.0 < to.height as f64)
+        {
+            return None;
+        }
+        let (ix, iy) = (x0.floor() as usize, y0.floor() as usize);
+        let (fx, fy) = ((x0 - ix as f64) as f32, (y0 - iy as f64) as f32);
+        let (w00, w01, w10, w11) = (
+            (1.0 - fx) * (1.0 - fy),
+            fx * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * fy,
+        );
+        let (mut bx, mut by, mut bb) = (0f32, 0f32, 0f32);
+        for j in 0..side {
+            let row0 = &to.px[(iy + j) * to.width + ix..(iy + j) * to.width + ix + side + 1];
+            let row1 =
+                &to.px[(iy + j + 1) * to.width + ix..(iy + j + 1) * to.width + ix + side + 1];
+            for i in 0..side {
+                let s = w00 * f32::from(row0[i])
+                    + w01 * f32::from(row0[i + 1])
+                    + w10 * f32::from(row1[i])
+                    + w11 * f32::from(row1[i + 1]);
+                let k = j * side + i;
+                let e = s - t[k];
+                bx += gx[k] * e;
+                by += gy[k] * e;
+                bb += e;
+            }
+        }
+        let step = inv * nalgebra::Vector3::new(f64::from(bx), f64::from(by), f64::from(bb));
+        d[0] -= step[0];
+        d[1] -= step[1];
+        if (d[0] - d0[0]).hypot(d[1] - d0[1]) > options.max_shift {
+            return None;
+        }
+        if step[0].hypot(step[1]) < 1e-3 {
+            break;
+        }
+    }
+    Some(d)
+}
+
+/// Refines the match of the integer pixels `(u0, v0)` of `prev` and `(u1, v1)` of `cur`:
+/// `Some([u0, v0, u1', v1'])` with `(u1', v1')` at sub-pixel precision, or `None` if the
+/// alignment fails or (with the forward-backward check) the two directions disagree.
+pub fn refine_match(
+    prev: Plane<'_>,
+    cur: Plane<'_>,
+    (u0, v0): (usize, usize),
+    (u1, v1): (usize, usize),
+    options: &KltOptions,
+) -> Option<[f64; 4]> {
+    let d0 = [u1 as f64 - u0 as f64, v1 as f64 - v0 as f64];
+    let d = align(prev, cur, u0, v0, d0, options)?;
+    let mut out = d;
+    if options.fb_threshold > 0.0 {
+        // Backward from the integer pixel nearest the refined position.
+        let (qu, qv) = (
+            (u0 as f64 + d[0]).round().max(0.0) as usize,
+            (v0 as f64 + d[1]).round().max(0.0) as usize,
+        );
+        let back0 = [u0 as f64 - qu as f64, v0 as f64 - qv as f64];
+        let back = align(cur, prev, qu, qv, back0, options)?;
+        // Forward says cur(p0 + d) = prev(p0); backward says prev(q + back) = cur(q), that is
+        // a displacement of -back from frame k-1 to k.
+        let disagreement = (d[0] + back[0]).hypot(d[1] + back[1]);
+        if disagreement > options.fb_threshold {
+            return None;
+        }
+        out = [0.5 * (d[0] - back[0]), 0.5 * (d[1] - back[1])];
+    }
+    Some([u0 as f64, v0 as f64, u0 as f64 + out[0], v0 as f64 + out[1]])
+}
