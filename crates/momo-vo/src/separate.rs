@@ -293,3 +293,29 @@ pub fn separate(
     }
     (sol, outcome)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options_validate_and_parse() {
+        let d = SeparateOptions::default();
+        assert!(d.validate().is_ok());
+        assert!(!d.final_robust);
+        assert!(
+            d.plausibility_margin < 0.0,
+            "the plausibility choice is off by default"
+        );
+        let nan = SeparateOptions {
+            plausibility_margin: f64::NAN,
+            ..d.clone()
+        };
+        assert!(nan.validate().unwrap_err().contains("plausibility_margin"));
+        let o: SeparateOptions =
+            toml::from_str("final_robust = true\nplausibility_margin = 16.0").unwrap();
+        assert!(o.final_robust);
+        assert_eq!(o.plausibility_margin, 16.0);
+        assert!(toml::from_str::<SeparateOptions>("final_robustness = true").is_err());
+    }
+}
