@@ -63,9 +63,12 @@ rows="$out/rows.tsv"
 score() {
     local pairs
     pairs=$(($(wc -l <"$out/seq/$1/poses.txt") - 1))
-    "$momo" eval --gt "$out/seq/$1/poses.txt" --est "$3" | tail -n 1 |
-        awk -v n="$1" -v m="$2" -v p="$pairs" \
-            '{ printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\n", n, m, $3, $6, $7, $8, p }' >>"$rows"
+    # Columns by their header names (`momo eval` adds columns over time).
+    "$momo" eval --gt "$out/seq/$1/poses.txt" --est "$3" | tail -n 2 |
+        awk -v n="$1" -v m="$2" -v p="$pairs" '
+            NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+            { printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\n", n, m, $c["median"], $c[">1deg"],
+                $c["bound"], $c["eff"], p }' >>"$rows"
 }
 for t in $trajectories; do
     traj=()

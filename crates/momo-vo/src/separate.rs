@@ -9,13 +9,19 @@
 //!    outside A's support, a second motion B is fitted to them alone (starts: straight ahead, the
 //!    frame's start and the restart yaw offsets; the lowest cost wins) and its support is scored
 //!    on all matches.
-//! 3. **Choice by spatial support**: each motion's support is counted in image cells (a
-//!    [`SeparateOptions::grid`] grid per camera, a cell counts if it holds at least one supporting
-//!    match) so that a compact object cannot outweigh a spread-out static scene; B replaces A if
-//!    it covers more cells. The two motions *compete* when B's support holds at least
-//!    `min_fraction` of the matches.
+//! 3. **Choice by vehicle plausibility, then spatial support**: the two motions *compete* when
+//!    B's support holds at least `min_fraction` of the matches. If the model is soft (it has
+//!    prior residuals, e.g. `soft_single_track`'s side slip and climb in units of their sigmas)
+//!    and the two motions' squared distances to the soft prior's centre (learnt over the
+//!    trusted frames) differ by more than [`SeparateOptions::plausibility_margin`], the more
+//!    plausible one wins: the apparent motion of a vehicle ahead or a crossing truck is rarely
+//!    one the ego vehicle can make. Otherwise each motion's support is counted in image cells
+//!    (a [`SeparateOptions::grid`] grid per camera, a cell counts if it holds at least one
+//!    supporting match) so that a compact object cannot outweigh a spread-out static scene; B
+//!    replaces A if it covers more cells.
 //! 4. **Final efficient stage**: the chosen motion is re-solved on its support alone with plain
-//!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches.
+//!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches
+//!    under Gaussian noise ([`SeparateOptions::final_robust`]: the frame's robust loss instead).
 
 use momo_core::{
     FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
@@ -37,8 +43,15 @@ pub struct SeparateOptions {
     pub grid: (usize, usize),
     /// Run the final least-squares stage on the chosen support.
     pub final_stage: bool,
+    /// The final stage keeps the frame's robust loss (on the chosen support) instead of plain
+    /// least squares: real matches have heavier tails than the simulator's Gaussian noise.
+    pub final_robust: bool,
     /// Fit and choose between two motions (off: only the final stage on A's support).
     pub second_motion: bool,
+    /// Soft models: the more plausible motion wins when the two motions' squared distances to
+    /// the soft prior's centre (sum of squared prior residuals, in sigma units) differ by more
+    /// than this; a negative value turns the plausibility test off (cells only).
+    pub plausibility_margin: f64,
 }
 
 impl Default for SeparateOptions {
@@ -48,7 +61,9 @@ impl Default for SeparateOptions {
             min_fraction: 0.15,
             grid: (8, 4),
             final_stage: true,
+            final_robust: false,
             second_motion: true,
+            plausibility_margin: -1.0,
         }
     }
 }
@@ -61,6 +76,9 @@ impl SeparateOptions {
         }
         if !(0.0..=1.0).contains(&self.min_fraction) {
             return Err("odometry.separate.min_fraction must be in [0, 1]".into());
+        }
+        if self.plausibility_margin.is_nan() {
+            return Err("odometry.separate.plausibility_margin must be a number".into());
         }
         if self.grid.0 == 0 || self.grid.1 == 0 || self.grid.0 * self.grid.1 > 10_000 {
             return Err("odometry.separate.grid must be (columns, rows), 1 to 10000 cells".into());
@@ -137,6 +155,18 @@ fn cells(rig: &Rig, obs: &FrameObservations, mask: &[Vec<bool>], grid: (usize, u
         total += seen.iter().filter(|s| **s).count();
     }
     total
+}
+
+/// Squared distance (sigma units) of a soft model's prior residuals to the soft prior's centre;
+/// `None` for a hard model (no prior residuals) or without a centre.
+fn implausibility(ctx: &SolveContext<'_>, params: &[f64]) -> Option<f64> {
+    let center = &ctx.motion_prior?.soft_center;
+    let q = ctx.estimator.prior_residuals(params);
+    if q.is_empty() || q.len() != center.len() {
+        return None;
+    }
+    let d: f64 = q.iter().zip(center).map(|(q, c)| (q - c).powi(2)).sum();
+    d.is_finite().then_some(d)
 }
 
 fn count(mask: &[Vec<bool>]) -> usize {
@@ -226,11 +256,23 @@ pub fn separate(
             let sup_b = support(&b.params);
             if count(&sup_b) >= min_n {
                 outcome.competing = true;
-                let (ca, cb) = (
-                    cells(ctx.rig, obs, &chosen.1, opts.grid),
-                    cells(ctx.rig, obs, &sup_b, opts.grid),
+                let (pa, pb) = (
+                    implausibility(ctx, &chosen.0.params),
+                    implausibility(ctx, &b.params),
                 );
-                if cb > ca {
+                let switch = match (pa, pb) {
+                    (Some(pa), Some(pb))
+                        if opts.plausibility_margin >= 0.0
+                            && (pa - pb).abs() > opts.plausibility_margin =>
+                    {
+                        pb < pa
+                    }
+                    _ => {
+                        cells(ctx.rig, obs, &sup_b, opts.grid)
+                            > cells(ctx.rig, obs, &chosen.1, opts.grid)
+                    }
+                };
+                if switch {
                     outcome.switched = true;
                     chosen = (b, sup_b);
                 }
@@ -240,9 +282,40 @@ pub fn separate(
     let (sol, mask) = chosen;
     if opts.final_stage && count(&mask) >= 8 {
         let core = subset(obs, &mask);
-        if let Some(fin) = ctx.solve(&core, &sol.params, &TrivialLoss, !outcome.competing) {
+        let loss: &dyn RobustLoss = if opts.final_robust {
+            ctx.loss
+        } else {
+            &TrivialLoss
+        };
+        if let Some(fin) = ctx.solve(&core, &sol.params, loss, !outcome.competing) {
             return (fin, outcome);
         }
     }
     (sol, outcome)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options_validate_and_parse() {
+        let d = SeparateOptions::default();
+        assert!(d.validate().is_ok());
+        assert!(!d.final_robust);
+        assert!(
+            d.plausibility_margin < 0.0,
+            "the plausibility choice is off by default"
+        );
+        let nan = SeparateOptions {
+            plausibility_margin: f64::NAN,
+            ..d.clone()
+        };
+        assert!(nan.validate().unwrap_err().contains("plausibility_margin"));
+        let o: SeparateOptions =
+            toml::from_str("final_robust = true\nplausibility_margin = 16.0").unwrap();
+        assert!(o.final_robust);
+        assert_eq!(o.plausibility_margin, 16.0);
+        assert!(toml::from_str::<SeparateOptions>("final_robustness = true").is_err());
+    }
 }
