@@ -658,3 +658,283 @@ fn too_many_restart_offsets_and_an_endless_font_are_bounded() {
         .arg(tmp.path().join("t.svg")));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+/// Rewrites the frame number `from` to `to` in a sequence file (`matches.csv`, `odometry.csv`).
+fn renumber(path: &Path, from: usize, to: usize) {
+    let text = std::fs::read_to_string(path).expect("read");
+    let prefix = format!("{from},");
+    let out: String = text
+        .lines()
+        .map(|l| match l.strip_prefix(&prefix) {
+            Some(rest) => format!("{to},{rest}\n"),
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(path, out).expect("write");
+}
+
+/// `momo` under an address-space limit (`ulimit -v`, kB).
+fn momo_limited(kb: usize) -> Command {
+    let mut c = Command::new("sh");
+    c.arg("-c")
+        .arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_momo"));
+    c
+}
+
+#[test]
+fn sparse_frame_numbers_are_not_expanded_in_memory() {
+    // Frames 1-5 of a simulated drive, then its frame 6 renumbered to 10,000,000 (MAX_FRAME).
+    // Expanded, the 10 million frame pairs take 800 MB (the calibration was killed by the limit
+    // below: "memory allocation failed", SIGABRT); held sparsely, a few MB.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let compact = tmp.path().join("compact");
+    let mut cfg = SimConfig::clean_pinhole();
+    cfg.frames = 7;
+    cfg.matches_per_camera = 100;
+    let sim = simulate(&cfg).expect("simulates");
+    sim.write(&compact).expect("writes");
+    std::fs::remove_file(compact.join("poses.txt")).expect("rm");
+    let sparse = tmp.path().join("sparse");
+    std::fs::create_dir(&sparse).expect("mkdir");
+    for f in ["rig.json", "matches.csv", "odometry.csv"] {
+        std::fs::copy(compact.join(f), sparse.join(f)).expect("copy");
+    }
+    renumber(&sparse.join("matches.csv"), 6, 10_000_000);
+    renumber(&sparse.join("odometry.csv"), 6, 10_000_000);
+    let limit_kb = 400_000;
+
+    // The calibration visits the same frame pairs: the same rig, bit for bit.
+    let calibrate = |seq: &Path, rig: &Path| {
+        let o = out(momo_limited(limit_kb)
+            .arg("calibrate")
+            .arg(seq)
+            .arg("-o")
+            .arg(rig)
+            .arg("-q"));
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        std::fs::read(rig).expect("rig written")
+    };
+    let from_compact = calibrate(&compact, &tmp.path().join("compact.json"));
+    let from_sparse = calibrate(&sparse, &tmp.path().join("sparse.json"));
+    assert_eq!(from_sparse, from_compact);
+
+    // The landscape of frame 3 reads the whole sequence and runs frames 1-3.
+    let o = out(momo_limited(limit_kb)
+        .args(["plot", "landscape"])
+        .arg(&sparse)
+        .args(["--frame", "3", "--steps", "5", "-o"])
+        .arg(tmp.path().join("l.svg")));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(tmp.path().join("l.svg").exists());
+    // A frame pair beyond the sequence is still named with the sequence's true extent.
+    let o = out(momo_limited(limit_kb)
+        .args(["plot", "landscape"])
+        .arg(&sparse)
+        .args(["--frame", "10000001", "-o"])
+        .arg(tmp.path().join("l2.svg")));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("frames 1..=10000000"), "{}", stderr(&o));
+}
+
+/// `momo config`'s text with the line starting with `key_line` replaced by `new` (or, when
+/// `new` starts with `+`, followed by it); returns the text and the 1-based line of the change.
+fn config_with(default: &str, key_line: &str, new: &str) -> (String, usize) {
+    let mut line = 0;
+    let mut text = String::new();
+    for (i, l) in default.lines().enumerate() {
+        if line == 0 && l.starts_with(key_line) {
+            if let Some(after) = new.strip_prefix('+') {
+                text.push_str(&format!("{l}\n{after}\n"));
+                line = i + 2;
+            } else {
+                text.push_str(&format!("{new}\n"));
+                line = i + 1;
+            }
+        } else {
+            text.push_str(&format!("{l}\n"));
+        }
+    }
+    assert!(line > 0, "the default configuration has `{key_line}`");
+    (text, line)
+}
+
+#[test]
+fn out_of_range_configuration_values_are_rejected_naming_file_line_and_key() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let default = String::from_utf8(out(momo().arg("config")).stdout).expect("utf8");
+    let huge = "9223372036854775807";
+    // (line of the default to change, the change, the key named, whether the line is exact)
+    let cases = [
+        (
+            "initial_arc_length",
+            "initial_arc_length = 1e308".to_string(),
+            "odometry.initial_arc_length",
+            true,
+        ),
+        (
+            "rotation_change_sigma",
+            "rotation_change_sigma = 1e-300".into(),
+            "odometry.rotation_change_sigma",
+            true,
+        ),
+        (
+            "max_iterations = 50",
+            format!("max_iterations = {huge}"),
+            "solver.max_iterations",
+            true,
+        ),
+        (
+            "max_iterations = 1000",
+            format!("max_iterations = {huge}"),
+            "five_point.max_iterations",
+            true,
+        ),
+        (
+            "threshold = 0.001",
+            "threshold = 1e300".into(),
+            "five_point.threshold",
+            true,
+        ),
+        (
+            "[odometry.motion_prior_sigmas]",
+            "+rot_z = 1e-300".into(),
+            "odometry.motion_prior_sigmas.rot_z",
+            false,
+        ),
+        // 2^32 x 2^32 cells: the product overflowed (a panic in debug builds, 0 cells in release).
+        (
+            "[odometry.motion_prior_sigmas]",
+            "[odometry.separate]\ngrid = [4294967296, 4294967296]\n[odometry.motion_prior_sigmas]"
+                .into(),
+            "odometry.separate.grid",
+            false,
+        ),
+    ];
+    let path = tmp.path().join("cfg.toml");
+    for (key_line, new, key, exact) in &cases {
+        let (text, line) = config_with(&default, key_line, new);
+        std::fs::write(&path, text).expect("write");
+        let e = momo::vo::Config::from_file(&path)
+            .expect_err(key)
+            .to_string();
+        let at = if *exact {
+            format!("{}:{line}: ", path.display())
+        } else {
+            format!("{}:", path.display())
+        };
+        assert!(e.starts_with(&at) && e.contains(key), "{key}: {e}");
+        // The process: exit 2, nothing written.
+        let p = tmp.path().join("p.txt");
+        let o = out(momo()
+            .arg("run")
+            .arg(tmp.path().join("none"))
+            .arg("-c")
+            .arg(&path)
+            .arg("-o")
+            .arg(&p));
+        assert_eq!(o.status.code(), Some(2), "{key}: {}", stderr(&o));
+        assert!(stderr(&o).contains(&at), "{key}: {}", stderr(&o));
+        assert!(!p.exists());
+    }
+    // A motion prior on a parameter the model does not have: the file and the line, not
+    // `<config>` (the check ran in Odometry::new, which did not know the file).
+    let seq = tmp.path().join("seq");
+    sequence(&seq);
+    let (text, line) = config_with(&default, "[odometry.motion_prior_sigmas]", "+nope = 1.0");
+    std::fs::write(&path, text).expect("write");
+    let o = out(momo()
+        .arg("run")
+        .arg(&seq)
+        .arg("-c")
+        .arg(&path)
+        .arg("-o")
+        .arg(tmp.path().join("p.txt")));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(&format!(
+            "{}:{line}: odometry.motion_prior_sigmas: the model has no parameter `nope`",
+            path.display()
+        )),
+        "{e}"
+    );
+    assert!(!e.contains("<config>"), "{e}");
+}
+
+/// A KITTI odometry sequence folder: calib.txt, image_0/ with three 64 x 32 PNGs, times.txt.
+fn kitti_folder(dir: &Path) {
+    std::fs::create_dir_all(dir.join("image_0")).expect("mkdir");
+    std::fs::write(
+        dir.join("calib.txt"),
+        "P0: 50 0 32 0 0 50 16 0 0 0 1 0\nP1: 50 0 32 -27 0 50 16 0 0 0 1 0\n",
+    )
+    .expect("calib");
+    for k in 0..3 {
+        let pixels: Vec<u8> = (0..64 * 32)
+            .map(|i| (((i % 64 + 3 * k) * 37 + (i / 64) * 11) % 251) as u8)
+            .collect();
+        let img = momo_match::GrayImage::from_raw(64, 32, pixels).expect("64 x 32");
+        img.save(dir.join(format!("image_0/{k:06}.png")))
+            .expect("png");
+    }
+    std::fs::write(dir.join("times.txt"), "0.0\n0.1\n0.2\n").expect("times");
+}
+
+#[test]
+fn the_kitti_folder_import_checks_its_output_directory_like_the_other_writers() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let kitti = tmp.path().join("kitti/06");
+    kitti_folder(&kitti);
+    let import = |out_dir: &Path, force: bool| {
+        let mut c = momo();
+        c.arg("import-kitti").arg(&kitti).arg(out_dir).arg("-q");
+        if force {
+            c.arg("--force");
+        }
+        out(&mut c)
+    };
+    // A new directory: written.
+    let fresh = tmp.path().join("fresh");
+    let o = import(&fresh, false);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(fresh.join("rig.json").is_file() && fresh.join("times.txt").is_file());
+
+    // A non-empty directory without --force: refused, untouched; with --force: written.
+    let mine = tmp.path().join("mine");
+    std::fs::create_dir(&mine).expect("mkdir");
+    std::fs::write(mine.join("rig.json"), "mine").expect("write");
+    let before = snapshot(&mine);
+    let o = import(&mine, false);
+    assert_refused(&o, "non-empty");
+    assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
+    assert_eq!(snapshot(&mine), before);
+    let o = import(&mine, true);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(momo::io::read_rig(mine.join("rig.json")).is_ok());
+
+    // The input folder itself (even with --force, any spelling): refused, nothing written there.
+    let before = snapshot(&kitti);
+    for spelling in [kitti.clone(), tmp.path().join("kitti/./06/../06")] {
+        let o = import(&spelling, true);
+        assert_refused(&o, "the input folder");
+        assert_eq!(snapshot(&kitti), before);
+    }
+    // An output that is an input of the import (its times.txt as the output's times.txt).
+    let linked = tmp.path().join("linked");
+    std::fs::create_dir(&linked).expect("mkdir");
+    std::os::unix::fs::symlink(kitti.join("times.txt"), linked.join("times.txt")).expect("ln");
+    let o = import(&linked, true);
+    assert_refused(&o, "an input");
+    assert_eq!(snapshot(&kitti), before);
+
+    // A failed import (a corrupt first image) removes the directory it created.
+    std::fs::write(kitti.join("image_0/000000.png"), "not a png").expect("write");
+    let failed = tmp.path().join("new/deep");
+    let o = import(&failed, false);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        !tmp.path().join("new").exists(),
+        "created directories removed"
+    );
+}

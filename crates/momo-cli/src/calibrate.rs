@@ -43,7 +43,7 @@ pub(crate) fn calibrate(args: CalibrateArgs) -> Result<(), Failure> {
     let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     crate::common::check_outputs(&inputs, &[args.output.as_path()])?;
     let config = load_config(args.config.as_deref())?;
-    let sequence = momo_io::read_sequence(&args.seq).map_err(Failure::input)?;
+    let sequence = momo_io::read_sparse_sequence(&args.seq).map_err(Failure::input)?;
     let est = calibrate_mount(&sequence, &config, &options, args.quiet)?;
     momo_io::write_rig(&args.output, &est.corrected_rig).map_err(Failure::other)?;
     if !args.quiet {
@@ -52,9 +52,10 @@ pub(crate) fn calibrate(args: CalibrateArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Calibrates the mount of a sequence in memory; prints the estimate unless `quiet`.
+/// Calibrates the mount of a sequence in memory (only its frame pairs with matches); prints the
+/// estimate unless `quiet`.
 pub(crate) fn calibrate_mount(
-    sequence: &momo_io::Sequence,
+    sequence: &momo_io::SparseSequence,
     config: &Config,
     options: &momo_vo::MountCalibration,
     quiet: bool,

@@ -52,6 +52,7 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
         )));
     }
     if momo_match::kitti::is_kitti_sequence_folder(&args.dir) {
+        let out = prepare_output(&args)?;
         let done = momo_match::kitti::import_kitti_sequence(
             &args.dir,
             &args.out_dir,
@@ -65,6 +66,7 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
                 Failure::other(e)
             }
         })?;
+        out.keep();
         if !args.quiet {
             note!(
                 "momo: imported the KITTI sequence folder: {} frames, {} camera(s){}{}; wrote {} (run `momo vo {} -o est.txt`)",
@@ -94,8 +96,8 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
         seed: args.seed,
         cross_camera: args.stereo && !args.no_cross_camera,
     };
+    let out = prepare_output(&args)?;
     let seq = import_l1avgvo(&args.dir, &options).map_err(Failure::input)?;
-    let out = momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)?;
     momo_io::write_sequence(&args.out_dir, &seq).map_err(Failure::other)?;
     out.keep();
     if !args.quiet {
@@ -113,4 +115,43 @@ pub(crate) fn import_kitti(args: ImportKittiArgs) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// The output directory of an import, before anything is read or written: refused if it is
+/// the input folder or if a file written there would replace an input (any spelling or link of
+/// it); created, or an existing one accepted only if empty or with `--force`; removed again on
+/// failure if this created it ([`momo_io::OutputDir`]).
+fn prepare_output(args: &ImportKittiArgs) -> Result<momo_io::OutputDir, Failure> {
+    use momo_io::files;
+    use std::os::unix::fs::MetadataExt;
+    if let (Ok(a), Ok(b)) = (
+        std::fs::metadata(&args.dir),
+        std::fs::metadata(&args.out_dir),
+    ) && (a.dev(), a.ino()) == (b.dev(), b.ino())
+    {
+        return Err(Failure::input(momo_io::IoError::file(
+            &args.out_dir,
+            momo_io::IoErrorKind::OutputRefused(format!(
+                "it is the input folder {}",
+                args.dir.display()
+            )),
+        )));
+    }
+    if std::fs::metadata(&args.out_dir).is_ok() {
+        let names = [
+            "calib.txt",
+            files::RIG,
+            files::MATCHES,
+            files::ODOMETRY,
+            files::POSES,
+            files::TIMES,
+        ];
+        let mut inputs: Vec<PathBuf> = names.iter().map(|f| args.dir.join(f)).collect();
+        inputs.extend(args.poses.clone());
+        let written: Vec<PathBuf> = names[1..].iter().map(|f| args.out_dir.join(f)).collect();
+        let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+        let written: Vec<&std::path::Path> = written.iter().map(PathBuf::as_path).collect();
+        crate::common::check_outputs(&inputs, &written)?;
+    }
+    momo_io::OutputDir::prepare(&args.out_dir, args.force).map_err(Failure::input)
 }

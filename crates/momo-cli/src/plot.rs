@@ -168,7 +168,7 @@ pub(crate) fn plot(figure: PlotCommand) -> Result<(), Failure> {
             steps,
         } => {
             let config = load_config(config.as_deref())?;
-            let sequence = momo_io::read_sequence(&seq).map_err(Failure::input)?;
+            let sequence = momo_io::read_sparse_sequence(&seq).map_err(Failure::input)?;
             let options = momo_plot::LandscapeOptions {
                 frame,
                 range_yaw_deg: range_yaw,

@@ -70,13 +70,13 @@ pub(crate) fn run(args: RunArgs) -> Result<(), Failure> {
     let estimator = args.estimator.into();
     let times =
         crate::trajfmt::check_times(args.format, &args.seq.join(momo_io::files::TIMES), None)?;
-    // With --calibrate-mount the mount is calibrated on the sequence first (a pass over all
-    // frames in memory), then the run streams the sequence with the corrected rig.
+    // With --calibrate-mount the mount is calibrated on the sequence first (a pass over its
+    // frame pairs with matches, held in memory), then the run streams the sequence with the corrected rig.
     let rig = if args.calibrate_mount {
         let options = momo_vo::MountCalibration::default()
             .with_model(Some(mount_model(&args.mount_model)?))
             .with_frames(args.mount_frames);
-        let sequence = momo_io::read_sequence(&args.seq).map_err(Failure::input)?;
+        let sequence = momo_io::read_sparse_sequence(&args.seq).map_err(Failure::input)?;
         Some(calibrate_mount(&sequence, &config, &options, args.quiet)?.corrected_rig)
     } else {
         None

@@ -15,8 +15,10 @@
 //! Trajectories can also be read and written in the TUM format (`read_tum`, `write_tum`,
 //! [`read_trajectory`] detects the format).
 //!
-//! - [`read_sequence`] loads a whole directory into a [`Sequence`]; [`MatchReader`] streams
-//!   `matches.csv` one frame pair at a time (memory bounded by one frame pair).
+//! - [`read_sequence`] loads a whole directory into a [`Sequence`]; [`read_sparse_sequence`]
+//!   into a [`SparseSequence`] that holds only the frame pairs with matches (memory grows with
+//!   the files, not with the last frame number); [`MatchReader`] streams `matches.csv` one frame
+//!   pair at a time (memory bounded by one frame pair).
 //! - Every input error is an [`IoError`] whose `Display` is `path:line: reason` (or
 //!   `path: reason` when no line applies); [`IoErrorKind`] says which rule was broken. Readers
 //!   never panic and never hold more than [`MAX_LINE_BYTES`] of a line in memory.
@@ -84,7 +86,10 @@ pub use matches::{
     MATCHES_HEADER, MATCHES_HEADER_CROSS, MAX_FRAME, MatchReader, MatchWriter,
     PIXEL_MARGIN_FRACTION, write_matches,
 };
-pub use odometry::{ODOMETRY_HEADER, read_odometry, read_odometry_from, write_odometry};
+pub use odometry::{
+    ODOMETRY_HEADER, read_odometry, read_odometry_from, read_odometry_rows,
+    read_odometry_rows_from, write_odometry,
+};
 pub use poses::{POSE_ORTHONORMAL_TOLERANCE, PoseWriter, read_poses, read_poses_from, write_poses};
 pub use rig::{MAX_RIG_BYTES, read_rig, read_rig_from_str, rig_to_json, write_rig};
 pub use text::MAX_LINE_BYTES;
@@ -139,6 +144,101 @@ impl Sequence {
     }
 }
 
+/// A whole sequence in memory with sparse frame numbers: only the frame pairs that have matches
+/// and the frames that have an odometry row are held, so that a `matches.csv` whose frame
+/// numbers jump (a last frame of 1,000,000 after a few hundred frame pairs) takes memory in
+/// proportion to its rows, not to its last frame. Read by [`read_sparse_sequence`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SparseSequence {
+    /// The cameras (`rig.json`).
+    pub rig: Rig,
+    /// `(k, matches of frame pair (k-1, k))` for every frame pair with at least one match, `k`
+    /// increasing; each entry has one list per camera.
+    pub frames: Vec<(usize, FrameObservations)>,
+    /// The rows of `odometry.csv` if present: `(k, arc length of frame pair (k-1, k))`, `k`
+    /// increasing.
+    pub arc_lengths: Option<Vec<(usize, f64)>>,
+    /// `poses.txt` if present: `T_cam0(0)_cam0(k)` per line, as read.
+    pub ground_truth: Option<Vec<Pose<f64>>>,
+    /// Number of frames: `max(last frame in matches.csv, last frame in odometry.csv) + 1`
+    /// (`FORMAT.md`), at least 1; the same as [`Sequence::num_frames`] of the dense sequence.
+    pub num_frames: usize,
+}
+
+impl SparseSequence {
+    /// The matches of frame pair `(k-1, k)`, `None` if it has none (binary search).
+    pub fn frame(&self, k: usize) -> Option<&FrameObservations> {
+        let i = self.frames.binary_search_by_key(&k, |(f, _)| *f).ok()?;
+        self.frames.get(i).map(|(_, obs)| obs)
+    }
+
+    /// The odometry arc length of frame pair `(k-1, k)`, `None` without a row (binary search).
+    pub fn arc_length(&self, k: usize) -> Option<f64> {
+        let a = self.arc_lengths.as_ref()?;
+        let i = a.binary_search_by_key(&k, |(f, _)| *f).ok()?;
+        a.get(i).map(|(_, l)| *l)
+    }
+
+    /// Number of match rows over all frames and cameras.
+    pub fn num_matches(&self) -> usize {
+        self.frames.iter().map(|(_, f)| f.len()).sum()
+    }
+
+    /// The dense [`Sequence`] (every frame pair up to [`num_frames`](Self::num_frames) in
+    /// memory), as [`read_sequence`] returns it.
+    pub fn into_dense(self) -> Sequence {
+        let num = self.num_frames.max(1);
+        let n = self.rig.len();
+        let mut frames = Vec::with_capacity(num);
+        for (k, obs) in self.frames {
+            frames.resize_with(k, || FrameObservations::new(n));
+            frames.push(obs);
+        }
+        frames.resize_with(num, || FrameObservations::new(n));
+        let arc_lengths = self.arc_lengths.map(|rows| {
+            let mut a = vec![None; num];
+            for (k, l) in rows {
+                if let Some(slot) = a.get_mut(k) {
+                    *slot = Some(l);
+                }
+            }
+            a
+        });
+        Sequence {
+            rig: self.rig,
+            frames,
+            arc_lengths,
+            ground_truth: self.ground_truth,
+        }
+    }
+}
+
+impl From<Sequence> for SparseSequence {
+    /// Keeps the frame pairs with matches and the arc lengths that are given.
+    fn from(seq: Sequence) -> Self {
+        let num_frames = seq.num_frames();
+        let frames = seq
+            .frames
+            .into_iter()
+            .enumerate()
+            .filter(|(_, obs)| !obs.is_empty())
+            .collect();
+        let arc_lengths = seq.arc_lengths.map(|a| {
+            a.into_iter()
+                .enumerate()
+                .filter_map(|(k, l)| l.map(|l| (k, l)))
+                .collect()
+        });
+        Self {
+            rig: seq.rig,
+            frames,
+            arc_lengths,
+            ground_truth: seq.ground_truth,
+            num_frames,
+        }
+    }
+}
+
 /// Opens an optional file: `Ok(None)` if it does not exist (a dangling symbolic link exists:
 /// it is an error, not a missing file).
 fn optional<T>(
@@ -162,31 +262,37 @@ fn optional<T>(
 
 /// Loads a sequence directory: `rig.json` and `matches.csv` (required), `odometry.csv` and
 /// `poses.txt` (optional). `frames` and `arc_lengths` are padded to
-/// [`num_frames`](Sequence::num_frames).
+/// [`num_frames`](Sequence::num_frames): memory grows with the last frame number (see
+/// [`read_sparse_sequence`] for sequences with sparse frame numbers).
 pub fn read_sequence(dir: impl AsRef<Path>) -> Result<Sequence, IoError> {
+    read_sparse_sequence(dir).map(SparseSequence::into_dense)
+}
+
+/// Loads a sequence directory as [`read_sequence`] does (the same files, checks and errors),
+/// holding only the frame pairs that have matches and the odometry rows: memory grows with the
+/// files' rows, not with their frame numbers.
+pub fn read_sparse_sequence(dir: impl AsRef<Path>) -> Result<SparseSequence, IoError> {
     let dir = dir.as_ref();
     let rig = read_rig(dir.join(files::RIG))?;
-    let n = rig.len();
-    let mut frames = vec![FrameObservations::new(n)];
+    let mut frames = Vec::new();
     for item in MatchReader::open(dir.join(files::MATCHES), &rig)? {
-        let (_, obs) = item?;
-        frames.push(obs);
+        let (k, obs) = item?;
+        if !obs.is_empty() {
+            frames.push((k, obs));
+        }
     }
-    let mut arc_lengths = optional(&dir.join(files::ODOMETRY), |p| read_odometry(p))?;
+    let arc_lengths = optional(&dir.join(files::ODOMETRY), |p| read_odometry_rows(p))?;
     let ground_truth = optional(&dir.join(files::POSES), |p| read_poses(p))?;
-    let num = frames
-        .len()
-        .max(arc_lengths.as_ref().map_or(0, Vec::len))
-        .max(1);
-    frames.resize_with(num, || FrameObservations::new(n));
-    if let Some(a) = arc_lengths.as_mut() {
-        a.resize(num, None);
-    }
-    Ok(Sequence {
+    let last = |k: Option<&usize>| k.copied().unwrap_or(0);
+    let num_frames = last(frames.last().map(|(k, _)| k)).max(last(
+        arc_lengths.as_ref().and_then(|a| a.last().map(|(k, _)| k)),
+    )) + 1;
+    Ok(SparseSequence {
         rig,
         frames,
         arc_lengths,
         ground_truth,
+        num_frames,
     })
 }
 

@@ -29,10 +29,44 @@ pub fn read_odometry_from<R: BufRead>(
     reader: R,
     path: impl AsRef<Path>,
 ) -> Result<Vec<Option<f64>>, IoError> {
+    let mut out: Vec<Option<f64>> = vec![None];
+    for_each_row(reader, path.as_ref(), |frame, value| {
+        out.resize(frame, None);
+        out.push(Some(value));
+    })?;
+    Ok(out)
+}
+
+/// Reads `odometry.csv` from `reader` as its rows, `(frame, arc length)` with increasing frames,
+/// without expanding the frame numbers (memory grows with the rows, not with the last frame).
+/// The same rules as [`read_odometry_from`].
+pub fn read_odometry_rows_from<R: BufRead>(
+    reader: R,
+    path: impl AsRef<Path>,
+) -> Result<Vec<(usize, f64)>, IoError> {
+    let mut out = Vec::new();
+    for_each_row(reader, path.as_ref(), |frame, value| {
+        out.push((frame, value))
+    })?;
+    Ok(out)
+}
+
+/// Reads `odometry.csv` as its rows (see [`read_odometry_rows_from`]).
+pub fn read_odometry_rows(path: impl AsRef<Path>) -> Result<Vec<(usize, f64)>, IoError> {
     let path = path.as_ref();
+    let file = File::open(path).map_err(|e| IoError::io(path, e))?;
+    read_odometry_rows_from(BufReader::new(file), path)
+}
+
+/// Parses `odometry.csv` and hands every valid row to `row(frame, arc_length)`, in file order.
+fn for_each_row<R: BufRead>(
+    reader: R,
+    path: &Path,
+    mut row: impl FnMut(usize, f64),
+) -> Result<(), IoError> {
     let mut lines = LineReader::new(reader);
     let mut columns = None;
-    let mut out: Vec<Option<f64>> = vec![None];
+    let mut previous = 0;
     loop {
         // `next_line` counts exactly one line per line it returns.
         let line_no = lines.line() + 1;
@@ -61,7 +95,6 @@ pub fn read_odometry_from<R: BufRead>(
                 max: MAX_FRAME,
             }));
         }
-        let previous = out.len() - 1;
         if frame == previous && previous > 0 {
             return Err(at(IoErrorKind::DuplicateFrame { frame }));
         }
@@ -78,8 +111,8 @@ pub fn read_odometry_from<R: BufRead>(
                 max: MAX_ARC_LENGTH,
             }));
         }
-        out.resize(frame, None);
-        out.push(Some(value));
+        previous = frame;
+        row(frame, value);
     }
     if columns.is_none() {
         return Err(IoError::file(
@@ -89,7 +122,7 @@ pub fn read_odometry_from<R: BufRead>(
             },
         ));
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Reads `odometry.csv` (see [`read_odometry_from`]).

@@ -262,3 +262,74 @@ fn a_failed_write_sequence_leaves_nothing() {
     drop(out);
     assert!(!dir.exists(), "the created directory is removed");
 }
+
+#[test]
+fn a_sparse_read_holds_only_the_frames_with_matches() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("rig.json"),
+        rig_json(2, PINHOLE, "1", [1.0, 0.0, 1.65]),
+    )
+    .expect("write");
+    std::fs::write(
+        dir.join("matches.csv"),
+        "frame,camera,u0,v0,u1,v1\n\
+         2,0,10,20,11,21\n2,1,30,40,31,41\n\
+         7,1,50,60,51,61\n\
+         9999999,0,70,80,71,81\n",
+    )
+    .expect("write");
+    std::fs::write(
+        dir.join("odometry.csv"),
+        "frame,arc_length\n1,0.5\n7,0.75\n10000000,1.25\n",
+    )
+    .expect("write");
+    let sparse = read_sparse_sequence(dir).expect("reads");
+    let frames: Vec<(usize, usize)> = sparse.frames.iter().map(|(k, f)| (*k, f.len())).collect();
+    assert_eq!(frames, [(2, 2), (7, 1), (9_999_999, 1)]);
+    assert_eq!(
+        sparse.arc_lengths.as_deref(),
+        Some(&[(1, 0.5), (7, 0.75), (10_000_000, 1.25)][..])
+    );
+    assert_eq!(sparse.num_frames, 10_000_001);
+    assert_eq!(sparse.num_matches(), 4);
+    assert_eq!(sparse.frame(7).map(|f| f.per_camera[1].len()), Some(1));
+    assert!(sparse.frame(3).is_none() && sparse.frame(0).is_none());
+    assert_eq!(sparse.arc_length(7), Some(0.75));
+    assert_eq!(sparse.arc_length(2), None);
+    assert_eq!(sparse.arc_length(10_000_000), Some(1.25));
+
+    // The same errors as the dense read, and the dense read is its expansion.
+    std::fs::write(
+        dir.join("odometry.csv"),
+        "frame,arc_length\n1,0.5\n7,0.75\n8,-1\n",
+    )
+    .expect("write");
+    let (a, b) = (
+        read_sparse_sequence(dir).expect_err("negative"),
+        read_sequence(dir).expect_err("negative"),
+    );
+    assert_eq!(a.to_string(), b.to_string());
+    assert!(
+        a.to_string()
+            .ends_with("odometry.csv:4: arc_length must be >= 0, found -1")
+    );
+    // (Small frame numbers: the dense read expands them.)
+    std::fs::write(
+        dir.join("matches.csv"),
+        "frame,camera,u0,v0,u1,v1\n2,0,10,20,11,21\n2,1,30,40,31,41\n9,0,70,80,71,81\n",
+    )
+    .expect("write");
+    std::fs::write(
+        dir.join("odometry.csv"),
+        "frame,arc_length\n3,0.5\n12,0.75\n",
+    )
+    .expect("w");
+    let dense = read_sequence(dir).expect("reads");
+    let sparse = read_sparse_sequence(dir).expect("reads");
+    assert_eq!(sparse.num_frames, 13);
+    assert_eq!(dense.num_frames(), sparse.num_frames);
+    assert_eq!(SparseSequence::from(dense.clone()), sparse);
+    assert_eq!(sparse.into_dense(), dense);
+}

@@ -3,7 +3,7 @@
 use crate::PlotError;
 use crate::render::{FONT, Figure, draw_err, render};
 use momo_core::{FrameObservations, SolveRequest};
-use momo_io::Sequence;
+use momo_io::SparseSequence;
 use momo_vo::{Config, Odometry};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -98,12 +98,12 @@ fn axis(centre: f64, half: f64, steps: usize) -> Vec<f64> {
 /// (`single_track_2d`, `single_track_3d`); otherwise it is replaced by `single_track_2d`.
 /// Metric, loss and solver are the configuration's.
 pub fn compute_landscape(
-    sequence: &Sequence,
+    sequence: &SparseSequence,
     config: Config,
     options: &LandscapeOptions,
 ) -> Result<Landscape, PlotError> {
     let k = options.frame;
-    let n = sequence.num_frames();
+    let n = sequence.num_frames;
     if k == 0 || k >= n {
         return Err(PlotError::Input(format!(
             "frame {k} is not a frame pair of the sequence (frames 1..={})",
@@ -127,7 +127,7 @@ pub fn compute_landscape(
         }
     }
     let empty = FrameObservations::new(sequence.rig.len());
-    let observations = sequence.frames.get(k).unwrap_or(&empty);
+    let observations = sequence.frame(k).unwrap_or(&empty);
     if observations.is_empty() {
         return Err(PlotError::Input(format!("frame {k} has no matches")));
     }
@@ -141,11 +141,8 @@ pub fn compute_landscape(
     let mut vo = Odometry::new(sequence.rig.clone(), config)?;
     let mut estimate = Vec::new();
     for i in 1..=k {
-        let obs = sequence.frames.get(i).unwrap_or(&empty);
-        let arc = sequence
-            .arc_lengths
-            .as_ref()
-            .and_then(|a| a.get(i).copied().flatten());
+        let obs = sequence.frame(i).unwrap_or(&empty);
+        let arc = sequence.arc_length(i);
         estimate = vo.process(obs, arc).diagnostics.params;
     }
 
@@ -462,13 +459,14 @@ mod tests {
             ..momo_sim::SimConfig::clean_pinhole()
         };
         let sim = momo_sim::simulate(&cfg)?;
+        let sequence = SparseSequence::from(sim.sequence.clone());
         let options = LandscapeOptions {
             frame: 4,
             steps: 11,
             ..LandscapeOptions::default()
         };
         // The default model (se3) has no yaw: single_track_2d is used.
-        let l = compute_landscape(&sim.sequence, Config::default(), &options)?;
+        let l = compute_landscape(&sequence, Config::default(), &options)?;
         assert_eq!(l.param_names, ["yaw", "arc_length"]);
         assert_eq!(l.cost.len(), 121);
         assert!(l.cost.iter().all(|c| c.is_finite() && *c >= 0.0));
@@ -501,7 +499,7 @@ mod tests {
             },
         ] {
             assert!(matches!(
-                compute_landscape(&sim.sequence, Config::default(), &bad),
+                compute_landscape(&sequence, Config::default(), &bad),
                 Err(PlotError::Input(_))
             ));
         }

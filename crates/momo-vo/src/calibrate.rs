@@ -445,18 +445,21 @@ pub fn corrected_rig(rig: &Rig, delta: &Vector3<f64>) -> Result<Rig, CoreError> 
     )
 }
 
-/// Calibrates the mount of a sequence's rig over its frame pairs (`sequence.frames[1..]`).
+/// Calibrates the mount of a sequence's rig over its frame pairs `1..num_frames`, as
+/// [`calibrate_mount`] does over the dense frames. Only the frame pairs with matches are
+/// visited (the others are counted as skipped), so that sparse frame numbers cost no memory.
 pub fn calibrate_sequence(
-    sequence: &momo_io::Sequence,
+    sequence: &momo_io::SparseSequence,
     config: &Config,
     options: &MountCalibration,
 ) -> Result<MountEstimate, CalibrationError> {
-    let frames = sequence.frames.get(1..).unwrap_or_default();
-    let arcs = sequence
-        .arc_lengths
-        .as_ref()
-        .map(|a| a.get(1..).unwrap_or_default());
-    calibrate_mount(&sequence.rig, frames, arcs, config, options)
+    let frames: Vec<FramePair<'_>> = sequence
+        .frames
+        .iter()
+        .map(|(k, obs)| (k - 1, obs, sequence.arc_length(*k)))
+        .collect();
+    let total = sequence.num_frames.saturating_sub(1);
+    calibrate_frames(&sequence.rig, &frames, total, config, options)
 }
 
 /// Calibrates the rig's mount rotation jointly over frame pairs.
@@ -473,7 +476,32 @@ pub fn calibrate_mount(
     config: &Config,
     options: &MountCalibration,
 ) -> Result<MountEstimate, CalibrationError> {
-    if frames.is_empty() {
+    let pairs: Vec<FramePair<'_>> = frames
+        .iter()
+        .enumerate()
+        .filter(|(_, obs)| !obs.is_empty())
+        .map(|(i, obs)| {
+            let arc = arc_lengths.and_then(|a| a.get(i).copied().flatten());
+            (i, obs, arc)
+        })
+        .collect();
+    calibrate_frames(rig, &pairs, frames.len(), config, options)
+}
+
+/// One frame pair given to the calibration: its index `i` among the frame pairs (frame pair
+/// `(i, i+1)`), its matches and its odometry arc length.
+type FramePair<'a> = (usize, &'a FrameObservations, Option<f64>);
+
+/// [`calibrate_mount`] over the frame pairs with matches (`i` increasing) of `total` frame
+/// pairs; the ones not listed have no matches.
+fn calibrate_frames(
+    rig: &Rig,
+    frames: &[FramePair<'_>],
+    total: usize,
+    config: &Config,
+    options: &MountCalibration,
+) -> Result<MountEstimate, CalibrationError> {
+    if total == 0 {
         return Err(CalibrationError::NoFrames);
     }
     let model = match &options.model {
@@ -488,7 +516,7 @@ pub fn calibrate_mount(
         config.metric.as_ref(),
         rig,
         frames,
-        arc_lengths,
+        total,
         config,
         options,
     )?;
@@ -617,8 +645,8 @@ fn calibrate_with(
     which: MountModel,
     metric: &dyn MetricSpec,
     rig: &Rig,
-    frames: &[FrameObservations],
-    arc_lengths: Option<&[Option<f64>]>,
+    frames: &[FramePair<'_>],
+    total: usize,
     config: &Config,
     options: &MountCalibration,
 ) -> Result<MountEstimate, CalibrationError> {
@@ -633,7 +661,7 @@ fn calibrate_with(
     let odo = &config.odometry;
     let np = model.params().len();
     let arc_index = model.arc_length_index();
-    let limit = options.frames.unwrap_or(frames.len()).min(frames.len());
+    let limit = options.frames.unwrap_or(total).min(total);
     if limit == 0 {
         return Err(CalibrationError::NoFrames);
     }
@@ -643,10 +671,11 @@ fn calibrate_with(
     let mut states: Vec<FrameState<'_>> = Vec::new();
     let mut previous = model.initial_params(odo.initial_arc_length);
     let mut cost_before = 0.0;
-    for (i, obs) in frames[..limit].iter().enumerate() {
-        let arc = arc_lengths
-            .and_then(|a| a.get(i).copied().flatten())
-            .filter(|l| l.is_finite() && *l >= 0.0);
+    // Frame pairs not in `frames` have no matches.
+    let listed = frames.iter().take_while(|(i, ..)| *i < limit).count();
+    skipped.no_matches += limit - listed;
+    for &(_, obs, arc) in &frames[..listed] {
+        let arc = arc.filter(|l| l.is_finite() && *l >= 0.0);
         if obs.len() < odo.min_matches.max(1) {
             skipped.no_matches += 1;
             continue;

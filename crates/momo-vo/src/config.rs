@@ -45,6 +45,21 @@ pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
 /// The most `odometry.restart_yaw_offsets` (each is one more solve per frame).
 pub const MAX_RESTART_OFFSETS: usize = 64;
 
+/// The most iterations of one solve (`solver.max_iterations`): a solve converges in tens; a
+/// larger bound only lets a stalled one run for minutes per frame.
+pub const MAX_SOLVER_ITERATIONS: u64 = 10_000;
+
+/// The most RANSAC iterations of the 5-point baseline (`five_point.max_iterations`): one
+/// million draws find an all-inlier sample at 10 % inliers (w⁵ = 1e-5) with 99.995 %
+/// confidence; more only run longer.
+pub const MAX_RANSAC_ITERATIONS: usize = 1_000_000;
+
+/// The smallest standard deviation of a motion prior (`odometry.rotation_change_sigma`,
+/// `odometry.motion_prior_sigmas`), radians or metres per frame: 1e-6 rad is 0.2 arc seconds,
+/// far below what a vehicle's rotation rate holds from one frame to the next; a smaller one
+/// makes the prior's weight overflow (1e-300 gives 1e300) and only freezes the motion.
+pub const MIN_PRIOR_SIGMA: f64 = 1e-6;
+
 /// Options of the odometry driver (everything that is not model, metric, loss or solver).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -473,6 +488,24 @@ impl Config {
     pub fn validate_for_rig(&self, rig: &Rig) -> Result<(), ConfigError> {
         let name = self.source_name().to_string();
         self.validate(&name)?;
+        let params = self.model.manifold().params();
+        if let Some(unknown) = self
+            .odometry
+            .motion_prior_sigmas
+            .keys()
+            .find(|k| !params.contains(&k.as_str()))
+        {
+            let key = format!("odometry.motion_prior_sigmas.{unknown}");
+            return Err(self.error_at(
+                &name,
+                &[&key, "odometry.motion_prior_sigmas"],
+                format!(
+                    "odometry.motion_prior_sigmas: the model has no parameter `{unknown}` (it \
+                     has {})",
+                    params.join(", ")
+                ),
+            ));
+        }
         let metric = type_tag(&self.metric);
         if metric == "geo_line"
             && let Some((j, _)) = rig
@@ -649,31 +682,38 @@ impl Config {
                 "odometry.prior_min_inlier_ratio must be within 0..=1".into(),
             );
         }
-        if !(finite_nonneg(o.rotation_change_sigma) && o.rotation_change_sigma <= 1.0) {
+        let sigma = o.rotation_change_sigma;
+        if !(sigma == 0.0 || (sigma >= MIN_PRIOR_SIGMA && sigma <= 1.0)) {
             bad(
                 &["odometry.rotation_change_sigma"],
                 format!(
-                    "odometry.rotation_change_sigma must be within 0..=1 rad per frame (0: \
-                     none), got {}",
-                    o.rotation_change_sigma
+                    "odometry.rotation_change_sigma must be 0 (none) or within \
+                     {MIN_PRIOR_SIGMA}..=1 rad per frame, got {sigma}"
                 ),
             );
         }
         if let Some((name, s)) = o
             .motion_prior_sigmas
             .iter()
-            .find(|(_, s)| !(s.is_finite() && **s > 0.0))
+            .find(|(_, s)| !(**s >= MIN_PRIOR_SIGMA && **s <= MAX_ARC_LENGTH))
         {
             bad(
                 &["odometry.motion_prior_sigmas"],
-                format!("odometry.motion_prior_sigmas.{name} must be finite and > 0, got {s}"),
+                format!(
+                    "odometry.motion_prior_sigmas.{name} must be within \
+                     {MIN_PRIOR_SIGMA}..={MAX_ARC_LENGTH} (radians or metres per frame), got {s}"
+                ),
             );
         }
         let f = &self.five_point;
-        if !(f.threshold > 0.0 && f.threshold.is_finite()) {
+        if !(f.threshold > 0.0 && f.threshold <= 0.5) {
             bad(
                 &["five_point.threshold"],
-                "five_point.threshold must be finite and > 0".into(),
+                format!(
+                    "five_point.threshold must be within (0, 0.5] rad of angular Sampson error, \
+                     got {}",
+                    f.threshold
+                ),
             );
         }
         if !(f.confidence > 0.0 && f.confidence < 1.0) {
@@ -682,10 +722,13 @@ impl Config {
                 "five_point.confidence must be within (0, 1)".into(),
             );
         }
-        if f.max_iterations == 0 {
+        if !(1..=MAX_RANSAC_ITERATIONS).contains(&f.max_iterations) {
             bad(
                 &["five_point.max_iterations"],
-                "five_point.max_iterations must be at least 1".into(),
+                format!(
+                    "five_point.max_iterations must be within 1..={MAX_RANSAC_ITERATIONS}, got {}",
+                    f.max_iterations
+                ),
             );
         }
         for (keys, reason) in self.trust.problems() {
@@ -735,6 +778,14 @@ impl Config {
                     "solver.max_iterations must be at least 1 (0 would return the start as the \
                      answer)"
                         .into(),
+                );
+            }
+            if k == "max_iterations" && x > MAX_SOLVER_ITERATIONS as f64 {
+                bad(
+                    &[key_of(k), "solver"],
+                    format!(
+                        "solver.max_iterations must be at most {MAX_SOLVER_ITERATIONS}, got {v}"
+                    ),
                 );
             }
             if (k.ends_with("_increase") || k.ends_with("_decrease")) && !(x > 1.0) {

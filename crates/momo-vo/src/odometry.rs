@@ -181,7 +181,7 @@ impl Odometry {
         for (name, sigma) in &config.odometry.motion_prior_sigmas {
             let Some(i) = names.iter().position(|n| n == name) else {
                 return Err(VoError::Config(ConfigError::Invalid {
-                    path: "<config>".into(),
+                    path: config.source_name().into(),
                     reason: format!(
                         "odometry.motion_prior_sigmas: the model has no parameter `{name}` \
                          (it has {})",

@@ -80,7 +80,8 @@ impl SeparateOptions {
         if self.plausibility_margin.is_nan() {
             return Err("odometry.separate.plausibility_margin must be a number".into());
         }
-        if self.grid.0 == 0 || self.grid.1 == 0 || self.grid.0 * self.grid.1 > 10_000 {
+        let cells = self.grid.0.checked_mul(self.grid.1);
+        if self.grid.0 == 0 || self.grid.1 == 0 || cells.is_none_or(|c| c > 10_000) {
             return Err("odometry.separate.grid must be (columns, rows), 1 to 10000 cells".into());
         }
         Ok(())
