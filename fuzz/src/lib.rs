@@ -13,6 +13,8 @@
 //! | `kitti_poses` | `momo_io::read_poses_from` | finite orthonormal rotations |
 //! | `config_toml`, `config_json` | `momo_vo::Config::from_{toml,json}_str` | an accepted config builds a driver and round-trips through TOML |
 //! | `estimator` | `momo_vo::MotionDriver::process` (momo and the 5-point baseline) | every motion finite with an orthonormal rotation |
+//! | `sweep_grid` | `momo_sweep::Grid::from_toml_str` | at most `MAX_COMBINATIONS`, counted as many as expanded; each combination's configuration valid or refused with its name, an accepted one round-trips and builds a driver |
+//! | `image_header` | `momo_match::image_size_from_bytes`, `momo_match::decode_gray` | an image decodes to the size its header declares (the size check before decoding holds) |
 //!
 //! Every error a parser returns must name a line (or the whole file) and render as
 //! `path[:line]: reason`.
@@ -458,5 +460,175 @@ pub fn estimator(input: &EstimatorInput) {
         if kind == EstimatorKind::Momo && obs.len() < min_matches.max(1) {
             assert_eq!(d.status, FrameStatus::NoMatches);
         }
+    }
+}
+
+/// Largest image (pixels) that [`image_header`] decodes after reading its header (keeps
+/// executions fast; the header is read for every input).
+pub const MAX_FUZZ_PIXELS: u64 = 1 << 22;
+
+/// Image bytes (PNG or JPEG, recognised by content): the header's size is read without decoding;
+/// an image that decodes has exactly that size, so that the check against the rig's size made
+/// before decoding (`momo match`, `momo vo`) cannot be bypassed. Errors name the image.
+pub fn image_header(data: &[u8]) {
+    let name = std::path::Path::new("image.png");
+    match momo_match::image_size_from_bytes(data, name) {
+        Err(e) => {
+            let text = e.to_string();
+            assert!(text.starts_with("image.png"), "`{text}` names the image");
+        }
+        Ok((w, h)) => {
+            if u64::from(w) * u64::from(h) <= MAX_FUZZ_PIXELS
+                && let Ok(img) = momo_match::decode_gray(data, name)
+            {
+                assert_eq!(
+                    (img.width(), img.height()),
+                    (w, h),
+                    "the decoded size is the header's"
+                );
+            }
+        }
+    }
+}
+
+/// Combinations of an accepted grid that [`sweep_grid`] expands and checks (keeps executions
+/// fast; the count is checked for every grid).
+pub const MAX_FUZZ_COMBINATIONS: usize = 8;
+
+/// A sweep grid (TOML, `momo sweep --grid`): errors name the file and stay short; an accepted
+/// grid has at most `momo_sweep::MAX_COMBINATIONS` combinations, counted without expanding
+/// them, and expands to exactly that many; each combination's configuration is valid (it
+/// round-trips through TOML and builds a driver) or refused naming the combination.
+pub fn sweep_grid(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let grid = match momo_sweep::Grid::from_toml_str(text, "grid.toml") {
+        Err(e) => {
+            let text = e.to_string();
+            assert!(text.starts_with("grid.toml"), "`{text}` names the grid");
+            assert!(text.len() < 2000, "short error: {} bytes", text.len());
+            return;
+        }
+        Ok(g) => g,
+    };
+    let n = grid.combination_count();
+    assert!(
+        n <= momo_sweep::MAX_COMBINATIONS,
+        "{n} combinations accepted"
+    );
+    if n <= 4 * MAX_FUZZ_COMBINATIONS {
+        let all = grid.combinations();
+        assert_eq!(all.len(), n, "counted as many as expanded");
+        for c in all.iter().take(MAX_FUZZ_COMBINATIONS) {
+            let label = c.label();
+            match c.build_config() {
+                Ok(config) => check_config(Ok(config), "combination"),
+                Err(e) => assert!(!e.to_string().is_empty(), "{label}: an empty error"),
+            }
+        }
+    }
+}
+
+/// A deterministic mutation of `data` (bit flips, interesting bytes and 32-bit integers,
+/// insertions and deletions, repeated chunks, tokens of `dictionary`, splices with `other`),
+/// for replaying the targets over a generated corpus without libFuzzer (`tests/corpus.rs`).
+/// PNG chunks get their CRCs recomputed, so that mutations reach past the checksum.
+pub fn mutate(data: &[u8], other: &[u8], dictionary: &[&[u8]], state: &mut u64) -> Vec<u8> {
+    let mut next = || {
+        // xorshift64*
+        *state ^= *state >> 12;
+        *state ^= *state << 25;
+        *state ^= *state >> 27;
+        state.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    };
+    let mut out = data.to_vec();
+    let rounds = 1 + next() % 4;
+    for _ in 0..rounds {
+        let len = out.len().max(1);
+        let at = (next() % len as u64) as usize;
+        match next() % 8 {
+            0 if !out.is_empty() => {
+                let i = at.min(out.len() - 1);
+                out[i] ^= 1 << (next() % 8);
+            }
+            1 if !out.is_empty() => {
+                let i = at.min(out.len() - 1);
+                out[i] = [0u8, 0xff, 0x7f, 0x80, b'0', b'9', b'\n', b'"'][(next() % 8) as usize];
+            }
+            2 if out.len() >= 4 => {
+                let i = at.min(out.len() - 4);
+                let v: u32 = [0, 1, 0xffff_ffff, 0x7fff_ffff, 20_000, 65_536, 0x8000_0000]
+                    [(next() % 7) as usize];
+                out[i..i + 4].copy_from_slice(&v.to_be_bytes());
+            }
+            3 => {
+                let b = (next() % 256) as u8;
+                out.insert(at.min(out.len()), b);
+            }
+            4 if !out.is_empty() => {
+                let i = at.min(out.len() - 1);
+                let n = (1 + next() % 16) as usize;
+                out.drain(i..(i + n).min(out.len()));
+            }
+            5 if !out.is_empty() => {
+                let i = at.min(out.len() - 1);
+                let n = (1 + next() % 64) as usize;
+                let chunk: Vec<u8> = out[i..(i + n).min(out.len())].to_vec();
+                let times = 1 + next() % 8;
+                for _ in 0..times {
+                    let j = (next() % (out.len() as u64 + 1)) as usize;
+                    out.splice(j..j, chunk.iter().copied());
+                }
+            }
+            6 if !dictionary.is_empty() => {
+                let token = dictionary[(next() % dictionary.len() as u64) as usize];
+                out.splice(at.min(out.len())..at.min(out.len()), token.iter().copied());
+            }
+            _ if !other.is_empty() => {
+                let j = (next() % other.len() as u64) as usize;
+                out.truncate(at.min(out.len()));
+                out.extend_from_slice(&other[j..]);
+            }
+            _ => {}
+        }
+        if out.len() > 1 << 16 {
+            out.truncate(1 << 16);
+        }
+    }
+    fix_png_crcs(&mut out);
+    out
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = 0xffff_ffffu32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// Recomputes the CRC of every complete chunk of a PNG (signature, then length, type, data, CRC).
+fn fix_png_crcs(data: &mut [u8]) {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    if !data.starts_with(SIGNATURE) {
+        return;
+    }
+    let mut i = SIGNATURE.len();
+    while i + 12 <= data.len() {
+        let len = u32::from_be_bytes([data[i], data[i + 1], data[i + 2], data[i + 3]]) as usize;
+        let Some(end) = (i + 8).checked_add(len).filter(|e| e + 4 <= data.len()) else {
+            return;
+        };
+        let crc = crc32(&data[i + 4..end]);
+        data[end..end + 4].copy_from_slice(&crc.to_be_bytes());
+        i = end + 4;
     }
 }

@@ -98,10 +98,7 @@ impl ImageSequence {
                     ))
                 })?;
                 if let Some(Some((ew, eh))) = self.expected.get(j) {
-                    let (w, h) = image::image_dimensions(path).map_err(|e| MatchError::Decode {
-                        path: path.to_path_buf(),
-                        reason: e.to_string(),
-                    })?;
+                    let (w, h) = image_size(path)?;
                     if (w, h) != (*ew, *eh) {
                         return Err(MatchError::ImageSize {
                             path: path.to_path_buf(),
@@ -154,18 +151,62 @@ fn list_images(folder: &Path) -> Result<Vec<PathBuf>, MatchError> {
     Ok(files)
 }
 
+/// The size (width, height) an image file declares in its header, read without decoding the
+/// pixels (PNG or JPEG, recognised by content).
+pub fn image_size(path: &Path) -> Result<(u32, u32), MatchError> {
+    let file = std::fs::File::open(path).map_err(|e| MatchError::Decode {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    header_size(std::io::BufReader::new(file)).map_err(|reason| MatchError::Decode {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
+
+/// [`image_size`] of an encoded image in memory; `name` names it in errors.
+pub fn image_size_from_bytes(bytes: &[u8], name: &Path) -> Result<(u32, u32), MatchError> {
+    header_size(std::io::Cursor::new(bytes)).map_err(|reason| MatchError::Decode {
+        path: name.to_path_buf(),
+        reason,
+    })
+}
+
+fn header_size<R: std::io::BufRead + std::io::Seek>(reader: R) -> Result<(u32, u32), String> {
+    image::io::Reader::new(reader)
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .into_dimensions()
+        .map_err(|e| e.to_string())
+}
+
 /// Decodes one image file to 8-bit gray (colour images are converted with the usual luma
 /// weights; 16-bit images are scaled to 8 bits).
 pub fn load_gray(path: &Path) -> Result<GrayImage, MatchError> {
-    let decode_err = |reason: String| MatchError::Decode {
+    let file = std::fs::File::open(path).map_err(|e| MatchError::Decode {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    decode(std::io::BufReader::new(file)).map_err(|reason| MatchError::Decode {
         path: path.to_path_buf(),
         reason,
-    };
-    let reader = image::io::Reader::open(path)
-        .map_err(|e| decode_err(e.to_string()))?
+    })
+}
+
+/// [`load_gray`] of an encoded image in memory; `name` names it in errors.
+pub fn decode_gray(bytes: &[u8], name: &Path) -> Result<GrayImage, MatchError> {
+    decode(std::io::Cursor::new(bytes)).map_err(|reason| MatchError::Decode {
+        path: name.to_path_buf(),
+        reason,
+    })
+}
+
+fn decode<R: std::io::BufRead + std::io::Seek>(reader: R) -> Result<GrayImage, String> {
+    let img = image::io::Reader::new(reader)
         .with_guessed_format()
-        .map_err(|e| decode_err(e.to_string()))?;
-    let img = reader.decode().map_err(|e| decode_err(e.to_string()))?;
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())?;
     Ok(match img {
         image::DynamicImage::ImageLuma8(g) => g,
         other => other.to_luma8(),

@@ -70,7 +70,9 @@ pub use error::MatchError;
 pub use features::{DetectorOptions, FrameFeatures};
 /// The 8-bit gray image type of the front end (from the `image` crate).
 pub use image::GrayImage;
-pub use images::{GammaTable, ImageSequence, load_gray};
+pub use images::{
+    GammaTable, ImageSequence, decode_gray, image_size, image_size_from_bytes, load_gray,
+};
 pub use matcher::{FrameMatcher, Match, MatchOptions, match_features, match_images};
 pub use pipeline::{
     FrontEndOptions, FrontEndStats, ImageFrontEnd, VoRun, VoSummary, match_to_sequence,

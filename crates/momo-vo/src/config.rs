@@ -488,7 +488,8 @@ impl Config {
     pub fn validate_for_rig(&self, rig: &Rig) -> Result<(), ConfigError> {
         let name = self.source_name().to_string();
         self.validate(&name)?;
-        let params = self.model.manifold().params();
+        let manifold = self.model.manifold();
+        let params = manifold.params();
         if let Some(unknown) = self
             .odometry
             .motion_prior_sigmas
