@@ -684,7 +684,7 @@ impl Config {
             );
         }
         let sigma = o.rotation_change_sigma;
-        if !(sigma == 0.0 || (sigma >= MIN_PRIOR_SIGMA && sigma <= 1.0)) {
+        if !(sigma == 0.0 || (MIN_PRIOR_SIGMA..=1.0).contains(&sigma)) {
             bad(
                 &["odometry.rotation_change_sigma"],
                 format!(
@@ -696,7 +696,7 @@ impl Config {
         if let Some((name, s)) = o
             .motion_prior_sigmas
             .iter()
-            .find(|(_, s)| !(**s >= MIN_PRIOR_SIGMA && **s <= MAX_ARC_LENGTH))
+            .find(|(_, s)| !(MIN_PRIOR_SIGMA..=MAX_ARC_LENGTH).contains(*s))
         {
             bad(
                 &["odometry.motion_prior_sigmas"],
