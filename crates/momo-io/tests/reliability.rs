@@ -303,18 +303,15 @@ fn a_sparse_read_holds_only_the_frames_with_matches() {
     // The same errors as the dense read, and the dense read is its expansion.
     std::fs::write(
         dir.join("odometry.csv"),
-        "frame,arc_length\n1,0.5\n7,0.75\n8,-1\n",
+        "frame,arc_length\n1,0.5\n7,0.75\n8,2000\n",
     )
     .expect("write");
     let (a, b) = (
-        read_sparse_sequence(dir).expect_err("negative"),
-        read_sequence(dir).expect_err("negative"),
+        read_sparse_sequence(dir).expect_err("too large"),
+        read_sequence(dir).expect_err("too large"),
     );
     assert_eq!(a.to_string(), b.to_string());
-    assert!(
-        a.to_string()
-            .ends_with("odometry.csv:4: arc_length must be >= 0, found -1")
-    );
+    assert!(a.to_string().contains("odometry.csv:4: "), "{a}");
     // (Small frame numbers: the dense read expands them.)
     std::fs::write(
         dir.join("matches.csv"),
