@@ -143,7 +143,11 @@ fn arc_lengths_above_a_kilometre_per_frame_pair_are_rejected() {
     )
     .expect_err("too large");
     assert_eq!(e.line, Some(3));
-    assert!(e.to_string().contains("supported maximum of 1000 m"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("beyond the supported -1000..=1000 m"),
+        "{e}"
+    );
     assert!(read_odometry_from("frame,arc_length\n1,999\n".as_bytes(), "o").is_ok());
     let dir = tempfile::tempdir().expect("tmp");
     assert!(write_odometry(dir.path().join("o.csv"), &[None, Some(1e201)]).is_err());
