@@ -25,74 +25,16 @@
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use momo_core::{
-    CameraModel, FrameEstimator, FrameObservations, LeastSquares, MetricSpec, ModelSpec, Pose,
-    Problem, Rig, RobustLoss, SolveRequest, Solver, so3_exp,
+    FrameEstimator, FrameObservations, LeastSquares, MetricSpec, ModelSpec, Problem, Rig,
+    RobustLoss, SolveRequest, Solver,
 };
 use momo_costs::canned;
-use nalgebra::{Vector2, Vector3};
 use std::hint::black_box;
 use std::time::Duration;
 
-/// The true vehicle motion: 2° of yaw over 1 m with a little pitch and roll.
-fn truth() -> Pose<f64> {
-    let yaw = 2.0_f64.to_radians();
-    Pose::new(
-        so3_exp(&Vector3::new(0.002, -0.003, yaw)),
-        Vector3::new(yaw.cos(), 0.5 * yaw, 0.004),
-    )
-}
-
-/// The previous frame's motion (the warm start).
-fn previous() -> Pose<f64> {
-    let yaw = 1.6_f64.to_radians();
-    Pose::new(
-        so3_exp(&Vector3::new(0.0, 0.0, yaw)),
-        Vector3::new(yaw.cos(), 0.5 * yaw, 0.0),
-    )
-}
-
-/// Uniform noise in [-0.5, 0.5) px on the inliers' frame-k pixels (SplitMix64, deterministic).
-fn add_noise(rig: &Rig, obs: &mut FrameObservations, inliers: usize, seed: u64) {
-    let mut state = seed;
-    let mut next = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    for (cam, list) in rig.cameras().iter().zip(obs.per_camera.iter_mut()) {
-        for o in list.iter_mut().take(inliers) {
-            let px1 = o.px1 + Vector2::new(next(), next());
-            if let Some(f1) = cam.model.unproject(&px1) {
-                o.px1 = px1;
-                o.f1 = f1;
-            }
-        }
-    }
-}
-
-/// `n` matches per camera of the rig (90 % inliers with noise, 10 % outliers).
-fn frame(rig: &Rig, n: usize, seed: u64) -> FrameObservations {
-    let outliers = n / 10;
-    let mut obs = canned::synthetic_observations(rig, &truth(), n - outliers, outliers, seed);
-    add_noise(rig, &mut obs, n - outliers, seed ^ 0xABCD);
-    obs
-}
-
-/// Warm start (the previous motion's parameters, the true arc length) and the fixed mask.
-fn start(est: &dyn FrameEstimator) -> (Vec<f64>, Vec<bool>) {
-    let arc = truth().translation.norm();
-    let mut init = est
-        .params_from_motion(&previous())
-        .unwrap_or_else(|| est.initial_params(arc));
-    let mut fixed = vec![false; init.len()];
-    if let Some(i) = est.arc_length_index() {
-        init[i] = arc;
-        fixed[i] = true;
-    }
-    (init, fixed)
-}
+#[path = "support/frames.rs"]
+mod frames;
+use frames::{frame, start, truth};
 
 /// Everything one benchmark needs.
 struct Case<'a> {
