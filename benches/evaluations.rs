@@ -25,16 +25,13 @@
 //! ```
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
-use momo_core::{
-    FrameObservations, LeastSquares, ModelSpec, ParamVec, Problem, ResidualMetric, Rig,
-};
-use momo_costs::canned;
+use momo_core::{FrameObservations, LeastSquares, ParamVec, Problem, ResidualMetric};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 #[path = "support/frames.rs"]
 mod frames;
-use frames::{frame, start, truth};
+use frames::{frame, start, target_cases, truth};
 
 #[inline(never)]
 fn timed_cost<R: ResidualMetric>(p: &Problem<'_, R>, x: &ParamVec) -> f64 {
@@ -68,20 +65,7 @@ fn evaluations(c: &mut Criterion) {
         .sample_size(40)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2));
-    let cases: [(&str, Rig, Box<dyn ModelSpec>, usize); 2] = [
-        (
-            "default_pinhole_300",
-            canned::pinhole_rig(),
-            Box::new(momo_models::Se3),
-            300,
-        ),
-        (
-            "single_track_3d_fisheye4x100",
-            canned::fisheye_rig(),
-            Box::new(momo_models::SingleTrack3d::default()),
-            100,
-        ),
-    ];
+    let cases = target_cases();
     let loss = momo_costs::Cauchy::new(0.001);
     let only = std::env::var("MOMO_EVAL_CASE").unwrap_or_default();
     for (name, rig, model, n) in cases {

@@ -34,7 +34,7 @@ use std::time::Duration;
 
 #[path = "support/frames.rs"]
 mod frames;
-use frames::{frame, start, truth};
+use frames::{frame, start, target_cases, truth};
 
 /// Everything one benchmark needs.
 struct Case<'a> {
@@ -115,20 +115,7 @@ fn targets(c: &mut Criterion) {
         .sample_size(60)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3));
-    let cases: [(&str, Rig, Box<dyn ModelSpec>, usize); 2] = [
-        (
-            "default_pinhole_300",
-            canned::pinhole_rig(),
-            Box::new(momo_models::Se3),
-            300,
-        ),
-        (
-            "single_track_3d_fisheye4x100",
-            canned::fisheye_rig(),
-            Box::new(momo_models::SingleTrack3d::default()),
-            100,
-        ),
-    ];
+    let cases = target_cases();
     let loss = momo_costs::Cauchy::new(0.001);
     let solver = momo_solvers::LevenbergMarquardt::default();
     for (name, rig, model, n) in cases {

@@ -1,7 +1,7 @@
 //! Frames shared by the benches (`matrix`, `evaluations`): a noisy synthetic frame pair with
 //! outliers for any rig, and the warm start of a solve.
 
-use momo_core::{CameraModel, FrameEstimator, FrameObservations, Pose, Rig, so3_exp};
+use momo_core::{CameraModel, FrameEstimator, FrameObservations, ModelSpec, Pose, Rig, so3_exp};
 use momo_costs::canned;
 use nalgebra::{Vector2, Vector3};
 
@@ -64,4 +64,23 @@ pub fn start(est: &dyn FrameEstimator) -> (Vec<f64>, Vec<bool>) {
         fixed[i] = true;
     }
     (init, fixed)
+}
+
+/// The two target cases: the default model on one pinhole camera with 300 matches, and
+/// `SingleTrack3d` on four fisheye cameras x 100 matches (name, rig, model, matches per camera).
+pub fn target_cases() -> [(&'static str, Rig, Box<dyn ModelSpec>, usize); 2] {
+    [
+        (
+            "default_pinhole_300",
+            canned::pinhole_rig(),
+            Box::new(momo_models::Se3),
+            300,
+        ),
+        (
+            "single_track_3d_fisheye4x100",
+            canned::fisheye_rig(),
+            Box::new(momo_models::SingleTrack3d::default()),
+            100,
+        ),
+    ]
 }
