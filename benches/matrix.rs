@@ -28,7 +28,7 @@ use momo_core::{
     FrameEstimator, FrameObservations, LeastSquares, MetricSpec, ModelSpec, Problem, Rig,
     RobustLoss, SolveRequest, Solver,
 };
-use momo_costs::canned;
+use momo_testing::canned;
 use std::hint::black_box;
 use std::time::Duration;
 

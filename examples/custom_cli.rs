@@ -13,7 +13,8 @@
 use momo::core::{
     Camera, Manifold, Observation, Pose, ResidualMetric, Scalar, cosc, essential, sinc,
 };
-use momo::models::{check_metric, check_model, register_metric, register_model};
+use momo::models::{register_metric, register_model};
+use momo_testing::{check_metric, check_model};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::process::ExitCode;

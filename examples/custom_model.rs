@@ -9,9 +9,11 @@
 //! Run with `cargo run --release --example custom_model`.
 
 use momo::core::{Manifold, ModelSpec, Pose, Scalar, SolveRequest, cosc, sinc};
-use momo::costs::{AnglePlane, Cauchy, canned};
-use momo::models::{check_model, register_model};
+use momo::costs::{AnglePlane, Cauchy};
+use momo::models::register_model;
 use momo::solvers::LevenbergMarquardt;
+use momo_testing::canned;
+use momo_testing::check_model;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 

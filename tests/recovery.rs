@@ -7,9 +7,10 @@ use momo::core::{
     Camera, CameraModel, FrameEstimator, FrameObservations, MetricSpec, ModelSpec, Observation,
     Rig, RobustLoss, SolveRequest, Solver,
 };
-use momo::costs::{AnglePlane, Cauchy, GeoLine, Sampson, canned};
+use momo::costs::{AnglePlane, Cauchy, GeoLine, Sampson};
 use momo::models::{Se3, SingleTrack2d, SingleTrack3d};
 use momo::solvers::{Dogleg, GaussNewton, LevenbergMarquardt};
+use momo_testing::canned;
 use nalgebra::Vector2;
 use rand::{Rng, SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};

@@ -2,7 +2,7 @@
 //! outliers for any rig, and the warm start of a solve.
 
 use momo_core::{CameraModel, FrameEstimator, FrameObservations, ModelSpec, Pose, Rig, so3_exp};
-use momo_costs::canned;
+use momo_testing::canned;
 use nalgebra::{Vector2, Vector3};
 
 /// The true vehicle motion: 2° of yaw over 1 m with a little pitch and roll.

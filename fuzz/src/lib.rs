@@ -46,15 +46,15 @@ pub const MAX_FUZZ_FRAMES: usize = 10_000;
 /// fast).
 pub const MAX_FUZZ_MATCHES: usize = 400;
 
-/// The KITTI-like pinhole camera of `FORMAT.md` (`momo_costs::canned::kitti_pinhole`).
+/// The KITTI-like pinhole camera of `FORMAT.md` (`momo_testing::canned::kitti_pinhole`).
 pub fn kitti_pinhole() -> Camera {
-    Camera::Pinhole(momo_costs::canned::kitti_pinhole())
+    Camera::Pinhole(momo_testing::canned::kitti_pinhole())
 }
 
 /// A Kannala-Brandt fisheye whose field of view exceeds 180 degrees
-/// (`momo_costs::canned::fisheye`).
+/// (`momo_testing::canned::fisheye`).
 pub fn wide_fisheye() -> Camera {
-    Camera::KannalaBrandt(momo_costs::canned::fisheye())
+    Camera::KannalaBrandt(momo_testing::canned::fisheye())
 }
 
 /// A valid but hostile pinhole: a 1 x 1 image with wildly different focal lengths.
@@ -71,7 +71,7 @@ pub fn tiny_pinhole() -> Camera {
 
 /// Camera looking along the vehicle's x axis (`FORMAT.md`'s example mount).
 fn forward() -> Matrix3<f64> {
-    momo_costs::canned::forward_looking()
+    momo_testing::canned::forward_looking()
 }
 
 fn rig_of(cameras: Vec<(Camera, Vector3<f64>, Matrix3<f64>)>) -> Rig {

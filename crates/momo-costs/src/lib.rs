@@ -21,13 +21,13 @@
 //! with their scale `b` in the metric's units: [`Cauchy`] (`cauchy`), [`Huber`] (`huber`),
 //! [`Tukey`] (`tukey`), and [`Trivial`] (`trivial`, plain least squares, from core).
 //!
-//! [`FocalScaled`] divides a pixel metric by the focal length (used by derivative checks).
-//! [`canned`] holds a pinhole rig, a four-camera fisheye rig and noise-free synthetic matches
-//! for checks and tests.
+//! Canned rigs and matches, the derivative checks of metrics and the focal-length scaling used
+//! by them live in the test-support crate `momo-testing`.
 //!
 //! ```
 //! use momo_core::{Pose, ResidualMetric, RobustLoss, camera_motion, so3_exp};
-//! use momo_costs::{AnglePlane, GeoLine, canned};
+//! use momo_costs::{AnglePlane, GeoLine};
+//! use momo_testing::canned;
 //! use nalgebra::Vector3;
 //!
 //! // A loss from a configuration file.
@@ -53,14 +53,11 @@
 //! ```
 
 mod angle_plane;
-pub mod canned;
-mod focal_scaled;
 mod geo_line;
 mod loss;
 mod sampson;
 
 pub use angle_plane::AnglePlane;
-pub use focal_scaled::FocalScaled;
 pub use geo_line::{GeoLine, fundamental};
 pub use loss::{Cauchy, Huber, Tukey};
 pub use momo_core::TrivialLoss as Trivial;

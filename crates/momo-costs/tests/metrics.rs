@@ -7,7 +7,8 @@ use momo_core::{
     Camera, FrameObservations, Manifold, MetricSpec, Observation, Pose, ResidualMetric, Rig,
     Scalar, camera_motion, so3_exp,
 };
-use momo_costs::{AnglePlane, FocalScaled, GeoLine, Sampson, SampsonPrepared, canned};
+use momo_costs::{AnglePlane, GeoLine, Sampson, SampsonPrepared};
+use momo_testing::{FocalScaled, canned};
 use nalgebra::{Vector2, Vector3};
 use proptest::prelude::*;
 
@@ -307,3 +308,8 @@ impl momo_core::Manifold for Straight {
         )
     }
 }
+
+// Every built-in metric through the public one-line property-test macro (momo-testing).
+momo_testing::test_metric!(macro_angle_plane, AnglePlane);
+momo_testing::test_metric!(macro_geo_line, FocalScaled(GeoLine), tol = 1e-5);
+momo_testing::test_metric!(macro_sampson, FocalScaled(Sampson), tol = 1e-5);

@@ -21,7 +21,7 @@
 //!
 //! ```
 //! use momo_core::{Manifold, Pose};
-//! use momo_costs::canned;
+//! use momo_testing::canned;
 //! use momo_fivepoint::FivePointRansac;
 //! use momo_models::SingleTrack2d;
 //!

@@ -6,9 +6,9 @@ use momo_core::{
     Camera, FrameObservations, Manifold, Observation, Pose, Rig, camera_motion, essential, so3_exp,
     so3_log,
 };
-use momo_costs::canned;
 use momo_fivepoint::{FivePointRansac, solve_five_point};
 use momo_models::{Se3, SingleTrack2d};
+use momo_testing::canned;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use proptest::prelude::*;
 use rand::rngs::StdRng;

@@ -8,8 +8,8 @@
 #![allow(clippy::unwrap_used)] // tests may unwrap
 
 use momo_core::{Camera, Pinhole, Pose, Rig, RigCamera};
-use momo_costs::canned;
 use momo_io::{IoError, MatchReader, POSE_ORTHONORMAL_TOLERANCE};
+use momo_testing::canned;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 

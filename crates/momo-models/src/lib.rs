@@ -17,12 +17,15 @@
 //! The built-in models are registered as [`momo_core::ModelSpec`] (typetag) with
 //! [`register_model!`]; a researcher's model or metric is registered the same way in one line
 //! ([`register_model!`], [`register_metric!`], re-exported from `momo-core`), and any
-//! registered model pairs with any registered metric. [`check_model`] checks a
-//! model's automatic derivatives against finite differences with every built-in metric.
+//! registered model pairs with any registered metric. `momo_testing::check_model` checks a
+//! model's automatic derivatives against finite differences with every built-in metric
+//! (`momo_testing::test_model!` as property tests). This crate depends on `momo-core` only.
 //!
 //! ```
 //! use momo_core::{Manifold, ModelSpec, MetricSpec};
-//! use momo_models::{SingleTrack2d, check_model};
+//! use momo_models::SingleTrack2d;
+//! use momo_testing::check_model;
+//! use momo_costs as _; // the built-in metrics, registered by type tag
 //!
 //! // Model and metric from a configuration, built into a type-erased estimator.
 //! let model: Box<dyn ModelSpec> = toml::from_str("type = \"single_track_3d\"").unwrap();
@@ -40,14 +43,12 @@
 //! assert!(check_model(&SingleTrack2d, &[0.0, 2.0], 1e-6).is_ok());
 //! ```
 
-mod check;
 mod registry;
 mod rotation;
 mod se3;
 mod single_track;
 mod soft;
 
-pub use check::{CHECK_INLIERS, CHECK_OFF_EPIPOLAR, check_metric, check_model};
 pub use momo_core::{register_metric, register_model};
 pub use rotation::{arc_chord, arc_length_from_chord, half_angle_sinc, rot_x, rot_y, rot_z};
 pub use se3::Se3;
@@ -56,7 +57,5 @@ pub use soft::SoftSingleTrack;
 
 /// Re-exported so that a crate defining its own model or metric needs only `momo-models`.
 pub use momo_core;
-/// Re-exported: the built-in metrics and losses.
-pub use momo_costs;
 /// Re-exported for `#[serde(crate = "momo_models::serde")]` in crates without their own serde.
 pub use serde;

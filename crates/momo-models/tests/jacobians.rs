@@ -2,9 +2,8 @@
 //! 1e-6) through `check_model`, at random parameters, at zero yaw and at exactly zero rotation.
 
 use momo_core::Manifold;
-use momo_models::{
-    Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack, TiltTranslation, check_model,
-};
+use momo_models::{Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack, TiltTranslation};
+use momo_testing::check_model;
 use proptest::prelude::*;
 
 const TOL: f64 = 1e-6;
@@ -139,3 +138,23 @@ fn a_broken_model_is_caught() {
     assert!(check_model(&NalgebraRotation, &[0.1, 0.0, 0.0, 1.0], TOL).is_ok());
     assert!(check_model(&NalgebraRotation, &[0.0, 0.0, 0.0, 1.0], TOL).is_err());
 }
+
+// The same checks through the public one-line macro (momo-testing), as a researcher writes them.
+momo_testing::test_model!(macro_single_track_2d, SingleTrack2d, [-0.3..0.3, 0.1..3.0]);
+momo_testing::test_model!(
+    macro_single_track_3d,
+    SingleTrack3d::default(),
+    [-0.3..0.3, 0.1..3.0, -0.05..0.05, -0.05..0.05]
+);
+momo_testing::test_model!(
+    macro_se3,
+    Se3,
+    [
+        -0.1..0.1,
+        -0.1..0.1,
+        -0.3..0.3,
+        -0.2..0.2,
+        -0.1..0.1,
+        0.1..3.0
+    ]
+);

@@ -7,8 +7,9 @@ use momo_core::{
     LeastSquares, Linearization, Manifold, MotionPrior, Pose, Problem, ResidualMetric, Rig,
     RobustLoss, RotationOnly, so3_exp,
 };
-use momo_costs::{AnglePlane, Cauchy, Huber, Trivial, Tukey, canned};
+use momo_costs::{AnglePlane, Cauchy, Huber, Trivial, Tukey};
 use momo_models::{Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack};
+use momo_testing::canned;
 use nalgebra::Vector3;
 use proptest::prelude::*;
 

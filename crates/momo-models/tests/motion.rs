@@ -1,8 +1,8 @@
 //! The models' geometry: closed-form inverses, agreement between models, conventions.
 
 use momo_core::{Manifold, Pose, Rig, so3_log};
-use momo_costs::canned;
 use momo_models::{Se3, SingleTrack2d, SingleTrack3d, TiltTranslation, rot_x, rot_y};
+use momo_testing::canned;
 use nalgebra::Vector3;
 use proptest::prelude::*;
 

@@ -1,15 +1,14 @@
 //! The registration macros used the way a researcher's crate uses them: only `momo_models`
 //! paths (serde through `momo_models::serde`, typetag brought in by the macros).
 
+use momo_costs::{AnglePlane, GeoLine, Sampson};
 use momo_models::momo_core::nalgebra::{Matrix3, Vector3};
 use momo_models::momo_core::{
     Camera, Manifold, MetricSpec, ModelSpec, Observation, Pose, ResidualMetric, Scalar, essential,
 };
-use momo_models::momo_costs::{AnglePlane, GeoLine, Sampson};
 use momo_models::serde::{Deserialize, Serialize};
-use momo_models::{
-    Se3, SingleTrack2d, SingleTrack3d, check_model, register_metric, register_model,
-};
+use momo_models::{Se3, SingleTrack2d, SingleTrack3d, register_metric, register_model};
+use momo_testing::check_model;
 
 /// A researcher's model: the single-track circle with a constant side slip angle β.
 #[derive(Clone, Debug, Serialize, Deserialize)]

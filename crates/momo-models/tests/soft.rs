@@ -2,8 +2,9 @@
 //! with the cost they add.
 
 use momo_core::{LeastSquares, Manifold, MotionPrior, ParamVec, Problem, ResidualMetric};
-use momo_costs::{AnglePlane, Cauchy, canned};
+use momo_costs::{AnglePlane, Cauchy};
 use momo_models::{Se3, SoftSingleTrack};
+use momo_testing::canned;
 
 /// The linearisation's cost is the cost, and its gradient matches central differences of the
 /// cost in every free parameter.

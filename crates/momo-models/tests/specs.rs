@@ -5,8 +5,9 @@ use momo_core::{
     CoreError, FrameEstimator, LeastSquares, MetricSpec, ModelSpec, ParamVec, RobustLoss,
     SolveRequest, Solver, SolverReport, Termination, solve_normal_equations,
 };
-use momo_costs::{AnglePlane, Cauchy, GeoLine, Sampson, Trivial, canned};
+use momo_costs::{AnglePlane, Cauchy, GeoLine, Sampson, Trivial};
 use momo_models::{Se3, SingleTrack2d, SingleTrack3d, TiltTranslation};
+use momo_testing::canned;
 
 /// A model spec, its parameter names and a parameter vector.
 type Case = (Box<dyn ModelSpec>, &'static [&'static str], Vec<f64>);

@@ -11,7 +11,7 @@
 //! use momo_vo::batch::{FramePair, estimate_batch};
 //! use momo_vo::Config;
 //! use momo_core::{FrameObservations, Pose, so3_exp};
-//! use momo_costs::canned;
+//! use momo_testing::canned;
 //! use nalgebra::Vector3;
 //!
 //! let rig = canned::pinhole_rig();
@@ -122,7 +122,7 @@ pub fn estimate_batch(
 mod tests {
     use super::*;
     use momo_core::{Pose, so3_exp};
-    use momo_costs::canned;
+    use momo_testing::canned;
     use nalgebra::Vector3;
 
     fn pairs(rig: &Rig, n: usize) -> Vec<FramePair> {

@@ -1,8 +1,8 @@
 //! Mount self-calibration on simulated frames with a known mount error.
 
 use momo_core::{Camera, CameraModel, FrameObservations, Manifold, Pose, Rig};
-use momo_costs::canned;
 use momo_models::{Se3, SingleTrack2d, SingleTrack3d};
+use momo_testing::canned;
 use momo_vo::calibrate::corrected_rig;
 use momo_vo::{
     CalibrationError, Config, MountCalibration, MountEstimate, MountModel, Trajectory,

@@ -3,8 +3,8 @@
 //! lever arm.
 
 use momo_core::{Camera, FrameObservations, Manifold, Observation, Pose, Rig, RigCamera, so3_log};
-use momo_costs::canned;
 use momo_models::{Se3, SingleTrack2d};
+use momo_testing::canned;
 use momo_vo::{Config, FrameStatus, Odometry, ScaleSource};
 use nalgebra::{Vector2, Vector3};
 

@@ -5,7 +5,7 @@
 //! 5-point baseline. No panic, and every motion finite with an orthonormal rotation.
 
 use momo_core::{FrameObservations, Observation, Pose};
-use momo_costs::canned;
+use momo_testing::canned;
 use momo_vo::{Config, EstimatorKind, FrameStatus};
 use nalgebra::{Vector2, Vector3};
 

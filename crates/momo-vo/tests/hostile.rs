@@ -8,7 +8,7 @@
 use momo_core::{
     Camera, CameraModel, FrameObservations, Observation, Pose, Rig, RigCamera, so3_exp,
 };
-use momo_costs::canned;
+use momo_testing::canned;
 use momo_vo::{Config, EstimatorKind, FrameStatus, Odometry, Reason, ScaleSource};
 use nalgebra::{Vector2, Vector3};
 

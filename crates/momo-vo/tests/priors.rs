@@ -1,8 +1,8 @@
 //! The soft single-track manifold and the motion prior, end to end through the odometry.
 
 use momo_core::{FrameObservations, Manifold};
-use momo_costs::canned;
 use momo_models::{Se3, SoftSingleTrack};
+use momo_testing::canned;
 use momo_vo::{Config, Odometry};
 
 fn obs_of(params: &[f64], seed: u64) -> FrameObservations {

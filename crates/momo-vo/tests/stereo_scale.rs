@@ -6,7 +6,7 @@ use momo_core::{
     CameraModel, CrossObservation, FrameObservations, Observation, Pose, Rig, RigCamera,
     cross_camera_motion,
 };
-use momo_costs::canned;
+use momo_testing::canned;
 use momo_vo::{Config, FrameStatus, Odometry, ScaleSource};
 use nalgebra::{Vector2, Vector3};
 

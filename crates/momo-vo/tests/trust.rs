@@ -4,7 +4,7 @@
 //! first frame.
 
 use momo_core::{CameraModel, FrameObservations, Observation, Pose, Rig};
-use momo_costs::canned;
+use momo_testing::canned;
 use momo_vo::{Config, Constraint, FrameStatus, Odometry, Reason, RunOptions, run_sequence};
 use nalgebra::{Vector2, Vector3};
 

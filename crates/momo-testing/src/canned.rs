@@ -137,7 +137,8 @@ fn sample_point(camera: &Camera, rng: &mut SplitMix) -> Vector3<f64> {
 ///
 /// ```
 /// use momo_core::{Pose, ResidualMetric, camera_motion};
-/// use momo_costs::{AnglePlane, canned};
+/// use momo_costs::AnglePlane;
+/// use momo_testing::canned;
 /// use nalgebra::{Matrix3, Vector3};
 ///
 /// let rig = canned::fisheye_rig();

@@ -1,8 +1,10 @@
 //! A one-line derivative check for researchers' motion models.
 
+use crate::{FocalScaled, canned};
 use momo_core::check::{JacobianMismatch, check_motion_jacobian, check_residual_jacobian};
 use momo_core::{FrameObservations, Manifold, ResidualMetric, Rig};
-use momo_costs::{AnglePlane, FocalScaled, GeoLine, Sampson, canned};
+use momo_costs::{AnglePlane, GeoLine, Sampson};
+use momo_models::{Se3, SingleTrack2d, SingleTrack3d};
 
 /// Matches per camera at the true motion in [`check_model`] (plus [`CHECK_OFF_EPIPOLAR`]).
 pub const CHECK_INLIERS: usize = 12;
@@ -31,7 +33,7 @@ fn worst<M: Manifold, R: ResidualMetric>(
 /// ([`momo_core::check::check_motion_jacobian`]), of a soft manifold's prior residuals
 /// ([`momo_core::check::check_prior_jacobian`]) and the Jacobians of the residuals of every
 /// built-in metric ([`momo_core::check::check_residual_jacobian`]) on two canned rigs
-/// ([`momo_costs::canned`]): a pinhole camera ([`AnglePlane`], [`GeoLine`], [`Sampson`]) and a
+/// ([`crate::canned`]): a pinhole camera ([`AnglePlane`], [`GeoLine`], [`Sampson`]) and a
 /// four-camera Kannala-Brandt rig ([`AnglePlane`], [`Sampson`] in tangent planes; [`GeoLine`] is
 /// pinhole only). The matches are noise-free projections under the motion at `params`
 /// (residuals near zero) plus a few off-epipolar ones (non-zero residuals).
@@ -46,7 +48,8 @@ fn worst<M: Manifold, R: ResidualMetric>(
 /// [`momo_core::so3_exp`].
 ///
 /// ```
-/// use momo_models::{Se3, check_model};
+/// use momo_models::Se3;
+/// use momo_testing::check_model;
 /// assert!(check_model(&Se3, &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], 1e-6).is_ok());
 /// ```
 pub fn check_model<M: Manifold>(
@@ -125,25 +128,57 @@ pub fn check_model<M: Manifold>(
 
 /// Checks a residual metric's automatic derivatives against central finite differences, in one
 /// call: the Jacobians of its residuals ([`momo_core::check::check_residual_jacobian`]) with
-/// every built-in model ([`crate::SingleTrack2d`], [`crate::SingleTrack3d`], [`crate::Se3`])
-/// at a straight and a curved motion, on the canned pinhole camera and, where the metric
-/// supports it ([`ResidualMetric::supports`]), the four-camera Kannala-Brandt rig
-/// ([`momo_costs::canned`]). The matches are as in [`check_model`]. The metric is checked as
-/// it is: give `tol` in its own units (for a metric in pixels, divide by the focal length or
-/// use a looser `tol`).
+/// every built-in model ([`SingleTrack2d`], [`SingleTrack3d`], [`Se3`]) at a straight and a
+/// curved motion ([`check_metric_at`] at yaw 0 and 0.05 rad, 1.2 m, slight pitch and roll), on
+/// the canned pinhole camera and, where the metric supports it ([`ResidualMetric::supports`]),
+/// the four-camera Kannala-Brandt rig ([`crate::canned`]). The matches are as in
+/// [`check_model`]. The metric is checked as it is: give `tol` in its own units (for a metric in
+/// pixels, divide by the focal length ([`FocalScaled`]) or use a looser `tol`).
 ///
 /// Returns the largest relative error, or the first mismatch beyond `tol`.
 ///
 /// ```
-/// use momo_models::check_metric;
+/// use momo_testing::check_metric;
 /// assert!(check_metric(&momo_costs::AnglePlane, 1e-6).is_ok());
 /// ```
 pub fn check_metric<R: ResidualMetric>(metric: &R, tol: f64) -> Result<f64, JacobianMismatch> {
-    use crate::{Se3, SingleTrack2d, SingleTrack3d};
     let mut acc: f64 = 0.0;
+    for yaw in [0.0, 0.05] {
+        acc = acc.max(check_metric_at(metric, [yaw, 1.2, 0.01, -0.005], 0, tol)?);
+    }
+    Ok(acc)
+}
+
+/// [`check_metric`] at one curve `[yaw, arc_length, pitch, roll]` (a [`SingleTrack3d`] motion
+/// that the matches are generated from) with the canned matches of `seed`: the residual
+/// Jacobians of `metric` with [`SingleTrack2d`] (yaw, arc length), [`SingleTrack3d`] and
+/// [`Se3`] at that curve's parameters, on both canned rigs where the metric supports the
+/// cameras. Used by [`crate::test_metric!`] with random curves and seeds.
+///
+/// ```
+/// use momo_testing::check_metric_at;
+/// assert!(check_metric_at(&momo_costs::AnglePlane, [0.2, 2.0, 0.0, 0.01], 7, 1e-6).is_ok());
+/// ```
+pub fn check_metric_at<R: ResidualMetric>(
+    metric: &R,
+    curve: [f64; 4],
+    seed: u64,
+    tol: f64,
+) -> Result<f64, JacobianMismatch> {
+    let mut acc: f64 = 0.0;
+    let [yaw, l, pitch, roll] = curve;
+    let st3 = [yaw, l, pitch, roll];
+    let motion = SingleTrack3d::default().motion(&st3);
+    let st2 = [yaw, l];
+    let mut se3 = [0.0; 6];
+    if let Some(p) = Se3.params_from_motion(&motion) {
+        se3.copy_from_slice(&p);
+    } else {
+        se3 = [pitch, roll, yaw, 0.5 * yaw, 0.0, l];
+    }
     let rigs = [
-        (canned::pinhole_rig(), 0x5eed_u64),
-        (canned::fisheye_rig(), 0xf15e_u64),
+        (canned::pinhole_rig(), 0x5eed_u64 ^ seed),
+        (canned::fisheye_rig(), 0xf15e_u64 ^ seed),
     ];
     for (rig, seed) in &rigs {
         if rig
@@ -153,22 +188,11 @@ pub fn check_metric<R: ResidualMetric>(metric: &R, tol: f64) -> Result<f64, Jaco
         {
             continue;
         }
-        for yaw in [0.0, 0.05] {
-            let st2 = [yaw, 1.2];
-            let st3 = [yaw, 1.2, 0.01, -0.005];
-            let se3 = [0.01, 0.002, yaw, 0.01, 0.005, 1.2];
-            let motion = SingleTrack3d::default().motion(&st3);
-            let obs = canned::synthetic_observations(
-                rig,
-                &motion,
-                CHECK_INLIERS,
-                CHECK_OFF_EPIPOLAR,
-                *seed,
-            );
-            acc = worst(acc, &SingleTrack2d, metric, rig, &obs, &st2, tol)?;
-            acc = worst(acc, &SingleTrack3d::default(), metric, rig, &obs, &st3, tol)?;
-            acc = worst(acc, &Se3, metric, rig, &obs, &se3, tol)?;
-        }
+        let obs =
+            canned::synthetic_observations(rig, &motion, CHECK_INLIERS, CHECK_OFF_EPIPOLAR, *seed);
+        acc = worst(acc, &SingleTrack2d, metric, rig, &obs, &st2, tol)?;
+        acc = worst(acc, &SingleTrack3d::default(), metric, rig, &obs, &st3, tol)?;
+        acc = worst(acc, &Se3, metric, rig, &obs, &se3, tol)?;
     }
     Ok(acc)
 }

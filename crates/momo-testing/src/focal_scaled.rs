@@ -15,7 +15,8 @@ use momo_core::{Camera, Observation, Pose, ResidualMetric, Scalar};
 ///
 /// ```
 /// use momo_core::{Pose, ResidualMetric, camera_motion};
-/// use momo_costs::{FocalScaled, GeoLine, canned};
+/// use momo_costs::GeoLine;
+/// use momo_testing::{FocalScaled, canned};
 /// use nalgebra::{Matrix3, Vector3};
 ///
 /// let rig = canned::pinhole_rig();
