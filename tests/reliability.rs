@@ -232,8 +232,28 @@ fn temporaries(dir: &Path) -> Vec<String> {
         .collect()
 }
 
+/// How many temporary outputs process `pid` holds open in `dir`: named ones (`.NAME.*.tmp`)
+/// and, on Linux, anonymous ones (`O_TMPFILE`, which `/proc/PID/fd` shows as
+/// `DIR/#INODE (deleted)`).
+fn open_temporaries(pid: u32, dir: &Path) -> usize {
+    let named = temporaries(dir).len();
+    let Ok(fds) = std::fs::read_dir(format!("/proc/{pid}/fd")) else {
+        return named;
+    };
+    let dir = std::fs::canonicalize(dir).expect("canonical");
+    let anonymous = fds
+        .filter_map(|e| std::fs::read_link(e.ok()?.path()).ok())
+        .filter(|target| {
+            target.parent() == Some(dir.as_path())
+                && target.to_string_lossy().ends_with(" (deleted)")
+        })
+        .count();
+    named + anonymous
+}
+
 /// `momo run` on a sequence whose matches.csv is a FIFO that this test holds open: the run
 /// has created its temporary outputs and waits for more rows when the signal arrives.
+/// `expected`: the exit code, or (negative) the signal that killed the process.
 fn signal_during_run(signal: &str, expected: i32) {
     let tmp = tempfile::tempdir().expect("tmp");
     let seq = tmp.path().join("seq");
@@ -275,7 +295,7 @@ fn signal_during_run(signal: &str, expected: i32) {
     fifo.write_all(half.as_bytes()).expect("write");
     fifo.flush().expect("flush");
     let start = std::time::Instant::now();
-    while temporaries(&outdir).len() < 2 {
+    while open_temporaries(child.id(), &outdir) < 2 {
         assert!(
             start.elapsed().as_secs() < 60,
             "no temporary files appeared"
@@ -291,13 +311,20 @@ fn signal_during_run(signal: &str, expected: i32) {
     assert!(killed.success());
     let status = child.wait().expect("wait");
     drop(fifo);
-    assert_eq!(status.code(), Some(expected), "exit code after SIG{signal}");
+    if expected < 0 {
+        use std::os::unix::process::ExitStatusExt;
+        assert_eq!(status.signal(), Some(-expected), "killed by SIG{signal}");
+    } else {
+        assert_eq!(status.code(), Some(expected), "exit code after SIG{signal}");
+    }
     assert_eq!(
         temporaries(&outdir),
         Vec::<String>::new(),
         "temporaries removed"
     );
     assert!(!outdir.join("p.txt").exists() && !outdir.join("d.csv").exists());
+    let left: Vec<_> = std::fs::read_dir(&outdir).expect("dir").collect();
+    assert!(left.is_empty(), "left in the output directory: {left:?}");
 }
 
 #[test]
@@ -308,6 +335,14 @@ fn sigterm_removes_temporary_files_and_exits_143() {
 #[test]
 fn sigint_removes_temporary_files_and_exits_130() {
     signal_during_run("INT", 130);
+}
+
+#[test]
+#[cfg(target_os = "linux")]
+fn sigkill_mid_write_leaves_no_file() {
+    // SIGKILL cannot be caught: nothing of momo runs after it. The temporary outputs are
+    // anonymous (O_TMPFILE) until the commit, so the kernel drops them with the process.
+    signal_during_run("KILL", -9);
 }
 
 #[test]
@@ -735,6 +770,51 @@ fn sparse_frame_numbers_are_not_expanded_in_memory() {
         .arg(tmp.path().join("l2.svg")));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("frames 1..=10000000"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_huge_last_frame_in_odometry_csv_is_not_expanded_by_momo_run() {
+    // odometry.csv's last frame is 10,000,000 (MAX_FRAME) and matches.csv ends in a bad row:
+    // the run streams frames 1-6, then stops at the bad row with exit 2. Held densely (16 bytes
+    // per frame), the odometry took 160-320 MB before the first frame and the process was
+    // killed by the allocator under the limit below (SIGABRT, exit 134); held as its rows, a
+    // debug build runs in under 50 MB of address space.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    let mut cfg = SimConfig::clean_pinhole();
+    cfg.frames = 7;
+    cfg.matches_per_camera = 100;
+    simulate(&cfg)
+        .expect("simulates")
+        .write(&seq)
+        .expect("writes");
+    let append = |name: &str, row: &str| {
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(seq.join(name))
+            .expect("open");
+        writeln!(f, "{row}").expect("append");
+    };
+    append("odometry.csv", "10000000,1.0");
+    append("matches.csv", "garbage");
+    let rows = std::fs::read_to_string(seq.join("matches.csv"))
+        .expect("read")
+        .lines()
+        .count();
+    let poses = tmp.path().join("p.txt");
+    let o = out(momo_limited(100_000)
+        .arg("run")
+        .arg(&seq)
+        .arg("-o")
+        .arg(&poses)
+        .arg("-q"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("matches.csv:{rows}:")),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!poses.exists());
 }
 
 /// `momo config`'s text with the line starting with `key_line` replaced by `new` (or, when
