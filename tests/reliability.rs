@@ -2,22 +2,13 @@
 //! left half-written or behind on any error or signal, unwritable standard streams end cleanly,
 //! and oversized inputs are refused early. Every test runs the built binary.
 
+mod common;
+
+use common::{assert_exit, momo, momo_limited, out, stderr};
 use momo::sim::{SimConfig, simulate};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-
-fn momo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_momo"))
-}
-
-fn out(cmd: &mut Command) -> Output {
-    cmd.output().expect("momo starts")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// A small simulated sequence (10 frames) with odometry and ground truth.
 fn sequence(dir: &Path) {
@@ -213,7 +204,7 @@ fn a_254_character_output_name_works() {
     assert_eq!(name.len(), 254);
     let target = tmp.path().join(&name);
     let o = out(momo().arg("run").arg(&seq).arg("-o").arg(&target).arg("-q"));
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_exit(&o, 0, &[]);
     assert_eq!(
         momo::io::read_poses(&target).expect("poses").len(),
         10,
@@ -361,7 +352,7 @@ fn simulate_and_import_refuse_a_non_empty_directory_without_force() {
     let o = out(momo()
         .args(["simulate", "--frames", "5", "--force"])
         .arg(&dir));
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_exit(&o, 0, &[]);
     assert!(momo::io::read_sequence(&dir).is_ok());
     // A file as the output directory.
     let file = tmp.path().join("file");
@@ -370,7 +361,7 @@ fn simulate_and_import_refuse_a_non_empty_directory_without_force() {
     assert_refused(&o, "file as directory");
     // import-kitti too (its input is checked after the directory, so any input will do).
     let o = out(momo().arg("import-kitti").arg(tmp.path()).arg(&dir));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_exit(&o, 2, &[]);
 }
 
 #[test]
@@ -423,7 +414,7 @@ fn a_failed_match_leaves_no_directory() {
         .arg("-o")
         .arg(&dir)
         .arg("-q"));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_exit(&o, 2, &[]);
     assert!(!dir.exists(), "the created output directory is removed");
 }
 
@@ -500,12 +491,7 @@ fn a_dangling_odometry_link_is_an_error() {
         .expect("symlink");
     let p = tmp.path().join("p.txt");
     let o = out(momo().arg("run").arg(&seq).arg("-o").arg(&p).arg("-q"));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("odometry.csv: a symbolic link"),
-        "{}",
-        stderr(&o)
-    );
+    assert_exit(&o, 2, &["odometry.csv: a symbolic link"]);
     assert!(!p.exists());
     let o = out(momo()
         .arg("calibrate")
@@ -513,7 +499,7 @@ fn a_dangling_odometry_link_is_an_error() {
         .arg("-o")
         .arg(&p)
         .arg("-q"));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_exit(&o, 2, &[]);
 }
 
 #[test]
@@ -525,8 +511,7 @@ fn eval_needs_two_poses() {
     std::fs::write(&empty, "").expect("write");
     for f in [&one, &empty] {
         let o = out(momo().arg("eval").arg("--gt").arg(f).arg("--est").arg(f));
-        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-        assert!(stderr(&o).contains("at least 2"), "{}", stderr(&o));
+        assert_exit(&o, 2, &["at least 2"]);
         assert!(!String::from_utf8_lossy(&o.stdout).contains("NaN"));
     }
 }
@@ -545,12 +530,7 @@ fn a_negative_frame_rate_is_parsed_and_rejected() {
         .arg("-o")
         .arg(tmp.path().join("e.svg"))
         .args(["--frame-rate", "-10"]));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("--frame-rate must be a positive number"),
-        "{}",
-        stderr(&o)
-    );
+    assert_exit(&o, 2, &["--frame-rate must be a positive number"]);
 }
 
 #[test]
@@ -566,12 +546,7 @@ fn config_files_are_capped_and_unknown_solver_keys_rejected() {
         .arg(&seq)
         .args(["-c", "/dev/zero", "-o"])
         .arg(&p));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("/dev/zero: larger than 1048576 bytes"),
-        "{}",
-        stderr(&o)
-    );
+    assert_exit(&o, 2, &["/dev/zero: larger than 1048576 bytes"]);
     assert!(started.elapsed().as_secs() < 30);
     // A misspelt solver option is an error naming the file and the line.
     let cfg = tmp.path().join("typo.toml");
@@ -587,9 +562,7 @@ fn config_files_are_capped_and_unknown_solver_keys_rejected() {
         .arg(&cfg)
         .arg("-o")
         .arg(&p));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("typo.toml:"), "{}", stderr(&o));
-    assert!(stderr(&o).contains("max_iteratons"), "{}", stderr(&o));
+    assert_exit(&o, 2, &["typo.toml:", "max_iteratons"]);
     // A missing file: the OS error once.
     let o = out(momo()
         .arg("run")
@@ -598,7 +571,7 @@ fn config_files_are_capped_and_unknown_solver_keys_rejected() {
         .arg(tmp.path().join("none.toml"))
         .arg("-o")
         .arg(&p));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_exit(&o, 2, &[]);
     assert_eq!(
         stderr(&o).matches("No such file").count(),
         1,
@@ -636,12 +609,7 @@ fn a_huge_sweep_grid_is_counted_not_expanded() {
         .arg("--output")
         .arg(tmp.path().join("out"))
         .arg("--quiet"));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("9000000 combinations"),
-        "{}",
-        stderr(&o)
-    );
+    assert_exit(&o, 2, &["9000000 combinations"]);
     assert!(started.elapsed().as_secs() < 60);
 }
 
@@ -675,12 +643,7 @@ fn too_many_restart_offsets_and_an_endless_font_are_bounded() {
         .arg(&cfg)
         .arg("-o")
         .arg(tmp.path().join("p.txt")));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("restart_yaw_offsets has 100000 entries"),
-        "{}",
-        stderr(&o)
-    );
+    assert_exit(&o, 2, &["restart_yaw_offsets has 100000 entries"]);
     // MOMO_PLOT_FONT=/dev/zero: skipped after 64 MiB instead of read until memory runs out.
     let gt = seq.join("poses.txt");
     let o = out(momo()
@@ -691,7 +654,7 @@ fn too_many_restart_offsets_and_an_endless_font_are_bounded() {
         .arg(&gt)
         .arg("-o")
         .arg(tmp.path().join("t.svg")));
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_exit(&o, 0, &[]);
 }
 
 /// Rewrites the frame number `from` to `to` in a sequence file (`matches.csv`, `odometry.csv`).
@@ -706,15 +669,6 @@ fn renumber(path: &Path, from: usize, to: usize) {
         })
         .collect();
     std::fs::write(path, out).expect("write");
-}
-
-/// `momo` under an address-space limit (`ulimit -v`, kB).
-fn momo_limited(kb: usize) -> Command {
-    let mut c = Command::new("sh");
-    c.arg("-c")
-        .arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\""))
-        .arg(env!("CARGO_BIN_EXE_momo"));
-    c
 }
 
 #[test]
@@ -747,7 +701,7 @@ fn sparse_frame_numbers_are_not_expanded_in_memory() {
             .arg("-o")
             .arg(rig)
             .arg("-q"));
-        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        assert_exit(&o, 0, &[]);
         std::fs::read(rig).expect("rig written")
     };
     let from_compact = calibrate(&compact, &tmp.path().join("compact.json"));
@@ -760,7 +714,7 @@ fn sparse_frame_numbers_are_not_expanded_in_memory() {
         .arg(&sparse)
         .args(["--frame", "3", "--steps", "5", "-o"])
         .arg(tmp.path().join("l.svg")));
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_exit(&o, 0, &[]);
     assert!(tmp.path().join("l.svg").exists());
     // A frame pair beyond the sequence is still named with the sequence's true extent.
     let o = out(momo_limited(limit_kb)
@@ -768,8 +722,7 @@ fn sparse_frame_numbers_are_not_expanded_in_memory() {
         .arg(&sparse)
         .args(["--frame", "10000001", "-o"])
         .arg(tmp.path().join("l2.svg")));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("frames 1..=10000000"), "{}", stderr(&o));
+    assert_exit(&o, 2, &["frames 1..=10000000"]);
 }
 
 #[test]
@@ -808,12 +761,7 @@ fn a_huge_last_frame_in_odometry_csv_is_not_expanded_by_momo_run() {
         .arg("-o")
         .arg(&poses)
         .arg("-q"));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains(&format!("matches.csv:{rows}:")),
-        "{}",
-        stderr(&o)
-    );
+    assert_exit(&o, 2, &[&format!("matches.csv:{rows}:")]);
     assert!(!poses.exists());
 }
 
@@ -930,7 +878,7 @@ fn out_of_range_configuration_values_are_rejected_naming_file_line_and_key() {
         .arg(&path)
         .arg("-o")
         .arg(tmp.path().join("p.txt")));
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_exit(&o, 2, &[]);
     let e = stderr(&o);
     assert!(
         e.contains(&format!(
@@ -977,7 +925,7 @@ fn the_kitti_folder_import_checks_its_output_directory_like_the_other_writers() 
     // A new directory: written.
     let fresh = tmp.path().join("fresh");
     let o = import(&fresh, false);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_exit(&o, 0, &[]);
     assert!(fresh.join("rig.json").is_file() && fresh.join("times.txt").is_file());
 
     // A non-empty directory without --force: refused, untouched; with --force: written.
@@ -990,7 +938,7 @@ fn the_kitti_folder_import_checks_its_output_directory_like_the_other_writers() 
     assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
     assert_eq!(snapshot(&mine), before);
     let o = import(&mine, true);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_exit(&o, 0, &[]);
     assert!(momo::io::read_rig(mine.join("rig.json")).is_ok());
 
     // The input folder itself (even with --force, any spelling): refused, nothing written there.
@@ -1012,7 +960,7 @@ fn the_kitti_folder_import_checks_its_output_directory_like_the_other_writers() 
     std::fs::write(kitti.join("image_0/000000.png"), "not a png").expect("write");
     let failed = tmp.path().join("new/deep");
     let o = import(&failed, false);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_exit(&o, 2, &[]);
     assert!(
         !tmp.path().join("new").exists(),
         "created directories removed"
