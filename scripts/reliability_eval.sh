@@ -8,14 +8,19 @@
 #   cargo build --release --bin momo
 #   bash scripts/reliability_eval.sh [WORK=/tmp/momo-reliability]
 #   ROWS="10000000 30000000" bash scripts/reliability_eval.sh      # streamed sizes (rows)
+#   ROWS= FIFO_ROWS=100000000 bash scripts/reliability_eval.sh     # through a FIFO, no disk
 #   MOMO=/path/to/other/momo bash scripts/reliability_eval.sh      # another build (before/after)
 #
 # Disk: ~81 bytes per row (10 million rows: 0.8 GB), checked against the free space first.
+# FIFO_ROWS: the rows are generated into a FIFO named matches.csv in the sequence directory
+# (momo reads it as it is written), so any size runs without disk; the generator (awk) runs
+# at the same time on the other core.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 momo=$(realpath "${MOMO:-target/release/momo}")
 work=${1:-/tmp/momo-reliability}
 rows_list=${ROWS-"1000000 10000000"}
+fifo_rows_list=${FIFO_ROWS-}
 [ -x "$momo" ] || { echo "no $momo: cargo build --release --bin momo" >&2; exit 1; }
 mkdir -p "$work"
 trap 'rm -rf "$work"' EXIT
@@ -59,6 +64,16 @@ echo "rig.json: $(stat -c %s "$work/rig50k/rig.json") bytes, $(grep -c '"model"'
 measure "run (50,000-camera rig.json, 20 frames)" "$momo" run "$work/rig50k" -o "$work/p.txt" -q
 rm -rf "$work/rig50k"
 
+# ROWS rows of the base sequence's matches: its 50 frame pairs repeated (frame k of copy r
+# is 50 r + k), to standard output.
+generate() {
+    awk -F, -v rows="$1" 'BEGIN { OFS = "," }
+        NR == 1 { print; next }
+        { line[++n] = $0; frame[n] = $1; sub(/^[^,]*,/, "", line[n]) }
+        END { for (i = 0; i < rows; i++) { j = i % n + 1; r = int(i / n);
+              print 50 * r + frame[j], line[j] } }' "$work/base/matches.csv"
+}
+
 # 3. ROWS rows streamed: the 50 frame pairs repeated (frame k of copy r is 50 r + k).
 for rows in $rows_list; do
     need=$((rows * 90))
@@ -69,13 +84,22 @@ for rows in $rows_list; do
     fi
     mkdir -p "$work/huge"
     cp "$work/base/rig.json" "$work/huge/"
-    awk -F, -v rows="$rows" 'BEGIN { OFS = "," }
-        NR == 1 { print; next }
-        { line[++n] = $0; frame[n] = $1; sub(/^[^,]*,/, "", line[n]) }
-        END { for (i = 0; i < rows; i++) { j = i % n + 1; r = int(i / n);
-              print 50 * r + frame[j], line[j] } }' "$work/base/matches.csv" > "$work/huge/matches.csv"
+    generate "$rows" > "$work/huge/matches.csv"
     echo "$rows rows: $(stat -c %s "$work/huge/matches.csv") bytes, last frame $(tail -n 1 "$work/huge/matches.csv" | cut -d, -f1)"
     measure "run (streamed, $rows rows)" "$momo" run "$work/huge" -o "$work/p.txt" -q
     echo "  poses written: $(wc -l < "$work/p.txt")"
     rm -rf "$work/huge" "$work/p.txt"
+done
+
+# 4. FIFO_ROWS rows streamed through a FIFO: nothing is written to disk but the poses.
+for rows in $fifo_rows_list; do
+    mkdir -p "$work/fifo"
+    cp "$work/base/rig.json" "$work/fifo/"
+    mkfifo "$work/fifo/matches.csv"
+    generate "$rows" > "$work/fifo/matches.csv" &
+    gen=$!
+    measure "run (streamed through a FIFO, $rows rows)" "$momo" run "$work/fifo" -o "$work/p.txt" -q
+    wait "$gen" || true
+    echo "  poses written: $(wc -l < "$work/p.txt")"
+    rm -rf "$work/fifo" "$work/p.txt"
 done

@@ -1,17 +1,15 @@
 //! `momo simulate` writes bound.csv (FORMAT.md version 2) and `momo eval` reports the bound and
 //! the efficiency; a malformed bound.csv is an input error naming file and line.
 
-use std::process::Command;
+mod common;
 
-fn momo() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_momo"))
-}
+use common::{assert_exit, momo, out};
 
 #[test]
 fn simulate_writes_the_bound_and_eval_reports_the_efficiency() {
     let dir = tempfile::tempdir().expect("tempdir");
     let seq = dir.path().join("seq");
-    let out = momo()
+    let o = out(momo()
         .args([
             "simulate",
             "--scenario",
@@ -21,46 +19,28 @@ fn simulate_writes_the_bound_and_eval_reports_the_efficiency() {
             "--seed",
             "2",
         ])
-        .arg(&seq)
-        .output()
-        .expect("momo starts");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .arg(&seq));
+    assert_exit(&o, 0, &[]);
     let bound = std::fs::read_to_string(seq.join("bound.csv")).expect("bound.csv written");
     let rows: Vec<&str> = bound.lines().collect();
     assert_eq!(rows[0], "frame,rotation_bound_deg,static_matches");
     assert_eq!(rows.len(), 30, "one row per frame pair");
     let est = dir.path().join("est.txt");
-    let out = momo()
+    let o = out(momo()
         .arg("run")
         .arg(&seq)
         .arg("--output")
         .arg(&est)
-        .arg("--quiet")
-        .output()
-        .expect("momo starts");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = momo()
+        .arg("--quiet"));
+    assert_exit(&o, 0, &[]);
+    let o = out(momo()
         .arg("eval")
         .arg("--gt")
         .arg(seq.join("poses.txt"))
         .arg("--est")
-        .arg(&est)
-        .output()
-        .expect("momo starts");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
+        .arg(&est));
+    assert_exit(&o, 0, &[]);
+    let text = String::from_utf8_lossy(&o.stdout);
     let lines: Vec<&str> = text.lines().collect();
     assert!(
         lines[1].contains("bound") && lines[1].contains("eff"),
@@ -82,15 +62,11 @@ fn simulate_writes_the_bound_and_eval_reports_the_efficiency() {
         "frame,rotation_bound_deg,static_matches\n1,nope,3\n",
     )
     .expect("write");
-    let out = momo()
+    let o = out(momo()
         .arg("eval")
         .arg("--gt")
         .arg(seq.join("poses.txt"))
         .arg("--est")
-        .arg(&est)
-        .output()
-        .expect("momo starts");
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("bound.csv:2:"), "{err}");
+        .arg(&est));
+    assert_exit(&o, 2, &["bound.csv:2:"]);
 }

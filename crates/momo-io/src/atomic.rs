@@ -2,7 +2,11 @@
 //!
 //! - [`AtomicFile`]: write to a temporary file in the target's directory, flush and sync it,
 //!   then rename it over the target. On any error (or a drop without [`AtomicFile::commit`]) the
-//!   temporary file is removed and the target is left as it was. [`commit_all`] commits several
+//!   temporary file is removed and the target is left as it was. On Linux the temporary file
+//!   is anonymous (`O_TMPFILE`) until the commit links it into the directory, so that even a
+//!   process killed by SIGKILL (or aborted by an allocation failure) while writing leaves
+//!   nothing; elsewhere, or where the file system does not support it, it is a named
+//!   `.NAME.XXXXXX.tmp`. [`commit_all`] commits several
 //!   outputs of one command together: all of them or none.
 //! - [`check_outputs`]: refuses outputs that are also inputs (compared by device and inode, so
 //!   links and other spellings are caught), an output given twice, outputs that exist but are
@@ -14,11 +18,12 @@
 
 use crate::error::{IoError, IoErrorKind};
 use std::collections::BTreeMap;
+use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
-use tempfile::NamedTempFile;
+use tempfile::TempPath;
 
 /// Longest part of the target's file name kept in a temporary name (bytes); the rest of the
 /// temporary name is `.` + this + `.XXXXXX.tmp`, well within NAME_MAX (255) for any target.
@@ -187,7 +192,8 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), IoError>
 /// target, [`writer`](Self::writer) writes into it, [`commit`](Self::commit) flushes, syncs and
 /// renames it over the target. Dropped without `commit`, the temporary file is removed and the
 /// target is untouched; on SIGINT / SIGTERM the command line removes it
-/// ([`remove_temporaries`]).
+/// ([`remove_temporaries`]). On Linux the temporary file has no name until the commit
+/// (`O_TMPFILE`): a killed process leaves nothing behind (see the module).
 ///
 /// ```
 /// use std::io::Write;
@@ -204,8 +210,82 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), IoError>
 /// ```
 pub struct AtomicFile {
     path: PathBuf,
-    writer: BufWriter<NamedTempFile>,
-    _guard: CleanupGuard,
+    writer: BufWriter<File>,
+    temp: Temp,
+}
+
+/// Where the temporary file of an [`AtomicFile`] lives.
+enum Temp {
+    /// An anonymous file (`O_TMPFILE`) in this directory, given a name only at the commit.
+    #[cfg(target_os = "linux")]
+    Anonymous(PathBuf),
+    /// A named temporary file (removed on drop), registered for [`remove_temporaries`].
+    Named(TempPath, CleanupGuard),
+}
+
+/// The prefix `.NAME.` of a temporary name, with NAME cut so that the whole stays within
+/// NAME_MAX.
+fn temp_prefix(name: &std::ffi::OsStr) -> String {
+    let mut kept = String::new();
+    for c in name.to_string_lossy().chars() {
+        if kept.len() + c.len_utf8() > TEMP_NAME_KEEP {
+            break;
+        }
+        kept.push(c);
+    }
+    format!(".{kept}.")
+}
+
+/// Opens an anonymous temporary file in `dir` (`O_TMPFILE`); `None` where the kernel or the
+/// file system does not support it (the caller falls back to a named temporary file).
+#[cfg(target_os = "linux")]
+fn open_anonymous(dir: &Path) -> Option<File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .mode(0o600)
+        .custom_flags(rustix::fs::OFlags::TMPFILE.bits() as i32)
+        .open(dir)
+        .ok()
+}
+
+/// Gives the anonymous file `file` a temporary name `.NAME.XXXXXX.tmp` in `dir`: a hard link
+/// through `/proc/self/fd` (`linkat` with `AT_SYMLINK_FOLLOW`, which needs no privilege).
+/// Without `/proc`, the content is copied into a named temporary file instead.
+#[cfg(target_os = "linux")]
+fn name_anonymous(file: &mut File, dir: &Path, prefix: &str) -> std::io::Result<TempPath> {
+    use std::os::fd::AsRawFd;
+    let proc_path = format!("/proc/self/fd/{}", file.as_raw_fd());
+    let linked = tempfile::Builder::new()
+        .prefix(prefix)
+        .suffix(".tmp")
+        .make_in(dir, |name| {
+            rustix::fs::linkat(
+                rustix::fs::CWD,
+                proc_path.as_str(),
+                rustix::fs::CWD,
+                name,
+                rustix::fs::AtFlags::SYMLINK_FOLLOW,
+            )
+            .map_err(std::io::Error::from)
+        });
+    match linked {
+        Ok(named) => Ok(named.into_temp_path()),
+        Err(_) => {
+            use std::io::{Seek, SeekFrom};
+            let mut copy = tempfile::Builder::new()
+                .prefix(prefix)
+                .suffix(".tmp")
+                .tempfile_in(dir)?;
+            file.seek(SeekFrom::Start(0))?;
+            std::io::copy(file, copy.as_file_mut())?;
+            copy.as_file()
+                .set_permissions(file.metadata()?.permissions())?;
+            copy.as_file().sync_all()?;
+            Ok(copy.into_temp_path())
+        }
+    }
 }
 
 impl AtomicFile {
@@ -220,26 +300,33 @@ impl AtomicFile {
                 IoErrorKind::InvalidData("the path does not name a file".into()),
             )
         })?;
-        // `.NAME.XXXXXX.tmp`, with NAME cut so that the whole stays within NAME_MAX.
-        let mut kept = String::new();
-        for c in name.to_string_lossy().chars() {
-            if kept.len() + c.len_utf8() > TEMP_NAME_KEEP {
-                break;
-            }
-            kept.push(c);
+        #[cfg(target_os = "linux")]
+        if let Some(file) = open_anonymous(dir) {
+            return Ok(Self {
+                path: path.to_owned(),
+                writer: BufWriter::new(file),
+                temp: Temp::Anonymous(dir.to_owned()),
+            });
         }
-        let prefix = format!(".{kept}.");
+        // `.NAME.XXXXXX.tmp`, with NAME cut so that the whole stays within NAME_MAX.
         let tmp = tempfile::Builder::new()
-            .prefix(&prefix)
+            .prefix(&temp_prefix(name))
             .suffix(".tmp")
             .tempfile_in(dir)
             .map_err(|e| IoError::io(path, e))?;
-        let guard = CleanupGuard::new(tmp.path().to_path_buf(), false);
+        let (file, tmp_path) = tmp.into_parts();
+        let guard = CleanupGuard::new(tmp_path.to_path_buf(), false);
         Ok(Self {
             path: path.to_owned(),
-            writer: BufWriter::new(tmp),
-            _guard: guard,
+            writer: BufWriter::new(file),
+            temp: Temp::Named(tmp_path, guard),
         })
+    }
+
+    /// Whether the temporary file is anonymous until the commit (`O_TMPFILE`, Linux): then a
+    /// killed process leaves no file behind.
+    pub fn is_anonymous(&self) -> bool {
+        !matches!(self.temp, Temp::Named(..))
     }
 
     /// The target path (for error messages).
@@ -248,7 +335,7 @@ impl AtomicFile {
     }
 
     /// The buffered writer into the temporary file.
-    pub fn writer(&mut self) -> &mut BufWriter<NamedTempFile> {
+    pub fn writer(&mut self) -> &mut BufWriter<File> {
         &mut self.writer
     }
 
@@ -257,12 +344,13 @@ impl AtomicFile {
         IoError::file(&self.path, IoErrorKind::Io(e))
     }
 
-    /// Flushes and syncs the temporary file and gives it ordinary permissions: everything of
-    /// a commit but the rename.
+    /// Flushes and syncs the temporary file, gives it ordinary permissions and (if anonymous)
+    /// a temporary name: everything of a commit but the rename.
     fn prepare(self) -> Result<Prepared, IoError> {
         let path = self.path;
-        let guard = self._guard;
-        let tmp = self
+        let io = |e| IoError::file(&path, IoErrorKind::Io(e));
+        #[cfg_attr(not(target_os = "linux"), allow(unused_mut))]
+        let mut file = self
             .writer
             .into_inner()
             .map_err(|e| IoError::file(&path, IoErrorKind::Io(e.into_error())))?;
@@ -270,13 +358,20 @@ impl AtomicFile {
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
-            tmp.as_file()
-                .set_permissions(std::fs::Permissions::from_mode(0o644))
-                .map_err(|e| IoError::file(&path, IoErrorKind::Io(e)))?;
+            file.set_permissions(std::fs::Permissions::from_mode(0o644))
+                .map_err(io)?;
         }
-        tmp.as_file()
-            .sync_all()
-            .map_err(|e| IoError::file(&path, IoErrorKind::Io(e)))?;
+        file.sync_all().map_err(io)?;
+        let (tmp, guard) = match self.temp {
+            Temp::Named(tmp, guard) => (tmp, guard),
+            #[cfg(target_os = "linux")]
+            Temp::Anonymous(dir) => {
+                let name = path.file_name().unwrap_or_default();
+                let tmp = name_anonymous(&mut file, &dir, &temp_prefix(name)).map_err(io)?;
+                let guard = CleanupGuard::new(tmp.to_path_buf(), false);
+                (tmp, guard)
+            }
+        };
         Ok(Prepared {
             path,
             tmp,
@@ -293,7 +388,7 @@ impl AtomicFile {
 /// A flushed and synced temporary file waiting for its rename.
 struct Prepared {
     path: PathBuf,
-    tmp: NamedTempFile,
+    tmp: TempPath,
     _guard: CleanupGuard,
 }
 
@@ -314,7 +409,6 @@ pub fn commit_all(files: Vec<AtomicFile>) -> Result<(), IoError> {
         return p
             .tmp
             .persist(&path)
-            .map(|_| ())
             .map_err(|e| IoError::file(&path, IoErrorKind::Io(e.error)));
     }
     let paths: Vec<PathBuf> = prepared.iter().map(|p| p.path.clone()).collect();
@@ -323,7 +417,7 @@ pub fn commit_all(files: Vec<AtomicFile>) -> Result<(), IoError> {
     for p in &prepared {
         let mut backup = None;
         if std::fs::symlink_metadata(&p.path).is_ok() {
-            let b = p.tmp.path().with_extension("bak");
+            let b = p.tmp.with_extension("bak");
             if std::fs::hard_link(&p.path, &b).is_ok() {
                 let g = CleanupGuard::new(b.clone(), false);
                 backup = Some((b, g));
@@ -337,7 +431,7 @@ pub fn commit_all(files: Vec<AtomicFile>) -> Result<(), IoError> {
         let path = p.path;
         let _guard = p._guard;
         match p.tmp.persist(&path) {
-            Ok(_) => renamed += 1,
+            Ok(()) => renamed += 1,
             Err(e) => {
                 failure = Some(IoError::file(&path, IoErrorKind::Io(e.error)));
                 break;

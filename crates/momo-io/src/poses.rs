@@ -5,7 +5,7 @@ use crate::atomic::{AtomicFile, put, stage_atomic};
 use crate::error::{IoError, IoErrorKind};
 use crate::text::{Exact, LineReader, is_blank, parse_f64};
 use momo_core::Pose;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix4, Vector3};
 use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -81,22 +81,40 @@ pub fn read_poses(path: impl AsRef<Path>) -> Result<Vec<Pose<f64>>, IoError> {
     read_poses_from(BufReader::new(file), path)
 }
 
-/// Writes one KITTI line (12 numbers, single spaces, round-trip exact).
-fn put_pose(f: &mut AtomicFile, p: &Pose<f64>) -> Result<(), IoError> {
+/// Writes one trajectory line, the row loop of the KITTI and the TUM writers: `first` (the TUM
+/// timestamp) if any, then the numbers `numbers` takes from the pose's 4x4 matrix, separated
+/// by single spaces, round-trip exact. Fails, writing nothing of the line, if the pose or
+/// `first` is not finite (checked before `numbers` sees the matrix).
+pub(crate) fn put_pose_line<const N: usize>(
+    f: &mut AtomicFile,
+    first: Option<f64>,
+    p: &Pose<f64>,
+    numbers: impl FnOnce(&Matrix4<f64>) -> [f64; N],
+) -> Result<(), IoError> {
     let m = p.to_homogeneous();
-    if m.iter().any(|v| !v.is_finite()) {
+    if m.iter().chain(&first).any(|v| !v.is_finite()) {
+        let what = if first.is_some() {
+            "a pose or timestamp with non-finite entries"
+        } else {
+            "a pose with non-finite entries"
+        };
         return Err(IoError::file(
             f.path(),
-            IoErrorKind::InvalidData("a pose with non-finite entries".into()),
+            IoErrorKind::InvalidData(what.into()),
         ));
     }
-    for r in 0..3 {
-        for c in 0..4 {
-            let sep = if r == 0 && c == 0 { "" } else { " " };
-            put!(f, "{sep}{}", Exact(m[(r, c)]))?;
-        }
+    for (i, v) in first.into_iter().chain(numbers(&m)).enumerate() {
+        let sep = if i == 0 { "" } else { " " };
+        put!(f, "{sep}{}", Exact(v))?;
     }
     put!(f, "\n")
+}
+
+/// Writes one KITTI line (the first three rows of the pose, 12 numbers).
+fn put_pose(f: &mut AtomicFile, p: &Pose<f64>) -> Result<(), IoError> {
+    put_pose_line(f, None, p, |m| -> [f64; 12] {
+        std::array::from_fn(|i| m[(i / 4, i % 4)])
+    })
 }
 
 /// Writes a KITTI poses file atomically. Fails (writing nothing) on non-finite poses.

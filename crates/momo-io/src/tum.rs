@@ -154,28 +154,13 @@ pub fn read_tum(path: impl AsRef<Path>) -> Result<(Vec<f64>, Vec<Pose<f64>>), Io
     read_tum_from(BufReader::new(file), path)
 }
 
-/// Writes one TUM line.
+/// Writes one TUM line: timestamp, translation, quaternion (x y z w).
 fn put_tum(f: &mut AtomicFile, t: f64, p: &Pose<f64>) -> Result<(), IoError> {
-    if !t.is_finite() || p.to_homogeneous().iter().any(|v| !v.is_finite()) {
-        return Err(IoError::file(
-            f.path(),
-            IoErrorKind::InvalidData("a pose or timestamp with non-finite entries".into()),
-        ));
-    }
-    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&p.rotation));
-    let (x, y, z) = (p.translation.x, p.translation.y, p.translation.z);
-    put!(
-        f,
-        "{} {} {} {} {} {} {} {}\n",
-        Exact(t),
-        Exact(x),
-        Exact(y),
-        Exact(z),
-        Exact(q.i),
-        Exact(q.j),
-        Exact(q.k),
-        Exact(q.w)
-    )
+    crate::poses::put_pose_line(f, Some(t), p, |_| {
+        let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&p.rotation));
+        let v = &p.translation;
+        [v.x, v.y, v.z, q.i, q.j, q.k, q.w]
+    })
 }
 
 /// Writes a TUM trajectory (`times[k] poses[k]` per line), atomically. Fails on different

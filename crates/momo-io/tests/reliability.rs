@@ -167,6 +167,54 @@ fn a_255_byte_target_gets_a_temporary_name_within_name_max() {
     assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
 }
 
+#[test]
+#[cfg(target_os = "linux")]
+fn an_output_has_no_name_until_its_commit() {
+    // O_TMPFILE: while an output is written, nothing of it is in the directory (a killed
+    // process leaves nothing); the commit links it in and renames it over the target.
+    let dir = tempfile::tempdir().expect("tmp");
+    let old = dir.path().join("old.txt");
+    std::fs::write(&old, "old").expect("write");
+    let new = dir.path().join("new.txt");
+    let mut a = AtomicFile::create(&old).expect("create");
+    let mut b = AtomicFile::create(&new).expect("create");
+    if !(a.is_anonymous() && b.is_anonymous()) {
+        eprintln!(
+            "O_TMPFILE is not supported in {}: skipped",
+            dir.path().display()
+        );
+        return;
+    }
+    for f in [&mut a, &mut b] {
+        // More than the writer's buffer, so that bytes reach the file before the commit.
+        let body = "new\n".repeat(10_000);
+        std::io::Write::write_all(f.writer(), body.as_bytes()).expect("write");
+        std::io::Write::flush(f.writer()).expect("flush");
+    }
+    assert_eq!(names(dir.path()), vec!["old.txt".to_string()]);
+    commit_all(vec![a, b]).expect("commit");
+    assert_eq!(
+        names(dir.path()),
+        vec!["new.txt".to_string(), "old.txt".to_string()]
+    );
+    for p in [&old, &new] {
+        let text = std::fs::read_to_string(p).expect("read");
+        assert_eq!(text, "new\n".repeat(10_000));
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(p).expect("meta").permissions().mode();
+        assert_eq!(mode & 0o777, 0o644, "ordinary permissions");
+    }
+    // Dropped without a commit: nothing appears, the target stays.
+    let mut c = AtomicFile::create(&old).expect("create");
+    std::io::Write::write_all(c.writer(), b"lost").expect("write");
+    drop(c);
+    assert_eq!(
+        std::fs::read_to_string(&old).expect("read"),
+        "new\n".repeat(10_000)
+    );
+    assert_eq!(names(dir.path()).len(), 2);
+}
+
 fn names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
         .expect("dir")

@@ -286,6 +286,20 @@ pub fn run_loop<E, B: Borrow<FrameObservations>>(
     frames: impl IntoIterator<Item = Result<(usize, B), E>>,
     arc_lengths: Option<&[Option<f64>]>,
     last_frame: usize,
+    sink: impl FnMut(&Pose<f64>, Option<&FrameResult>) -> Result<(), E>,
+) -> Result<RunSummary, E> {
+    let arc = |k: usize| arc_lengths.and_then(|a| a.get(k).copied().flatten());
+    run_loop_with(driver, rig, frames, arc, last_frame, sink)
+}
+
+/// [`run_loop`] with the arc length of frame pair `k` given by `arc(k)` (called with
+/// increasing `k`), so that the odometry can be held sparsely ([`run_sequence`]).
+fn run_loop_with<E, B: Borrow<FrameObservations>>(
+    driver: &mut dyn MotionDriver,
+    rig: &Rig,
+    frames: impl IntoIterator<Item = Result<(usize, B), E>>,
+    mut arc: impl FnMut(usize) -> Option<f64>,
+    last_frame: usize,
     mut sink: impl FnMut(&Pose<f64>, Option<&FrameResult>) -> Result<(), E>,
 ) -> Result<RunSummary, E> {
     let mut trajectory = Trajectory::new(rig);
@@ -294,7 +308,6 @@ pub fn run_loop<E, B: Borrow<FrameObservations>>(
         frames: 1,
         ..Default::default()
     };
-    let arc = |k: usize| arc_lengths.and_then(|a| a.get(k).copied().flatten());
     let empty = FrameObservations::new(rig.len());
     let mut step = |k: usize, obs: &FrameObservations, summary: &mut RunSummary| {
         let result = driver.process(obs, arc(k));
@@ -343,18 +356,20 @@ pub fn run_sequence(
     }
     let odometry_path = dir.join("odometry.csv");
     // A dangling symbolic link is an odometry.csv that cannot be read, not a missing one.
-    let arc_lengths = if std::fs::symlink_metadata(&odometry_path).is_ok() {
+    // The rows are held as they are (16 bytes per row), not expanded to one entry per frame:
+    // a last frame of 10,000,000 costs nothing before the frames are run.
+    let arc_rows = if std::fs::symlink_metadata(&odometry_path).is_ok() {
         if std::fs::metadata(&odometry_path).is_err() {
             return Err(RunError::Input(IoError::file(
                 &odometry_path,
                 momo_io::IoErrorKind::DanglingLink,
             )));
         }
-        let arcs = momo_io::read_odometry(&odometry_path).map_err(RunError::Input)?;
-        check_arc_lengths(&odometry_path, &arcs).map_err(RunError::Input)?;
-        Some(arcs)
+        let rows = momo_io::read_odometry_rows(&odometry_path).map_err(RunError::Input)?;
+        check_arc_lengths(&odometry_path, &rows).map_err(RunError::Input)?;
+        rows
     } else {
-        None
+        Vec::new()
     };
     let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunError::Input)?;
 
@@ -365,15 +380,23 @@ pub fn run_sequence(
         None => None,
     };
     // Frames beyond the last match row but within odometry.csv are run without matches.
-    let last_frame = arc_lengths
-        .as_ref()
-        .map_or(0, |a| a.len().saturating_sub(1));
+    let last_frame = arc_rows.last().map_or(0, |&(k, _)| k);
     let frames = reader.map(|item| item.map_err(RunError::Input));
-    let summary = run_loop(
+    // The frame pairs come in increasing order: a cursor walks the rows once.
+    let mut next_row = 0;
+    let arc = |k: usize| {
+        while arc_rows.get(next_row).is_some_and(|&(f, _)| f < k) {
+            next_row += 1;
+        }
+        arc_rows
+            .get(next_row)
+            .and_then(|&(f, l)| (f == k).then_some(l))
+    };
+    let summary = run_loop_with(
         vo.as_mut(),
         &rig,
         frames,
-        arc_lengths.as_deref(),
+        arc,
         last_frame,
         |pose, result| {
             poses.push(pose).map_err(RunError::Output)?;
@@ -395,9 +418,9 @@ pub fn run_sequence(
 
 /// Rejects arc lengths no vehicle travels between two frames (above
 /// [`crate::config::MAX_ARC_LENGTH`], e.g. 1e200 m), at the line of the first one.
-fn check_arc_lengths(path: &Path, arcs: &[Option<f64>]) -> Result<(), IoError> {
+fn check_arc_lengths(path: &Path, rows: &[(usize, f64)]) -> Result<(), IoError> {
     let limit = crate::config::MAX_ARC_LENGTH;
-    let Some(frame) = arcs.iter().position(|a| a.is_some_and(|l| l.abs() > limit)) else {
+    let Some(&(frame, _)) = rows.iter().find(|(_, l)| l.abs() > limit) else {
         return Ok(());
     };
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
