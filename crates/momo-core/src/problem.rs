@@ -11,8 +11,8 @@ use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
 use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
 use nalgebra::{DMatrix, SMatrix, SVector};
-use std::cell::RefCell;
 use num_dual::DualSVec64;
+use std::cell::RefCell;
 
 /// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
 ///

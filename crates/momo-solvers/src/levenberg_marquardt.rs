@@ -265,8 +265,7 @@ impl LevenbergMarquardt {
                     last_step = finish
                         && last_relative.is_some_and(|before| {
                             let rate = relative / before;
-                            rate <= LAST_STEP_MAX_RATE
-                                && relative * rate <= self.function_tolerance
+                            rate <= LAST_STEP_MAX_RATE && relative * rate <= self.function_tolerance
                         });
                     last_relative = Some(relative);
                 } else {

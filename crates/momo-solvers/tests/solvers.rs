@@ -390,7 +390,12 @@ fn covariance_from_the_report() {
 fn last_step_without_linearisation_saves_linearisations() {
     let p = Fit::cauchy(OutlierLine::new(), 0.05);
     let mut saved = 0;
-    for x0 in [pv(&[0.0, 0.0]), pv(&[2.0, 0.0]), pv(&[1.0, 0.6]), pv(&[-1.0, 1.5])] {
+    for x0 in [
+        pv(&[0.0, 0.0]),
+        pv(&[2.0, 0.0]),
+        pv(&[1.0, 0.6]),
+        pv(&[-1.0, 1.5]),
+    ] {
         let run = |skip: bool| {
             p.reset_counts();
             let s = LevenbergMarquardt::default().with_skip_last_linearization(skip);

@@ -606,7 +606,12 @@ impl Odometry {
         }
         // Where the inliers are. With an angular metric at its loss scale, the solver's own
         // inliers (its residual is the angle to the epipolar plane): no second pass.
-        let in_rig: usize = obs.per_camera.iter().take(self.rig.len()).map(Vec::len).sum();
+        let in_rig: usize = obs
+            .per_camera
+            .iter()
+            .take(self.rig.len())
+            .map(Vec::len)
+            .sum();
         if self.metric_is_angular
             && self.inlier_angle() == self.config.loss.scale()
             && sol.inlier_mask.len() == in_rig

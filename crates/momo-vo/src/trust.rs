@@ -282,7 +282,9 @@ pub fn spread_of_mask(rig: &Rig, obs: &FrameObservations, mask: &[bool]) -> Opti
         offsets.push(at);
         at += matches.len();
     }
-    spread(rig, obs, |j, i| mask.get(offsets[j] + i).copied().unwrap_or(false))
+    spread(rig, obs, |j, i| {
+        mask.get(offsets[j] + i).copied().unwrap_or(false)
+    })
 }
 
 /// The spread of `n` unit bearings from the sum of their outer products.

@@ -29,7 +29,11 @@ fn matches(n: usize, flow: f64, rng: &mut Rng) -> Vec<Observation> {
             let angle = flow * 10f64.powf(2.0 * rng.next() - 1.0);
             let axis = Vector3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
             let f1 = so3_exp(&(axis.normalize() * angle)) * f0;
-            let scale = if rng.next() < 0.3 { 1.0 + rng.next() } else { 1.0 };
+            let scale = if rng.next() < 0.3 {
+                1.0 + rng.next()
+            } else {
+                1.0
+            };
             Observation {
                 px0: Vector2::zeros(),
                 px1: Vector2::zeros(),
@@ -107,7 +111,10 @@ fn spread_of_a_mask_is_the_spread_of_the_marked_matches() {
             .map(|v| v.max(0.0))
             .collect();
         ev.sort_by(|a, b| b.total_cmp(a));
-        assert!((fast.extent - ev[1].sqrt()).abs() < 1e-12, "{fast:?} {ev:?}");
+        assert!(
+            (fast.extent - ev[1].sqrt()).abs() < 1e-12,
+            "{fast:?} {ev:?}"
+        );
         assert!((fast.width - ev[2].sqrt()).abs() < 1e-12, "{fast:?} {ev:?}");
         // A mask of one match is too few.
         let one: Vec<bool> = (0..mask.len()).map(|k| k == 0).collect();
@@ -135,9 +142,7 @@ fn dedupe_keeps_the_first_of_each_repeated_match() {
                 });
             }
         }
-        let bits = |o: &Observation| {
-            [o.px0.x, o.px0.y, o.px1.x, o.px1.y].map(f64::to_bits)
-        };
+        let bits = |o: &Observation| [o.px0.x, o.px0.y, o.px1.x, o.px1.y].map(f64::to_bits);
         let mut expected = obs.clone();
         let mut expected_removed = 0;
         for list in &mut expected.per_camera {

@@ -336,7 +336,11 @@ pub fn check_final(problem: &dyn LeastSquares, r: &momo_core::SolverReport) {
     if lin.hessian == r.normal_matrix {
         assert_eq!(lin.cost, r.final_cost, "{r:?}");
     } else {
-        assert_eq!(r.termination, momo_core::Termination::CostConverged, "{r:?}");
+        assert_eq!(
+            r.termination,
+            momo_core::Termination::CostConverged,
+            "{r:?}"
+        );
         assert_eq!(problem.cost(&r.x), r.final_cost, "{r:?}");
     }
 }
