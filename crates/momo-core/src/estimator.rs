@@ -54,6 +54,10 @@ pub struct FrameSolution {
     pub report: SolverReport,
     /// Matches whose residual norm is within the loss scale, per camera.
     pub inliers_per_camera: Vec<usize>,
+    /// Per match, all cameras in order (camera 0's matches first): whether its residual norm
+    /// is within the loss scale at [`params`](Self::params) (the matches counted in
+    /// [`inliers_per_camera`](Self::inliers_per_camera)).
+    pub inlier_mask: Vec<bool>,
 }
 
 impl FrameSolution {
@@ -142,20 +146,23 @@ pub fn erase_dyn<R: ResidualMetric>(
     Box::new(Erased { model, metric })
 }
 
-/// Counts the inliers (residual norm within the loss scale) per camera.
+/// Counts the inliers (residual norm within the loss scale) per camera at the solver's `x`, and
+/// marks them per match (all cameras in order); reuses the residuals of the solver's last
+/// evaluation when it was at `x`.
 fn count_inliers<R: ResidualMetric>(
     problem: &Problem<'_, R>,
     rig: &Rig,
     scale: f64,
-    params: &[f64],
-) -> Vec<usize> {
+    x: &ParamVec,
+) -> (Vec<usize>, Vec<bool>) {
     let mut inliers = vec![0; rig.len()];
-    problem.for_each_residual_norm(params, |j, n| {
-        if n <= scale {
-            inliers[j] += 1;
-        }
+    let mut mask = Vec::with_capacity(problem.num_matches());
+    problem.for_each_residual_norm_at(x, |j, n| {
+        let inlier = n <= scale;
+        inliers[j] += usize::from(inlier);
+        mask.push(inlier);
     });
-    inliers
+    (inliers, mask)
 }
 
 fn run<R: ResidualMetric>(
@@ -176,12 +183,13 @@ fn run<R: ResidualMetric>(
     .with_motion_prior(req.motion_prior);
     let report = req.solver.solve(&problem, &problem.free_params());
     let params = problem.full_params(&report.x);
-    let inliers = count_inliers(&problem, req.rig, req.loss.scale(), &params);
+    let (inliers, inlier_mask) = count_inliers(&problem, req.rig, req.loss.scale(), &report.x);
     Ok(FrameSolution {
         free: problem.free_indices().to_vec(),
         params,
         report,
         inliers_per_camera: inliers,
+        inlier_mask,
     })
 }
 
@@ -251,7 +259,7 @@ impl<R: ResidualMetric> FrameEstimator for Erased<R> {
 
     fn inliers(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError> {
         let problem = self.problem(req, params)?;
-        Ok(count_inliers(&problem, req.rig, req.loss.scale(), params))
+        Ok(count_inliers(&problem, req.rig, req.loss.scale(), &problem.free_params()).0)
     }
 }
 

@@ -12,6 +12,7 @@ use crate::scalar::Scalar;
 use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
 use nalgebra::{DMatrix, SMatrix, SVector};
 use num_dual::DualSVec64;
+use std::cell::RefCell;
 
 /// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
 ///
@@ -53,6 +54,10 @@ pub struct Problem<'a, R: ResidualMetric> {
     /// Differentiate the per-match residuals on dual numbers even if the metric has a fused
     /// kernel (the oracle of the kernels' tests).
     automatic: bool,
+    /// The squared residual norms `|r|²` of every match (camera order) at the last point
+    /// whose cost was evaluated (by [`LeastSquares::cost`] or a linearisation), and that point:
+    /// the inlier count after a solve reads them instead of evaluating the residuals again.
+    last_norms: RefCell<(ParamVec, Vec<f64>)>,
 }
 
 /// The rotation prior's loss `ρ(z) = c² ln(1 + z / c²)` and its derivative `ρ'(z)`, with `c` =
@@ -119,6 +124,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             motion_prior: None,
             prior_scale: loss.scale(),
             automatic: false,
+            last_norms: RefCell::new((ParamVec::repeat(f64::NAN), Vec::new())),
         })
     }
 
@@ -297,9 +303,50 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         &self.free[..self.n_free]
     }
 
+    /// The number of matches the residuals are evaluated on (cameras of the rig only).
+    pub fn num_matches(&self) -> usize {
+        self.obs
+            .per_camera
+            .iter()
+            .take(self.rig.len())
+            .map(Vec::len)
+            .sum()
+    }
+
     /// Calls `f(camera, residual norm)` for every match at the full parameters `params`.
     pub fn for_each_residual_norm(&self, params: &[f64], mut f: impl FnMut(usize, f64)) {
         self.for_each_squared_norm(params, |j, s| f(j, s.sqrt()));
+    }
+
+    /// Like [`for_each_residual_norm`](Self::for_each_residual_norm) at the solver's `x`,
+    /// reusing the residuals of the last evaluation if it was at `x` (the end of a solve: no
+    /// second pass over the matches).
+    pub fn for_each_residual_norm_at(&self, x: &ParamVec, mut f: impl FnMut(usize, f64)) {
+        {
+            let last = self.last_norms.borrow();
+            if last.0 == *x && last.1.len() == self.num_matches() {
+                let mut k = 0;
+                for (j, obs) in self.obs.per_camera.iter().take(self.rig.len()).enumerate() {
+                    for s in &last.1[k..k + obs.len()] {
+                        f(j, s.sqrt());
+                    }
+                    k += obs.len();
+                }
+                return;
+            }
+        }
+        let params = self.full_params(x);
+        self.for_each_residual_norm(&params, f);
+    }
+
+    /// Starts recording the squared residual norms at `x` (see `last_norms`): a buffer of one
+    /// entry per match, written in order through [`Recorder::put`].
+    #[inline]
+    fn record_norms(&self, x: &ParamVec) -> Recorder<'_> {
+        let mut last = self.last_norms.borrow_mut();
+        last.0 = *x;
+        last.1.resize(self.num_matches(), f64::NAN);
+        Recorder { last, at: 0 }
     }
 
     /// Calls `f(camera, |r|²)` for every match at the full parameters `params` (plain `f64`).
@@ -416,11 +463,13 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         let mut g = SVector::<f64, N>::zeros();
         let mut cost = 0.0;
         let loss = self.loss;
+        let mut last = self.record_norms(x);
         self.visit::<N>(x, |r| {
             let mut s = 0.0;
             for v in r {
                 s += v.re * v.re;
             }
+            last.put(s);
             let [rho1, rho2] = if known_cost.is_some() {
                 loss.weights(s)
             } else {
@@ -461,6 +510,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                 }
             }
         });
+        drop(last);
         self.finish_linearization(x, known_cost, cost, h, g)
     }
 
@@ -493,6 +543,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         let mut r = [0.0; MAX_RESIDUALS];
         let mut dr_dq = [[0.0; MAX_KERNEL_INPUTS]; MAX_RESIDUALS];
         let mut jac = [[0.0; N]; MAX_RESIDUALS];
+        let mut last = self.record_norms(x);
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
                 continue;
@@ -528,7 +579,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                     }
                     jac[i] = row;
                 }
-                accumulate_robust(
+                last.put(accumulate_robust(
                     self.loss,
                     known_cost.is_some(),
                     &r[..n_res],
@@ -536,9 +587,10 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                     &mut cost,
                     &mut h,
                     &mut g,
-                );
+                ));
             }
         }
+        drop(last);
         self.finish_linearization(x, known_cost, cost, h, g)
     }
 
@@ -587,7 +639,9 @@ impl<R: ResidualMetric> LeastSquares for Problem<'_, R> {
             p[self.free[k]] = x[k];
         }
         let mut cost = 0.0;
+        let mut last = self.record_norms(x);
         self.for_each_squared_norm(&p[..self.np], |_, s| {
+            last.put(s);
             cost += 0.5 * self.loss.evaluate(s)[0];
         });
         cost + self.prior_cost(&p[..self.np])
@@ -623,10 +677,28 @@ impl<R: ResidualMetric> Problem<'_, R> {
     }
 }
 
+/// Writes the squared residual norms of one evaluation into `Problem::last_norms`, in match
+/// order.
+struct Recorder<'a> {
+    last: std::cell::RefMut<'a, (ParamVec, Vec<f64>)>,
+    at: usize,
+}
+
+impl Recorder<'_> {
+    /// Records the next match's `|r|²`.
+    #[inline(always)]
+    fn put(&mut self, s: f64) {
+        if let Some(v) = self.last.1.get_mut(self.at) {
+            *v = s;
+        }
+        self.at += 1;
+    }
+}
+
 /// Adds one match's robustified Gauss-Newton terms (upper triangle of `h`) for residuals `r`
 /// with Jacobian rows `jac` (plain `f64`), as the automatic path does: the loss's weights
 /// `ρ'`, `ρ''` at `s = |r|²` with Ceres' corrector (Triggs et al.); with `weights_only` the
-/// loss is not asked for `ρ` and `cost` is left alone.
+/// loss is not asked for `ρ` and `cost` is left alone. Returns `s`.
 #[inline(always)]
 fn accumulate_robust<const N: usize>(
     loss: &dyn RobustLoss,
@@ -636,7 +708,7 @@ fn accumulate_robust<const N: usize>(
     cost: &mut f64,
     h: &mut SMatrix<f64, N, N>,
     g: &mut SVector<f64, N>,
-) {
+) -> f64 {
     let mut s = 0.0;
     for v in r {
         s += v * v;
@@ -649,7 +721,7 @@ fn accumulate_robust<const N: usize>(
         [rho1, rho2]
     };
     if rho1 <= 0.0 {
-        return;
+        return s;
     }
     let (sqrt_rho1, residual_scaling, alpha_sq_norm) = corrector(s, rho1, rho2);
     let mut rtj = [0.0; N];
@@ -675,6 +747,7 @@ fn accumulate_robust<const N: usize>(
             }
         }
     }
+    s
 }
 
 /// The camera motion `C_j = P_j⁻¹ M P_j` of a camera with extrinsic `P_j = T_vehicle_camera`

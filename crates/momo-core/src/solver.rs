@@ -90,7 +90,9 @@ pub struct SolverReport {
     pub iterations: usize,
     /// Why the solver stopped.
     pub termination: Termination,
-    /// The normal matrix `JᵀJ` (robustified) at the final point, for a covariance.
+    /// The normal matrix `JᵀJ` (robustified) at the final point, for a covariance; after a
+    /// last step taken without a linearisation (Levenberg-Marquardt's
+    /// `skip_last_linearization`), at the point one step before it.
     pub normal_matrix: NormalMatrix,
 }
 

@@ -6,8 +6,10 @@ use momo_core::{LeastSquares, Linearization, ParamVec, Solver, SolverReport, Ter
 use serde::{Deserialize, Serialize};
 
 /// Levenberg-Marquardt: the step solves `(H + λ diag H) δ = -g` (Marquardt's scaling, so that λ
-/// does not depend on the parameters' units), the trial point costs one
-/// [`LeastSquares::cost`], and only an accepted step is linearised.
+/// does not depend on the parameters' units), and the trial point is linearised right away
+/// (one pass over the residuals gives its cost and, if it is accepted, the next normal
+/// equations), except for a last step predicted to end the solve, which costs one
+/// [`LeastSquares::cost`] ([`skip_last_linearization`](Self::skip_last_linearization)).
 ///
 /// The damping follows Nielsen's rule on the gain ratio `ρ = actual / predicted decrease`: an
 /// accepted step (`ρ > 0`) multiplies λ by `max(1 / lambda_decrease, 1 - (2ρ - 1)³)`, a
@@ -47,6 +49,16 @@ pub struct LevenbergMarquardt {
     pub min_lambda: f64,
     /// Largest λ: beyond it no step is possible and the solver stops.
     pub max_lambda: f64,
+    /// Take the last step without linearising its end point, where the problem allows it
+    /// ([`LmProblem::can_finish_with_cost`]): when the Gauss-Newton model's predicted decrease,
+    /// extrapolated geometrically from the last two linearised points (`p_k² / p_(k-1)`), is
+    /// at most `function_tolerance · cost` and the ratio `p_k / p_(k-1)` at most 0.3, the step
+    /// is tried on one [`LeastSquares::cost`]
+    /// and, if it decreases the cost, taken as the last one ([`Termination::CostConverged`]);
+    /// the report's normal matrix is then the one of the point before it. Saves one
+    /// linearisation per solve where the convergence is linear (robust losses). `false`
+    /// linearises every trial point, as before.
+    pub skip_last_linearization: bool,
 }
 
 impl Default for LevenbergMarquardt {
@@ -65,6 +77,7 @@ impl Default for LevenbergMarquardt {
             lambda_decrease: 3.0,
             min_lambda: 1e-16,
             max_lambda: 1e16,
+            skip_last_linearization: true,
         }
     }
 }
@@ -79,6 +92,7 @@ with_setters!(LevenbergMarquardt {
     with_lambda_decrease => lambda_decrease: f64,
     with_min_lambda => min_lambda: f64,
     with_max_lambda => max_lambda: f64,
+    with_skip_last_linearization => skip_last_linearization: bool,
 });
 
 /// A least-squares problem as Levenberg-Marquardt sees it, for problems whose normal equations
@@ -121,6 +135,18 @@ pub trait LmProblem {
     fn step_is_small(&self, step: &Self::Step, x: &Self::Point, tol: f64) -> bool;
     /// The point reached from `x` by `step` (`x + δ` in a vector space).
     fn retract(&self, x: &Self::Point, step: &Self::Step) -> Self::Point;
+    /// Whether a solve may end on a point that was not linearised
+    /// ([`LevenbergMarquardt::skip_last_linearization`]): its result then carries the gradient
+    /// and normal matrix of the point before, with the new cost
+    /// ([`finish_with_cost`](Self::finish_with_cost)). `false` by default.
+    fn can_finish_with_cost(&self) -> bool {
+        false
+    }
+    /// Replaces the cost of `lin` (the last linearisation) by `cost`, the cost at the final
+    /// point one step away; only called if [`can_finish_with_cost`](Self::can_finish_with_cost).
+    fn finish_with_cost(&self, lin: &mut Self::Lin, cost: f64) {
+        let _ = (lin, cost);
+    }
 }
 
 /// The outcome of [`LevenbergMarquardt::minimize`]: the final point, its linearisation (for a
@@ -218,15 +244,32 @@ impl LevenbergMarquardt {
         let mut iterations = 0;
         // True right after a linearisation: the model test is due.
         let mut fresh = true;
+        // The model's predicted decrease (relative to the cost) at the last linearised point.
+        let mut last_relative: Option<f64> = None;
+        // The next trial is the last one: its point is not linearised.
+        let mut last_step = false;
+        let finish = self.skip_last_linearization && problem.can_finish_with_cost();
         let termination = 'outer: loop {
             if fresh {
                 fresh = false;
                 // The undamped (Gauss-Newton) step only serves the model test: one small solve.
                 if let Some(gn) = problem.solve_damped(&lin, 0.0, false) {
                     let predicted = problem.predicted_decrease(&lin, &gn);
-                    if predicted <= self.function_tolerance * problem.lin_cost(&lin) {
+                    let cost = problem.lin_cost(&lin);
+                    if predicted <= self.function_tolerance * cost {
                         break 'outer Termination::CostConverged;
                     }
+                    // Linear convergence: the next point's predicted decrease extrapolated
+                    // from the last two.
+                    let relative = predicted / cost;
+                    last_step = finish
+                        && last_relative.is_some_and(|before| {
+                            let rate = relative / before;
+                            rate <= LAST_STEP_MAX_RATE && relative * rate <= self.function_tolerance
+                        });
+                    last_relative = Some(relative);
+                } else {
+                    last_relative = None;
                 }
             }
             if iterations >= self.max_iterations {
@@ -243,6 +286,19 @@ impl LevenbergMarquardt {
                     break 'outer take_final_step(problem, &mut x, &mut lin, &step);
                 }
                 let trial = problem.retract(&x, &step);
+                if last_step {
+                    // One cost evaluation decides; a rejected last step falls back to the
+                    // linearised trials.
+                    last_step = false;
+                    let c = problem.cost(&trial);
+                    let old_cost = problem.lin_cost(&lin);
+                    if c.is_finite() && c < old_cost {
+                        x = trial;
+                        problem.finish_with_cost(&mut lin, c);
+                        break 'outer Termination::CostConverged;
+                    }
+                    break 'trial !c.is_finite();
+                }
                 // Steps are rarely rejected here (the damping starts small and follows the
                 // gain ratio), so the trial point is linearised right away: one pass over the
                 // matches gives its cost and, when it is accepted, the next normal equations.
@@ -295,6 +351,12 @@ impl LevenbergMarquardt {
         }
     }
 }
+
+/// The largest ratio of two consecutive predicted decreases for which the next one is
+/// extrapolated ([`LevenbergMarquardt::skip_last_linearization`]): the convergence must be
+/// clearly linear, so that the remaining gains after the last step, `p q / (1 - q)` for a rate
+/// `q`, stay within 1.5 times the tolerance.
+const LAST_STEP_MAX_RATE: f64 = 0.3;
 
 /// A step below the parameter tolerance ends the solve, but it is still the best guess: it is
 /// taken if it decreases the cost (and the new point is linearised, for the report). Returns
@@ -363,6 +425,12 @@ impl LmProblem for Dense<'_> {
     }
     fn retract(&self, x: &ParamVec, step: &ParamVec) -> ParamVec {
         x + step
+    }
+    fn can_finish_with_cost(&self) -> bool {
+        true
+    }
+    fn finish_with_cost(&self, lin: &mut Linearization, cost: f64) {
+        lin.cost = cost;
     }
 }
 

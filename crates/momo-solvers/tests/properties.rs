@@ -20,9 +20,7 @@ fn check_all(problem: &dyn LeastSquares, x0: &ParamVec) -> Vec<momo_core::Solver
         assert!(r.iterations <= 50);
         if r.initial_cost.is_finite() {
             assert!(r.final_cost <= r.initial_cost, "{s:?}: {r:?}");
-            let lin = problem.linearize(&r.x);
-            assert_eq!(lin.cost, r.final_cost);
-            assert_eq!(lin.hessian, r.normal_matrix);
+            check_final(problem, &r);
         } else {
             assert_eq!(r.termination, Termination::NumericalFailure);
             assert_eq!(r.x.rows(0, n), x0.rows(0, n));

@@ -24,9 +24,8 @@ fn check_invariants(problem: &dyn LeastSquares, x0: &ParamVec, r: &SolverReport,
     assert!(r.iterations <= max_iter, "{r:?}");
     if r.initial_cost.is_finite() {
         assert!(r.final_cost <= r.initial_cost, "{r:?}");
-        assert_eq!(r.final_cost, problem.linearize(&r.x).cost);
-        // The normal matrix belongs to the final point.
-        assert_eq!(r.normal_matrix, problem.linearize(&r.x).hessian, "{r:?}");
+        // The normal matrix belongs to the final point (or to the point before LM's last step).
+        check_final(problem, r);
     } else {
         assert_eq!(r.x.rows(0, n), x0.rows(0, n));
     }
@@ -382,4 +381,44 @@ fn covariance_from_the_report() {
     let cov = r.covariance(1.0).unwrap();
     let h = p.linearize(&r.x).hessian.view((0, 0), (3, 3)).into_owned();
     assert!((cov * h - nalgebra::DMatrix::<f64>::identity(3, 3)).amax() < 1e-10);
+}
+
+/// Levenberg-Marquardt's last step without a linearisation (`skip_last_linearization`, issue
+/// 19): on a robust fit whose convergence is linear it saves linearisations, and it ends
+/// within the function tolerance of the solve that linearises every point.
+#[test]
+fn last_step_without_linearisation_saves_linearisations() {
+    let p = Fit::cauchy(OutlierLine::new(), 0.05);
+    let mut saved = 0;
+    for x0 in [
+        pv(&[0.0, 0.0]),
+        pv(&[2.0, 0.0]),
+        pv(&[1.0, 0.6]),
+        pv(&[-1.0, 1.5]),
+    ] {
+        let run = |skip: bool| {
+            p.reset_counts();
+            let s = LevenbergMarquardt::default().with_skip_last_linearization(skip);
+            let r = s.solve(&p, &x0);
+            check_invariants(&p, &x0, &r, 50);
+            assert!(r.termination.is_converged(), "{r:?}");
+            (r, p.linearizations.get(), p.costs.get())
+        };
+        let (every, lin_every, _) = run(false);
+        let (skip, lin_skip, cost_skip) = run(true);
+        assert!(lin_skip <= lin_every, "{lin_skip} > {lin_every}");
+        if lin_skip < lin_every {
+            saved += lin_every - lin_skip;
+            // The step it took instead: one cost evaluation (the start's check evaluates none).
+            assert!(cost_skip >= 1);
+        }
+        let tol = LevenbergMarquardt::default().function_tolerance;
+        assert!(
+            (skip.final_cost - every.final_cost).abs() <= 2.0 * tol * every.final_cost,
+            "{} vs {}",
+            skip.final_cost,
+            every.final_cost
+        );
+    }
+    assert!(saved > 0, "no linearisation saved");
 }

@@ -604,7 +604,23 @@ impl Odometry {
         if inliers < t.min_inliers {
             return Some(Reason::TooFewInliers);
         }
-        // Where the inliers are: residuals on the angle to the epipolar plane.
+        // Where the inliers are. With an angular metric at its loss scale, the solver's own
+        // inliers (its residual is the angle to the epipolar plane): no second pass.
+        let in_rig: usize = obs
+            .per_camera
+            .iter()
+            .take(self.rig.len())
+            .map(Vec::len)
+            .sum();
+        if self.metric_is_angular
+            && self.inlier_angle() == self.config.loss.scale()
+            && sol.inlier_mask.len() == in_rig
+        {
+            let s = trust::spread_of_mask(&self.rig, obs, &sol.inlier_mask);
+            return s
+                .filter(|s| s.extent < t.min_extent)
+                .map(|_| Reason::InliersInSmallRegion);
+        }
         let threshold = self.inlier_angle();
         let cams: Vec<Option<Pose<f64>>> = self
             .rig

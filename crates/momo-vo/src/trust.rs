@@ -18,7 +18,7 @@
 //!   [`TrustOptions::min_inliers`], or inliers in a small region: degenerate.
 
 use momo_core::{FrameObservations, Observation, Rig};
-use nalgebra::{DMatrix, Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
 /// Thresholds of the trust checks and of the run's failure share (`[trust]` in the
@@ -150,55 +150,76 @@ impl Reason {
 }
 
 /// Removes repeated matches (the same two pixels, bit for bit, in the same camera): each
-/// counts once. Returns the number removed.
+/// counts once (the first is kept). Returns the number removed.
 pub fn dedupe(obs: &mut FrameObservations) -> usize {
     let mut removed = 0;
+    let mut table: Vec<u32> = Vec::new();
+    let mut repeated: Vec<bool> = Vec::new();
     for matches in &mut obs.per_camera {
-        let before = matches.len();
-        let key = |o: &Observation| {
-            [
-                o.px0.x.to_bits(),
-                o.px0.y.to_bits(),
-                o.px1.x.to_bits(),
-                o.px1.y.to_bits(),
-            ]
-        };
-        let mut seen = std::collections::HashSet::with_capacity_and_hasher(
-            before,
-            std::hash::BuildHasherDefault::<KeyHasher>::default(),
-        );
-        matches.retain(|o| seen.insert(key(o)));
-        removed += before - matches.len();
+        let n = matches.len();
+        if n < 2 {
+            continue;
+        }
+        // Open addressing over match indices (`u32::MAX`: empty), at most half full, keyed by
+        // the pixels' bits; a hash collision costs a comparison, never a wrong answer.
+        let bits = (2 * n).next_power_of_two().trailing_zeros();
+        let slots = 1usize << bits;
+        table.clear();
+        table.resize(slots, u32::MAX);
+        repeated.clear();
+        repeated.resize(n, false);
+        let mut found = 0;
+        for (i, o) in matches.iter().enumerate() {
+            let k = key(o);
+            let mut slot = (hash(&k) >> (64 - bits)) as usize;
+            loop {
+                let held = table[slot];
+                if held == u32::MAX {
+                    table[slot] = i as u32;
+                    break;
+                }
+                if key(&matches[held as usize]) == k {
+                    repeated[i] = true;
+                    found += 1;
+                    break;
+                }
+                slot = (slot + 1) & (slots - 1);
+            }
+        }
+        if found > 0 {
+            let mut i = 0;
+            matches.retain(|_| {
+                i += 1;
+                !repeated[i - 1]
+            });
+            removed += found;
+        }
     }
     removed
 }
 
-/// A fast hasher for [`dedupe`]'s keys (pixel coordinates' bits, not chosen by an adversary
-/// who could profit from collisions: a collision costs a comparison, not a wrong answer).
-/// SipHash, the default, took as long as a cost evaluation of the frame (callgrind: 125,000
-/// instructions per 300 matches).
-#[derive(Default)]
-struct KeyHasher(u64);
+/// A match's identity: its two pixels, bit for bit.
+#[inline]
+fn key(o: &Observation) -> [u64; 4] {
+    [
+        o.px0.x.to_bits(),
+        o.px0.y.to_bits(),
+        o.px1.x.to_bits(),
+        o.px1.y.to_bits(),
+    ]
+}
 
-impl std::hash::Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        self.0
+/// FxHash's step (rotate, mix in, multiply) over the key's words: fast, and the keys are not
+/// chosen by an adversary who could profit from collisions. (SipHash in a `HashSet` took as
+/// long as a cost evaluation of the frame, callgrind: 125,000 instructions per 300 matches.)
+#[inline]
+fn hash(k: &[u64; 4]) -> u64 {
+    let mut h = 0u64;
+    for &v in k {
+        h = (h.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
     }
-    fn write(&mut self, bytes: &[u8]) {
-        let mut chunks = bytes.chunks_exact(8);
-        for c in &mut chunks {
-            let mut w = [0u8; 8];
-            w.copy_from_slice(c);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-        for b in chunks.remainder() {
-            self.write_u64(u64::from(*b));
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        // FxHash's step: rotate, mix in, multiply.
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
+    // The table takes the top bits, where the multiplication gathers the entropy.
+    h
 }
 
 /// The angular spread of a set of bearings in the vehicle frame, from the eigenvalues
@@ -221,37 +242,65 @@ pub fn spread(
     keep: impl Fn(usize, usize) -> bool,
 ) -> Option<Spread> {
     let mut n = 0usize;
-    let mut sum = Vector3::zeros();
     let mut outer = Matrix3::zeros();
     for (j, matches) in obs.per_camera.iter().enumerate() {
         let Some(cam) = rig.cameras().get(j) else {
             continue;
         };
-        let r = cam.t_vehicle_camera.rotation;
+        // The second moment in the camera frame (upper triangle), rotated once per camera:
+        // `Σ (R f)(R f)ᵀ = R (Σ f fᵀ) Rᵀ`.
+        let mut m = [0.0; 6];
+        let before = n;
         for (i, o) in matches.iter().enumerate() {
             if !keep(j, i) {
                 continue;
             }
-            let f = r * o.f0.normalize();
-            sum += f;
-            outer += f * f.transpose();
+            let f = o.f0.normalize();
+            m[0] += f.x * f.x;
+            m[1] += f.x * f.y;
+            m[2] += f.x * f.z;
+            m[3] += f.y * f.y;
+            m[4] += f.y * f.z;
+            m[5] += f.z * f.z;
             n += 1;
         }
+        if n > before {
+            let c = Matrix3::new(m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]);
+            let r = cam.t_vehicle_camera.rotation;
+            outer += r * c * r.transpose();
+        }
     }
+    spread_of_moment(outer, n)
+}
+
+/// [`spread`] of the matches marked in `mask` (one flag per match, the rig's cameras in order,
+/// as [`momo_core::FrameSolution::inlier_mask`]); unmarked or missing entries are left out.
+pub fn spread_of_mask(rig: &Rig, obs: &FrameObservations, mask: &[bool]) -> Option<Spread> {
+    let mut offsets = Vec::with_capacity(obs.per_camera.len());
+    let mut at = 0;
+    for matches in &obs.per_camera {
+        offsets.push(at);
+        at += matches.len();
+    }
+    spread(rig, obs, |j, i| {
+        mask.get(offsets[j] + i).copied().unwrap_or(false)
+    })
+}
+
+/// The spread of `n` unit bearings from the sum of their outer products.
+fn spread_of_moment(outer: Matrix3<f64>, n: usize) -> Option<Spread> {
     if n < 2 {
         return None;
     }
-    let _ = sum;
     // The second moment of the unit bearings (not centred): bearings near one direction d give
     // `d dᵀ` plus their angular spread in the two smaller eigenvalues; bearings on one image
     // line (a great circle, a plane through the centre) give a vanishing smallest eigenvalue,
     // however long the line is.
     let moment = outer / n as f64;
-    let mut ev: Vec<f64> = SymmetricEigen::new(moment)
+    let mut ev: [f64; 3] = SymmetricEigen::new(moment)
         .eigenvalues
-        .iter()
         .map(|v| v.max(0.0))
-        .collect();
+        .into();
     ev.sort_by(|a, b| b.total_cmp(a));
     Some(Spread {
         extent: ev[1].sqrt(),
@@ -279,6 +328,24 @@ pub fn median_flow(obs: &FrameObservations) -> Option<f64> {
     Some(*m)
 }
 
+/// Whether the [`median_flow`] is below `threshold` (radians, below π/2), without computing
+/// it: the element at position `len / 2` of the sorted flows is below the threshold exactly
+/// when more than `len / 2` flows are, and a flow `atan2(|a × b|, a · b)` is below `t` exactly
+/// when `a · b > 0` and `|a × b|² < tan²(t) (a · b)²` (no normalisation: the angle does not
+/// depend on the bearings' lengths). `None` without matches.
+pub fn median_flow_below(obs: &FrameObservations, threshold: f64) -> Option<bool> {
+    let tan2 = threshold.tan().powi(2);
+    let mut total = 0usize;
+    let mut below = 0usize;
+    for o in obs.per_camera.iter().flatten() {
+        let d = o.f0.dot(&o.f1);
+        let c2 = o.f0.cross(&o.f1).norm_squared();
+        below += usize::from(d > 0.0 && c2 < tan2 * (d * d));
+        total += 1;
+    }
+    (total > 0).then_some(below > total / 2)
+}
+
 /// The verdict on a frame's matches before the solve.
 pub fn before_solve(
     options: &TrustOptions,
@@ -293,7 +360,7 @@ pub fn before_solve(
     if s.width < options.min_width {
         return Some((Constraint::Weak, Reason::AlongALine));
     }
-    if moving && median_flow(obs).is_some_and(|f| f < options.min_flow) {
+    if moving && median_flow_below(obs, options.min_flow) == Some(true) {
         return Some((Constraint::Weak, Reason::LittleFlow));
     }
     None

@@ -324,3 +324,23 @@ pub fn tight() -> Vec<Box<dyn Solver>> {
         ),
     ]
 }
+
+/// The report's final cost and normal matrix belong to its final point; or, after
+/// Levenberg-Marquardt's last step taken without a linearisation
+/// (`LevenbergMarquardt::skip_last_linearization`), the cost is the final point's
+/// (`LeastSquares::cost`) and the normal matrix is that of the point one step before, which
+/// must then be a converged solve.
+#[allow(dead_code)]
+pub fn check_final(problem: &dyn LeastSquares, r: &momo_core::SolverReport) {
+    let lin = problem.linearize(&r.x);
+    if lin.hessian == r.normal_matrix {
+        assert_eq!(lin.cost, r.final_cost, "{r:?}");
+    } else {
+        assert_eq!(
+            r.termination,
+            momo_core::Termination::CostConverged,
+            "{r:?}"
+        );
+        assert_eq!(problem.cost(&r.x), r.final_cost, "{r:?}");
+    }
+}
