@@ -28,7 +28,7 @@ if [[ ! -d "$snippets" ]]; then
     exit 2
 fi
 
-(cd "$root" && cargo build --release && cargo build --release -p momo-match --example kitti_setup)
+(cd "$root" && nice cargo build --release && nice cargo build --release -p momo-match --example kitti_setup)
 momo="$root/target/release/momo"
 setup="$root/target/release/examples/kitti_setup"
 mkdir -p "$out/seq" "$out/est" "$out/log"
@@ -49,20 +49,28 @@ for s in 06 01; do
         seq="$out/seq/$name"
         "$momo" match "${folders[@]}" --rig "$out/kitti$s/rig_$rig.json" \
             --odometry "$out/kitti$s/odometry.csv" -o "$seq" 2> "$out/log/match_$name.txt"
-        ms=$(sed -n 's/.*(\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/match_$name.txt")
+        ms=$(sed -n 's/.*[ (]\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/match_$name.txt")
         "$momo" run "$seq" -o "$out/est/${name}_momo.txt" -q
         "$momo" run "$seq" -o "$out/est/${name}_five_point.txt" --estimator five-point -q
         "$momo" vo "${folders[@]}" --rig "$out/kitti$s/rig_$rig.json" \
             --odometry "$out/kitti$s/odometry.csv" -o "$out/est/${name}_vo.txt" 2> "$out/log/vo_$name.txt"
-        vo_ms=$(sed -n 's/.*(\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/vo_$name.txt")
-        for est in momo five_point vo; do
+        vo_ms=$(sed -n 's/.*[ (]\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/vo_$name.txt")
+        # Without odometry.csv: the scale comes from the stereo cross-camera matches
+        # (momo-match's stereo module) or is unobservable (mono).
+        "$momo" vo "${folders[@]}" --rig "$out/kitti$s/rig_$rig.json" \
+            -o "$out/est/${name}_vo_noodo.txt" 2> "$out/log/vo_noodo_$name.txt"
+        noodo_ms=$(sed -n 's/.*[ (]\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/vo_noodo_$name.txt")
+        scale=$(sed -n 's/.*scale: \(.*\)$/\1/p' "$out/log/vo_noodo_$name.txt")
+        for est in momo five_point vo vo_noodo; do
             read -r med p95 max gross <<< "$(scores "$gt" "$out/est/${name}_$est.txt")"
+            read -r terr ratio _ <<< "$(python3 "$root/scripts/snippet_terr.py" "$gt" "$out/est/${name}_$est.txt")"
             case $est in
                 momo) label="momo (\`momo match\` + \`momo run\`)"; t="$ms" ;;
                 five_point) label="5-point RANSAC (same matches)"; t="$ms" ;;
                 vo) label="\`momo vo\` (one pass)"; t="$vo_ms" ;;
+                vo_noodo) label="\`momo vo\`, no odometry.csv (scale: $scale)"; t="$noodo_ms" ;;
             esac
-            rows+=("| $s | $rig | $label | $med | $p95 | $max | $gross | $t |")
+            rows+=("| $s | $rig | $label | $med | $p95 | $max | $gross | $terr | $ratio | $t |")
         done
     done
 done
@@ -79,8 +87,14 @@ cores=$(nproc)
     echo "(decoding excluded), as \`momo match\` / \`momo vo\` report it, on this $cores-core machine while"
     echo "other jobs may have been running. Made by \`scripts/images_eval.sh\`."
     echo
-    echo "| seq | rig | estimator | median | p95 | max | > 1° | ms/frame matching |"
-    echo "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: |"
+    echo "t_err is the KITTI devkit's translational error of one segment, the whole snippet (frame 0"
+    echo "to 50, \`scripts/snippet_terr.py\`; the devkit's 100-800 m segments are longer than the"
+    echo "snippets), in %; \"path\" the estimated over the ground-truth path length. Without"
+    echo "odometry.csv a mono rig's scale is unobservable (t_err meaningless); a stereo rig's comes from"
+    echo "the cross-camera matches of \`momo-match\`'s stereo module (left(k-1)-right(k), right(k-1)-left(k))."
+    echo
+    echo "| seq | rig | estimator | median | p95 | max | > 1° | t_err % | path | ms/frame matching |"
+    echo "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
     printf '%s\n' "${rows[@]}"
 } > "$section.tmp"
 mv "$section.tmp" "$section"

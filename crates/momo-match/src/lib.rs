@@ -64,6 +64,7 @@ pub mod kitti;
 pub mod matcher;
 pub mod pipeline;
 pub mod refine;
+pub mod stereo;
 pub mod synthetic;
 
 pub use error::MatchError;
@@ -79,3 +80,4 @@ pub use pipeline::{
     vo_from_images,
 };
 pub use refine::KltOptions;
+pub use stereo::{StereoOptions, StereoPair, rectified_pairs};

@@ -415,6 +415,17 @@ impl FrameMatcher {
         self.frames
     }
 
+    /// Camera `camera`'s features of the last frame pushed (frame k).
+    pub fn current(&self, camera: usize) -> Option<&FrameFeatures> {
+        self.prev.get(camera)?.as_ref()
+    }
+
+    /// Camera `camera`'s features of the frame before the last one pushed (frame k-1; empty
+    /// before the second push).
+    pub fn previous(&self, camera: usize) -> Option<&FrameFeatures> {
+        self.spare.get(camera)
+    }
+
     /// Adds frame k (one image per camera, each camera's size fixed over the sequence). Returns
     /// `None` for the first frame, else the matches of `(k-1, k)`, `result[camera]`.
     pub fn push(&mut self, images: &[GrayImage]) -> Result<Option<Vec<Vec<Match>>>, MatchError> {

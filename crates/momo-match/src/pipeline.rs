@@ -61,6 +61,8 @@ pub struct ImageFrontEnd {
     next: usize,
     stats: FrontEndStats,
     failed: bool,
+    /// Rectified camera pairs matched across cameras (`crate::stereo`).
+    stereo: Vec<crate::stereo::StereoPair>,
 }
 
 impl ImageFrontEnd {
@@ -100,6 +102,7 @@ impl ImageFrontEnd {
             next: 0,
             stats: FrontEndStats::default(),
             failed: false,
+            stereo: crate::stereo::rectified_pairs(rig, &crate::stereo::StereoOptions::default()),
         })
     }
 
@@ -111,6 +114,12 @@ impl ImageFrontEnd {
     /// The time spent and matches found so far.
     pub fn stats(&self) -> FrontEndStats {
         self.stats
+    }
+
+    /// True if the rig has rectified stereo pairs, whose cross-camera matches
+    /// ([`FrameObservations::cross_camera`], `crate::stereo`) every frame pair carries.
+    pub fn has_cross_camera(&self) -> bool {
+        !self.stereo.is_empty()
     }
 
     /// Reads and matches the next frame; `None` after the last one. The first call reads frames
@@ -173,6 +182,27 @@ impl ImageFrontEnd {
                     )
                 }));
             }
+            // Cross-camera matches of the rectified stereo pairs: the metric scale.
+            let t3 = Instant::now();
+            let opts = crate::stereo::StereoOptions::default();
+            for pair in &self.stereo {
+                let feats = |c| self.matcher.current(c).zip(self.matcher.previous(c));
+                if let (Some((cur_i, prev_i)), Some((cur_j, _))) =
+                    (feats(pair.from), feats(pair.to))
+                {
+                    let m = crate::stereo::cross_matches(
+                        pair,
+                        prev_i,
+                        cur_i,
+                        cur_j,
+                        &per_camera[pair.from],
+                        &opts,
+                    );
+                    obs.cross_camera
+                        .extend(crate::stereo::cross_observations(&self.rig, pair, &m));
+                }
+            }
+            self.stats.match_seconds += t3.elapsed().as_secs_f64();
             self.stats.matches += obs.len();
             return Ok(Some((k, obs)));
         }
@@ -227,7 +257,12 @@ pub fn match_to_sequence<P: AsRef<Path>>(
     }
     let mut front = ImageFrontEnd::new(folders, &rig, rig_path, options)?;
     std::fs::create_dir_all(out_dir).map_err(|e| IoError::io(out_dir, e))?;
-    let mut writer = MatchWriter::create(out_dir.join(files::MATCHES))?;
+    let path = out_dir.join(files::MATCHES);
+    let mut writer = if front.has_cross_camera() {
+        MatchWriter::create_cross(path)?
+    } else {
+        MatchWriter::create(path)?
+    };
     for item in &mut front {
         let (k, obs) = item?;
         writer.push(k, &obs)?;
