@@ -26,6 +26,7 @@ pub mod calibrate;
 pub mod config;
 pub mod odometry;
 pub mod pipeline;
+pub mod hypotheses;
 pub mod separate;
 pub mod stereo_scale;
 pub mod trust;

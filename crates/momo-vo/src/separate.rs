@@ -19,6 +19,9 @@
 //!    (a [`SeparateOptions::grid`] grid per camera, a cell counts if it holds at least one
 //!    supporting match) so that a compact object cannot outweigh a spread-out static scene; B
 //!    replaces A if it covers more cells.
+//!    With [`SeparateOptions::hypotheses`] set, the choice is made over frames by the
+//!    parallax of each motion's support instead ([`crate::hypotheses`]; the rule above decides
+//!    only when that cue does not apply).
 //! 4. **Final efficient stage**: the chosen motion is re-solved on its support alone with plain
 //!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches
 //!    under Gaussian noise ([`SeparateOptions::final_robust`]: the frame's robust loss instead).
@@ -28,6 +31,7 @@ use momo_core::{
     Solver, TrivialLoss, camera_motion, essential,
 };
 use momo_core::{Rig, Termination};
+use crate::hypotheses::{HypothesesOptions, Hypothesis, HypothesisTracker};
 use serde::{Deserialize, Serialize};
 
 /// Options of the motion separation (`[odometry.separate]` in the TOML config).
@@ -52,6 +56,10 @@ pub struct SeparateOptions {
     /// the soft prior's centre (sum of squared prior residuals, in sigma units) differ by more
     /// than this; a negative value turns the plausibility test off (cells only).
     pub plausibility_margin: f64,
+    /// The multi-frame choice between the two motions by their parallax
+    /// ([`crate::hypotheses`], `[odometry.separate.hypotheses]`); none by default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hypotheses: Option<HypothesesOptions>,
 }
 
 impl Default for SeparateOptions {
@@ -64,6 +72,7 @@ impl Default for SeparateOptions {
             final_robust: false,
             second_motion: true,
             plausibility_margin: -1.0,
+            hypotheses: None,
         }
     }
 }
@@ -83,6 +92,9 @@ impl SeparateOptions {
         let cells = self.grid.0.checked_mul(self.grid.1);
         if self.grid.0 == 0 || self.grid.1 == 0 || cells.is_none_or(|c| c > 10_000) {
             return Err("odometry.separate.grid must be (columns, rows), 1 to 10000 cells".into());
+        }
+        if let Some(h) = &self.hypotheses {
+            h.validate()?;
         }
         Ok(())
     }
@@ -217,13 +229,17 @@ impl SolveContext<'_> {
 }
 
 /// The separation stage (see the module doc): returns the frame's solution (A, or the second
-/// motion, after the final stage) and what happened. `starts` are the second motion's starts.
+/// motion, after the final stage) and what happened. `starts` are the second motion's starts;
+/// `tracker` keeps the multi-frame evidence of [`SeparateOptions::hypotheses`] and
+/// `arc_length` is the frame's odometry arc length if known.
 pub fn separate(
     ctx: &SolveContext<'_>,
     opts: &SeparateOptions,
     obs: &FrameObservations,
     first: FrameSolution,
     starts: &[Vec<f64>],
+    tracker: &mut HypothesisTracker,
+    arc_length: Option<f64>,
 ) -> (FrameSolution, SeparationOutcome) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
@@ -261,7 +277,21 @@ pub fn separate(
                     implausibility(ctx, &chosen.0.params),
                     implausibility(ctx, &b.params),
                 );
+                let by_parallax = opts.hypotheses.as_ref().and_then(|h| {
+                    let motion_a = ctx.estimator.motion(&chosen.0.params);
+                    let arc = arc_length.map_or(motion_a.translation.norm(), f64::abs);
+                    let a = Hypothesis {
+                        motion: motion_a,
+                        support: &chosen.1,
+                    };
+                    let b = Hypothesis {
+                        motion: ctx.estimator.motion(&b.params),
+                        support: &sup_b,
+                    };
+                    tracker.choose(h, ctx.rig, obs, arc, &a, &b)
+                });
                 let switch = match (pa, pb) {
+                    _ if by_parallax.is_some() => by_parallax == Some(true),
                     (Some(pa), Some(pb))
                         if opts.plausibility_margin >= 0.0
                             && (pa - pb).abs() > opts.plausibility_margin =>
@@ -279,6 +309,11 @@ pub fn separate(
                 }
             }
         }
+    }
+    if !outcome.competing
+        && let Some(h) = &opts.hypotheses
+    {
+        tracker.idle(h);
     }
     let (sol, mask) = chosen;
     if opts.final_stage && count(&mask) >= 8 {
