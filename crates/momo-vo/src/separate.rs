@@ -288,7 +288,7 @@ pub fn separate(
                         motion: ctx.estimator.motion(&b.params),
                         support: &sup_b,
                     };
-                    tracker.choose(h, ctx.rig, obs, arc, &a, &b)
+                    tracker.choose(h, ctx.rig, obs, arc, arc_length.is_some(), &a, &b)
                 });
                 let switch = match (pa, pb) {
                     _ if by_parallax.is_some() => by_parallax == Some(true),
