@@ -189,8 +189,33 @@ pub fn ground_support(
     support: &[Vec<bool>],
     opts: &HypothesesOptions,
 ) -> usize {
-    let mut n = 0;
-    for ((cam, matches), mask) in rig.cameras().iter().zip(&obs.per_camera).zip(support) {
+    ground_mask(rig, motion, obs, support, opts)
+        .iter()
+        .flatten()
+        .filter(|g| **g)
+        .count()
+}
+
+/// The matches of [`ground_support`] as a mask (per camera, per match).
+pub fn ground_mask(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    opts: &HypothesesOptions,
+) -> Vec<Vec<bool>> {
+    let mut out: Vec<Vec<bool>> = obs
+        .per_camera
+        .iter()
+        .map(|m| vec![false; m.len()])
+        .collect();
+    for (((cam, matches), mask), out) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(support)
+        .zip(&mut out)
+    {
         let p_vc = &cam.t_vehicle_camera;
         let height = p_vc.translation.z - opts.ground_z;
         if !(height > 0.2) {
@@ -203,7 +228,12 @@ pub fn ground_support(
             continue;
         }
         let th = t / tn;
-        for (o, _) in matches.iter().zip(mask).filter(|(_, k)| **k) {
+        for ((o, _), g) in matches
+            .iter()
+            .zip(mask)
+            .zip(out.iter_mut())
+            .filter(|((_, k), _)| **k)
+        {
             let rf1 = c.rotation * o.f1;
             let away = th.cross(&o.f0);
             let a = away.norm();
@@ -229,12 +259,26 @@ pub fn ground_support(
             let tol = opts
                 .ground_tolerance
                 .max(2.0 * height * opts.noise_angle / p);
-            if tol < 0.5 * height && (x_v.z - opts.ground_z).abs() < tol {
-                n += 1;
-            }
+            *g = tol < 0.5 * height && (x_v.z - opts.ground_z).abs() < tol;
         }
     }
-    n
+    out
+}
+
+/// A motion's score for the choice: its ground support if [`HypothesesOptions::ground`], else
+/// its parallax support.
+pub fn score(
+    opts: &HypothesesOptions,
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+) -> usize {
+    if opts.ground {
+        ground_support(rig, motion, obs, support, opts)
+    } else {
+        parallax_support(rig, motion, obs, support, opts.parallax)
+    }
 }
 
 impl HypothesisTracker {
@@ -271,17 +315,8 @@ impl HypothesisTracker {
             self.idle(opts);
             return None;
         }
-        let (pa, pb) = if opts.ground {
-            (
-                ground_support(rig, &a.motion, obs, a.support, opts),
-                ground_support(rig, &b.motion, obs, b.support, opts),
-            )
-        } else {
-            (
-                parallax_support(rig, &a.motion, obs, a.support, opts.parallax),
-                parallax_support(rig, &b.motion, obs, b.support, opts.parallax),
-            )
-        };
+        let pa = score(opts, rig, &a.motion, obs, a.support);
+        let pb = score(opts, rig, &b.motion, obs, b.support);
         if pa + pb < opts.min_matches.max(1) {
             self.idle(opts);
             return None;
@@ -381,8 +416,14 @@ mod tests {
             ..HypothesesOptions::default()
         };
         let mut t = HypothesisTracker::default();
-        assert_eq!(t.choose(&par, &rig, &obs, 1.0, true, &bad, &good), Some(true));
-        assert_eq!(t.choose(&par, &rig, &obs, 1.0, true, &good, &bad), Some(false));
+        assert_eq!(
+            t.choose(&par, &rig, &obs, 1.0, true, &bad, &good),
+            Some(true)
+        );
+        assert_eq!(
+            t.choose(&par, &rig, &obs, 1.0, true, &good, &bad),
+            Some(false)
+        );
         // Standing still: no cue.
         assert_eq!(t.choose(&par, &rig, &obs, 0.0, true, &bad, &good), None);
         // With a margin above one frame's evidence, two consistent frames are needed.
@@ -392,8 +433,14 @@ mod tests {
             ..par.clone()
         };
         let mut t = HypothesisTracker::default();
-        assert_eq!(t.choose(&slow, &rig, &obs, 1.0, true, &bad, &good), Some(false));
-        assert_eq!(t.choose(&slow, &rig, &obs, 1.0, true, &bad, &good), Some(true));
+        assert_eq!(
+            t.choose(&slow, &rig, &obs, 1.0, true, &bad, &good),
+            Some(false)
+        );
+        assert_eq!(
+            t.choose(&slow, &rig, &obs, 1.0, true, &bad, &good),
+            Some(true)
+        );
         assert_eq!(t.evidence, 0.0, "the evidence restarts after a switch");
     }
 
@@ -435,7 +482,10 @@ mod tests {
         // The same direction of travel at a third of the arc length: the points rise.
         let short = Pose::new(ego.rotation, ego.translation / 3.0);
         let m = ground_support(&rig, &short, &obs, &all, &opts);
-        assert!(m <= 3, "{m} of 30 road points on the road at the wrong scale");
+        assert!(
+            m <= 3,
+            "{m} of 30 road points on the road at the wrong scale"
+        );
     }
 
     #[test]

@@ -26,12 +26,12 @@
 //!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches
 //!    under Gaussian noise ([`SeparateOptions::final_robust`]: the frame's robust loss instead).
 
+use crate::hypotheses::{HypothesesOptions, Hypothesis, HypothesisTracker, ground_mask, score};
 use momo_core::{
     FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
     Solver, TrivialLoss, camera_motion, essential,
 };
 use momo_core::{Rig, Termination};
-use crate::hypotheses::{HypothesesOptions, Hypothesis, HypothesisTracker};
 use serde::{Deserialize, Serialize};
 
 /// Options of the motion separation (`[odometry.separate]` in the TOML config).
@@ -252,6 +252,10 @@ pub fn separate(
     let min_n = ((opts.min_fraction * n as f64).ceil() as usize).max(12);
     let sup_a = support(&first.params);
     let mut chosen = (first, sup_a);
+    // The alternatives to A: B, fitted to the matches outside A's support, and (with
+    // `hypotheses` and odometry) C, the previous frame's motion (the first start) re-solved on
+    // the matches it puts on the road: the continued track of the static world.
+    let mut alternatives: Vec<(FrameSolution, Vec<Vec<bool>>)> = Vec::new();
     if opts.second_motion && n - count(&chosen.1) >= min_n {
         let rest_mask: Vec<Vec<bool>> = chosen
             .1
@@ -272,42 +276,78 @@ pub fn separate(
         if let Some(b) = best {
             let sup_b = support(&b.params);
             if count(&sup_b) >= min_n {
-                outcome.competing = true;
-                let (pa, pb) = (
-                    implausibility(ctx, &chosen.0.params),
-                    implausibility(ctx, &b.params),
-                );
-                let by_parallax = opts.hypotheses.as_ref().and_then(|h| {
-                    let motion_a = ctx.estimator.motion(&chosen.0.params);
-                    let arc = arc_length.map_or(motion_a.translation.norm(), f64::abs);
-                    let a = Hypothesis {
-                        motion: motion_a,
-                        support: &chosen.1,
-                    };
-                    let b = Hypothesis {
-                        motion: ctx.estimator.motion(&b.params),
-                        support: &sup_b,
-                    };
-                    tracker.choose(h, ctx.rig, obs, arc, arc_length.is_some(), &a, &b)
-                });
-                let switch = match (pa, pb) {
-                    _ if by_parallax.is_some() => by_parallax == Some(true),
-                    (Some(pa), Some(pb))
-                        if opts.plausibility_margin >= 0.0
-                            && (pa - pb).abs() > opts.plausibility_margin =>
-                    {
-                        pb < pa
-                    }
-                    _ => {
-                        cells(ctx.rig, obs, &sup_b, opts.grid)
-                            > cells(ctx.rig, obs, &chosen.1, opts.grid)
-                    }
-                };
-                if switch {
-                    outcome.switched = true;
-                    chosen = (b, sup_b);
-                }
+                alternatives.push((b, sup_b));
             }
+        }
+    }
+    if opts.second_motion
+        && let Some(h) = &opts.hypotheses
+        && arc_length.is_some()
+        && let Some(previous) = starts.first()
+    {
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let road = ground_mask(ctx.rig, &ctx.estimator.motion(previous), obs, &all, h);
+        if count(&road) >= 12
+            && let Some(c) = ctx.solve(&subset(obs, &road), previous, ctx.loss, false)
+        {
+            let sup_c = support(&c.params);
+            // A distinct motion: it explains a third of `min_n` matches A does not.
+            let new: usize = sup_c
+                .iter()
+                .zip(&chosen.1)
+                .map(|(c, a)| c.iter().zip(a).filter(|(c, a)| **c && !**a).count())
+                .sum();
+            if new >= (min_n / 3).max(12) && count(&sup_c) >= min_n {
+                alternatives.push((c, sup_c));
+            }
+        }
+    }
+    outcome.competing = !alternatives.is_empty();
+    if let Some(h) = &opts.hypotheses
+        && !alternatives.is_empty()
+    {
+        // The alternative with the most ground (or parallax) support against A, over frames.
+        let metric = arc_length.is_some();
+        let motion_a = ctx.estimator.motion(&chosen.0.params);
+        let arc = arc_length.map_or(motion_a.translation.norm(), f64::abs);
+        let mut scored: Vec<(usize, (FrameSolution, Vec<Vec<bool>>))> = alternatives
+            .into_iter()
+            .map(|alt| {
+                let m = ctx.estimator.motion(&alt.0.params);
+                (score(h, ctx.rig, &m, obs, &alt.1), alt)
+            })
+            .collect();
+        scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
+        let (_, best) = scored.swap_remove(0);
+        let a = Hypothesis {
+            motion: motion_a,
+            support: &chosen.1,
+        };
+        let b = Hypothesis {
+            motion: ctx.estimator.motion(&best.0.params),
+            support: &best.1,
+        };
+        if tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true) {
+            outcome.switched = true;
+            chosen = best;
+        }
+    } else if let Some(b) = alternatives.pop() {
+        let (pa, pb) = (
+            implausibility(ctx, &chosen.0.params),
+            implausibility(ctx, &b.0.params),
+        );
+        let switch = match (pa, pb) {
+            (Some(pa), Some(pb))
+                if opts.plausibility_margin >= 0.0
+                    && (pa - pb).abs() > opts.plausibility_margin =>
+            {
+                pb < pa
+            }
+            _ => cells(ctx.rig, obs, &b.1, opts.grid) > cells(ctx.rig, obs, &chosen.1, opts.grid),
+        };
+        if switch {
+            outcome.switched = true;
+            chosen = b;
         }
     }
     if !outcome.competing
