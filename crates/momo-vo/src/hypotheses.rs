@@ -404,11 +404,11 @@ mod tests {
         let all = vec![vec![true; pts.len()]];
         let none = vec![vec![false; pts.len()]];
         let good = Hypothesis {
-            motion: ego.clone(),
+            motion: ego,
             support: &all,
         };
         let bad = Hypothesis {
-            motion: ego.clone(),
+            motion: ego,
             support: &none,
         };
         let par = HypothesesOptions {
@@ -459,7 +459,7 @@ mod tests {
             width: 1241.0,
             height: 376.0,
         });
-        let rig = Rig::mono(cam, p_vc.clone()).unwrap();
+        let rig = Rig::mono(cam, p_vc).unwrap();
         // Road points 5-14 m ahead, 2-4 m left and right (vehicle frame, z = 0): near enough
         // for parallax that tells their height.
         let road: Vec<Vector3<f64>> = (0..30)

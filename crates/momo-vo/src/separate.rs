@@ -134,6 +134,9 @@ pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -
         .collect()
 }
 
+/// A candidate motion and its support (per camera, per match).
+type Candidate = (FrameSolution, Vec<Vec<bool>>);
+
 /// The matches where `mask` holds.
 fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObservations {
     FrameObservations {
@@ -255,7 +258,7 @@ pub fn separate(
     // The alternatives to A: B, fitted to the matches outside A's support, and (with
     // `hypotheses` and odometry) C, the previous frame's motion (the first start) re-solved on
     // the matches it puts on the road: the continued track of the static world.
-    let mut alternatives: Vec<(FrameSolution, Vec<Vec<bool>>)> = Vec::new();
+    let mut alternatives: Vec<Candidate> = Vec::new();
     if opts.second_motion && n - count(&chosen.1) >= min_n {
         let rest_mask: Vec<Vec<bool>> = chosen
             .1
@@ -310,7 +313,7 @@ pub fn separate(
         let metric = arc_length.is_some();
         let motion_a = ctx.estimator.motion(&chosen.0.params);
         let arc = arc_length.map_or(motion_a.translation.norm(), f64::abs);
-        let mut scored: Vec<(usize, (FrameSolution, Vec<Vec<bool>>))> = alternatives
+        let mut scored: Vec<(usize, Candidate)> = alternatives
             .into_iter()
             .map(|alt| {
                 let m = ctx.estimator.motion(&alt.0.params);
