@@ -166,6 +166,8 @@ pub struct Odometry {
     soft_count: usize,
     /// The metric's residual is an angle (radians): `angle_plane`.
     metric_is_angular: bool,
+    /// Multi-frame evidence of the motion separation's hypothesis choice (crate::hypotheses).
+    hypotheses: crate::hypotheses::HypothesisTracker,
 }
 
 impl Odometry {
@@ -223,6 +225,7 @@ impl Odometry {
             soft_center,
             soft_count: 0,
             metric_is_angular: config_metric_is_angular,
+            hypotheses: Default::default(),
         })
     }
 
@@ -284,6 +287,7 @@ impl Odometry {
             Vec::new()
         };
         self.soft_count = 0;
+        self.hypotheses.reset();
     }
 
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
@@ -461,7 +465,15 @@ impl Odometry {
                     fixed: &fixed,
                     motion_prior: Some(&self.motion_prior),
                 };
-                let (sol, o) = crate::separate::separate(&ctx, opts, obs, sol, &starts);
+                let (sol, o) = crate::separate::separate(
+                    &ctx,
+                    opts,
+                    obs,
+                    sol,
+                    &starts,
+                    &mut self.hypotheses,
+                    arc_length,
+                );
                 (Some(sol), o.competing)
             }
             (r, _) => (r, false),

@@ -19,10 +19,14 @@
 //!    (a [`SeparateOptions::grid`] grid per camera, a cell counts if it holds at least one
 //!    supporting match) so that a compact object cannot outweigh a spread-out static scene; B
 //!    replaces A if it covers more cells.
+//!    With [`SeparateOptions::hypotheses`] set, the choice is made over frames by the
+//!    parallax of each motion's support instead ([`crate::hypotheses`]; the rule above decides
+//!    only when that cue does not apply).
 //! 4. **Final efficient stage**: the chosen motion is re-solved on its support alone with plain
 //!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches
 //!    under Gaussian noise ([`SeparateOptions::final_robust`]: the frame's robust loss instead).
 
+use crate::hypotheses::{HypothesesOptions, Hypothesis, HypothesisTracker, ground_mask, score};
 use momo_core::{
     FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
     Solver, TrivialLoss, camera_motion, essential,
@@ -52,6 +56,10 @@ pub struct SeparateOptions {
     /// the soft prior's centre (sum of squared prior residuals, in sigma units) differ by more
     /// than this; a negative value turns the plausibility test off (cells only).
     pub plausibility_margin: f64,
+    /// The multi-frame choice between the two motions by their parallax
+    /// ([`crate::hypotheses`], `[odometry.separate.hypotheses]`); none by default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hypotheses: Option<HypothesesOptions>,
 }
 
 impl Default for SeparateOptions {
@@ -64,6 +72,7 @@ impl Default for SeparateOptions {
             final_robust: false,
             second_motion: true,
             plausibility_margin: -1.0,
+            hypotheses: None,
         }
     }
 }
@@ -83,6 +92,9 @@ impl SeparateOptions {
         let cells = self.grid.0.checked_mul(self.grid.1);
         if self.grid.0 == 0 || self.grid.1 == 0 || cells.is_none_or(|c| c > 10_000) {
             return Err("odometry.separate.grid must be (columns, rows), 1 to 10000 cells".into());
+        }
+        if let Some(h) = &self.hypotheses {
+            h.validate()?;
         }
         Ok(())
     }
@@ -121,6 +133,9 @@ pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -
         })
         .collect()
 }
+
+/// A candidate motion and its support (per camera, per match).
+type Candidate = (FrameSolution, Vec<Vec<bool>>);
 
 /// The matches where `mask` holds.
 fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObservations {
@@ -217,13 +232,17 @@ impl SolveContext<'_> {
 }
 
 /// The separation stage (see the module doc): returns the frame's solution (A, or the second
-/// motion, after the final stage) and what happened. `starts` are the second motion's starts.
+/// motion, after the final stage) and what happened. `starts` are the second motion's starts;
+/// `tracker` keeps the multi-frame evidence of [`SeparateOptions::hypotheses`] and
+/// `arc_length` is the frame's odometry arc length if known.
 pub fn separate(
     ctx: &SolveContext<'_>,
     opts: &SeparateOptions,
     obs: &FrameObservations,
     first: FrameSolution,
     starts: &[Vec<f64>],
+    tracker: &mut HypothesisTracker,
+    arc_length: Option<f64>,
 ) -> (FrameSolution, SeparationOutcome) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
@@ -236,6 +255,10 @@ pub fn separate(
     let min_n = ((opts.min_fraction * n as f64).ceil() as usize).max(12);
     let sup_a = support(&first.params);
     let mut chosen = (first, sup_a);
+    // The alternatives to A: B, fitted to the matches outside A's support, and (with
+    // `hypotheses` and odometry) C, the previous frame's motion (the first start) re-solved on
+    // the matches it puts on the road: the continued track of the static world.
+    let mut alternatives: Vec<Candidate> = Vec::new();
     if opts.second_motion && n - count(&chosen.1) >= min_n {
         let rest_mask: Vec<Vec<bool>> = chosen
             .1
@@ -256,29 +279,84 @@ pub fn separate(
         if let Some(b) = best {
             let sup_b = support(&b.params);
             if count(&sup_b) >= min_n {
-                outcome.competing = true;
-                let (pa, pb) = (
-                    implausibility(ctx, &chosen.0.params),
-                    implausibility(ctx, &b.params),
-                );
-                let switch = match (pa, pb) {
-                    (Some(pa), Some(pb))
-                        if opts.plausibility_margin >= 0.0
-                            && (pa - pb).abs() > opts.plausibility_margin =>
-                    {
-                        pb < pa
-                    }
-                    _ => {
-                        cells(ctx.rig, obs, &sup_b, opts.grid)
-                            > cells(ctx.rig, obs, &chosen.1, opts.grid)
-                    }
-                };
-                if switch {
-                    outcome.switched = true;
-                    chosen = (b, sup_b);
-                }
+                alternatives.push((b, sup_b));
             }
         }
+    }
+    if opts.second_motion
+        && let Some(h) = &opts.hypotheses
+        && arc_length.is_some()
+        && let Some(previous) = starts.first()
+    {
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let road = ground_mask(ctx.rig, &ctx.estimator.motion(previous), obs, &all, h);
+        if count(&road) >= 12
+            && let Some(c) = ctx.solve(&subset(obs, &road), previous, ctx.loss, false)
+        {
+            let sup_c = support(&c.params);
+            // A distinct motion: it explains a third of `min_n` matches A does not.
+            let new: usize = sup_c
+                .iter()
+                .zip(&chosen.1)
+                .map(|(c, a)| c.iter().zip(a).filter(|(c, a)| **c && !**a).count())
+                .sum();
+            if new >= (min_n / 3).max(12) && count(&sup_c) >= min_n {
+                alternatives.push((c, sup_c));
+            }
+        }
+    }
+    outcome.competing = !alternatives.is_empty();
+    if let Some(h) = &opts.hypotheses
+        && !alternatives.is_empty()
+    {
+        // The alternative with the most ground (or parallax) support against A, over frames.
+        let metric = arc_length.is_some();
+        let motion_a = ctx.estimator.motion(&chosen.0.params);
+        let arc = arc_length.map_or(motion_a.translation.norm(), f64::abs);
+        let mut scored: Vec<(usize, Candidate)> = alternatives
+            .into_iter()
+            .map(|alt| {
+                let m = ctx.estimator.motion(&alt.0.params);
+                (score(h, ctx.rig, &m, obs, &alt.1), alt)
+            })
+            .collect();
+        scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
+        let (_, best) = scored.swap_remove(0);
+        let a = Hypothesis {
+            motion: motion_a,
+            support: &chosen.1,
+        };
+        let b = Hypothesis {
+            motion: ctx.estimator.motion(&best.0.params),
+            support: &best.1,
+        };
+        if tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true) {
+            outcome.switched = true;
+            chosen = best;
+        }
+    } else if let Some(b) = alternatives.pop() {
+        let (pa, pb) = (
+            implausibility(ctx, &chosen.0.params),
+            implausibility(ctx, &b.0.params),
+        );
+        let switch = match (pa, pb) {
+            (Some(pa), Some(pb))
+                if opts.plausibility_margin >= 0.0
+                    && (pa - pb).abs() > opts.plausibility_margin =>
+            {
+                pb < pa
+            }
+            _ => cells(ctx.rig, obs, &b.1, opts.grid) > cells(ctx.rig, obs, &chosen.1, opts.grid),
+        };
+        if switch {
+            outcome.switched = true;
+            chosen = b;
+        }
+    }
+    if !outcome.competing
+        && let Some(h) = &opts.hypotheses
+    {
+        tracker.idle(h);
     }
     let (sol, mask) = chosen;
     if opts.final_stage && count(&mask) >= 8 {

@@ -1,0 +1,503 @@
+//! Multi-frame choice between two competing motions (issue 14): the static world against a
+//! large moving object, as an optional part of the motion separation
+//! (`[odometry.separate.hypotheses]`, off by default; see [`crate::separate`]).
+//!
+//! When the separation finds two motions with large support (A, the frame's solve, continuing
+//! the previous frame's track through the warm start and the rotation prior; B, fitted to the
+//! rest), the per-frame cues (support, positive depth, image cells, plausibility) cannot tell
+//! them apart: a vehicle ahead moving with the ego car holds most matches, and its apparent
+//! motion (its lateral drift seen as a yaw) is itself a plausible vehicle motion.
+//!
+//! The cue used here is **odometry consistency through parallax**. When the vehicle moved (the
+//! odometry arc length, or the estimated one, is at least [`HypothesesOptions::min_arc_length`]),
+//! the static world seen under the true motion shows translation parallax: once the rotation is
+//! removed, a match's bearing moves away from the epipole (the focus of expansion), by an angle
+//! that grows with the arc length and shrinks with the depth. An object moving with the ego car
+//! shows no parallax at all: the motion that explains it is (nearly) a pure rotation, and under
+//! it its matches, and the far static points it also fits, stay where the rotation puts them.
+//! So each motion is scored by its **parallax support** `P(H)`: the matches of its support whose
+//! derotated bearing moved away from its epipole (positive depth) by at least
+//! [`HypothesesOptions::parallax`] radians,
+//! `p = ((f0 × R f1) · (t × f0)) / ‖t × f0‖`, with `(R, t)` the camera motion (the pose of the
+//! camera at frame k in the camera at frame k-1) and `f0`, `f1` the unit bearings.
+//!
+//! A zero-flow object has no parallax, but a bus in stop-and-go traffic or an oncoming car
+//! does, and then the parallax support does not choose. The stronger form of the same cue is
+//! **the ground at the odometry's scale** ([`HypothesesOptions::ground`], on by default): with
+//! the motion's translation at the odometry arc length, each parallax match of a motion's
+//! support is triangulated (depth `z0` in the camera at frame k-1 from
+//! `z0 f0 = z1 R f1 + t`) and counted in its **ground support** if the point lies on the road
+//! plane, `z = ground_z` in the vehicle frame (the rig's mount heights put the road at
+//! `z = 0` in the simulator and in `momo import-kitti`), within
+//! `max(ground_tolerance, 2 h σ / p)` (`h` the camera's height above the road, `σ`
+//! [`HypothesesOptions::noise_angle`], `p` the match's parallax angle: the height error of a
+//! triangulated road point). The true motion puts the road where the mount says it is; the
+//! motion of an object, scaled by the ego car's arc length, puts its points at wrong depths
+//! and its support has (almost) no road points (simulated KITTI 00 seed 2, frames 1-116:
+//! 19-52 road points under the true motion, 0-11 under the locked-in one).
+//!
+//! **Over frames**, the evidence that B beats A, `e = (P(B) - P(A)) / (P(A) + P(B))`, is
+//! accumulated with a decay: `D_k = decay · D_{k-1} + e_k` (frames without competition only
+//! decay it); B replaces A when `D_k` exceeds [`HypothesesOptions::margin`], and the evidence
+//! restarts at zero after a switch (the chosen track becomes the continued one). A decay of 0
+//! is a per-frame choice; a decay near 1 needs consistent evidence over several frames.
+//!
+//! What the simulator's data allows (momo-sim `moving_traffic`): odometry arc lengths are given
+//! (exact by default), so the parallax cue applies; matches are drawn independently per frame
+//! pair (no tracks), so match persistence and epipolar consistency over two frame gaps cannot
+//! be used on it.
+
+use momo_core::{FrameObservations, Pose, Rig, camera_motion};
+use serde::{Deserialize, Serialize};
+
+/// Options of the multi-frame hypothesis choice (`[odometry.separate.hypotheses]`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct HypothesesOptions {
+    /// Least derotated parallax angle (radians) of a match counted in a motion's parallax
+    /// support (0.004 ≈ 2.9 px at f = 718 px, about 2 sigma of the derotated angle at 1 px).
+    pub parallax: f64,
+    /// The cue applies only when the frame's arc length (odometry if given, else the solved
+    /// one) is at least this (metres): without translation there is no parallax.
+    pub min_arc_length: f64,
+    /// The cue decides only when the two motions' parallax supports hold at least this many
+    /// matches together (otherwise the separation's own rule decides).
+    pub min_matches: usize,
+    /// Decay of the accumulated evidence from one frame to the next, in [0, 1).
+    pub decay: f64,
+    /// B replaces A when the accumulated evidence exceeds this.
+    pub margin: f64,
+    /// Choose by the ground support (see the module doc) instead of the parallax support.
+    pub ground: bool,
+    /// Height of the road in the vehicle frame, metres (0: the vehicle origin on the road).
+    pub ground_z: f64,
+    /// Least height tolerance of a road point, metres.
+    pub ground_tolerance: f64,
+    /// Standard deviation of a bearing's angle (radians; 1 px at f = 718 px is 0.0014), for
+    /// the height tolerance of triangulated road points.
+    pub noise_angle: f64,
+}
+
+impl Default for HypothesesOptions {
+    fn default() -> Self {
+        Self {
+            parallax: 0.004,
+            min_arc_length: 0.1,
+            min_matches: 10,
+            decay: 0.0,
+            margin: 0.0,
+            ground: true,
+            ground_z: 0.0,
+            ground_tolerance: 0.08,
+            noise_angle: 0.0014,
+        }
+    }
+}
+
+impl HypothesesOptions {
+    /// Checks the options; the message names the first bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.parallax.is_finite() && self.parallax > 0.0) {
+            return Err("odometry.separate.hypotheses.parallax must be a positive number".into());
+        }
+        if !(self.min_arc_length.is_finite() && self.min_arc_length >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.min_arc_length must be a non-negative number".into(),
+            );
+        }
+        if !(0.0..1.0).contains(&self.decay) {
+            return Err("odometry.separate.hypotheses.decay must be in [0, 1)".into());
+        }
+        if !self.ground_z.is_finite() {
+            return Err("odometry.separate.hypotheses.ground_z must be a finite number".into());
+        }
+        if !(self.ground_tolerance.is_finite() && self.ground_tolerance > 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.ground_tolerance must be a positive number".into(),
+            );
+        }
+        if !(self.noise_angle.is_finite() && self.noise_angle >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.noise_angle must be a non-negative number".into(),
+            );
+        }
+        if !self.margin.is_finite() {
+            return Err("odometry.separate.hypotheses.margin must be a finite number".into());
+        }
+        Ok(())
+    }
+}
+
+/// One competing motion: the vehicle motion and its support mask (per camera, per match).
+pub struct Hypothesis<'a> {
+    /// The vehicle motion.
+    pub motion: Pose<f64>,
+    /// Its support (per camera, per match).
+    pub support: &'a [Vec<bool>],
+}
+
+/// The state of the multi-frame choice (the accumulated evidence), kept by the odometry driver.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HypothesisTracker {
+    /// Accumulated evidence that the alternative motion beats the continued one.
+    evidence: f64,
+}
+
+/// The parallax support of a motion (see the module doc): the matches of `support` whose
+/// derotated bearing moved away from the motion's epipole by at least `min_angle` radians.
+/// Matches of cameras whose translation is (numerically) zero do not count.
+pub fn parallax_support(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    min_angle: f64,
+) -> usize {
+    let mut n = 0;
+    for ((cam, matches), mask) in rig.cameras().iter().zip(&obs.per_camera).zip(support) {
+        let c = camera_motion(motion, &cam.t_vehicle_camera);
+        let t = c.translation;
+        let tn = t.norm();
+        if !(tn > 1e-12) {
+            continue;
+        }
+        let t = t / tn;
+        for (o, _) in matches.iter().zip(mask).filter(|(_, k)| **k) {
+            let rf1 = c.rotation * o.f1;
+            let away = t.cross(&o.f0);
+            let a = away.norm();
+            if a < 1e-9 {
+                continue;
+            }
+            let p = o.f0.cross(&rf1).dot(&away) / a;
+            if p >= min_angle {
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// The ground support of a motion (see the module doc): the matches of `support` with at least
+/// `opts.parallax / 2` radians of parallax whose triangulated point (the motion's translation
+/// taken at its scale, i.e. the odometry arc length) lies on the road plane `z = opts.ground_z`
+/// of the vehicle frame at frame k-1. Cameras less than 0.2 m above the road do not count.
+pub fn ground_support(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    opts: &HypothesesOptions,
+) -> usize {
+    ground_mask(rig, motion, obs, support, opts)
+        .iter()
+        .flatten()
+        .filter(|g| **g)
+        .count()
+}
+
+/// The matches of [`ground_support`] as a mask (per camera, per match).
+pub fn ground_mask(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    opts: &HypothesesOptions,
+) -> Vec<Vec<bool>> {
+    let mut out: Vec<Vec<bool>> = obs
+        .per_camera
+        .iter()
+        .map(|m| vec![false; m.len()])
+        .collect();
+    for (((cam, matches), mask), out) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(support)
+        .zip(&mut out)
+    {
+        let p_vc = &cam.t_vehicle_camera;
+        let height = p_vc.translation.z - opts.ground_z;
+        if !(height > 0.2) {
+            continue;
+        }
+        let c = camera_motion(motion, p_vc);
+        let t = c.translation;
+        let tn = t.norm();
+        if !(tn > 1e-9) {
+            continue;
+        }
+        let th = t / tn;
+        for ((o, _), g) in matches
+            .iter()
+            .zip(mask)
+            .zip(out.iter_mut())
+            .filter(|((_, k), _)| **k)
+        {
+            let rf1 = c.rotation * o.f1;
+            let away = th.cross(&o.f0);
+            let a = away.norm();
+            if a < 1e-9 {
+                continue;
+            }
+            let p = o.f0.cross(&rf1).dot(&away) / a;
+            if p < 0.5 * opts.parallax {
+                continue;
+            }
+            // z0 f0 - z1 R f1 = t in the least-squares sense (2 x 2 normal equations).
+            let (a11, a12, a22) = (1.0, -o.f0.dot(&rf1), 1.0);
+            let (b1, b2) = (o.f0.dot(&t), -rf1.dot(&t));
+            let det = a11 * a22 - a12 * a12;
+            if det.abs() < 1e-12 {
+                continue;
+            }
+            let z0 = (b1 * a22 - a12 * b2) / det;
+            if !(z0 > 0.0) {
+                continue;
+            }
+            let x_v = p_vc.rotation * (o.f0 * z0) + p_vc.translation;
+            let tol = opts
+                .ground_tolerance
+                .max(2.0 * height * opts.noise_angle / p);
+            *g = tol < 0.5 * height && (x_v.z - opts.ground_z).abs() < tol;
+        }
+    }
+    out
+}
+
+/// A motion's score for the choice: its ground support if [`HypothesesOptions::ground`], else
+/// its parallax support.
+pub fn score(
+    opts: &HypothesesOptions,
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+) -> usize {
+    if opts.ground {
+        ground_support(rig, motion, obs, support, opts)
+    } else {
+        parallax_support(rig, motion, obs, support, opts.parallax)
+    }
+}
+
+impl HypothesisTracker {
+    /// A frame without two competing motions: the evidence decays.
+    pub fn idle(&mut self, opts: &HypothesesOptions) {
+        self.evidence *= opts.decay;
+    }
+
+    /// Forgets the evidence (a reset of the driver).
+    pub fn reset(&mut self) {
+        self.evidence = 0.0;
+    }
+
+    /// Chooses between the continued motion `a` and the alternative `b` of a frame with arc
+    /// length `arc_length` (metres; odometry's or the solved one; `metric`: the motions'
+    /// translations are at metric scale, i.e. odometry gave the arc length): `Some(true)` if `b`
+    /// replaces `a`, `Some(false)` if `a` stays, `None` if the cue does not apply (too little
+    /// translation or support, or the ground cue without metric scale; the evidence then only
+    /// decays).
+    #[allow(clippy::too_many_arguments)]
+    pub fn choose(
+        &mut self,
+        opts: &HypothesesOptions,
+        rig: &Rig,
+        obs: &FrameObservations,
+        arc_length: f64,
+        metric: bool,
+        a: &Hypothesis<'_>,
+        b: &Hypothesis<'_>,
+    ) -> Option<bool> {
+        if !(arc_length.is_finite() && arc_length >= opts.min_arc_length)
+            || (opts.ground && !metric)
+        {
+            self.idle(opts);
+            return None;
+        }
+        let pa = score(opts, rig, &a.motion, obs, a.support);
+        let pb = score(opts, rig, &b.motion, obs, b.support);
+        if pa + pb < opts.min_matches.max(1) {
+            self.idle(opts);
+            return None;
+        }
+        let e = (pb as f64 - pa as f64) / (pa + pb) as f64;
+        self.evidence = opts.decay * self.evidence + e;
+        if self.evidence > opts.margin {
+            self.evidence = 0.0;
+            Some(true)
+        } else {
+            Some(false)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use momo_core::Observation;
+    use nalgebra::{Matrix3, Vector2, Vector3};
+
+    fn rig() -> Rig {
+        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+            fx: 718.0,
+            fy: 718.0,
+            cx: 607.0,
+            cy: 185.0,
+            width: 1241.0,
+            height: 376.0,
+        });
+        Rig::mono(cam, Pose::identity()).unwrap()
+    }
+
+    fn obs_of(points: &[Vector3<f64>], cam_motion: &Pose<f64>) -> FrameObservations {
+        // Camera motion C: X0 = R X1 + t, so X1 = R^T (X0 - t).
+        let per: Vec<Observation> = points
+            .iter()
+            .map(|x0| {
+                let x1 = cam_motion.rotation.transpose() * (x0 - cam_motion.translation);
+                Observation {
+                    f0: x0.normalize(),
+                    f1: x1.normalize(),
+                    px0: Vector2::zeros(),
+                    px1: Vector2::zeros(),
+                }
+            })
+            .collect();
+        FrameObservations {
+            per_camera: vec![per],
+            cross_camera: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn static_world_has_parallax_and_a_zero_flow_object_has_none() {
+        let rig = rig();
+        // Camera looks along +z; drive 1 m forward with a small yaw.
+        let r = momo_core::so3_exp(&Vector3::new(0.0, 0.01, 0.0));
+        let ego = Pose::new(r, Vector3::new(0.0, 0.0, 1.0));
+        let near: Vec<Vector3<f64>> = (0..20)
+            .map(|i| Vector3::new(-4.0 + 0.4 * i as f64, 1.5, 8.0 + i as f64))
+            .collect();
+        let obs = obs_of(&near, &ego);
+        let all = vec![vec![true; near.len()]];
+        assert_eq!(parallax_support(&rig, &ego, &obs, &all, 0.004), 20);
+        // The same matches explained by the rotation alone (translation sideways, along a
+        // direction that gives no parallax to these bearings): few or none count.
+        let object = obs_of(&near, &Pose::new(Matrix3::identity(), Vector3::zeros()));
+        let fake = Pose::new(Matrix3::identity(), Vector3::new(0.0, 0.0, 1.0));
+        assert_eq!(parallax_support(&rig, &fake, &object, &all, 0.004), 0);
+        // Backwards parallax (negative depth) does not count.
+        let back = Pose::new(r, Vector3::new(0.0, 0.0, -1.0));
+        assert_eq!(parallax_support(&rig, &back, &obs, &all, 0.004), 0);
+    }
+
+    #[test]
+    fn tracker_switches_on_parallax_and_accumulates_with_decay() {
+        let rig = rig();
+        let r = momo_core::so3_exp(&Vector3::new(0.0, 0.01, 0.0));
+        let ego = Pose::new(r, Vector3::new(0.0, 0.0, 1.0));
+        let pts: Vec<Vector3<f64>> = (0..20)
+            .map(|i| Vector3::new(-4.0 + 0.4 * i as f64, 1.5, 8.0 + i as f64))
+            .collect();
+        let obs = obs_of(&pts, &ego);
+        let all = vec![vec![true; pts.len()]];
+        let none = vec![vec![false; pts.len()]];
+        let good = Hypothesis {
+            motion: ego,
+            support: &all,
+        };
+        let bad = Hypothesis {
+            motion: ego,
+            support: &none,
+        };
+        let par = HypothesesOptions {
+            ground: false,
+            ..HypothesesOptions::default()
+        };
+        let mut t = HypothesisTracker::default();
+        assert_eq!(
+            t.choose(&par, &rig, &obs, 1.0, true, &bad, &good),
+            Some(true)
+        );
+        assert_eq!(
+            t.choose(&par, &rig, &obs, 1.0, true, &good, &bad),
+            Some(false)
+        );
+        // Standing still: no cue.
+        assert_eq!(t.choose(&par, &rig, &obs, 0.0, true, &bad, &good), None);
+        // With a margin above one frame's evidence, two consistent frames are needed.
+        let slow = HypothesesOptions {
+            decay: 0.8,
+            margin: 1.5,
+            ..par.clone()
+        };
+        let mut t = HypothesisTracker::default();
+        assert_eq!(
+            t.choose(&slow, &rig, &obs, 1.0, true, &bad, &good),
+            Some(false)
+        );
+        assert_eq!(
+            t.choose(&slow, &rig, &obs, 1.0, true, &bad, &good),
+            Some(true)
+        );
+        assert_eq!(t.evidence, 0.0, "the evidence restarts after a switch");
+    }
+
+    #[test]
+    fn the_road_lies_at_the_mount_height_only_under_the_true_motion_at_its_scale() {
+        // The KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above the road.
+        let p_vc = Pose::new(
+            Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
+            Vector3::new(1.0, 0.0, 1.65),
+        );
+        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+            fx: 718.0,
+            fy: 718.0,
+            cx: 607.0,
+            cy: 185.0,
+            width: 1241.0,
+            height: 376.0,
+        });
+        let rig = Rig::mono(cam, p_vc).unwrap();
+        // Road points 5-14 m ahead, 2-4 m left and right (vehicle frame, z = 0): near enough
+        // for parallax that tells their height.
+        let road: Vec<Vector3<f64>> = (0..30)
+            .map(|i| {
+                let x = 5.0 + 0.3 * i as f64;
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (2.0 + 0.066 * i as f64);
+                let v = Vector3::new(x, y, 0.0);
+                p_vc.rotation.transpose() * (v - p_vc.translation)
+            })
+            .collect();
+        let ego = Pose::new(
+            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
+            Vector3::new(1.0, 0.0, 0.0),
+        );
+        let obs = obs_of(&road, &camera_motion(&ego, &p_vc));
+        let all = vec![vec![true; road.len()]];
+        let opts = HypothesesOptions::default();
+        let n = ground_support(&rig, &ego, &obs, &all, &opts);
+        assert!(n >= 27, "{n} of 30 road points on the road");
+        // The same direction of travel at a third of the arc length: the points rise.
+        let short = Pose::new(ego.rotation, ego.translation / 3.0);
+        let m = ground_support(&rig, &short, &obs, &all, &opts);
+        assert!(
+            m <= 3,
+            "{m} of 30 road points on the road at the wrong scale"
+        );
+    }
+
+    #[test]
+    fn options_validate_and_parse() {
+        assert!(HypothesesOptions::default().validate().is_ok());
+        let d = HypothesesOptions {
+            decay: 1.0,
+            ..HypothesesOptions::default()
+        };
+        assert!(d.validate().unwrap_err().contains("decay"));
+        let o: HypothesesOptions = toml::from_str("decay = 0.5\nmargin = 0.2").unwrap();
+        assert_eq!((o.decay, o.margin), (0.5, 0.2));
+        assert!(toml::from_str::<HypothesesOptions>("decays = 0.5").is_err());
+    }
+}
