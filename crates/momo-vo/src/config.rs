@@ -104,6 +104,11 @@ pub struct OdometryOptions {
     /// Motion separation after each frame's solve ([`crate::separate`]); none by default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub separate: Option<crate::separate::SeparateOptions>,
+    /// The final efficient stage after each moving frame's solve ([`crate::final_fit`]: the
+    /// noise estimated from the residuals, a refit on the matches within a few sigmas); none
+    /// by default. Not applied when `separate` is set (it has its own final stage).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_fit: Option<crate::final_fit::FinalFitOptions>,
     /// Centre a soft manifold's prior (`soft_single_track`'s side slip and climb) on its
     /// running mean over this many recent moving frames, so that a constant offset (a camera
     /// mount a few tenths of a degree off nominal) is learnt online instead of pulling every
@@ -134,6 +139,7 @@ impl Default for OdometryOptions {
             prior_min_inlier_ratio: 0.85,
             prior_min_arc_length: 0.0,
             separate: None,
+            final_fit: None,
             soft_prior_centring_frames: 0,
             motion_prior_sigmas: BTreeMap::new(),
         }
@@ -660,6 +666,9 @@ impl Config {
         }
         if let Some(Err(reason)) = o.separate.as_ref().map(|s| s.validate()) {
             bad(&["odometry.separate"], reason);
+        }
+        if let Some(Err(reason)) = o.final_fit.as_ref().map(|s| s.validate()) {
+            bad(&["odometry.final_fit"], reason);
         }
         // Every offset is one more solve per frame: 100,000 ran for minutes per frame.
         if o.restart_yaw_offsets.len() > MAX_RESTART_OFFSETS {
