@@ -803,9 +803,10 @@ impl Odometry {
         fixed: &[bool],
         scale: ScaleSource,
     ) -> FrameSolution {
-        let Some(opts) = &self.config.odometry.final_fit else {
+        let opts = &self.config.odometry.final_fit;
+        if !opts.enabled {
             return sol;
-        };
+        }
         let mut fixed = fixed.to_vec();
         if let Some(i) = self.estimator.arc_length_index()
             && scale != ScaleSource::Estimated
