@@ -95,7 +95,9 @@ impl FinalFitOptions {
             ));
         }
         if self.min_scale_ratio > self.max_scale_ratio {
-            return Err("odometry.final_fit.min_scale_ratio must not exceed max_scale_ratio".into());
+            return Err(
+                "odometry.final_fit.min_scale_ratio must not exceed max_scale_ratio".into(),
+            );
         }
         Ok(())
     }
@@ -260,7 +262,10 @@ mod tests {
         // Clamped to [0.1 b, 5 b].
         let tiny = estimate_sigma(&[1e-9; 50], 0.001, &FinalFitOptions::default()).unwrap();
         assert_eq!(tiny, 1e-4);
-        assert_eq!(estimate_sigma(&[1.0; 5], 0.001, &FinalFitOptions::default()), None);
+        assert_eq!(
+            estimate_sigma(&[1.0; 5], 0.001, &FinalFitOptions::default()),
+            None
+        );
     }
 
     /// `Φ⁻¹((1 + p) / 2)` by bisection on a numerically integrated Gaussian density.
