@@ -168,8 +168,10 @@ fn the_rotation_prior_lowers_the_error_on_sparse_noisy_frames() {
     })
     .expect("simulation");
     let median_error = |sigma: f64| {
-        let mut config = Config::default();
-        config.model = Box::new(momo_models::Se3);
+        let mut config = Config {
+            model: Box::new(Se3),
+            ..Config::default()
+        };
         config.odometry.final_fit.enabled = false;
         config.odometry.rotation_change_sigma = sigma;
         let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("valid config");
