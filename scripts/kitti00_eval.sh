@@ -62,17 +62,22 @@ make_cfg() {
     local f="$out/cfg/$1.toml"
     "$momo" config >"$f"
     set_cfg "$f" model type "\"$2\""
+    if [[ "$2" != soft_single_track ]]; then # the default model's own fields
+        sed -i -e '/^side_slip_sigma = /d' -e '/^climb_sigma = /d' "$f"
+    fi
     set_cfg "$f" metric type "\"$3\""
     set_cfg "$f" loss type '"cauchy"'
     set_cfg "$f" loss scale "$4"
 }
 "$momo" config >"$out/cfg/default.toml"
-# soft: the soft single-track manifold (slip sigma 0.02 rad) with the default rotation prior, as
-# in scripts/sim_eval.sh's momo_soft; no_prior: the default without the rotation prior
-# (odometry.rotation_change_sigma = 0, the default before 2026-11-23).
+# old_default: the default before 2026-11-24 (se3, no soft-prior centring, no final stage);
+# no_prior: the default without the rotation prior (rotation_change_sigma = 0, as before
+# 2026-11-23).
 "$momo" config |
-    sed -e 's/^type = "se3"/type = "soft_single_track"\nside_slip_sigma = 0.02\nclimb_sigma = 0.02/' \
-        >"$out/cfg/soft.toml"
+    sed -e '/^side_slip_sigma = /d' -e '/^climb_sigma = /d' \
+        -e 's/^type = "soft_single_track"/type = "se3"/' \
+        -e 's/^soft_prior_centring_frames = .*/soft_prior_centring_frames = 0/' \
+        -e 's/^enabled = true/enabled = false/' >"$out/cfg/old_default.toml"
 "$momo" config | sed -e 's/^rotation_change_sigma = .*/rotation_change_sigma = 0.0/' \
     >"$out/cfg/no_prior.toml"
 # tukey: the default, then each frame refined with Tukey at 0.0075 rad ([refine_loss]), as in
@@ -132,7 +137,7 @@ run() {
 for seq in mono100 mono300 stereo200 mono_all; do
     run "$seq" default
     run "$seq" no_prior
-    run "$seq" soft
+    run "$seq" old_default
     run "$seq" tukey
     run "$seq" five_point
     run "$seq" five_point_refined
@@ -140,7 +145,7 @@ done
 for s in $seeds; do
     run "mono200_s$s" default
     run "mono200_s$s" no_prior
-    run "mono200_s$s" soft
+    run "mono200_s$s" old_default
     run "mono200_s$s" tukey
     run "mono200_s$s" five_point
     run "mono200_s$s" five_point_refined
@@ -192,9 +197,10 @@ fi
         echo "frame-to-frame estimate can score here."
         echo
     fi
-    echo "\`default\` is \`se3\` with the rotation prior (\`odometry.rotation_change_sigma\` = 0.002);"
-    echo "\`no_prior\` the same without it (the default before 2026-11-23); \`soft\` the default with"
-    echo "the soft single-track manifold (see scripts/sim_eval.sh); \`tukey\` the default refined per frame with Tukey at 0.0075 rad"
+    echo "\`default\` is \`soft_single_track\` (slip sigmas 0.01 rad, centred over 100 frames) with the"
+    echo "rotation prior (\`odometry.rotation_change_sigma\` = 0.002) and the final stage (\`[odometry.final_fit]\`);"
+    echo "\`no_prior\` the same without the rotation prior; \`old_default\` the default before 2026-11-24"
+    echo "(\`se3\`, no final stage); \`tukey\` the default refined per frame with Tukey at 0.0075 rad"
     echo "(\`[refine_loss]\`); \`five_point_refined\` the 5-point baseline with LO-RANSAC-style"
     echo "refinement (\`--estimator five-point-refined\`); \`mono_all\` has every match (about 2,000"
     echo "per frame pair)."

@@ -120,6 +120,16 @@ pub trait FrameEstimator: Send + Sync + Debug {
     /// Matches whose residual norm is within the loss scale, per camera, at a full parameter
     /// vector.
     fn inliers(&self, request: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError>;
+    /// The residual norm `|r|` of every match (per camera, in order; the metric's units) at a
+    /// full parameter vector: what a final stage estimates the noise from. The default (for
+    /// estimators that cannot say) is an empty list.
+    fn residual_norms(
+        &self,
+        _request: &SolveRequest<'_>,
+        _params: &[f64],
+    ) -> Result<Vec<Vec<f64>>, CoreError> {
+        Ok(Vec::new())
+    }
 }
 
 /// The estimator of a model with a metric: the model erased, the metric's per-match loop
@@ -260,6 +270,17 @@ impl<R: ResidualMetric> FrameEstimator for Erased<R> {
     fn inliers(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError> {
         let problem = self.problem(req, params)?;
         Ok(count_inliers(&problem, req.rig, req.loss.scale(), &problem.free_params()).0)
+    }
+
+    fn residual_norms(
+        &self,
+        req: &SolveRequest<'_>,
+        params: &[f64],
+    ) -> Result<Vec<Vec<f64>>, CoreError> {
+        let problem = self.problem(req, params)?;
+        let mut out = vec![Vec::new(); req.rig.len()];
+        problem.for_each_residual_norm(params, |j, n| out[j].push(n));
+        Ok(out)
     }
 }
 

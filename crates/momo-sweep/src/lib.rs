@@ -23,7 +23,7 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let grid = Grid::from_toml_str(
 //!     r#"
-//!     models = ["se3", "single_track_2d"]
+//!     models = ["soft_single_track", "single_track_2d"]
 //!     metrics = ["angle_plane"]
 //!     losses = ["cauchy", "trivial"]
 //!     loss_scales = [0.001, 0.002]
@@ -39,7 +39,7 @@
 //! let cfg = momo_sim::SimConfig { frames: 12, ..momo_sim::SimConfig::outliers() };
 //! let seq = momo_sim::simulate(&cfg)?.sequence;
 //! let plan = Plan::new(&grid, &["sim".to_string()])?;
-//! assert!(plan.default_combination.is_some()); // se3 / angle_plane / cauchy 0.001 / LM
+//! assert!(plan.default_combination.is_some()); // soft_single_track / angle_plane / cauchy 0.001 / LM
 //!
 //! // The first of two shards, then the second: disjoint, and together every job.
 //! let first: Shard = "1/2".parse()?;

@@ -29,7 +29,7 @@ impl Manifold for Exploding {
 momo_models::register_model!(Exploding, "test_exploding");
 
 const SMALL: &str = r#"
-models = ["se3", "single_track_2d"]
+models = ["soft_single_track", "single_track_2d"]
 metrics = ["angle_plane", "geo_line"]
 losses = ["cauchy", "trivial"]
 solvers = ["levenberg_marquardt", { type = "gauss_newton", max_iterations = 7 }]
@@ -56,17 +56,17 @@ fn grid_expands_in_a_fixed_order() {
     assert_eq!(c.len(), 2 * (3 + 2) * 2 * 2);
     assert_eq!(
         c[0].label(),
-        "se3 / angle_plane / cauchy 0.001 / levenberg_marquardt / 40"
+        "soft_single_track / angle_plane / cauchy 0.001 / levenberg_marquardt / 40"
     );
     assert_eq!(
         c[3].label(),
-        "se3 / angle_plane / cauchy 0.001 / gauss_newton{max_iterations=7} / all"
+        "soft_single_track / angle_plane / cauchy 0.001 / gauss_newton{max_iterations=7} / all"
     );
     assert_eq!(c[4].loss_scale, Some(0.002));
     let trivial = c.iter().find(|c| c.loss == "trivial").expect("trivial");
     assert_eq!(trivial.loss_scale, None);
     assert!(c.iter().all(|c| c.build_config().is_ok()));
-    // Exactly one combination is the default configuration (se3, angle_plane, cauchy 0.001,
+    // Exactly one combination is the default configuration (soft_single_track, angle_plane, cauchy 0.001,
     // LM with default options); the one with a changed GN is not.
     let defaults: Vec<_> = c.iter().filter(|c| c.is_default()).collect();
     assert_eq!(defaults.len(), 2, "one per match count"); // 40 and all
@@ -95,8 +95,10 @@ fn grid_errors_name_the_line() {
     assert!(reason.contains("bogus"), "{reason}");
     assert_eq!(line, 1);
 
-    let (_, reason) =
-        grid_err(&SMALL.replace("models = [\"se3\", ", "models = [\"se3\", \"se3\", "));
+    let (_, reason) = grid_err(&SMALL.replace(
+        "models = [\"soft_single_track\", ",
+        "models = [\"soft_single_track\", \"soft_single_track\", ",
+    ));
     assert!(reason.contains("twice"), "{reason}");
 
     let (line, reason) = grid_err(&format!("{SMALL}\n[odometry]\nmin_matches = -4\n"));

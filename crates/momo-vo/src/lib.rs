@@ -24,6 +24,7 @@ pub mod baseline;
 pub mod batch;
 pub mod calibrate;
 pub mod config;
+pub mod final_fit;
 pub mod hypotheses;
 pub mod odometry;
 pub mod pipeline;

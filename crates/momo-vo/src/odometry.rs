@@ -523,6 +523,9 @@ impl Odometry {
                         sol.params[i] = held_init[i];
                     }
                 }
+                if !standstill && self.config.odometry.separate.is_none() {
+                    sol = self.final_fit(obs, sol, &fixed, diag.scale);
+                }
                 self.fill_diagnostics(&sol, &mut diag);
                 if let (Some(i), Some(sigma)) = (arc_index, cross_sigma) {
                     diag.param_sigmas[i] = sigma;
@@ -817,6 +820,36 @@ impl Odometry {
             }
             None => Some(sol),
         }
+    }
+
+    /// The final efficient stage ([`crate::final_fit`], `odometry.final_fit`), with the arc
+    /// length held where the frame holds it.
+    fn final_fit(
+        &self,
+        obs: &FrameObservations,
+        sol: FrameSolution,
+        fixed: &[bool],
+        scale: ScaleSource,
+    ) -> FrameSolution {
+        let opts = &self.config.odometry.final_fit;
+        if !opts.enabled {
+            return sol;
+        }
+        let mut fixed = fixed.to_vec();
+        if let Some(i) = self.estimator.arc_length_index()
+            && scale != ScaleSource::Estimated
+        {
+            fixed[i] = true;
+        }
+        let ctx = crate::final_fit::FinalFitContext {
+            rig: &self.rig,
+            estimator: self.estimator.as_ref(),
+            loss: self.config.loss.as_ref(),
+            solver: self.config.solver.as_ref(),
+            fixed: &fixed,
+            motion_prior: &self.motion_prior,
+        };
+        crate::final_fit::refit(&ctx, opts, obs, sol)
     }
 
     fn solve_with_restarts(

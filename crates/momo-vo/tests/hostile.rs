@@ -27,7 +27,17 @@ fn assert_finite_orthonormal(m: &Pose<f64>) {
 
 /// The default estimator, warmed up on `frames` ordinary frames of `warm_motion`.
 fn warmed_up(rig: &Rig, warm_motion: &Pose<f64>, frames: usize, rng: &mut Rng) -> Odometry {
-    let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+    warmed_up_with(rig, Config::default(), warm_motion, frames, rng)
+}
+
+fn warmed_up_with(
+    rig: &Rig,
+    config: Config,
+    warm_motion: &Pose<f64>,
+    frames: usize,
+    rng: &mut Rng,
+) -> Odometry {
+    let mut vo = Odometry::new(rig.clone(), config).expect("valid");
     for _ in 0..frames {
         let r = vo.process(&frame(rig, warm_motion, 150, 0.5, rng), Some(1.0));
         assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
@@ -134,13 +144,26 @@ fn standstill_without_odometry_gets_the_rotation_and_holds_the_scale() {
 /// ego-motion within one frame: momo returns the camera's motion *relative to the object*
 /// (within noise), flags nothing, and the error against the true ego-motion is the object's
 /// own motion. Documented as a limitation; the defence is more than one rigid structure in
-/// view (see `degenerate.rs` and the simulator's moving-object scenario).
+/// view (see `degenerate.rs` and the simulator's moving-object scenario). Shown with the free
+/// model `se3`; the default `soft_single_track` is pulled part of the way from this apparent
+/// motion (it slips sideways) towards a motion a car makes (measured: 0.24 deg from the
+/// apparent motion), still about 2 deg from the ego-motion.
 #[test]
 fn all_matches_on_one_moving_object_give_the_motion_relative_to_the_object() {
+    for free in [true, false] {
+        one_moving_object(free);
+    }
+}
+
+fn one_moving_object(free: bool) {
     let mut rng = Rng(3);
     let rig = canned::pinhole_rig();
     let ego = drive(0.0, 1.0);
-    let mut vo = warmed_up(&rig, &ego, 3, &mut rng);
+    let mut config = Config::default();
+    if free {
+        config.model = Box::new(momo_models::Se3);
+    }
+    let mut vo = warmed_up_with(&rig, config, &ego, 3, &mut rng);
     // Object motion in the vehicle frame at k-1: a point X goes to O X.
     let object = Pose::new(
         so3_exp(&Vector3::new(0.0, 0.0, 2.0_f64.to_radians())),
@@ -158,8 +181,14 @@ fn all_matches_on_one_moving_object_give_the_motion_relative_to_the_object() {
     eprintln!(
         "moving object: error {to_apparent:.4} deg to the relative motion, {to_ego:.3} deg to the ego-motion"
     );
-    assert!(to_apparent < 0.05, "{to_apparent}");
-    assert!(to_ego > 1.9, "{to_ego}");
+    if free {
+        assert!(to_apparent < 0.05, "{to_apparent}");
+        assert!(to_ego > 1.9, "{to_ego}");
+    } else {
+        // Between the two, much nearer the apparent motion: the limitation stands.
+        assert!(to_apparent < 0.5, "{to_apparent}");
+        assert!(to_ego > 1.5, "{to_ego}");
+    }
 }
 
 // ----------------------------------------------------------------------------- 90% outliers

@@ -98,12 +98,23 @@ fn a_tukey_refinement_removes_the_outliers_pull() {
         let p = &r.diagnostics.params;
         (0..5).map(|i| (p[i] - truth[i]).abs()).fold(0.0, f64::max)
     };
-    let base = error(Config::default());
+    // The Cauchy stage alone (the final stage, on by default, removes the pull as well).
+    let first = || {
+        let mut c = Config::default();
+        c.odometry.final_fit.enabled = false;
+        c
+    };
+    let base = error(first());
     let text = format!(
         "{}\n[refine_loss]\ntype = \"tukey\"\nscale = 0.001\n",
-        Config::default().to_commented_toml()
+        first().to_commented_toml()
     );
     let refined = error(Config::from_toml_str(&text, "refine.toml").expect("valid"));
+    let with_final = error(Config::default());
+    assert!(
+        with_final < 0.1 * base,
+        "Cauchy stage {base:e}, with the final stage {with_final:e}"
+    );
     // Noise-free inliers: the outliers' pull is all the error there is. (A Tukey scale above
     // the outliers' residuals would keep them: 0.0075 gives 5e-3 here.)
     assert!(
@@ -144,6 +155,9 @@ fn the_rotation_prior_does_not_hold_the_first_frame_straight() {
 /// The default rotation prior helps where the matches are few and noisy: over the simulated
 /// `sparse_outliers` drive (100 matches, 30 % outliers, 1 px), the median rotation error is
 /// lower with it than without (scripts/sim_eval.sh over 3 x 400 frames: 0.101 -> 0.094 deg).
+/// Measured with the free model `se3` and no final stage (the default before 2026-11-24); with
+/// the soft default the gain on this drive is 1.3 % (0.0616 -> 0.0608 deg): the side-slip prior
+/// already holds what the rotation prior held (docs/RESULTS.md §9).
 #[test]
 fn the_rotation_prior_lowers_the_error_on_sparse_noisy_frames() {
     use momo_sim::{SimConfig, simulate};
@@ -154,7 +168,11 @@ fn the_rotation_prior_lowers_the_error_on_sparse_noisy_frames() {
     })
     .expect("simulation");
     let median_error = |sigma: f64| {
-        let mut config = Config::default();
+        let mut config = Config {
+            model: Box::new(Se3),
+            ..Config::default()
+        };
+        config.odometry.final_fit.enabled = false;
         config.odometry.rotation_change_sigma = sigma;
         let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("valid config");
         let mut errors: Vec<f64> = sim

@@ -115,12 +115,27 @@ fn truth(k: usize) -> Pose<f64> {
     drive(yaw, l)
 }
 
+///
+/// Run with the free model `se3` (worst frame 1.5-2.3 % over seeds 1-3) and with the default
+/// `soft_single_track` (since 2026-11-24): its side-slip prior couples the direction of travel
+/// with the yaw while the arc length is measured, and the worst frame of seed 3 is 3.3 % off
+/// (5.7 % without the final stage); the path and the calibration of the sigma hold for both.
 #[test]
 fn stereo_without_odometry_measures_the_arc_length() {
+    for free in [true, false] {
+        stereo_scale_run(free);
+    }
+}
+
+fn stereo_scale_run(free: bool) {
     for seed in [1, 2, 3] {
         let rig = stereo_rig();
         let mut rng = Rng(seed);
-        let mut vo = Odometry::new(rig.clone(), Config::default()).expect("valid");
+        let mut config = Config::default();
+        if free {
+            config.model = Box::new(momo_models::Se3);
+        }
+        let mut vo = Odometry::new(rig.clone(), config).expect("valid");
         let i = vo.estimator().arc_length_index().expect("arc length");
         let (mut estimated, mut worst, mut total, mut travelled) = (0, 0.0_f64, 0.0, 0.0);
         let (mut within_3_sigma, mut z2) = (0, 0.0);
@@ -152,7 +167,14 @@ fn stereo_without_odometry_measures_the_arc_length() {
             z2 / estimated.max(1) as f64
         );
         assert!(estimated >= 22, "{estimated}");
-        assert!(worst < 0.03, "{worst}");
+        if free {
+            assert!(worst < 0.03, "{worst}");
+        } else {
+            assert!(
+                worst < 0.04,
+                "soft default: {worst} (measured 0.033 at most)"
+            );
+        }
         assert!((total / travelled - 1.0).abs() < 0.01);
         assert!(within_3_sigma * 10 >= estimated * 8, "{within_3_sigma}");
     }
