@@ -1,6 +1,6 @@
 //! Criterion benchmarks of one frame pair for every model x metric x loss x solver, at 100, 300
 //! and 1,000 matches per camera, on one pinhole camera and on a four-camera fisheye rig
-//! (`momo_costs::canned`), plus the two speed targets and the "floor" (one evaluation
+//! (`momo_testing::canned`), plus the two speed targets and the "floor" (one evaluation
 //! of the residuals, one linearisation).
 //!
 //! Data: a curve with a little pitch and roll (yaw 2°, 1 m), 90 % noise-free inliers with

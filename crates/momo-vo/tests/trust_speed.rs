@@ -3,7 +3,7 @@
 //! summed per camera.
 
 use momo_core::{FrameObservations, Observation, Pose, so3_exp};
-use momo_costs::canned;
+use momo_testing::canned;
 use momo_vo::trust::{median_flow, median_flow_below, spread, spread_of_mask};
 use nalgebra::{Vector2, Vector3};
 
