@@ -966,3 +966,59 @@ fn the_kitti_folder_import_checks_its_output_directory_like_the_other_writers() 
         "created directories removed"
     );
 }
+
+#[cfg(target_os = "linux")]
+#[test]
+fn an_allocation_failure_mid_run_leaves_no_file() {
+    // Frames 1-6 are estimated and their poses written into the (anonymous, O_TMPFILE) output,
+    // then the last frame pair holds 3 million matches: reading it needs more address space
+    // than the limit allows, the allocator fails and the process aborts (SIGABRT) in the middle
+    // of the run. No handler runs on an abort; the output must still leave nothing behind.
+    let tmp = tempfile::tempdir().expect("tmp");
+    let seq = tmp.path().join("seq");
+    let mut cfg = SimConfig::clean_pinhole();
+    cfg.frames = 8;
+    cfg.matches_per_camera = 100;
+    simulate(&cfg)
+        .expect("simulates")
+        .write(&seq)
+        .expect("writes");
+    let text = std::fs::read_to_string(seq.join("matches.csv")).expect("read");
+    let last = text.lines().last().expect("a row").to_string();
+    let mut f = std::io::BufWriter::new(
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(seq.join("matches.csv"))
+            .expect("open"),
+    );
+    for _ in 0..3_000_000 {
+        writeln!(f, "{last}").expect("append");
+    }
+    f.flush().expect("flush");
+    drop(f);
+    let out_dir = tmp.path().join("out");
+    std::fs::create_dir(&out_dir).expect("mkdir");
+    let o = out(momo_limited(100_000)
+        .arg("run")
+        .arg(&seq)
+        .arg("-o")
+        .arg(out_dir.join("p.txt"))
+        .arg("-d")
+        .arg(out_dir.join("d.csv"))
+        .arg("-q"));
+    {
+        use std::os::unix::process::ExitStatusExt;
+        assert_eq!(
+            o.status.signal(),
+            Some(6),
+            "expected an abort on the allocation failure: {:?} {}",
+            o.status,
+            stderr(&o)
+        );
+    }
+    let left: Vec<_> = std::fs::read_dir(&out_dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
