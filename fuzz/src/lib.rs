@@ -667,3 +667,11 @@ fn fix_png_crcs(data: &mut [u8]) {
         i = end + 4;
     }
 }
+
+/// The replay of every target over its seeds and a generated mutation corpus, without libFuzzer
+/// (`cargo test --manifest-path fuzz/Cargo.toml --no-default-features --lib`).
+#[cfg(test)]
+#[path = "../tests/corpus.rs"]
+mod corpus;
+#[cfg(test)]
+extern crate self as momo_fuzz;
