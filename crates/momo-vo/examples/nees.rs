@@ -3,19 +3,38 @@
 //! For every scenario and seed, simulates a drive (`momo_sim`), runs the default odometry and,
 //! for each frame pair whose status is `estimated` or `weak`, computes the normalised
 //! estimation error squared of the rotation vector, `NEES = δwᵀ Σ_ww⁻¹ δw` with
-//! `δw = w_est - w_true` (the first three parameters of `se3`). If the covariance is right,
+//! `δw = log(R_trueᵀ R_est)`, and `Σ_ww = J Σ Jᵀ` the reported covariance of the free parameters
+//! carried to the rotation by `J = ∂ log(R(p̂)ᵀ R(p)) / ∂p` (central differences of the model's
+//! motion; for `se3`, whose first three parameters are a rotation vector, `J ≈ [I 0]`), so any
+//! model can be scored (the default is `soft_single_track`). If the covariance is right,
 //! NEES follows chi-square with 3 degrees of freedom: mean 3, 95 % of frames below 7.815.
 //!
 //! Frames whose rotation covariance has an infinite direction (nothing constrains it) score
 //! NEES 0. Standstill, degenerate and held frames are not scored (column "not scored").
 //!
 //! Usage: `cargo run --release -p momo-vo --example nees [FRAMES] [SEEDS...]`
-//! (default 100 frames, seeds 1 2 3). Prints one Markdown row per scenario.
+//! (default 100 frames, seeds 1 2 3); `MOMO_NEES_CONFIG=cfg.toml` scores another configuration.
+//! Prints one Markdown row per scenario.
 
-use momo_core::so3_log;
+use momo_core::{FrameEstimator, so3_log};
 use momo_sim::{SimConfig, simulate};
 use momo_vo::{Config, FrameStatus, Odometry};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+
+/// The default configuration, or the TOML file named by `MOMO_NEES_CONFIG`.
+fn config() -> Config {
+    let Ok(path) = std::env::var("MOMO_NEES_CONFIG") else {
+        return Config::default();
+    };
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        eprintln!("nees: {path}: {e}");
+        std::process::exit(2)
+    });
+    Config::from_toml_str(&text, &path).unwrap_or_else(|e| {
+        eprintln!("nees: {e}");
+        std::process::exit(2)
+    })
+}
 
 /// The 95 % quantile of chi-square with 3 degrees of freedom.
 const CHI2_3_95: f64 = 7.814_727_903_251_178;
@@ -59,7 +78,7 @@ fn main() {
                 }
             };
             let seq = &sim.sequence;
-            let mut vo = match Odometry::new(seq.rig.clone(), Config::default()) {
+            let mut vo = match Odometry::new(seq.rig.clone(), config()) {
                 Ok(v) => v,
                 Err(e) => {
                     eprintln!("nees: {e}");
@@ -78,8 +97,12 @@ fn main() {
                     held += 1;
                     continue;
                 }
-                let Some(nees) = rotation_nees(d, &sim.vehicle_motions[k].rotation, &r.motion)
-                else {
+                let Some(nees) = rotation_nees(
+                    vo.estimator(),
+                    d,
+                    &sim.vehicle_motions[k].rotation,
+                    &r.motion,
+                ) else {
                     held += 1;
                     continue;
                 };
@@ -111,29 +134,37 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
-/// NEES of the rotation: the error `log(R_trueᵀ R_est)` (a small rotation vector, the
-/// difference of the rotation parameters to first order) against the rotation block of the
-/// reported covariance.
+/// NEES of the rotation: the error `log(R_trueᵀ R_est)` (a small rotation vector on the right
+/// of the estimate) against the reported covariance of the free parameters carried to that
+/// rotation vector, `J Σ Jᵀ` with `J = ∂ log(R(p̂)ᵀ R(p)) / ∂p` by central differences.
 fn rotation_nees(
+    model: &dyn FrameEstimator,
     d: &momo_vo::FrameDiagnostics,
     truth: &Matrix3<f64>,
     est: &momo_core::Pose<f64>,
 ) -> Option<f64> {
     let n = d.free.len();
-    let pos: Vec<usize> = (0..3)
-        .map(|i| d.free.iter().position(|&f| f == i))
-        .collect::<Option<_>>()?;
-    if d.covariance.len() != n * n {
+    if n == 0 || d.covariance.len() != n * n || d.params.len() != model.param_names().len() {
         return None;
     }
-    let cov = Matrix3::from_fn(|r, c| d.covariance[pos[r] * n + pos[c]]);
+    let cov = DMatrix::from_row_slice(n, n, &d.covariance);
     if cov.iter().any(|v| v.is_infinite()) {
-        // An unconstrained rotation direction: infinite sigma, no error is surprising.
+        // An unconstrained direction: infinite sigma, no error is surprising.
         return Some(0.0);
     }
-    let inv = cov.try_inverse()?;
-    // Rotation parameters are a rotation vector w with R = exp(w): for small errors
-    // w_est - w_true ≈ log(R_trueᵀ R_est) expressed in the same frame.
+    let r0 = model.motion(&d.params).rotation;
+    let mut jac = DMatrix::zeros(3, n);
+    let h = 1e-6;
+    for (c, &i) in d.free.iter().enumerate() {
+        let (mut plus, mut minus) = (d.params.clone(), d.params.clone());
+        plus[i] += h;
+        minus[i] -= h;
+        let wp = so3_log(&(r0.transpose() * model.motion(&plus).rotation));
+        let wm = so3_log(&(r0.transpose() * model.motion(&minus).rotation));
+        jac.set_column(c, &((wp - wm) / (2.0 * h)));
+    }
+    let cw = &jac * cov * jac.transpose();
+    let inv = Matrix3::from_fn(|r, c| cw[(r, c)]).try_inverse()?;
     let e: Vector3<f64> = so3_log(&(truth.transpose() * est.rotation));
     Some((e.transpose() * inv * e)[(0, 0)])
 }

@@ -105,8 +105,8 @@ pub struct OdometryOptions {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub separate: Option<crate::separate::SeparateOptions>,
     /// The final efficient stage after each moving frame's solve ([`crate::final_fit`]: the
-    /// noise estimated from the residuals, a refit on the matches within a few sigmas); on by
-    /// default (`enabled = false` turns it off). Not applied when `separate` is set (it has
+    /// noise estimated from the residuals, a refit on the matches within a few sigmas); off by
+    /// default (its covariance is over-confident, see [`crate::final_fit::FinalFitOptions`]). Not applied when `separate` is set (it has
     /// its own final stage).
     pub final_fit: crate::final_fit::FinalFitOptions,
     /// Centre a soft manifold's prior (`soft_single_track`'s side slip and climb) on its
@@ -245,11 +245,12 @@ pub struct Origin {
 /// The default: `SoftSingleTrack` (Se3's parameters, side slip and climb as priors with sigma
 /// 0.01 rad, centred on their running mean over 100 frames) with the arc length from odometry,
 /// `AnglePlane`, Cauchy with scale 0.001 rad (0.7 px at KITTI's focal length),
-/// Levenberg-Marquardt, the rotation prior and the final efficient stage
-/// ([`crate::final_fit`]). Since 2026-11-24 (issue 14, docs/RESULTS.md §9): efficiency
-/// (median error / Cramér-Rao bound, 5 seeds) 0.86-1.14 on clean, highway, very sparse,
-/// fisheye rig and sparse outliers (se3 before: 1.14-1.51), 1.24 with 30 % outliers (1.60);
-/// real KITTI 00 medians 0-3 % below the se3 default's.
+/// Levenberg-Marquardt and the rotation prior. Since 2026-11-24 (issue 14, docs/RESULTS.md
+/// §9): efficiency (median error / Cramér-Rao bound, 5 seeds) 0.83-1.14 on clean, highway,
+/// very sparse and sparse outliers, 1.33 on the fisheye rig, 1.40 with 30 % outliers (se3
+/// before: 1.14-1.60); real KITTI 00 medians 2-7 % below the se3 default's. The final
+/// efficient stage ([`crate::final_fit`]) brings the fisheye rig to 1.14 and the outliers to
+/// 1.24 but makes the covariance over-confident, so it is off.
 ///
 /// The se3 choice before it:
 ///
