@@ -192,14 +192,31 @@ pub fn check_residual_jacobian<M: Manifold, R: ResidualMetric>(
     Ok(worst)
 }
 
-/// Checks `ρ'` and `ρ''` of a loss at `s` against central differences of `ρ` and `ρ'`.
+/// Checks `ρ'` and `ρ''` of a loss at `s` against central differences of `ρ` and `ρ'`, and
+/// the loss's shortcuts against [`RobustLoss::evaluate`]: [`RobustLoss::rho`] bit for bit (the
+/// solver compares costs from both), [`RobustLoss::weights`] within `tol`.
 pub fn check_loss_derivatives(
     loss: &dyn RobustLoss,
     s: f64,
     tol: f64,
 ) -> Result<f64, JacobianMismatch> {
     let h = 1e-6 * s.abs().max(1e-6);
-    let [_, d1, d2] = loss.evaluate(s);
+    let [rho, d1, d2] = loss.evaluate(s);
+    let shortcut = loss.rho(s);
+    if shortcut.to_bits() != rho.to_bits() {
+        return Err(JacobianMismatch {
+            what: "rho (RobustLoss::rho against evaluate)".into(),
+            row: 0,
+            col: 0,
+            ad: shortcut,
+            fd: rho,
+            error: (shortcut - rho).abs(),
+            tolerance: 0.0,
+        });
+    }
+    let [w1, w2] = loss.weights(s);
+    compare("rho' (RobustLoss::weights)", 0, 0, w1, d1, tol)?;
+    compare("rho'' (RobustLoss::weights)", 1, 0, w2, d2, tol)?;
     let [ra, da, _] = loss.evaluate(s + h);
     let [rb, db, _] = loss.evaluate(s - h);
     let scale = loss.evaluate(s)[1].abs().max(1e-300);

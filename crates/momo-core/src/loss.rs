@@ -18,6 +18,13 @@ pub trait RobustLoss: Debug + Send + Sync {
         [d1, d2]
     }
 
+    /// `ρ(s)` only: what a cost evaluation needs. Override it where the derivatives cost extra
+    /// divisions (Cauchy); it must equal `evaluate(s)[0]` bit for bit. The default calls
+    /// [`evaluate`](Self::evaluate).
+    fn rho(&self, s: f64) -> f64 {
+        self.evaluate(s)[0]
+    }
+
     /// The residual magnitude that separates inliers from outliers (`|r| <= scale`), in the
     /// metric's units; `f64::INFINITY` for a non-robust loss.
     fn scale(&self) -> f64;

@@ -642,7 +642,7 @@ impl<R: ResidualMetric> LeastSquares for Problem<'_, R> {
         let mut last = self.record_norms(x);
         self.for_each_squared_norm(&p[..self.np], |_, s| {
             last.put(s);
-            cost += 0.5 * self.loss.evaluate(s)[0];
+            cost += 0.5 * self.loss.rho(s);
         });
         cost + self.prior_cost(&p[..self.np])
     }

@@ -87,6 +87,13 @@ impl RobustLoss for Cauchy {
         [b2 * log, d1, -d1 * d1 / b2]
     }
 
+    fn rho(&self, s: f64) -> f64 {
+        let b2 = self.scale * self.scale;
+        let x = s / b2;
+        let log = if x < 0.01 { x.ln_1p() } else { (1.0 + x).ln() };
+        b2 * log
+    }
+
     fn weights(&self, s: f64) -> [f64; 2] {
         let b2 = self.scale * self.scale;
         let d1 = b2 / (b2 + s);

@@ -310,7 +310,7 @@ impl LmProblem for Refinement<'_, '_> {
 
     fn cost(&self, x: &Pose<f64>) -> f64 {
         let e = essential(x);
-        let rho = |o: &&Observation| 0.5 * self.loss.evaluate(sampson_angle_sq(&e, o))[0];
+        let rho = |o: &&Observation| 0.5 * self.loss.rho(sampson_angle_sq(&e, o));
         self.obs.iter().map(rho).sum()
     }
 
