@@ -27,6 +27,12 @@ pub(crate) struct CalibrateArgs {
     /// by default it is held at zero there and estimated with single_track_2d).
     #[arg(long)]
     estimate_roll: bool,
+    /// Bootstrap replicas of the uncertainty (each resamples every frame pair's matches and
+    /// calibrates again; the reported sigma is the larger of theirs and the Gauss-Newton one);
+    /// 0: the Gauss-Newton sigma alone, which is over-confident where the matches see the
+    /// direction of travel weakly.
+    #[arg(long, default_value_t = momo_vo::calibrate::DEFAULT_BOOTSTRAP)]
+    bootstrap: usize,
     /// Print nothing but errors.
     #[arg(short, long)]
     quiet: bool,
@@ -37,7 +43,8 @@ pub(crate) fn calibrate(args: CalibrateArgs) -> Result<(), Failure> {
     let options = momo_vo::MountCalibration::default()
         .with_model(Some(mount_model(&args.model)?))
         .with_frames(args.frames)
-        .with_roll(args.estimate_roll.then_some(true));
+        .with_roll(args.estimate_roll.then_some(true))
+        .with_bootstrap(args.bootstrap);
     let mut inputs = crate::common::sequence_files(&args.seq);
     inputs.extend(args.config.clone());
     let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
@@ -92,7 +99,15 @@ fn print_mount_estimate(est: &momo_vo::MountEstimate, seconds: f64) -> Result<()
     let (left, up) = est.travel_direction_deg();
     let held = if est.roll_estimated { "" } else { " (held)" };
     outln!(
-        "mount correction, degrees (rotation of the rig about camera 0, vehicle frame x forward, y left, z up; \u{b1} 1 sigma):"
+        "mount correction, degrees (rotation of the rig about camera 0, vehicle frame x forward, y left, z up; \u{b1} 1 sigma{}):",
+        if est.replicas > 0 {
+            format!(
+                ", sigma from {} bootstrap replicas or the curvature, the larger",
+                est.replicas
+            )
+        } else {
+            String::new()
+        }
     );
     outln!("  roll  (about x) {:+.4} \u{b1} {:.4}{held}", d.x, s.x);
     outln!(
