@@ -83,7 +83,8 @@ pub struct LevenbergMarquardt {
     /// point is then `t δ` with `t = κ_m / κ` clamped to `[1, max_step_extrapolation]` (the
     /// minimum along `δ` of a quadratic with that curvature, if the next step is about
     /// parallel to the last, as it is when the convergence is linear). A longer trial that
-    /// does not decrease the cost is retried at `t = 1` (one more iteration, same damping).
+    /// does not decrease the cost is retried at `t = 1` (one more iteration, same damping), and
+    /// the rest of that solve takes no lengthened step.
     /// The damping follows the gain ratio against the unscaled step's predicted decrease.
     /// `1` (the default) never lengthens a step: every pose bit-identical to before. Only
     /// problems that can scale a step ([`LmProblem::scale_step`]) use it.
@@ -298,6 +299,7 @@ impl LevenbergMarquardt {
         } else {
             1.0
         };
+        let mut extrapolating = max_t > 1.0;
         let termination = 'outer: loop {
             if fresh {
                 fresh = false;
@@ -399,7 +401,10 @@ impl LevenbergMarquardt {
                     problem.predicted_decrease(&lin, unscaled.as_ref().unwrap_or(&step));
                 if unscaled.is_some() && !(c.is_finite() && c < old_cost && problem.is_finite(&new))
                 {
-                    // The lengthened trial failed: the solved step next, same damping.
+                    // The lengthened trial failed: the solved step next, same damping, and no
+                    // more lengthening in this solve (the cost is not near a quadratic along the
+                    // steps).
+                    extrapolating = false;
                     continue 'outer;
                 }
                 if !(c.is_finite() && c < old_cost) {
@@ -411,7 +416,7 @@ impl LevenbergMarquardt {
                 if !problem.is_finite(&new) {
                     break 'trial true;
                 }
-                if max_t > 1.0 {
+                if extrapolating {
                     extrapolate =
                         curvature_ratio(problem, &lin, &step, old_cost - c).clamp(1.0, max_t);
                 }

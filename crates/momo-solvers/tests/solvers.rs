@@ -422,3 +422,45 @@ fn last_step_without_linearisation_saves_linearisations() {
     }
     assert!(saved > 0, "no linearisation saved");
 }
+
+/// Levenberg-Marquardt's step extrapolation (`max_step_extrapolation`, issue 19): on a robust
+/// fit whose convergence is linear (the re-weighted normal matrix overestimates the cost's
+/// curvature) a step lengthened by the curvature ratio of the last one saves linearisations
+/// overall and ends within the function tolerance of the plain solve; at 1 it changes nothing.
+#[test]
+fn step_extrapolation_saves_linearisations() {
+    let p = Fit::cauchy(OutlierLine::new(), 0.05);
+    let (mut plain_total, mut extrapolated_total) = (0, 0);
+    for x0 in [
+        pv(&[0.0, 0.0]),
+        pv(&[2.0, 0.0]),
+        pv(&[1.0, 0.6]),
+        pv(&[-1.0, 1.5]),
+    ] {
+        let run = |t: f64| {
+            p.reset_counts();
+            let s = LevenbergMarquardt::default().with_max_step_extrapolation(t);
+            let r = s.solve(&p, &x0);
+            check_invariants(&p, &x0, &r, 50);
+            assert!(r.termination.is_converged(), "{r:?}");
+            (r, p.linearizations.get())
+        };
+        let (plain, lin_plain) = run(1.0);
+        let (default, _) = run(LevenbergMarquardt::default().max_step_extrapolation);
+        assert_eq!(plain.x, default.x, "1 is the default and changes nothing");
+        let (ext, lin_ext) = run(2.0);
+        plain_total += lin_plain;
+        extrapolated_total += lin_ext;
+        let tol = LevenbergMarquardt::default().function_tolerance;
+        assert!(
+            (ext.final_cost - plain.final_cost).abs() <= 2.0 * tol * plain.final_cost,
+            "{} vs {}",
+            ext.final_cost,
+            plain.final_cost
+        );
+    }
+    assert!(
+        extrapolated_total < plain_total,
+        "{extrapolated_total} linearisations with the extrapolation, {plain_total} without"
+    );
+}
