@@ -14,7 +14,7 @@
 //!   separate measurements. `MOMO_EVAL_ROUNDS` sets the rounds (31 by default).
 //!
 //! `MOMO_EVAL_SOLVER` adds lines to the driver's `[solver]` section (`;` separates them), e.g.
-//! `MOMO_EVAL_SOLVER='finish_on_gain_ratio = true'`.
+//! `MOMO_EVAL_SOLVER='max_step_extrapolation = 2.0'`.
 //!
 //! For instruction counts (repeatable on a loaded machine), run under callgrind with few
 //! rounds and a filter that matches no criterion benchmark, and read the inclusive counts of
@@ -77,7 +77,7 @@ fn evaluations(c: &mut Criterion) {
         Box::new(momo_models::SoftSingleTrack::default()),
         300,
     ));
-    // Extra `[solver]` lines for the driver (e.g. `finish_on_gain_ratio = true`).
+    // Extra `[solver]` lines for the driver (e.g. `max_step_extrapolation = 2.0`).
     let solver_extra = std::env::var("MOMO_EVAL_SOLVER").unwrap_or_default();
     let loss = momo_costs::Cauchy::new(0.001);
     let only = std::env::var("MOMO_EVAL_CASE").unwrap_or_default();

@@ -59,22 +59,6 @@ pub struct LevenbergMarquardt {
     /// linearisation per solve where the convergence is linear (robust losses). `false`
     /// linearises every trial point, as before.
     pub skip_last_linearization: bool,
-    /// Try a step on one [`LeastSquares::cost`] where the linearised point is already near
-    /// convergence, and end the solve there if the gain ratio says the model was good enough
-    /// (needs [`skip_last_linearization`](Self::skip_last_linearization) and a problem that
-    /// allows it). At a linearised point whose Gauss-Newton predicted decrease `p` is at most
-    /// `function_tolerance / 0.3` of the cost, and where the extrapolation of
-    /// `skip_last_linearization` does not already apply (it needs two linearised points, so it
-    /// never applies to the first step of a warm-started solve), the damped step `δ` (model
-    /// decrease `m`) is tried on the cost alone. With the gain ratio `ρ` and `e = 1 - ρ`, the
-    /// decrease still available at the new point is estimated as `e² / (1 + e) · m + (p - m)`
-    /// (a quadratic whose curvature along `δ` is `1 - e` times the model's, plus what the
-    /// damping left out); if `|e| ≤ 0.5` and that estimate is at most `function_tolerance` of the
-    /// new cost, the step ends the solve ([`Termination::CostConverged`], the report's normal
-    /// matrix is the one of the point before); otherwise an accepted step is linearised with
-    /// its known cost (no loss values) and the solve goes on as before. `false` (the default
-    /// until measured otherwise): every pose bit-identical to before.
-    pub finish_on_gain_ratio: bool,
     /// Lengthen a step by the curvature ratio measured on the step before, for the linear
     /// convergence of a robust (iteratively re-weighted) fit, whose normal matrix
     /// overestimates the cost's curvature. After an accepted step `s` from a linearised point
@@ -84,7 +68,9 @@ pub struct LevenbergMarquardt {
     /// minimum along `δ` of a quadratic with that curvature, if the next step is about
     /// parallel to the last, as it is when the convergence is linear). A longer trial that
     /// does not decrease the cost is retried at `t = 1` (one more iteration, same damping), and
-    /// the rest of that solve takes no lengthened step.
+    /// the rest of that solve takes no lengthened step. A point reached by a lengthened step
+    /// does not take the last step of [`skip_last_linearization`](Self::skip_last_linearization)
+    /// (the ratio of its predicted decrease to the one before is not a rate of convergence).
     /// The damping follows the gain ratio against the unscaled step's predicted decrease.
     /// `1` (the default) never lengthens a step: every pose bit-identical to before. Only
     /// problems that can scale a step ([`LmProblem::scale_step`]) use it.
@@ -108,7 +94,6 @@ impl Default for LevenbergMarquardt {
             min_lambda: 1e-16,
             max_lambda: 1e16,
             skip_last_linearization: true,
-            finish_on_gain_ratio: false,
             max_step_extrapolation: 1.0,
         }
     }
@@ -125,7 +110,6 @@ with_setters!(LevenbergMarquardt {
     with_min_lambda => min_lambda: f64,
     with_max_lambda => max_lambda: f64,
     with_skip_last_linearization => skip_last_linearization: bool,
-    with_finish_on_gain_ratio => finish_on_gain_ratio: bool,
     with_max_step_extrapolation => max_step_extrapolation: f64,
 });
 
@@ -289,9 +273,6 @@ impl LevenbergMarquardt {
         // The next trial is the last one: its point is not linearised.
         let mut last_step = false;
         let finish = self.skip_last_linearization && problem.can_finish_with_cost();
-        // The Gauss-Newton predicted decrease at the last linearised point, when the next trial
-        // is to be decided on its cost alone (`finish_on_gain_ratio`).
-        let mut gain_finish: Option<f64> = None;
         // The factor on the next trial step (`max_step_extrapolation`); 1: none.
         let mut extrapolate = 1.0;
         let max_t = if self.max_step_extrapolation.is_finite() {
@@ -300,6 +281,9 @@ impl LevenbergMarquardt {
             1.0
         };
         let mut extrapolating = max_t > 1.0;
+        // The last accepted step was lengthened: the ratio of the predicted decreases it leaves
+        // says nothing about the rate of the convergence, so the last step is not extrapolated.
+        let mut lengthened = false;
         let termination = 'outer: loop {
             if fresh {
                 fresh = false;
@@ -314,19 +298,14 @@ impl LevenbergMarquardt {
                     // from the last two.
                     let relative = predicted / cost;
                     last_step = finish
+                        && !lengthened
                         && last_relative.is_some_and(|before| {
                             let rate = relative / before;
                             rate <= LAST_STEP_MAX_RATE && relative * rate <= self.function_tolerance
                         });
                     last_relative = Some(relative);
-                    gain_finish = (finish
-                        && self.finish_on_gain_ratio
-                        && !last_step
-                        && relative * LAST_STEP_MAX_RATE <= self.function_tolerance)
-                        .then_some(predicted);
                 } else {
                     last_relative = None;
-                    gain_finish = None;
                 }
             }
             if iterations >= self.max_iterations {
@@ -363,39 +342,11 @@ impl LevenbergMarquardt {
                     }
                     break 'trial !c.is_finite();
                 }
-                let gn_predicted = gain_finish.take().filter(|_| unscaled.is_none());
-                let (new, c) = if let Some(p_gn) = gn_predicted {
-                    // Near convergence: the trial's cost alone decides whether it ends the
-                    // solve; an accepted trial that does not is linearised with its cost.
-                    let c = problem.cost(&trial);
-                    let old_cost = problem.lin_cost(&lin);
-                    let predicted = problem.predicted_decrease(&lin, &step);
-                    if !(c.is_finite() && c < old_cost) {
-                        if common::at_noise_floor(old_cost, c, predicted, self.function_tolerance) {
-                            break 'outer Termination::CostConverged;
-                        }
-                        break 'trial !c.is_finite();
-                    }
-                    if predicted > 0.0 {
-                        let e = 1.0 - (old_cost - c) / predicted;
-                        let remaining = e * e / (1.0 + e) * predicted + (p_gn - predicted).max(0.0);
-                        if e.abs() <= GAIN_FINISH_MAX_ERROR
-                            && remaining <= self.function_tolerance * c
-                        {
-                            x = trial;
-                            problem.finish_with_cost(&mut lin, c);
-                            break 'outer Termination::CostConverged;
-                        }
-                    }
-                    (problem.linearize_known_cost(&trial, c), c)
-                } else {
-                    let new = problem.linearize(&trial);
-                    let c = problem.lin_cost(&new);
-                    (new, c)
-                };
                 // Steps are rarely rejected here (the damping starts small and follows the
                 // gain ratio), so the trial point is linearised right away: one pass over the
                 // matches gives its cost and, when it is accepted, the next normal equations.
+                let new = problem.linearize(&trial);
+                let c = problem.lin_cost(&new);
                 let old_cost = problem.lin_cost(&lin);
                 let predicted =
                     problem.predicted_decrease(&lin, unscaled.as_ref().unwrap_or(&step));
@@ -422,6 +373,7 @@ impl LevenbergMarquardt {
                 }
                 x = trial;
                 lin = new;
+                lengthened = unscaled.is_some();
                 let rho = if predicted > 0.0 {
                     (old_cost - c) / predicted
                 } else {
@@ -462,11 +414,6 @@ impl LevenbergMarquardt {
 /// clearly linear, so that the remaining gains after the last step, `p q / (1 - q)` for a rate
 /// `q`, stay within 1.5 times the tolerance.
 const LAST_STEP_MAX_RATE: f64 = 0.3;
-
-/// The largest `|1 - ρ|` (gain ratio `ρ`) for which a step tried on its cost alone may end the
-/// solve ([`LevenbergMarquardt::finish_on_gain_ratio`]): the model's curvature along the step
-/// is then within a factor 2 of the cost's, and the estimate of the remaining decrease holds.
-const GAIN_FINISH_MAX_ERROR: f64 = 0.5;
 
 /// `κ_m / κ` along the accepted step `s` from the point linearised in `lin` (cost decrease
 /// `actual`): the model's curvature `sᵀHs` over the cost's, `2 (-actual - gᵀs)`

