@@ -111,48 +111,89 @@ pub fn align(
         return None;
     }
     let inv = m.try_inverse()?;
-    let side = 2 * r + 1;
+    let iterations = options.iterations.max(1);
+    // The iterations with the patch side known at compile time (the loops unroll and
+    // vectorise); `r` is in 1..=MAX_HALF.
+    let run = match r {
+        1 => iterate::<1>,
+        2 => iterate::<2>,
+        3 => iterate::<3>,
+        4 => iterate::<4>,
+        5 => iterate::<5>,
+        6 => iterate::<6>,
+        _ => iterate::<MAX_HALF>,
+    };
+    run(
+        to,
+        (u, v),
+        d0,
+        &t,
+        &gx,
+        &gy,
+        &inv,
+        iterations,
+        options.max_shift,
+    )
+}
+
+/// The Gauss-Newton iterations of [`align`] for the half-width `R`: per iteration the patch of
+/// `to` is sampled bilinearly (rows interpolated in u first, then pairs of rows in v) and
+/// compared with the template `t`.
+#[allow(clippy::too_many_arguments)]
+fn iterate<const R: usize>(
+    to: Plane<'_>,
+    (u, v): (usize, usize),
+    d0: [f64; 2],
+    t: &[f32; MAX_PATCH],
+    gx: &[f32; MAX_PATCH],
+    gy: &[f32; MAX_PATCH],
+    inv: &nalgebra::Matrix3<f64>,
+    iterations: usize,
+    max_shift: f64,
+) -> Option<[f64; 2]> {
+    let side = 2 * R + 1;
     let mut d = d0;
-    for _ in 0..options.iterations.max(1) {
+    // The patch's rows interpolated in u: `side + 1` rows of `side` samples.
+    let mut hrow = [[0f32; 2 * MAX_HALF + 1]; 2 * MAX_HALF + 2];
+    for _ in 0..iterations {
         let (cx, cy) = (u as f64 + d[0], v as f64 + d[1]);
         // The patch in `to` must stay inside with one pixel for bilinear sampling.
-        let (x0, y0) = (cx - r as f64, cy - r as f64);
+        let (x0, y0) = (cx - R as f64, cy - R as f64);
         if !(x0 >= 0.0
             && y0 >= 0.0
-            && cx + r as f64 + 1.0 < to.width as f64
-            && cy + r as f64 + 1.0 < to.height as f64)
+            && cx + R as f64 + 1.0 < to.width as f64
+            && cy + R as f64 + 1.0 < to.height as f64)
         {
             return None;
         }
         let (ix, iy) = (x0.floor() as usize, y0.floor() as usize);
         let (fx, fy) = ((x0 - ix as f64) as f32, (y0 - iy as f64) as f32);
-        let (w00, w01, w10, w11) = (
-            (1.0 - fx) * (1.0 - fy),
-            fx * (1.0 - fy),
-            (1.0 - fx) * fy,
-            fx * fy,
-        );
+        for (j, out) in hrow[..side + 1].iter_mut().enumerate() {
+            let start = (iy + j) * to.width + ix;
+            let row = &to.px[start..start + side + 1];
+            let out = &mut out[..side];
+            for i in 0..side {
+                let (a, b) = (f32::from(row[i]), f32::from(row[i + 1]));
+                out[i] = a + fx * (b - a);
+            }
+        }
         let (mut bx, mut by, mut bb) = (0f32, 0f32, 0f32);
         for j in 0..side {
-            let row0 = &to.px[(iy + j) * to.width + ix..(iy + j) * to.width + ix + side + 1];
-            let row1 =
-                &to.px[(iy + j + 1) * to.width + ix..(iy + j + 1) * to.width + ix + side + 1];
+            let (h0, h1) = (&hrow[j][..side], &hrow[j + 1][..side]);
+            let k0 = j * side;
+            let (tj, gxj, gyj) = (&t[k0..k0 + side], &gx[k0..k0 + side], &gy[k0..k0 + side]);
             for i in 0..side {
-                let s = w00 * f32::from(row0[i])
-                    + w01 * f32::from(row0[i + 1])
-                    + w10 * f32::from(row1[i])
-                    + w11 * f32::from(row1[i + 1]);
-                let k = j * side + i;
-                let e = s - t[k];
-                bx += gx[k] * e;
-                by += gy[k] * e;
+                let s = h0[i] + fy * (h1[i] - h0[i]);
+                let e = s - tj[i];
+                bx += gxj[i] * e;
+                by += gyj[i] * e;
                 bb += e;
             }
         }
         let step = inv * nalgebra::Vector3::new(f64::from(bx), f64::from(by), f64::from(bb));
         d[0] -= step[0];
         d[1] -= step[1];
-        if (d[0] - d0[0]).hypot(d[1] - d0[1]) > options.max_shift {
+        if (d[0] - d0[0]).hypot(d[1] - d0[1]) > max_shift {
             return None;
         }
         if step[0].hypot(step[1]) < 1e-3 {
