@@ -377,6 +377,7 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
     (
         "metric",
         "# Residual metric: angle_plane (any camera; sine of the angle to the epipolar plane),\n\
+         # angle_plane_ml (angle_plane over its pixel-noise std: ML weighting, any camera),\n\
          # geo_line (pinhole; pixel distance to the epipolar lines), sampson (pinhole).",
     ),
     (
