@@ -10,6 +10,7 @@
 //! | type tag | metric | residuals per match | unit | cameras |
 //! | --- | --- | --- | --- | --- |
 //! | `angle_plane` | [`AnglePlane`]: `f1ᵀ E f0 / ‖E f0‖` | 1 | sine of an angle | any central camera |
+//! | `angle_plane_ml` | [`AnglePlaneMl`]: `angle_plane` over its pixel-noise std (ML weighting) | 1 | radians at the image centre | any central camera |
 //! | `geo_line` | [`GeoLine`]: pixel distances to both epipolar lines | 2 | pixels | pinhole |
 //! | `sampson` | [`Sampson`]: first-order geometric error | 1 | pixels | any (tangent planes off pinhole) |
 //!
@@ -53,11 +54,13 @@
 //! ```
 
 mod angle_plane;
+mod angle_plane_ml;
 mod geo_line;
 mod loss;
 mod sampson;
 
 pub use angle_plane::AnglePlane;
+pub use angle_plane_ml::{AnglePlaneMl, AnglePlaneMlPrepared, bearing_covariance};
 pub use geo_line::{GeoLine, fundamental};
 pub use loss::{Cauchy, Huber, Tukey};
 pub use momo_core::TrivialLoss as Trivial;

@@ -311,5 +311,6 @@ impl momo_core::Manifold for Straight {
 
 // Every built-in metric through the public one-line property-test macro (momo-testing).
 momo_testing::test_metric!(macro_angle_plane, AnglePlane);
+momo_testing::test_metric!(macro_angle_plane_ml, momo_costs::AnglePlaneMl);
 momo_testing::test_metric!(macro_geo_line, FocalScaled(GeoLine), tol = 1e-5);
 momo_testing::test_metric!(macro_sampson, FocalScaled(Sampson), tol = 1e-5);

@@ -377,6 +377,7 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
     (
         "metric",
         "# Residual metric: angle_plane (any camera; sine of the angle to the epipolar plane),\n\
+         # angle_plane_ml (angle_plane over its pixel-noise std: ML weighting, any camera),\n\
          # geo_line (pinhole; pixel distance to the epipolar lines), sampson (pinhole).",
     ),
     (
@@ -582,7 +583,7 @@ impl Config {
         let metric = type_tag(&self.metric);
         // The loss scale is in the metric's units: radians for angle_plane, pixels otherwise.
         let (lo, hi, unit) = match metric.as_str() {
-            "angle_plane" => (1e-7, 0.5, "rad"),
+            "angle_plane" | "angle_plane_ml" => (1e-7, 0.5, "rad"),
             "geo_line" | "sampson" | "focal_scaled" => (1e-4, 1e3, "px"),
             _ => (1e-9, 1e6, "metric units"),
         };

@@ -196,7 +196,7 @@ impl Odometry {
         let config_metric_is_angular = serde_json::to_value(&config.metric)
             .ok()
             .and_then(|v| v.get("type").and_then(|t| t.as_str()).map(str::to_string))
-            .is_some_and(|t| t == "angle_plane");
+            .is_some_and(|t| t == "angle_plane" || t == "angle_plane_ml");
         let has_params = inv_sigma.iter().any(|w| *w != 0.0);
         let sigma_w = config.odometry.rotation_change_sigma;
         let loss_scale = config.loss.scale();
