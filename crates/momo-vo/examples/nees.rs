@@ -180,7 +180,10 @@ fn print_frame(
         e.z.to_degrees(),
         d.inliers,
         n,
-        d.params.iter().map(|p| (p * 1e4).round() / 1e4).collect::<Vec<_>>(),
+        d.params
+            .iter()
+            .map(|p| (p * 1e4).round() / 1e4)
+            .collect::<Vec<_>>(),
         sig.join(" ")
     );
 }

@@ -444,7 +444,7 @@ impl Odometry {
                         diag.status = FrameStatus::Degenerate;
                         diag.constraint = Constraint::Degenerate;
                         diag.reason = Some(reason);
-                        self.fill_diagnostics(&sol, &mut diag);
+                        self.fill_diagnostics(obs, &sol, false, &mut diag);
                         None
                     }
                     None => Some(sol),
@@ -526,7 +526,7 @@ impl Odometry {
                 if !standstill && self.config.odometry.separate.is_none() {
                     sol = self.final_fit(obs, sol, &fixed, diag.scale);
                 }
-                self.fill_diagnostics(&sol, &mut diag);
+                self.fill_diagnostics(obs, &sol, !standstill, &mut diag);
                 if let (Some(i), Some(sigma)) = (arc_index, cross_sigma) {
                     diag.param_sigmas[i] = sigma;
                 }
@@ -907,6 +907,40 @@ impl Odometry {
 
     /// The calibrated covariance of the free parameters ([`trust::calibrated_covariance`]).
     fn covariance(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+        trust::calibrated_covariance(&self.covariance_inputs(sol))
+    }
+
+    /// The reported covariance: the calibrated one, widened where the leave-one-cell-out
+    /// jackknife is wider ([`trust::jackknife_covariance`], `trust.jackknife_grid`).
+    fn reported_covariance(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        jackknife: bool,
+    ) -> Option<nalgebra::DMatrix<f64>> {
+        let mut cov = self.covariance(sol)?;
+        if !jackknife {
+            return Some(cov);
+        }
+        let n_params = self.estimator.param_names().len();
+        let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
+        for &[gx, gy] in &self.config.trust.jackknife_grids {
+            let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
+                .iter()
+                .filter_map(|o| {
+                    let s = self.solve_once(o, &sol.params, &fixed, false)?;
+                    Some(sol.free.iter().map(|&i| s.params[i]).collect())
+                })
+                .collect();
+            if let Some(j) = trust::jackknife_covariance(&samples) {
+                cov = trust::widen(&cov, &j, self.config.trust.jackknife_min_ratio);
+            }
+        }
+        Some(cov)
+    }
+
+    /// The inputs of [`trust::calibrated_covariance`] for a solution.
+    fn covariance_inputs(&self, sol: &FrameSolution) -> trust::CovarianceInputs {
         let n = sol.free.len();
         let names = self.estimator.param_names();
         let pos = |name: &str| {
@@ -918,7 +952,7 @@ impl Odometry {
             _ => None,
         };
         let scale = self.config.loss.scale();
-        trust::calibrated_covariance(&trust::CovarianceInputs {
+        trust::CovarianceInputs {
             normal: sol.report.normal_matrix.view((0, 0), (n, n)).into_owned(),
             cost: sol.report.final_cost,
             inliers: sol.inliers(),
@@ -926,10 +960,16 @@ impl Odometry {
             prior_inv_sigma: self.motion_prior.rotation_inv_sigma,
             prior_scale: self.motion_prior.scale,
             sigma_floor: if scale.is_finite() { 0.05 * scale } else { 0.0 },
-        })
+        }
     }
 
-    fn fill_diagnostics(&self, sol: &FrameSolution, diag: &mut FrameDiagnostics) {
+    fn fill_diagnostics(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        jackknife: bool,
+        diag: &mut FrameDiagnostics,
+    ) {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
         diag.iterations = sol.report.iterations;
@@ -937,7 +977,7 @@ impl Odometry {
         diag.inliers = sol.inliers();
         diag.inliers_per_camera = sol.inliers_per_camera.clone();
         diag.free = sol.free.clone();
-        if let Some(cov) = self.covariance(sol) {
+        if let Some(cov) = self.reported_covariance(obs, sol, jackknife) {
             for (k, &i) in sol.free.iter().enumerate() {
                 diag.param_sigmas[i] = cov[(k, k)].max(0.0).sqrt();
             }
