@@ -939,6 +939,84 @@ impl Odometry {
         Some(cov)
     }
 
+    /// A second motion that explains at least `trust.competing_min_fraction` of the matches
+    /// outside the estimate's support (fitted to them from the previous frame's motion and
+    /// straight ahead): its free parameters and its weight `w` (its support's share of the two
+    /// supports).
+    fn competing_motion(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+    ) -> Option<(Vec<f64>, f64)> {
+        let t = &self.config.trust;
+        let n = obs.len();
+        if t.competing_min_fraction <= 0.0 || n == 0 {
+            return None;
+        }
+        let min_n = ((t.competing_min_fraction * n as f64).ceil() as usize).max(12);
+        let angles = |params: &[f64]| {
+            crate::separate::epipolar_angles(&self.rig, &self.estimator.motion(params), obs)
+        };
+        let a = angles(&sol.params);
+        let outside: Vec<Vec<bool>> = a
+            .iter()
+            .map(|c| c.iter().map(|x| *x >= t.competing_threshold).collect())
+            .collect();
+        let n_out = outside.iter().flatten().filter(|k| **k).count();
+        if n_out < min_n {
+            return None;
+        }
+        let rest = FrameObservations {
+            per_camera: obs
+                .per_camera
+                .iter()
+                .zip(&outside)
+                .map(|(m, k)| {
+                    m.iter()
+                        .zip(k)
+                        .filter(|(_, k)| **k)
+                        .map(|(o, _)| *o)
+                        .collect()
+                })
+                .collect(),
+            cross_camera: Vec::new(),
+        };
+        let n_params = self.estimator.param_names().len();
+        let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
+        let mut ahead = self.estimator.initial_params(
+            self.estimator
+                .arc_length_index()
+                .map_or(1.0, |i| sol.params[i]),
+        );
+        if let Some(i) = self.estimator.arc_length_index() {
+            ahead[i] = sol.params[i];
+        }
+        let mut previous = self.previous.clone();
+        if let Some(i) = self.estimator.arc_length_index() {
+            previous[i] = sol.params[i];
+        }
+        let b = [previous, ahead]
+            .iter()
+            .filter_map(|s| self.solve_once(&rest, s, &fixed, false))
+            .min_by(|x, y| x.report.final_cost.total_cmp(&y.report.final_cost))?;
+        let in_b = angles(&b.params)
+            .iter()
+            .zip(&outside)
+            .map(|(c, o)| {
+                c.iter()
+                    .zip(o)
+                    .filter(|(x, o)| **o && **x < t.competing_threshold)
+                    .count()
+            })
+            .sum::<usize>();
+        if in_b < min_n {
+            return None;
+        }
+        let in_a = n - n_out;
+        let w = in_b as f64 / (in_a + in_b) as f64;
+        Some((sol.free.iter().map(|&i| b.params[i]).collect(), w))
+    }
+
     /// The inputs of [`trust::calibrated_covariance`] for a solution.
     fn covariance_inputs(&self, sol: &FrameSolution) -> trust::CovarianceInputs {
         let n = sol.free.len();
@@ -977,7 +1055,19 @@ impl Odometry {
         diag.inliers = sol.inliers();
         diag.inliers_per_camera = sol.inliers_per_camera.clone();
         diag.free = sol.free.clone();
-        if let Some(cov) = self.reported_covariance(obs, sol, jackknife) {
+        let mut reported = self.reported_covariance(obs, sol, jackknife);
+        if jackknife
+            && let Some(cov) = reported.as_mut()
+            && let Some((b, w)) = self.competing_motion(obs, sol)
+        {
+            let a: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
+            *cov = trust::mixture_covariance(cov, &a, &b, w);
+            if diag.constraint == Constraint::Well {
+                diag.constraint = Constraint::Weak;
+                diag.reason = Some(Reason::CompetingMotions);
+            }
+        }
+        if let Some(cov) = reported {
             for (k, &i) in sol.free.iter().enumerate() {
                 diag.param_sigmas[i] = cov[(k, k)].max(0.0).sqrt();
             }

@@ -54,6 +54,15 @@ pub struct TrustOptions {
     /// more than this factor (a jackknife over few cells is itself noisy: widening on every
     /// small excess would make well-behaved frames under-confident). Default 2.
     pub jackknife_min_ratio: f64,
+    /// Competing motions: when at least this share of the matches lies outside the estimate's
+    /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
+    /// fitted to them; if it explains that share of the matches, the frame is weak
+    /// (`competing_motions`) and its covariance that of the mixture of the two motions
+    /// ([`mixture_covariance`]). 0: off. Default 0.15.
+    pub competing_min_fraction: f64,
+    /// The support threshold of the competing-motions check, radians (epipolar angle; default
+    /// 0.003, about 2 px at f = 700 px).
+    pub competing_threshold: f64,
 }
 
 impl Default for TrustOptions {
@@ -67,6 +76,8 @@ impl Default for TrustOptions {
             max_failed_share: 0.5,
             jackknife_grids: vec![[3, 2], [4, 2]],
             jackknife_min_ratio: 2.0,
+            competing_min_fraction: 0.15,
+            competing_threshold: 0.003,
         }
     }
 }
@@ -111,6 +122,14 @@ impl TrustOptions {
                     self.jackknife_min_ratio
                 ),
             ));
+        }
+        for (key, v) in [
+            ("trust.competing_min_fraction", self.competing_min_fraction),
+            ("trust.competing_threshold", self.competing_threshold),
+        ] {
+            if !(0.0..1.0).contains(&v) {
+                out.push((vec![key], format!("{key} must be within 0..1, got {v}")));
+            }
         }
         for &[gx, gy] in &self.jackknife_grids {
             if gx == 0 || gy == 0 || gx * gy > 64 || gx * gy < 2 {
@@ -162,6 +181,10 @@ pub enum Reason {
     TooFewInliers,
     /// The inliers lie in a small region.
     InliersInSmallRegion,
+    /// A second motion explains a large share of the matches that the estimate does not
+    /// explain (a large object moving differently): the covariance is that of the mixture of
+    /// the two motions ([`mixture_covariance`]).
+    CompetingMotions,
 }
 
 impl Reason {
@@ -176,6 +199,7 @@ impl Reason {
             Reason::NoInliers => "no_inliers",
             Reason::TooFewInliers => "too_few_inliers",
             Reason::InliersInSmallRegion => "inliers_in_small_region",
+            Reason::CompetingMotions => "competing_motions",
         }
     }
 }
@@ -602,4 +626,18 @@ pub fn jackknife_covariance(samples: &[Vec<f64>]) -> Option<DMatrix<f64>> {
         cov += &d * d.transpose();
     }
     Some(cov * ((g as f64 - 1.0) / g as f64))
+}
+
+/// The covariance of the mixture of two competing estimates with weights `1 - w` (the frame's,
+/// `a`) and `w` (the competitor, `b`): `Σ + w (1 - w) d dᵀ` with `d = b - a` (free parameters).
+/// The reported estimate stays `a`; the term covers the error of having chosen the wrong one.
+pub fn mixture_covariance(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> DMatrix<f64> {
+    if a.len() != cov.nrows() || b.len() != a.len() || !(0.0..=1.0).contains(&w) {
+        return cov.clone();
+    }
+    let d = DVector::from_iterator(a.len(), b.iter().zip(a).map(|(b, a)| b - a));
+    if d.iter().any(|v| !v.is_finite()) {
+        return cov.clone();
+    }
+    cov + &d * d.transpose() * (w * (1.0 - w))
 }
