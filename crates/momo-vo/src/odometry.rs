@@ -418,6 +418,12 @@ impl Odometry {
             diag.constraint = c;
             diag.reason = Some(r);
         }
+        // A weak frame: the priors yield to its weak but consistent evidence.
+        let unit = self.config.loss.scale();
+        self.motion_prior.scale = match verdict {
+            Some((Constraint::Weak, _)) => unit * self.config.trust.weak_prior_factor,
+            _ => unit,
+        };
         if verdict.is_some_and(|(_, r)| r == Reason::LittleFlow)
             && let Some(i) = arc_index
             && diag.scale == ScaleSource::Estimated

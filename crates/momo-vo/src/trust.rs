@@ -60,6 +60,11 @@ pub struct TrustOptions {
     /// (`competing_motions`) and its covariance that of the mixture of the two motions
     /// ([`mixture_covariance`]). 0: off. Default 0.15.
     pub competing_min_fraction: f64,
+    /// On a weak frame (matches along a line, too little flow) every prior term (the soft
+    /// manifold's side slip and climb, the change-of-motion priors) is weighted by this factor
+    /// squared, so that the prior yields to weak but consistent evidence as the rotation prior
+    /// does (it is not centred on a weak frame). 1: as on any frame. Default 0.1.
+    pub weak_prior_factor: f64,
     /// The support threshold of the competing-motions check, radians (epipolar angle; default
     /// 0.003, about 2 px at f = 700 px).
     pub competing_threshold: f64,
@@ -77,6 +82,7 @@ impl Default for TrustOptions {
             jackknife_grids: vec![[3, 2], [4, 2]],
             jackknife_min_ratio: 2.0,
             competing_min_fraction: 0.15,
+            weak_prior_factor: 0.1,
             competing_threshold: 0.003,
         }
     }
@@ -130,6 +136,15 @@ impl TrustOptions {
             if !(0.0..1.0).contains(&v) {
                 out.push((vec![key], format!("{key} must be within 0..1, got {v}")));
             }
+        }
+        if !(self.weak_prior_factor > 0.0 && self.weak_prior_factor <= 1.0) {
+            out.push((
+                vec!["trust.weak_prior_factor"],
+                format!(
+                    "trust.weak_prior_factor must be within (0, 1], got {}",
+                    self.weak_prior_factor
+                ),
+            ));
         }
         for &[gx, gy] in &self.jackknife_grids {
             if gx == 0 || gy == 0 || gx * gy > 64 || gx * gy < 2 {
