@@ -56,9 +56,8 @@ pub struct TrustOptions {
     pub jackknife_min_ratio: f64,
     /// Competing motions: when at least this share of the matches lies outside the estimate's
     /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
-    /// fitted to them; if it explains that share of the matches, the frame is weak
-    /// (`competing_motions`) and its covariance that of the mixture of the two motions
-    /// ([`mixture_covariance`]). 0: off. Default 0.15.
+    /// fitted to them; if it explains that share of the matches, the frame's covariance is
+    /// that of the mixture of the two motions ([`mixture_covariance`]). 0: off. Default 0.15.
     pub competing_min_fraction: f64,
     /// On a weak frame (matches along a line, too little flow) every prior term (the soft
     /// manifold's side slip and climb, the change-of-motion priors) is weighted by this factor
@@ -196,10 +195,6 @@ pub enum Reason {
     TooFewInliers,
     /// The inliers lie in a small region.
     InliersInSmallRegion,
-    /// A second motion explains a large share of the matches that the estimate does not
-    /// explain (a large object moving differently): the covariance is that of the mixture of
-    /// the two motions ([`mixture_covariance`]).
-    CompetingMotions,
 }
 
 impl Reason {
@@ -214,7 +209,6 @@ impl Reason {
             Reason::NoInliers => "no_inliers",
             Reason::TooFewInliers => "too_few_inliers",
             Reason::InliersInSmallRegion => "inliers_in_small_region",
-            Reason::CompetingMotions => "competing_motions",
         }
     }
 }
