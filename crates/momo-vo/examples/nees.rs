@@ -47,6 +47,8 @@ fn main() {
     } else {
         vec![1, 2, 3]
     };
+    // `MOMO_NEES_FRAMES=scenario`: one line per scored frame of that scenario.
+    let verbose = std::env::var("MOMO_NEES_FRAMES").ok();
     let scenarios = [
         "clean_pinhole",
         "outliers",
@@ -106,6 +108,9 @@ fn main() {
                     held += 1;
                     continue;
                 };
+                if verbose.as_deref() == Some(name) {
+                    print_frame(&sim, k, seed, d, &r.motion, nees, vo.rig());
+                }
                 nees_seed.push(nees);
             }
             per_seed.push(mean(&nees_seed));
@@ -128,6 +133,59 @@ fn main() {
                 .join(" / ")
         );
     }
+}
+
+/// One scored frame: error and sigma of the rotation (deg), NEES, inliers, the object's share
+/// of the matches and of the inliers (from the simulator's labels: diagnostics only), and the
+/// share of matches outside the estimate's support (epipolar angle above 3e-3 rad).
+fn print_frame(
+    sim: &momo_sim::Simulation,
+    k: usize,
+    seed: u64,
+    d: &momo_vo::FrameDiagnostics,
+    est: &momo_core::Pose<f64>,
+    nees: f64,
+    rig: &momo_core::Rig,
+) {
+    let truth = &sim.vehicle_motions[k];
+    let e = so3_log(&(truth.rotation.transpose() * est.rotation));
+    let turn = so3_log(&truth.rotation).norm().to_degrees();
+    let obs = &sim.sequence.frames[k];
+    let angles = momo_vo::separate::epipolar_angles(rig, est, obs);
+    let true_angles = momo_vo::separate::epipolar_angles(rig, truth, obs);
+    let (mut n, mut obj, mut obj_in, mut outside, mut static_out_true) = (0, 0, 0, 0, 0);
+    for (j, labels) in sim.labels[k].iter().enumerate() {
+        for (i, l) in labels.iter().enumerate() {
+            n += 1;
+            let a = angles[j][i];
+            let is_obj = *l == momo_sim::MatchLabel::MovingObject;
+            obj += usize::from(is_obj);
+            obj_in += usize::from(is_obj && a < 1e-3);
+            outside += usize::from(a > 3e-3);
+            static_out_true += usize::from(true_angles[j][i] > 3e-3);
+        }
+    }
+    let sig: Vec<String> = d
+        .param_sigmas
+        .iter()
+        .map(|s| format!("{:.2e}", s))
+        .collect();
+    println!(
+        "seed {seed} k {k:3} turn {turn:.2} deg err {:.3} deg ({:+.3} {:+.3} {:+.3}) nees {nees:8.2} \
+         inl {}/{} obj {obj} obj_in {obj_in} outside(est) {outside} outside(true) {static_out_true} \
+         params {:?} sig [{}]",
+        e.norm().to_degrees(),
+        e.x.to_degrees(),
+        e.y.to_degrees(),
+        e.z.to_degrees(),
+        d.inliers,
+        n,
+        d.params
+            .iter()
+            .map(|p| (p * 1e4).round() / 1e4)
+            .collect::<Vec<_>>(),
+        sig.join(" ")
+    );
 }
 
 fn mean(v: &[f64]) -> f64 {

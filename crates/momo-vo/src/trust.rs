@@ -17,8 +17,8 @@
 //!   [`TrustOptions::max_rotation`]), no inlier, fewer inliers than
 //!   [`TrustOptions::min_inliers`], or inliers in a small region: degenerate.
 
-use momo_core::{FrameObservations, Observation, Rig};
-use nalgebra::{DMatrix, Matrix3, SymmetricEigen};
+use momo_core::{CameraModel, FrameObservations, Observation, Rig};
+use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
 /// Thresholds of the trust checks and of the run's failure share (`[trust]` in the
@@ -45,6 +45,28 @@ pub struct TrustOptions {
     /// A run in which more than this share of the frame pairs failed, were degenerate or held
     /// their motion (no matches) ends with a warning and exit code 3 (`momo run`); default 0.5.
     pub max_failed_share: f64,
+    /// Grids of cells per camera image (columns, rows) of the leave-one-cell-out jackknife
+    /// ([`jackknife_covariance`]): the reported covariance is widened where the estimate moves
+    /// when the matches of one cell are left out (a rigid object moving differently), for each
+    /// grid in turn; empty: off. Default `[[3, 2], [4, 2]]`.
+    pub jackknife_grids: Vec<[usize; 2]>,
+    /// The jackknife widens a direction only where its variance exceeds the calibrated one by
+    /// more than this factor (a jackknife over few cells is itself noisy: widening on every
+    /// small excess would make well-behaved frames under-confident). Default 2.
+    pub jackknife_min_ratio: f64,
+    /// Competing motions: when at least this share of the matches lies outside the estimate's
+    /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
+    /// fitted to them; if it explains that share of the matches, the frame's covariance is
+    /// that of the mixture of the two motions ([`mixture_covariance`]). 0: off. Default 0.15.
+    pub competing_min_fraction: f64,
+    /// On a weak frame (matches along a line, too little flow) every prior term (the soft
+    /// manifold's side slip and climb, the change-of-motion priors) is weighted by this factor
+    /// squared, so that the prior yields to weak but consistent evidence as the rotation prior
+    /// does (it is not centred on a weak frame). 1: as on any frame. Default 0.1.
+    pub weak_prior_factor: f64,
+    /// The support threshold of the competing-motions check, radians (epipolar angle; default
+    /// 0.003, about 2 px at f = 700 px).
+    pub competing_threshold: f64,
 }
 
 impl Default for TrustOptions {
@@ -56,6 +78,11 @@ impl Default for TrustOptions {
             min_flow: 2e-4,
             min_inliers: 10,
             max_failed_share: 0.5,
+            jackknife_grids: vec![[3, 2], [4, 2]],
+            jackknife_min_ratio: 2.0,
+            competing_min_fraction: 0.15,
+            weak_prior_factor: 0.1,
+            competing_threshold: 0.003,
         }
     }
 }
@@ -91,6 +118,43 @@ impl TrustOptions {
                     self.max_failed_share
                 ),
             ));
+        }
+        if !(self.jackknife_min_ratio >= 1.0 && self.jackknife_min_ratio.is_finite()) {
+            out.push((
+                vec!["trust.jackknife_min_ratio"],
+                format!(
+                    "trust.jackknife_min_ratio must be a finite number of at least 1, got {}",
+                    self.jackknife_min_ratio
+                ),
+            ));
+        }
+        for (key, v) in [
+            ("trust.competing_min_fraction", self.competing_min_fraction),
+            ("trust.competing_threshold", self.competing_threshold),
+        ] {
+            if !(0.0..1.0).contains(&v) {
+                out.push((vec![key], format!("{key} must be within 0..1, got {v}")));
+            }
+        }
+        if !(self.weak_prior_factor > 0.0 && self.weak_prior_factor <= 1.0) {
+            out.push((
+                vec!["trust.weak_prior_factor"],
+                format!(
+                    "trust.weak_prior_factor must be within (0, 1], got {}",
+                    self.weak_prior_factor
+                ),
+            ));
+        }
+        for &[gx, gy] in &self.jackknife_grids {
+            if gx == 0 || gy == 0 || gx * gy > 64 || gx * gy < 2 {
+                out.push((
+                    vec!["trust.jackknife_grids"],
+                    format!(
+                        "trust.jackknife_grids: each grid must have two positive counts and 2 \
+                         to 64 cells, got [{gx}, {gy}]"
+                    ),
+                ));
+            }
         }
         out
     }
@@ -396,6 +460,13 @@ pub struct CovarianceInputs {
 /// the largest, or not positive) get infinite variance on every parameter they involve:
 /// an information-free frame reports an infinite sigma, never 0.
 pub fn calibrated_covariance(inp: &CovarianceInputs) -> Option<DMatrix<f64>> {
+    let (info, _) = calibrated_information(inp)?;
+    Some(invert_information(&info))
+}
+
+/// The information matrix `H_data / σ² + H_prior` of [`calibrated_covariance`] (symmetrised)
+/// and the residual variance `σ²` it used.
+pub fn calibrated_information(inp: &CovarianceInputs) -> Option<(DMatrix<f64>, f64)> {
     let n = inp.normal.nrows();
     if n == 0 || inp.normal.ncols() != n || inp.normal.iter().any(|v| !v.is_finite()) {
         return None;
@@ -420,10 +491,18 @@ pub fn calibrated_covariance(inp: &CovarianceInputs) -> Option<DMatrix<f64>> {
         }
     }
     let info = (&info + info.transpose()) * 0.5;
-    let eig = SymmetricEigen::new(info);
+    Some((info, sigma2))
+}
+
+/// The inverse of an information matrix; directions it does not constrain (eigenvalues below
+/// `1e-12` of the largest, or not positive) get infinite variance on every parameter they
+/// involve.
+fn invert_information(info: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = info.nrows();
+    let eig = SymmetricEigen::new(info.clone());
     let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
     if !(max > 0.0) {
-        return Some(DMatrix::from_element(n, n, f64::INFINITY));
+        return DMatrix::from_element(n, n, f64::INFINITY);
     }
     let mut cov = DMatrix::zeros(n, n);
     let mut unconstrained = vec![false; n];
@@ -443,5 +522,131 @@ pub fn calibrated_covariance(inp: &CovarianceInputs) -> Option<DMatrix<f64>> {
             cov.column_mut(i).fill(f64::INFINITY);
         }
     }
-    Some(cov)
+    cov
+}
+
+/// The cell of a match in a `grid` (columns, rows) over its camera's image of `size` (width,
+/// height), from its frame-(k-1) pixel.
+pub fn cell_of(px: (f64, f64), size: (f64, f64), grid: (usize, usize)) -> usize {
+    let (gx, gy) = (grid.0.max(1) as f64, grid.1.max(1) as f64);
+    let cx = (px.0 / size.0.max(1.0) * gx).clamp(0.0, gx - 1.0);
+    let cy = (px.1 / size.1.max(1.0) * gy).clamp(0.0, gy - 1.0);
+    let c = cy as usize * grid.0.max(1) + cx as usize;
+    if c < grid.0.max(1) * grid.1.max(1) {
+        c
+    } else {
+        0
+    }
+}
+
+/// The covariance that is at least `base` in every direction and `other` where `other` is
+/// wider by more than the factor `min_ratio`: `B^½ V f(Λ) Vᵀ B^½` with `V Λ Vᵀ` the
+/// eigen-decomposition of `B^-½ O B^-½` and `f(λ) = λ` if `λ > min_ratio`, else 1. `base` with
+/// an infinite entry is returned as it is.
+pub fn widen(base: &DMatrix<f64>, other: &DMatrix<f64>, min_ratio: f64) -> DMatrix<f64> {
+    let n = base.nrows();
+    if base.iter().any(|v| !v.is_finite())
+        || other.nrows() != n
+        || other.iter().any(|v| !v.is_finite())
+    {
+        return base.clone();
+    }
+    let eig = SymmetricEigen::new(base.clone());
+    if eig.eigenvalues.iter().any(|l| !(*l > 0.0)) {
+        return base.clone();
+    }
+    let half = &eig.eigenvectors
+        * DMatrix::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
+        * eig.eigenvectors.transpose();
+    let inv_half = &eig.eigenvectors
+        * DMatrix::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.sqrt()))
+        * eig.eigenvectors.transpose();
+    let rel = &inv_half * other * &inv_half;
+    let rel = (&rel + rel.transpose()) * 0.5;
+    let e = SymmetricEigen::new(rel);
+    let stretched = &e.eigenvectors
+        * DMatrix::from_diagonal(&e.eigenvalues.map(|l| if l > min_ratio { l } else { 1.0 }))
+        * e.eigenvectors.transpose();
+    let out = &half * stretched * &half;
+    (&out + out.transpose()) * 0.5
+}
+
+/// The matches of every image cell but one, for each cell that holds matches (`grid` per
+/// camera, cells of the frame-(k-1) pixels): the samples of the leave-one-cell-out
+/// [`jackknife_covariance`]. Cross-camera matches are kept in every sample.
+pub fn leave_one_cell_out(
+    rig: &Rig,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+) -> Vec<FrameObservations> {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let mut out = Vec::new();
+    for (j, matches) in obs.per_camera.iter().enumerate() {
+        let Some(cam) = rig.cameras().get(j) else {
+            continue;
+        };
+        let size = cam.model.size();
+        let of: Vec<usize> = matches
+            .iter()
+            .map(|o| cell_of((o.px0.x, o.px0.y), size, grid))
+            .collect();
+        for c in 0..cells {
+            if !of.contains(&c) {
+                continue;
+            }
+            let mut sample = obs.clone();
+            sample.per_camera[j] = matches
+                .iter()
+                .zip(&of)
+                .filter(|(_, k)| **k != c)
+                .map(|(o, _)| *o)
+                .collect();
+            out.push(sample);
+        }
+    }
+    out
+}
+
+/// The delete-one-group jackknife covariance of an estimate from its leave-one-cell-out
+/// re-estimates `θ_b` (G of them, the free parameters): `(G-1)/G Σ_b (θ_b - θ̄)(θ_b - θ̄)ᵀ`.
+///
+/// The classical covariance assumes independent residuals; a rigid object moving differently
+/// puts a block of matches that pull the estimate together into a few cells, and the estimate
+/// moves when they are left out: the jackknife sees it. `None` for fewer than 2 samples or
+/// samples of different lengths.
+pub fn jackknife_covariance(samples: &[Vec<f64>]) -> Option<DMatrix<f64>> {
+    let g = samples.len();
+    let n = samples.first()?.len();
+    if g < 2
+        || samples
+            .iter()
+            .any(|s| s.len() != n || s.iter().any(|v| !v.is_finite()))
+    {
+        return None;
+    }
+    let mut mean = DVector::zeros(n);
+    for s in samples {
+        mean += DVector::from_column_slice(s);
+    }
+    mean /= g as f64;
+    let mut cov = DMatrix::zeros(n, n);
+    for s in samples {
+        let d = DVector::from_column_slice(s) - &mean;
+        cov += &d * d.transpose();
+    }
+    Some(cov * ((g as f64 - 1.0) / g as f64))
+}
+
+/// The covariance of the mixture of two competing estimates with weights `1 - w` (the frame's,
+/// `a`) and `w` (the competitor, `b`): `Σ + w (1 - w) d dᵀ` with `d = b - a` (free parameters).
+/// The reported estimate stays `a`; the term covers the error of having chosen the wrong one.
+pub fn mixture_covariance(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> DMatrix<f64> {
+    if a.len() != cov.nrows() || b.len() != a.len() || !(0.0..=1.0).contains(&w) {
+        return cov.clone();
+    }
+    let d = DVector::from_iterator(a.len(), b.iter().zip(a).map(|(b, a)| b - a));
+    if d.iter().any(|v| !v.is_finite()) {
+        return cov.clone();
+    }
+    cov + &d * d.transpose() * (w * (1.0 - w))
 }
