@@ -116,6 +116,10 @@ pub struct FrameResult {
     pub diagnostics: FrameDiagnostics,
 }
 
+/// Per-frame decay of the recent frames' best inlier share (half-life about 140 frames): a
+/// drop of the support against it triggers the jackknife of the covariance.
+const INLIER_SHARE_PEAK_DECAY: f64 = 0.995;
+
 /// The frame-to-frame odometry: feed it frame pairs in order with [`Odometry::process`].
 ///
 /// Behaviour on degenerate frames (documented in the README and tested):
@@ -143,6 +147,9 @@ pub struct Odometry {
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
     inlier_ratio_average: Option<f64>,
+    /// The highest inlier share of the recent moving frames, decaying by
+    /// [`INLIER_SHARE_PEAK_DECAY`] per frame (the jackknife's trigger).
+    inlier_share_peak: Option<f64>,
     /// The motion prior of the next solve: its change-of-motion parts are centred on the
     /// previous frame before each solve (`odometry.rotation_change_sigma`,
     /// `odometry.motion_prior_sigmas`), its soft centre is `soft_center`.
@@ -215,6 +222,7 @@ impl Odometry {
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
+            inlier_share_peak: None,
             motion_prior: MotionPrior {
                 scale: loss_scale,
                 ..MotionPrior::default()
@@ -277,6 +285,7 @@ impl Odometry {
         self.after_standstill = false;
         self.frame = 0;
         self.inlier_ratio_average = None;
+        self.inlier_share_peak = None;
         self.prior_ready = false;
         self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
             let neutral = self
@@ -450,7 +459,7 @@ impl Odometry {
                         diag.status = FrameStatus::Degenerate;
                         diag.constraint = Constraint::Degenerate;
                         diag.reason = Some(reason);
-                        self.fill_diagnostics(obs, &sol, false, &mut diag);
+                        self.fill_diagnostics(obs, &sol, false, false, &mut diag);
                         None
                     }
                     None => Some(sol),
@@ -532,7 +541,19 @@ impl Odometry {
                 if !standstill && self.config.odometry.separate.is_none() {
                     sol = self.final_fit(obs, sol, &fixed, diag.scale);
                 }
-                self.fill_diagnostics(obs, &sol, !standstill, &mut diag);
+                // The jackknife (a dozen solves) only where the support dropped against the
+                // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
+                let share = sol.inliers() as f64 / matches.max(1) as f64;
+                let drop = self.config.trust.jackknife_support_drop;
+                let jackknife =
+                    drop >= 1.0 || self.inlier_share_peak.is_none_or(|p| share < drop * p);
+                self.fill_diagnostics(obs, &sol, !standstill, jackknife, &mut diag);
+                if !standstill {
+                    self.inlier_share_peak = Some(match self.inlier_share_peak {
+                        Some(p) => share.max(INLIER_SHARE_PEAK_DECAY * p),
+                        None => share,
+                    });
+                }
                 if let (Some(i), Some(sigma)) = (arc_index, cross_sigma) {
                     diag.param_sigmas[i] = sigma;
                 }
@@ -1047,10 +1068,15 @@ impl Odometry {
         }
     }
 
+    /// Fills the solve's diagnostics and the reported covariance. On a moving frame
+    /// (`moving`) a competing motion widens it ([`trust::mixture_covariance`]), and the
+    /// leave-one-cell-out jackknife does where `jackknife` (the support dropped, see
+    /// [`trust::TrustOptions::jackknife_support_drop`]) or a competing motion was found.
     fn fill_diagnostics(
         &self,
         obs: &FrameObservations,
         sol: &FrameSolution,
+        moving: bool,
         jackknife: bool,
         diag: &mut FrameDiagnostics,
     ) {
@@ -1061,10 +1087,15 @@ impl Odometry {
         diag.inliers = sol.inliers();
         diag.inliers_per_camera = sol.inliers_per_camera.clone();
         diag.free = sol.free.clone();
-        let mut reported = self.reported_covariance(obs, sol, jackknife);
-        if jackknife
-            && let Some(cov) = reported.as_mut()
-            && let Some((b, w)) = self.competing_motion(obs, sol)
+        let competing = if moving {
+            self.competing_motion(obs, sol)
+        } else {
+            None
+        };
+        let mut reported =
+            self.reported_covariance(obs, sol, moving && (jackknife || competing.is_some()));
+        if let Some(cov) = reported.as_mut()
+            && let Some((b, w)) = competing
         {
             let a: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
             // The status is left as it is: a noise-free frame after a spoilt one

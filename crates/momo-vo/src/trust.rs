@@ -54,6 +54,11 @@ pub struct TrustOptions {
     /// more than this factor (a jackknife over few cells is itself noisy: widening on every
     /// small excess would make well-behaved frames under-confident). Default 2.
     pub jackknife_min_ratio: f64,
+    /// The jackknife (a dozen extra solves) runs on a frame whose inlier share is below this
+    /// factor times the best share of the recent frames (a maximum decaying by 0.5 % per
+    /// frame), on a frame with a competing motion, and on the first frame; at least 1: on every
+    /// moving frame. Default 0.9.
+    pub jackknife_support_drop: f64,
     /// Competing motions: when at least this share of the matches lies outside the estimate's
     /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
     /// fitted to them; if it explains that share of the matches, the frame's covariance is
@@ -80,6 +85,7 @@ impl Default for TrustOptions {
             max_failed_share: 0.5,
             jackknife_grids: vec![[3, 2], [4, 2]],
             jackknife_min_ratio: 2.0,
+            jackknife_support_drop: 0.9,
             competing_min_fraction: 0.15,
             weak_prior_factor: 0.1,
             competing_threshold: 0.003,
@@ -116,6 +122,15 @@ impl TrustOptions {
                 format!(
                     "trust.max_failed_share must be within 0..=1, got {}",
                     self.max_failed_share
+                ),
+            ));
+        }
+        if !(self.jackknife_support_drop >= 0.0 && self.jackknife_support_drop.is_finite()) {
+            out.push((
+                vec!["trust.jackknife_support_drop"],
+                format!(
+                    "trust.jackknife_support_drop must be a finite number of at least 0, got {}",
+                    self.jackknife_support_drop
                 ),
             ));
         }
