@@ -993,21 +993,8 @@ impl Odometry {
         if n_out < min_n {
             return None;
         }
-        let rest = FrameObservations {
-            per_camera: obs
-                .per_camera
-                .iter()
-                .zip(&outside)
-                .map(|(m, k)| {
-                    m.iter()
-                        .zip(k)
-                        .filter(|(_, k)| **k)
-                        .map(|(o, _)| *o)
-                        .collect()
-                })
-                .collect(),
-            cross_camera: Vec::new(),
-        };
+        let mut rest = crate::separate::subset(obs, &outside);
+        rest.cross_camera.clear();
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let mut ahead = self.estimator.initial_params(

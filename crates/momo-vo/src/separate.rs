@@ -137,8 +137,8 @@ pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -
 /// A candidate motion and its support (per camera, per match).
 type Candidate = (FrameSolution, Vec<Vec<bool>>);
 
-/// The matches where `mask` holds.
-fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObservations {
+/// The matches where `mask` holds (per camera, per match; the cross-camera matches kept).
+pub(crate) fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObservations {
     FrameObservations {
         per_camera: obs
             .per_camera
