@@ -29,7 +29,7 @@ pub(crate) struct CalibrateArgs {
     estimate_roll: bool,
     /// Bootstrap replicas of the uncertainty (each resamples every frame pair's matches and
     /// calibrates again; the reported sigma is the larger of theirs and the Gauss-Newton one);
-    /// 0: the Gauss-Newton sigma alone, which is over-confident where the matches see the
+    /// 0 or 1: the Gauss-Newton sigma alone, which is over-confident where the matches see the
     /// direction of travel weakly.
     #[arg(long, default_value_t = momo_vo::calibrate::DEFAULT_BOOTSTRAP)]
     bootstrap: usize,

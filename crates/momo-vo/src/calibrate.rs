@@ -320,7 +320,8 @@ pub struct MountCalibration {
     /// Estimate the mount's roll (about the vehicle's x axis)? `None`: the model's default
     /// ([`MountModel::observes_roll`]); otherwise the roll correction is held at zero.
     pub estimate_roll: Option<bool>,
-    /// Bootstrap replicas of the covariance (0: the Gauss-Newton covariance alone). Each
+    /// Bootstrap replicas of the covariance (0 or 1: the Gauss-Newton covariance alone; one
+    /// replica cannot give a covariance). Each
     /// replica resamples every frame pair's matches with replacement and calibrates again;
     /// the reported covariance is the larger (by trace) of the Gauss-Newton one and the
     /// replicas' sample covariance (see [`MountEstimate::covariance`]).
