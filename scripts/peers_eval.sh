@@ -116,6 +116,7 @@ if "$momo" run --help | grep -q 'five-point-refined'; then
 fi
 rows="$out/rows.tsv"
 : >"$rows"
+: >"$out/magsac.tsv"
 # num_cameras SEQ
 num_cameras() { grep -c '"T_vehicle_camera"' "$out/seq/$1/rig.json"; }
 # score SEQ METHOD EST MS DEGENERATE: appends "seq method median p95 max >1deg t_err r_err ms deg".
@@ -127,6 +128,29 @@ score() {
         <<<"$scores" >>"$rows"
 }
 failed() { printf '%s\t%s\tfailed\n' "$1" "$2" >>"$rows"; }
+# whole_process SEQ EST DIAG: the default `momo run` three more times (reading matches.csv, writing
+# poses and diagnostics included), timed by Python (wall clock; CPU = the child's user + system
+# time from getrusage, microsecond resolution); appends "seq pairs wall_ms cpu_ms" per frame pair,
+# the median of the three, to speed.tsv.
+speed="$out/speed.tsv"
+: >"$speed"
+whole_process() {
+    python3 - "$1" "$(($(wc -l <"$2") - 1))" "$momo" run "$out/seq/$1" -o "$2" -d "$3" -q \
+        >>"$speed" <<'PY'
+import resource, statistics, subprocess, sys, time
+seq, pairs, cmd = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+wall, cpu = [], []
+for _ in range(3):
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run(cmd, check=True)
+    wall.append(time.perf_counter() - start)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+print("%s\t%d\t%.4f\t%.4f" % (seq, pairs, 1e3 * statistics.median(wall) / pairs,
+                              1e3 * statistics.median(cpu) / pairs))
+PY
+}
 # run_momo SEQ METHOD
 run_momo() {
     local seq="$1" m="$2" est="$out/est/$1__$2.txt" diag="$out/est/$1__$2.csv"
@@ -135,6 +159,9 @@ run_momo() {
     if ! "$momo" run "$out/seq/$seq" -o "$est" -d "$diag" "${how[@]}" -q; then
         failed "$seq" "momo $m"
         return
+    fi
+    if [[ "$m" == default ]]; then
+        whole_process "$seq" "$est" "$diag"
     fi
     local ms dg
     ms="$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) { if ($i == "time_us") c = i; if ($i == "status") s = i }; next }
@@ -155,6 +182,10 @@ run_peer() {
     fi
     local ms dg
     ms="$("$venv/bin/python" -c 'import json, sys; print("%.3f" % json.load(open(sys.argv[1]))["ms_per_frame"])' "$stats")"
+    if [[ "$m" == opencv-magsac && "$t" == "${thresholds%% *}" ]]; then
+        "$venv/bin/python" -c 'import json, sys; s = json.load(open(sys.argv[1])); print("%s\t%.4f\t%.4f" % (sys.argv[2], s["ms_per_frame"], s["cpu_ms_per_frame"]))' \
+            "$stats" "$seq" >>"$out/magsac.tsv"
+    fi
     dg="$("$venv/bin/python" -c 'import json, sys; print(json.load(open(sys.argv[1]))["degenerate"])' "$stats")"
     local label="$m"
     if (("$(num_cameras "$seq")" > 1)) && [[ "$m" != poselib-generalized ]]; then
@@ -233,6 +264,25 @@ for path in sys.argv[1:]:
         print("- %s, %s: %d of %d (%.0f %%)" % (key[0], key[1], s["bearings_dropped_beyond_max_angle"],
               s["matches"], 100.0 * s["bearings_dropped_beyond_max_angle"] / s["matches"]))
 PY
+    fi
+    if ((peers)) && [[ -s "$out/magsac.tsv" ]]; then
+        echo
+        echo "### Whole process: \`momo run\` against OpenCV MAGSAC's library calls"
+        echo
+        echo "Per frame pair, same sequences, same run: \`momo run\` with the default configuration as"
+        echo "a whole process (start-up, reading rig.json, matches.csv and odometry.csv, estimating,"
+        echo "writing the poses and the diagnostics; median of three runs) against the"
+        echo "time spent inside \`cv2.findEssentialMat(USAC_MAGSAC)\` + \`cv2.recoverPose\` alone (one"
+        echo "thread, the input already converted). CPU = user + system time (momo) and the calling"
+        echo "thread's CPU time (OpenCV, \`time.thread_time\`): less sensitive than the wall clock to the"
+        echo "other processes of a shared machine. Ratio = MAGSAC / momo (issue 19's target: >= 20)."
+        echo
+        echo "| sequence | frame pairs | momo ms (wall) | momo ms (CPU) | MAGSAC ms (wall) | MAGSAC ms (CPU) | ratio (wall) | ratio (CPU) |"
+        echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        awk -F'\t' 'NR == FNR { mw[$1] = $2; mc[$1] = $3; next }
+            ($1 in mw) { printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.1f | %.1f |\n",
+                         $1, $2, $3, $4, mw[$1], mc[$1], mw[$1] / $3, mc[$1] / $4 }' \
+            "$out/magsac.tsv" "$speed"
     fi
     if ((!peers)); then
         echo

@@ -74,6 +74,9 @@ import json
 import math
 import sys
 import time
+
+# CPU seconds of this thread spent in the peers' library calls (time.thread_time), summed.
+PEER_CPU_SECONDS = [0.0]
 from pathlib import Path
 
 import numpy as np
@@ -311,7 +314,7 @@ class Peer:
         if self.method.startswith("opencv"):
             cv2 = self.cv2
             k = np.array([[f, 0.0, 0.0], [0.0, f, 0.0], [0.0, 0.0, 1.0]])
-            start = time.perf_counter()
+            start, cpu_start = time.perf_counter(), time.thread_time()
             e, mask = cv2.findEssentialMat(x0, x1, k, method=self.cv_method, prob=0.999,
                                            threshold=self.threshold_px)
             ok = e is not None and e.shape[0] >= 3 and e.shape[1] == 3
@@ -319,6 +322,7 @@ class Peer:
                 e = np.ascontiguousarray(e[:3])
                 n_in, r, t, _ = cv2.recoverPose(e, x0, x1, k, mask=mask)
             elapsed = time.perf_counter() - start
+            PEER_CPU_SECONDS[0] += time.thread_time() - cpu_start
             if not ok or n_in < self.min_matches or not finite(r) or not finite(t):
                 return None, elapsed
             # OpenCV: x1 = R x0 + t (frame k-1 -> frame k); momo's camera motion C is the pose
@@ -326,10 +330,11 @@ class Peer:
             rc, tc = r.T, -r.T @ t.reshape(3)
         else:
             cam_dict = self.virtual_camera(cam)
-            start = time.perf_counter()
+            start, cpu_start = time.perf_counter(), time.thread_time()
             p, info = self.poselib.estimate_relative_pose(
                 x0, x1, cam_dict, cam_dict, {"max_epipolar_error": self.threshold_px}, {})
             elapsed = time.perf_counter() - start
+            PEER_CPU_SECONDS[0] += time.thread_time() - cpu_start
             r, t = np.asarray(p.R), np.asarray(p.t).reshape(3)
             if info.get("num_inliers", 0) < self.min_matches or not finite(r) or not finite(t):
                 return None, elapsed
@@ -348,10 +353,11 @@ class Peer:
             m.x2 = x1
             matches.append(m)
         cams = [self.virtual_camera(c) for c in range(len(self.models))]
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.thread_time()
         p, info = pl.estimate_generalized_relative_pose(
             matches, self.ext, cams, self.ext, cams, {"max_epipolar_error": self.threshold_px}, {})
         elapsed = time.perf_counter() - start
+        PEER_CPU_SECONDS[0] += time.thread_time() - cpu_start
         r, t = np.asarray(p.R), np.asarray(p.t).reshape(3)
         if info.get("num_inliers", 0) < self.min_matches or not finite(r) or not finite(t):
             return None, elapsed
@@ -483,6 +489,9 @@ def main(argv=None) -> int:
         "peer_calls": calls,
         "ms_per_frame": 1e3 * peer_seconds / pairs if pairs else float("nan"),
         "ms_per_call": 1e3 * peer_seconds / calls if calls else float("nan"),
+        # CPU time of the library calls (this thread), per frame pair: less sensitive than the
+        # wall clock to other processes on a loaded machine.
+        "cpu_ms_per_frame": 1e3 * PEER_CPU_SECONDS[0] / pairs if pairs else float("nan"),
         "versions": versions,
     }
     stats_path = args.stats or args.output.with_suffix(".json")
