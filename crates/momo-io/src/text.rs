@@ -202,29 +202,29 @@ fn parse_plain_decimal(text: &str) -> Option<f64> {
         b'+' => (false, &b[1..]),
         _ => (false, b),
     };
+    let n = digits.len();
+    // Wrapping arithmetic: with more than 19 digits `w` may wrap, but is then not used.
     let mut w: u64 = 0;
-    let mut count = 0usize;
-    let mut int_digits = 0usize;
-    let mut after_point: Option<usize> = None;
-    for &c in digits {
-        match c {
-            b'0'..=b'9' => {
-                count += 1;
-                if count > 19 {
-                    return None;
-                }
-                w = w * 10 + u64::from(c - b'0');
-                match after_point.as_mut() {
-                    Some(k) => *k += 1,
-                    None => int_digits += 1,
-                }
-            }
-            b'.' if after_point.is_none() => after_point = Some(0),
-            _ => return None,
+    let mut i = 0;
+    while i < n && digits[i].is_ascii_digit() {
+        w = w.wrapping_mul(10).wrapping_add(u64::from(digits[i] - b'0'));
+        i += 1;
+    }
+    let int_digits = i;
+    let mut k = 0;
+    if i < n && digits[i] == b'.' {
+        i += 1;
+        let first = i;
+        while i < n && digits[i].is_ascii_digit() {
+            w = w.wrapping_mul(10).wrapping_add(u64::from(digits[i] - b'0'));
+            i += 1;
+        }
+        k = i - first;
+        if k == 0 {
+            return None;
         }
     }
-    let k = after_point.unwrap_or(0);
-    if int_digits == 0 || after_point == Some(0) || w >= 1 << 53 || k > 22 {
+    if i != n || int_digits == 0 || int_digits + k > 19 || w >= 1 << 53 || k > 22 {
         return None;
     }
     // `w < 2^53` converts exactly.
