@@ -88,12 +88,17 @@ METHODS = ("opencv-ransac", "opencv-magsac", "poselib", "poselib-generalized")
 
 
 class CameraModel:
-    """A camera of rig.json: pinhole or kannala_brandt, as crates/momo-core/src/camera.rs."""
+    """A camera of rig.json (pinhole, kannala_brandt, radtan, double_sphere, unified), unprojected
+    as crates/momo-core/src/camera.rs does."""
 
     def __init__(self, model: dict):
         self.type = model["type"]
-        if self.type not in ("pinhole", "kannala_brandt"):
+        if self.type not in ("pinhole", "kannala_brandt", "radtan", "double_sphere", "unified"):
             raise ValueError(f"unknown camera model type {self.type!r}")
+        if self.type == "radtan":
+            self.radtan = [float(model.get(n, 0.0)) for n in ("k1", "k2", "p1", "p2", "k3")]
+        self.xi = float(model.get("xi", 0.0))
+        self.alpha = float(model.get("alpha", 0.0))
         self.fx = float(model["fx"])
         self.fy = float(model["fy"])
         self.cx = float(model["cx"])
@@ -114,8 +119,62 @@ class CameraModel:
         dpoly = 1.0 + t2 * (3.0 * k1 + t2 * (5.0 * k2 + t2 * (7.0 * k3 + t2 * 9.0 * k4)))
         return theta * poly, dpoly
 
+    def _unproject_radtan(self, u: np.ndarray, v: np.ndarray):
+        """Newton on distort(m) = target, started at the target (as `Radtan::unproject`, without
+        its step halving); valid where the pixel residual ends below 1e-6 px."""
+        k1, k2, p1, p2, k3 = self.radtan
+        tx = (u - self.cx) / self.fx
+        ty = (v - self.cy) / self.fy
+        x, y = tx.copy(), ty.copy()
+        for _ in range(50):
+            r2 = x * x + y * y
+            radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            dradial = k1 + r2 * (2.0 * k2 + r2 * 3.0 * k3)
+            ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - tx
+            ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - ty
+            a = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x
+            b = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y
+            d = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x
+            det = a * d - b * b
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x = x - (d * ex - b * ey) / det
+                y = y - (a * ey - b * ex) / det
+        r2 = x * x + y * y
+        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - tx
+        ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - ty
+        ok = np.isfinite(x) & np.isfinite(y) & (np.hypot(ex * self.fx, ey * self.fy) < 1e-6)
+        b = np.stack([np.where(ok, x, 0.0), np.where(ok, y, 0.0), np.ones_like(u)], 1)
+        return b / np.linalg.norm(b, axis=1)[:, None], ok
+
     def unproject(self, u: np.ndarray, v: np.ndarray):
         """Unit bearings (n x 3) and a validity mask, as `CameraModel::unproject`."""
+        if self.type == "radtan":
+            return self._unproject_radtan(u, v)
+        if self.type in ("double_sphere", "unified"):
+            # Closed forms of `DoubleSphere::unproject` / `Unified::unproject` (without their
+            # exact valid-region test at the border; the peers drop wide bearings anyway).
+            mx = (u - self.cx) / self.fx
+            my = (v - self.cy) / self.fy
+            r2 = mx * mx + my * my
+            xi = self.xi
+            with np.errstate(invalid="ignore", divide="ignore"):
+                if self.type == "double_sphere":
+                    a = self.alpha
+                    under = 1.0 - (2.0 * a - 1.0) * r2
+                    mz = (1.0 - a * a * r2) / (a * np.sqrt(under) + 1.0 - a)
+                    root = mz * mz + (1.0 - xi * xi) * r2
+                    k = (mz * xi + np.sqrt(root)) / (mz * mz + r2)
+                    b = np.stack([k * mx, k * my, k * mz - xi], 1)
+                    ok = (under > 0) & (root >= 0)
+                else:
+                    root = 1.0 + (1.0 - xi * xi) * r2
+                    k = (xi + np.sqrt(root)) / (1.0 + r2)
+                    b = np.stack([k * mx, k * my, k - xi], 1)
+                    ok = root >= 0
+                n = np.linalg.norm(b, axis=1)
+                ok &= np.isfinite(n) & (n > 0)
+                return np.where(ok[:, None], b / np.where(ok, n, 1.0)[:, None], 0.0), ok
         if self.type == "pinhole":
             b = np.stack([(u - self.cx) / self.fx, (v - self.cy) / self.fy, np.ones_like(u)], 1)
             n = np.linalg.norm(b, axis=1)
