@@ -228,26 +228,36 @@ def read_rig(path: Path):
 
 
 def read_matches(path: Path):
-    """matches.csv -> {frame: {camera: (n x 4 array u0 v0 u1 v1)}}, and the last frame."""
+    """matches.csv -> {frame: {camera: (n x 4 array u0 v0 u1 v1)}}, and the last frame.
+
+    Cross-camera matches (the optional `camera_to` column, FORMAT.md version 5, naming another
+    camera than `camera`) are skipped: the peers estimate from per-camera matches only."""
     rows = {}
     last = 0
     with path.open(newline="") as f:
         reader = csv.reader(f)
         header = None
+        to = None
         for line_no, row in enumerate(reader, 1):
             if not row or all(not c.strip() for c in row):
                 continue
             if header is None:
                 names = [c.strip() for c in row]
                 want = ["frame", "camera", "u0", "v0", "u1", "v1"]
-                if sorted(names) != sorted(want):
+                if sorted(names) not in (sorted(want), sorted(want + ["camera_to"])):
                     raise ValueError(f"{path}:{line_no}: bad header {row}")
                 header = [names.index(w) for w in want]
+                to = names.index("camera_to") if "camera_to" in names else None
+                n_fields = len(names)
                 continue
-            if len(row) != 6:
-                raise ValueError(f"{path}:{line_no}: expected 6 fields, found {len(row)}")
+            if len(row) != n_fields:
+                raise ValueError(
+                    f"{path}:{line_no}: expected {n_fields} fields, found {len(row)}")
             frame = int(row[header[0]])
             cam = int(row[header[1]])
+            if to is not None and row[to].strip() and int(row[to]) != cam:
+                last = max(last, frame)
+                continue
             vals = [float(row[i]) for i in header[2:]]
             rows.setdefault(frame, {}).setdefault(cam, []).append(vals)
             last = max(last, frame)
