@@ -105,6 +105,19 @@ pub struct FrameDiagnostics {
     pub constraint: Constraint,
     /// Why the frame is weak or degenerate (`None` if well constrained).
     pub reason: Option<Reason>,
+    /// Whether the leave-one-cell-out jackknife of the covariance ran on this frame
+    /// ([`trust::TrustOptions::jackknife_support_drop`]).
+    #[serde(default)]
+    pub jackknife: bool,
+    /// The competing motion found by the covariance's check ([`trust::mixture_covariance`]):
+    /// its parameters (all of the model's) and its weight `w`; `None` if there was none.
+    #[serde(default)]
+    pub competing: Option<(Vec<f64>, f64)>,
+    /// The clustering of the residuals in the image ([`trust::cell_residual_statistic`]),
+    /// divided by its degrees of freedom (about 1 for independent residuals; NaN if not
+    /// computed).
+    #[serde(default)]
+    pub residual_clustering: f64,
 }
 
 /// The result of one frame pair.
@@ -389,6 +402,9 @@ impl Odometry {
             time_us: 0.0,
             constraint: Constraint::Well,
             reason: None,
+            jackknife: false,
+            competing: None,
+            residual_clustering: f64::NAN,
         };
 
         {
@@ -1079,8 +1095,29 @@ impl Odometry {
         } else {
             None
         };
-        let mut reported =
-            self.reported_covariance(obs, sol, moving && (jackknife || competing.is_some()));
+        if moving {
+            let motion = self.estimator.motion(&sol.params);
+            let t = &self.config.trust;
+            diag.residual_clustering = trust::cell_residual_statistic(
+                &self.rig,
+                &motion,
+                obs,
+                (8, 4),
+                t.competing_threshold,
+            )
+            .map_or(f64::NAN, |(t, cells)| {
+                t / cells.saturating_sub(sol.free.len()).max(1) as f64
+            });
+        }
+        diag.jackknife = moving && (jackknife || competing.is_some());
+        let mut reported = self.reported_covariance(obs, sol, diag.jackknife);
+        if let Some((b, w)) = &competing {
+            let mut all = sol.params.clone();
+            for (&i, v) in sol.free.iter().zip(b) {
+                all[i] = *v;
+            }
+            diag.competing = Some((all, *w));
+        }
         if let Some(cov) = reported.as_mut()
             && let Some((b, w)) = competing
         {

@@ -665,3 +665,64 @@ pub fn mixture_covariance(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> D
     }
     cov + &d * d.transpose() * (w * (1.0 - w))
 }
+
+/// Whether the residuals of a frame cluster in the image: the signed epipolar angle of every
+/// match within `threshold` (radians) under `motion`, summed per image cell (`grid` per
+/// camera, cells of the frame-(k-1) pixels), `T = Σ_b S_b² / (n_b σ²)` with `S_b` the cell's
+/// sum, `n_b` its count and `σ²` the mean squared angle of all of them. With independent
+/// residuals each cell's mean is noise around zero and `T` follows about chi-square with
+/// (cells - parameters) degrees of freedom; a block of matches that pulls the estimate away
+/// from the rest (a rigid object moving differently, absorbed into a compromise motion)
+/// leaves signed residuals of one sign in the cells of each side, and `T` grows with the
+/// number of matches. Returns `T` and the number of cells with at least 2 matches; `None`
+/// without such cells.
+pub fn cell_residual_statistic(
+    rig: &Rig,
+    motion: &momo_core::Pose<f64>,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+    threshold: f64,
+) -> Option<(f64, usize)> {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let mut sums: Vec<(f64, usize)> = Vec::new();
+    let mut sq = 0.0;
+    let mut count = 0usize;
+    for (cam, matches) in rig.cameras().iter().zip(&obs.per_camera) {
+        let e = momo_core::essential(&momo_core::camera_motion(motion, &cam.t_vehicle_camera));
+        let size = cam.model.size();
+        let base = sums.len();
+        sums.resize(base + cells, (0.0, 0));
+        for o in matches {
+            let (f0, f1) = (o.f0.normalize(), o.f1.normalize());
+            let n0 = e * f0;
+            let n1 = e.transpose() * f1;
+            let (a, b) = (n0.norm(), n1.norm());
+            if a < 1e-15 || b < 1e-15 {
+                continue;
+            }
+            let c = f1.dot(&n0);
+            let r = 0.5 * (c / a + c / b);
+            if !(r.abs() < threshold) {
+                continue;
+            }
+            let cell = base + cell_of((o.px0.x, o.px0.y), size, grid);
+            sums[cell].0 += r;
+            sums[cell].1 += 1;
+            sq += r * r;
+            count += 1;
+        }
+    }
+    if count == 0 || !(sq > 0.0) {
+        return None;
+    }
+    let sigma2 = sq / count as f64;
+    let mut t = 0.0;
+    let mut used = 0usize;
+    for &(s, n) in &sums {
+        if n >= 2 {
+            t += s * s / (n as f64 * sigma2);
+            used += 1;
+        }
+    }
+    (used > 0).then_some((t, used))
+}
