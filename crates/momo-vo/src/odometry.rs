@@ -188,6 +188,8 @@ pub struct Odometry {
     metric_is_angular: bool,
     /// Multi-frame evidence of the motion separation's hypothesis choice (crate::hypotheses).
     hypotheses: crate::hypotheses::HypothesisTracker,
+    /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
+    clustering: trust::ClusteringTrigger,
 }
 
 impl Odometry {
@@ -247,6 +249,7 @@ impl Odometry {
             soft_count: 0,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
+            clustering: Default::default(),
         })
     }
 
@@ -475,7 +478,7 @@ impl Odometry {
                         diag.status = FrameStatus::Degenerate;
                         diag.constraint = Constraint::Degenerate;
                         diag.reason = Some(reason);
-                        self.fill_diagnostics(obs, &sol, false, false, &mut diag);
+                        self.fill_diagnostics(obs, &sol, false, (false, false), &mut diag);
                         None
                     }
                     None => Some(sol),
@@ -561,9 +564,25 @@ impl Odometry {
                 // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
                 let share = sol.inliers() as f64 / matches.max(1) as f64;
                 let drop = self.config.trust.jackknife_support_drop;
-                let jackknife =
+                let mut jackknife =
                     drop >= 1.0 || self.inlier_share_peak.is_none_or(|p| share < drop * p);
-                self.fill_diagnostics(obs, &sol, !standstill, jackknife, &mut diag);
+                // And on the frames where the residuals cluster in the image (a rigid object in
+                // a compromise motion), with the half-image grids too.
+                let mut clustered = false;
+                if !standstill {
+                    let t = &self.config.trust;
+                    let stat = trust::cell_residual_statistic(
+                        &self.rig,
+                        &self.estimator.motion(&sol.params),
+                        obs,
+                        (t.clustering_grid[0], t.clustering_grid[1]),
+                        t.competing_threshold,
+                    );
+                    diag.residual_clustering = stat.map_or(f64::NAN, |(t, c)| t / c as f64);
+                    clustered = self.clustering.observe(t, stat);
+                    jackknife |= clustered;
+                }
+                self.fill_diagnostics(obs, &sol, !standstill, (jackknife, clustered), &mut diag);
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {
                         Some(p) => share.max(INLIER_SHARE_PEAK_DECAY * p),
@@ -960,6 +979,7 @@ impl Odometry {
         obs: &FrameObservations,
         sol: &FrameSolution,
         jackknife: bool,
+        clustered: bool,
     ) -> Option<nalgebra::DMatrix<f64>> {
         let mut cov = self.covariance(sol)?;
         if !jackknife {
@@ -967,7 +987,9 @@ impl Odometry {
         }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
-        for &[gx, gy] in &self.config.trust.jackknife_grids {
+        let t = &self.config.trust;
+        let extra: &[[usize; 2]] = if clustered { &t.clustering_grids } else { &[] };
+        for &[gx, gy] in t.jackknife_grids.iter().chain(extra) {
             let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
                 .iter()
                 .filter_map(|o| {
@@ -1080,7 +1102,7 @@ impl Odometry {
         obs: &FrameObservations,
         sol: &FrameSolution,
         moving: bool,
-        jackknife: bool,
+        jackknife: (bool, bool),
         diag: &mut FrameDiagnostics,
     ) {
         diag.initial_cost = sol.report.initial_cost;
@@ -1095,22 +1117,9 @@ impl Odometry {
         } else {
             None
         };
-        if moving {
-            let motion = self.estimator.motion(&sol.params);
-            let t = &self.config.trust;
-            diag.residual_clustering = trust::cell_residual_statistic(
-                &self.rig,
-                &motion,
-                obs,
-                (8, 4),
-                t.competing_threshold,
-            )
-            .map_or(f64::NAN, |(t, cells)| {
-                t / cells.saturating_sub(sol.free.len()).max(1) as f64
-            });
-        }
-        diag.jackknife = moving && (jackknife || competing.is_some());
-        let mut reported = self.reported_covariance(obs, sol, diag.jackknife);
+        diag.jackknife = moving && (jackknife.0 || competing.is_some());
+        let mut reported =
+            self.reported_covariance(obs, sol, diag.jackknife, moving && jackknife.1);
         if let Some((b, w)) = &competing {
             let mut all = sol.params.clone();
             for (&i, v) in sol.free.iter().zip(b) {

@@ -72,6 +72,24 @@ pub struct TrustOptions {
     /// The support threshold of the competing-motions check, radians (epipolar angle; default
     /// 0.003, about 2 px at f = 700 px).
     pub competing_threshold: f64,
+    /// The cells (columns, rows per camera) of the residual-clustering test
+    /// ([`cell_residual_statistic`]). Default `[8, 4]`.
+    pub clustering_grid: [usize; 2],
+    /// The clustering test fires where its statistic `T` is above the chi-square quantile of
+    /// this many standard normal deviations (Wilson-Hilferty, degrees of freedom the cells
+    /// used): the residuals of whole image regions share a sign, as a rigid object absorbed
+    /// into a compromise motion leaves them. 0: off. Default 3 (a false alarm rate of about
+    /// 0.1 % for independent residuals).
+    pub clustering_z: f64,
+    /// After the clustering test fired, the jackknife runs on this many frames (that one
+    /// included) with the extra grids [`TrustOptions::clustering_grids`]: a moving object stays
+    /// in view for a while, and on some of its frames the compromise hides below the test's
+    /// noise. Default 10.
+    pub clustering_frames: usize,
+    /// Grids added to [`TrustOptions::jackknife_grids`] on the frames the clustering test
+    /// marked: halves of the image (an object spread over several cells moves the estimate
+    /// only when most of it is left out). Default `[[1, 2], [2, 1]]`.
+    pub clustering_grids: Vec<[usize; 2]>,
 }
 
 impl Default for TrustOptions {
@@ -89,6 +107,10 @@ impl Default for TrustOptions {
             competing_min_fraction: 0.15,
             weak_prior_factor: 0.1,
             competing_threshold: 0.003,
+            clustering_grid: [8, 4],
+            clustering_z: 3.0,
+            clustering_frames: 10,
+            clustering_grids: vec![[1, 2], [2, 1]],
         }
     }
 }
@@ -160,12 +182,31 @@ impl TrustOptions {
                 ),
             ));
         }
-        for &[gx, gy] in &self.jackknife_grids {
+        if !(self.clustering_z >= 0.0 && self.clustering_z.is_finite()) {
+            out.push((
+                vec!["trust.clustering_z"],
+                format!(
+                    "trust.clustering_z must be a finite number of at least 0, got {}",
+                    self.clustering_z
+                ),
+            ));
+        }
+        let [cx, cy] = self.clustering_grid;
+        if cx == 0 || cy == 0 || cx * cy > 1024 {
+            out.push((
+                vec!["trust.clustering_grid"],
+                format!(
+                    "trust.clustering_grid must have two positive counts and at most 1024 cells, \
+                     got [{cx}, {cy}]"
+                ),
+            ));
+        }
+        for &[gx, gy] in self.jackknife_grids.iter().chain(&self.clustering_grids) {
             if gx == 0 || gy == 0 || gx * gy > 64 || gx * gy < 2 {
                 out.push((
-                    vec!["trust.jackknife_grids"],
+                    vec!["trust.jackknife_grids", "trust.clustering_grids"],
                     format!(
-                        "trust.jackknife_grids: each grid must have two positive counts and 2 \
+                        "trust.jackknife_grids, trust.clustering_grids: each grid must have two positive counts and 2 \
                          to 64 cells, got [{gx}, {gy}]"
                     ),
                 ));
@@ -725,4 +766,40 @@ pub fn cell_residual_statistic(
         }
     }
     (used > 0).then_some((t, used))
+}
+
+/// The chi-square quantile with `k` degrees of freedom `z` standard normal deviations above
+/// the mean (Wilson-Hilferty: `k (1 - 2/(9k) + z √(2/(9k)))³`).
+pub fn chi_square_quantile(k: f64, z: f64) -> f64 {
+    let a = 2.0 / (9.0 * k);
+    k * (1.0 - a + z * a.sqrt()).powi(3)
+}
+
+/// The residual-clustering trigger of the jackknife ([`TrustOptions::clustering_z`]): fires
+/// on a frame whose [`cell_residual_statistic`] is above the chi-square quantile and keeps the
+/// jackknife on for [`TrustOptions::clustering_frames`] frames.
+#[derive(Clone, Debug, Default)]
+pub struct ClusteringTrigger {
+    /// Frames left in which the jackknife runs with the extra grids.
+    left: usize,
+}
+
+impl ClusteringTrigger {
+    /// Scores one moving frame (`statistic`: `T` and the cells used, if computed) and says
+    /// whether its jackknife should run with the extra grids.
+    pub fn observe(&mut self, options: &TrustOptions, statistic: Option<(f64, usize)>) -> bool {
+        if options.clustering_z > 0.0
+            && let Some((t, cells)) = statistic
+            && cells > 0
+            && t > chi_square_quantile(cells as f64, options.clustering_z)
+        {
+            self.left = options.clustering_frames.max(1);
+        }
+        if self.left > 0 {
+            self.left -= 1;
+            true
+        } else {
+            false
+        }
+    }
 }
