@@ -100,6 +100,8 @@ fn main() {
             let mut classical = verbose.as_deref().filter(|v| *v == name).and_then(|_| {
                 let mut c = config();
                 c.trust.jackknife_grids.clear();
+                c.trust.clustering_grids.clear();
+                c.trust.clustering_z = 0.0;
                 c.trust.competing_min_fraction = 0.0;
                 Odometry::new(seq.rig.clone(), c).ok()
             });

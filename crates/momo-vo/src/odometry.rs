@@ -1131,8 +1131,14 @@ impl Odometry {
             && let Some((b, w)) = competing
         {
             let a: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
-            // The status is left as it is: a noise-free frame after a spoilt one
-            // (tests/fuzz_regressions.rs) was flagged; not investigated yet.
+            // A frame whose covariance the two motions' difference dominates is flagged
+            // (`weak`, `competing_motions`): it keeps its estimate and does not centre the next
+            // frame's prior. Frames where the difference stays within the (jackknife-widened)
+            // covariance keep `estimated`.
+            if trust::mixture_dominates(cov, &a, &b, w) && diag.constraint == Constraint::Well {
+                diag.constraint = Constraint::Weak;
+                diag.reason = Some(Reason::CompetingMotions);
+            }
             *cov = trust::mixture_covariance(cov, &a, &b, w);
         }
         if let Some(cov) = reported {

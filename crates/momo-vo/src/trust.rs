@@ -251,6 +251,9 @@ pub enum Reason {
     TooFewInliers,
     /// The inliers lie in a small region.
     InliersInSmallRegion,
+    /// A second motion explains a large share of the matches and the frame's covariance is
+    /// dominated by the two motions' difference ([`mixture_covariance`]).
+    CompetingMotions,
 }
 
 impl Reason {
@@ -265,6 +268,7 @@ impl Reason {
             Reason::NoInliers => "no_inliers",
             Reason::TooFewInliers => "too_few_inliers",
             Reason::InliersInSmallRegion => "inliers_in_small_region",
+            Reason::CompetingMotions => "competing_motions",
         }
     }
 }
@@ -802,4 +806,19 @@ impl ClusteringTrigger {
             false
         }
     }
+}
+
+/// Whether the mixture term of [`mixture_covariance`] dominates `cov` along the difference
+/// `d = b - a`: `w (1 - w) dᵀ Σ⁻¹ d > 1` (the two motions are further apart than the frame's
+/// own uncertainty). `false` where `cov` cannot be inverted or the inputs do not fit.
+pub fn mixture_dominates(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> bool {
+    if a.len() != cov.nrows() || b.len() != a.len() || cov.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    let d = DVector::from_iterator(a.len(), b.iter().zip(a).map(|(b, a)| b - a));
+    let Some(inv) = cov.clone().try_inverse() else {
+        return false;
+    };
+    let m = (d.transpose() * inv * &d)[(0, 0)];
+    m.is_finite() && w * (1.0 - w) * m > 1.0
 }
