@@ -61,7 +61,15 @@ fn main() {
         "| scenario | frames scored | not scored | mean NEES | median NEES | inside 95 % chi2(3) | mean NEES per seed |"
     );
     println!("|---|---|---|---|---|---|---|");
+    // `MOMO_NEES_SCENARIOS=a,b`: only these scenarios.
+    let only = std::env::var("MOMO_NEES_SCENARIOS").ok();
     for name in scenarios {
+        if only
+            .as_deref()
+            .is_some_and(|o| !o.split(',').any(|s| s == name))
+        {
+            continue;
+        }
         let mut all = Vec::new();
         let mut held = 0usize;
         let mut per_seed = Vec::new();
@@ -87,6 +95,16 @@ fn main() {
                     std::process::exit(1);
                 }
             };
+            // With `MOMO_NEES_FRAMES`: the classical covariance alongside (no jackknife, no
+            // competing motion: the same estimates), to show what the widening did.
+            let mut classical = verbose.as_deref().filter(|v| *v == name).and_then(|_| {
+                let mut c = config();
+                c.trust.jackknife_grids.clear();
+                c.trust.clustering_grids.clear();
+                c.trust.clustering_z = 0.0;
+                c.trust.competing_min_fraction = 0.0;
+                Odometry::new(seq.rig.clone(), c).ok()
+            });
             let mut nees_seed = Vec::new();
             for k in 1..seq.num_frames() {
                 let arc = seq
@@ -94,6 +112,15 @@ fn main() {
                     .as_ref()
                     .and_then(|a| a.get(k).copied().flatten());
                 let r = vo.process(&seq.frames[k], arc);
+                let nees_classical = classical.as_mut().and_then(|c| {
+                    let rc = c.process(&seq.frames[k], arc);
+                    rotation_nees(
+                        c.estimator(),
+                        &rc.diagnostics,
+                        &sim.vehicle_motions[k].rotation,
+                        &rc.motion,
+                    )
+                });
                 let d = &r.diagnostics;
                 if !matches!(d.status, FrameStatus::Estimated | FrameStatus::Weak) {
                     held += 1;
@@ -109,7 +136,15 @@ fn main() {
                     continue;
                 };
                 if verbose.as_deref() == Some(name) {
-                    print_frame(&sim, k, seed, d, &r.motion, nees, vo.rig());
+                    print_frame(
+                        &sim,
+                        (k, seed),
+                        d,
+                        &r.motion,
+                        (nees, nees_classical.unwrap_or(f64::NAN)),
+                        vo.rig(),
+                        vo.estimator(),
+                    );
                 }
                 nees_seed.push(nees);
             }
@@ -135,17 +170,20 @@ fn main() {
     }
 }
 
-/// One scored frame: error and sigma of the rotation (deg), NEES, inliers, the object's share
-/// of the matches and of the inliers (from the simulator's labels: diagnostics only), and the
-/// share of matches outside the estimate's support (epipolar angle above 3e-3 rad).
+/// One scored frame: error of the rotation (deg), NEES with the reported and the classical
+/// covariance, inliers, the object's share of the matches and of the inliers (from the
+/// simulator's labels: diagnostics only), the share of matches outside the estimate's support
+/// (epipolar angle above 3e-3 rad) under the estimate and under the truth, whether the
+/// jackknife ran, and the competing motion (its weight and its rotation's distance to the
+/// truth and to the estimate, deg).
 fn print_frame(
     sim: &momo_sim::Simulation,
-    k: usize,
-    seed: u64,
+    (k, seed): (usize, u64),
     d: &momo_vo::FrameDiagnostics,
     est: &momo_core::Pose<f64>,
-    nees: f64,
+    (nees, nees_classical): (f64, f64),
     rig: &momo_core::Rig,
+    model: &dyn FrameEstimator,
 ) {
     let truth = &sim.vehicle_motions[k];
     let e = so3_log(&(truth.rotation.transpose() * est.rotation));
@@ -165,26 +203,29 @@ fn print_frame(
             static_out_true += usize::from(true_angles[j][i] > 3e-3);
         }
     }
-    let sig: Vec<String> = d
-        .param_sigmas
-        .iter()
-        .map(|s| format!("{:.2e}", s))
-        .collect();
+    let competing = match &d.competing {
+        Some((p, w)) => {
+            let r = model.motion(p).rotation;
+            format!(
+                "w {w:.2} to_truth {:.3} to_est {:.3}",
+                so3_log(&(truth.rotation.transpose() * r))
+                    .norm()
+                    .to_degrees(),
+                so3_log(&(est.rotation.transpose() * r)).norm().to_degrees()
+            )
+        }
+        None => "-".into(),
+    };
     println!(
-        "seed {seed} k {k:3} turn {turn:.2} deg err {:.3} deg ({:+.3} {:+.3} {:+.3}) nees {nees:8.2} \
-         inl {}/{} obj {obj} obj_in {obj_in} outside(est) {outside} outside(true) {static_out_true} \
-         params {:?} sig [{}]",
+        "seed {seed} k {k:3} turn {turn:.2} err {:.3} nees {nees:8.2} classical {nees_classical:8.2} \
+         inl {}/{} obj {obj} obj_in {obj_in} out_est {outside} out_true {static_out_true} \
+         {:?} jk {} clu {:.2} comp {competing}",
         e.norm().to_degrees(),
-        e.x.to_degrees(),
-        e.y.to_degrees(),
-        e.z.to_degrees(),
         d.inliers,
         n,
-        d.params
-            .iter()
-            .map(|p| (p * 1e4).round() / 1e4)
-            .collect::<Vec<_>>(),
-        sig.join(" ")
+        d.status,
+        u8::from(d.jackknife),
+        d.residual_clustering,
     );
 }
 

@@ -124,6 +124,9 @@ impl MotionDriver for FivePointBaseline {
             time_us: start.elapsed().as_secs_f64() * 1e6,
             constraint: crate::trust::Constraint::Well,
             reason: None,
+            jackknife: false,
+            competing: None,
+            residual_clustering: f64::NAN,
         };
         FrameResult {
             motion,

@@ -105,6 +105,19 @@ pub struct FrameDiagnostics {
     pub constraint: Constraint,
     /// Why the frame is weak or degenerate (`None` if well constrained).
     pub reason: Option<Reason>,
+    /// Whether the leave-one-cell-out jackknife of the covariance ran on this frame
+    /// ([`trust::TrustOptions::jackknife_support_drop`]).
+    #[serde(default)]
+    pub jackknife: bool,
+    /// The competing motion found by the covariance's check ([`trust::mixture_covariance`]):
+    /// its parameters (all of the model's) and its weight `w`; `None` if there was none.
+    #[serde(default)]
+    pub competing: Option<(Vec<f64>, f64)>,
+    /// The clustering of the residuals in the image ([`trust::cell_residual_statistic`]),
+    /// divided by its degrees of freedom (about 1 for independent residuals; NaN if not
+    /// computed).
+    #[serde(default)]
+    pub residual_clustering: f64,
 }
 
 /// The result of one frame pair.
@@ -175,6 +188,8 @@ pub struct Odometry {
     metric_is_angular: bool,
     /// Multi-frame evidence of the motion separation's hypothesis choice (crate::hypotheses).
     hypotheses: crate::hypotheses::HypothesisTracker,
+    /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
+    clustering: trust::ClusteringTrigger,
 }
 
 impl Odometry {
@@ -234,6 +249,7 @@ impl Odometry {
             soft_count: 0,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
+            clustering: Default::default(),
         })
     }
 
@@ -389,6 +405,9 @@ impl Odometry {
             time_us: 0.0,
             constraint: Constraint::Well,
             reason: None,
+            jackknife: false,
+            competing: None,
+            residual_clustering: f64::NAN,
         };
 
         {
@@ -459,7 +478,7 @@ impl Odometry {
                         diag.status = FrameStatus::Degenerate;
                         diag.constraint = Constraint::Degenerate;
                         diag.reason = Some(reason);
-                        self.fill_diagnostics(obs, &sol, false, false, &mut diag);
+                        self.fill_diagnostics(obs, &sol, false, (false, false), &mut diag);
                         None
                     }
                     None => Some(sol),
@@ -545,9 +564,25 @@ impl Odometry {
                 // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
                 let share = sol.inliers() as f64 / matches.max(1) as f64;
                 let drop = self.config.trust.jackknife_support_drop;
-                let jackknife =
+                let mut jackknife =
                     drop >= 1.0 || self.inlier_share_peak.is_none_or(|p| share < drop * p);
-                self.fill_diagnostics(obs, &sol, !standstill, jackknife, &mut diag);
+                // And on the frames where the residuals cluster in the image (a rigid object in
+                // a compromise motion), with the half-image grids too.
+                let mut clustered = false;
+                if !standstill {
+                    let t = &self.config.trust;
+                    let stat = trust::cell_residual_statistic(
+                        &self.rig,
+                        &self.estimator.motion(&sol.params),
+                        obs,
+                        (t.clustering_grid[0], t.clustering_grid[1]),
+                        t.competing_threshold,
+                    );
+                    diag.residual_clustering = stat.map_or(f64::NAN, |(t, c)| t / c as f64);
+                    clustered = self.clustering.observe(t, stat);
+                    jackknife |= clustered;
+                }
+                self.fill_diagnostics(obs, &sol, !standstill, (jackknife, clustered), &mut diag);
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {
                         Some(p) => share.max(INLIER_SHARE_PEAK_DECAY * p),
@@ -944,6 +979,7 @@ impl Odometry {
         obs: &FrameObservations,
         sol: &FrameSolution,
         jackknife: bool,
+        clustered: bool,
     ) -> Option<nalgebra::DMatrix<f64>> {
         let mut cov = self.covariance(sol)?;
         if !jackknife {
@@ -951,7 +987,9 @@ impl Odometry {
         }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
-        for &[gx, gy] in &self.config.trust.jackknife_grids {
+        let t = &self.config.trust;
+        let extra: &[[usize; 2]] = if clustered { &t.clustering_grids } else { &[] };
+        for &[gx, gy] in t.jackknife_grids.iter().chain(extra) {
             let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
                 .iter()
                 .filter_map(|o| {
@@ -1064,7 +1102,7 @@ impl Odometry {
         obs: &FrameObservations,
         sol: &FrameSolution,
         moving: bool,
-        jackknife: bool,
+        jackknife: (bool, bool),
         diag: &mut FrameDiagnostics,
     ) {
         diag.initial_cost = sol.report.initial_cost;
@@ -1079,14 +1117,28 @@ impl Odometry {
         } else {
             None
         };
+        diag.jackknife = moving && (jackknife.0 || competing.is_some());
         let mut reported =
-            self.reported_covariance(obs, sol, moving && (jackknife || competing.is_some()));
+            self.reported_covariance(obs, sol, diag.jackknife, moving && jackknife.1);
+        if let Some((b, w)) = &competing {
+            let mut all = sol.params.clone();
+            for (&i, v) in sol.free.iter().zip(b) {
+                all[i] = *v;
+            }
+            diag.competing = Some((all, *w));
+        }
         if let Some(cov) = reported.as_mut()
             && let Some((b, w)) = competing
         {
             let a: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
-            // The status is left as it is: a noise-free frame after a spoilt one
-            // (tests/fuzz_regressions.rs) was flagged; not investigated yet.
+            // A frame whose covariance the two motions' difference dominates is flagged
+            // (`weak`, `competing_motions`): it keeps its estimate and does not centre the next
+            // frame's prior. Frames where the difference stays within the (jackknife-widened)
+            // covariance keep `estimated`.
+            if trust::mixture_dominates(cov, &a, &b, w) && diag.constraint == Constraint::Well {
+                diag.constraint = Constraint::Weak;
+                diag.reason = Some(Reason::CompetingMotions);
+            }
             *cov = trust::mixture_covariance(cov, &a, &b, w);
         }
         if let Some(cov) = reported {

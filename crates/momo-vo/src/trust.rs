@@ -72,6 +72,24 @@ pub struct TrustOptions {
     /// The support threshold of the competing-motions check, radians (epipolar angle; default
     /// 0.003, about 2 px at f = 700 px).
     pub competing_threshold: f64,
+    /// The cells (columns, rows per camera) of the residual-clustering test
+    /// ([`cell_residual_statistic`]). Default `[8, 4]`.
+    pub clustering_grid: [usize; 2],
+    /// The clustering test fires where its statistic `T` is above the chi-square quantile of
+    /// this many standard normal deviations (Wilson-Hilferty, degrees of freedom the cells
+    /// used): the residuals of whole image regions share a sign, as a rigid object absorbed
+    /// into a compromise motion leaves them. 0: off. Default 3 (a false alarm rate of about
+    /// 0.1 % for independent residuals).
+    pub clustering_z: f64,
+    /// After the clustering test fired, the jackknife runs on this many frames (that one
+    /// included) with the extra grids [`TrustOptions::clustering_grids`]: a moving object stays
+    /// in view for a while, and on some of its frames the compromise hides below the test's
+    /// noise. Default 10.
+    pub clustering_frames: usize,
+    /// Grids added to [`TrustOptions::jackknife_grids`] on the frames the clustering test
+    /// marked: halves of the image (an object spread over several cells moves the estimate
+    /// only when most of it is left out). Default `[[1, 2], [2, 1]]`.
+    pub clustering_grids: Vec<[usize; 2]>,
 }
 
 impl Default for TrustOptions {
@@ -89,6 +107,10 @@ impl Default for TrustOptions {
             competing_min_fraction: 0.15,
             weak_prior_factor: 0.1,
             competing_threshold: 0.003,
+            clustering_grid: [8, 4],
+            clustering_z: 3.0,
+            clustering_frames: 10,
+            clustering_grids: vec![[1, 2], [2, 1]],
         }
     }
 }
@@ -160,12 +182,31 @@ impl TrustOptions {
                 ),
             ));
         }
-        for &[gx, gy] in &self.jackknife_grids {
+        if !(self.clustering_z >= 0.0 && self.clustering_z.is_finite()) {
+            out.push((
+                vec!["trust.clustering_z"],
+                format!(
+                    "trust.clustering_z must be a finite number of at least 0, got {}",
+                    self.clustering_z
+                ),
+            ));
+        }
+        let [cx, cy] = self.clustering_grid;
+        if cx == 0 || cy == 0 || cx * cy > 1024 {
+            out.push((
+                vec!["trust.clustering_grid"],
+                format!(
+                    "trust.clustering_grid must have two positive counts and at most 1024 cells, \
+                     got [{cx}, {cy}]"
+                ),
+            ));
+        }
+        for &[gx, gy] in self.jackknife_grids.iter().chain(&self.clustering_grids) {
             if gx == 0 || gy == 0 || gx * gy > 64 || gx * gy < 2 {
                 out.push((
-                    vec!["trust.jackknife_grids"],
+                    vec!["trust.jackknife_grids", "trust.clustering_grids"],
                     format!(
-                        "trust.jackknife_grids: each grid must have two positive counts and 2 \
+                        "trust.jackknife_grids, trust.clustering_grids: each grid must have two positive counts and 2 \
                          to 64 cells, got [{gx}, {gy}]"
                     ),
                 ));
@@ -210,6 +251,9 @@ pub enum Reason {
     TooFewInliers,
     /// The inliers lie in a small region.
     InliersInSmallRegion,
+    /// A second motion explains a large share of the matches and the frame's covariance is
+    /// dominated by the two motions' difference ([`mixture_covariance`]).
+    CompetingMotions,
 }
 
 impl Reason {
@@ -224,6 +268,7 @@ impl Reason {
             Reason::NoInliers => "no_inliers",
             Reason::TooFewInliers => "too_few_inliers",
             Reason::InliersInSmallRegion => "inliers_in_small_region",
+            Reason::CompetingMotions => "competing_motions",
         }
     }
 }
@@ -664,4 +709,116 @@ pub fn mixture_covariance(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> D
         return cov.clone();
     }
     cov + &d * d.transpose() * (w * (1.0 - w))
+}
+
+/// Whether the residuals of a frame cluster in the image: the signed epipolar angle of every
+/// match within `threshold` (radians) under `motion`, summed per image cell (`grid` per
+/// camera, cells of the frame-(k-1) pixels), `T = Σ_b S_b² / (n_b σ²)` with `S_b` the cell's
+/// sum, `n_b` its count and `σ²` the mean squared angle of all of them. With independent
+/// residuals each cell's mean is noise around zero and `T` follows about chi-square with
+/// (cells - parameters) degrees of freedom; a block of matches that pulls the estimate away
+/// from the rest (a rigid object moving differently, absorbed into a compromise motion)
+/// leaves signed residuals of one sign in the cells of each side, and `T` grows with the
+/// number of matches. Returns `T` and the number of cells with at least 2 matches; `None`
+/// without such cells.
+pub fn cell_residual_statistic(
+    rig: &Rig,
+    motion: &momo_core::Pose<f64>,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+    threshold: f64,
+) -> Option<(f64, usize)> {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let mut sums: Vec<(f64, usize)> = Vec::new();
+    let mut sq = 0.0;
+    let mut count = 0usize;
+    for (cam, matches) in rig.cameras().iter().zip(&obs.per_camera) {
+        let e = momo_core::essential(&momo_core::camera_motion(motion, &cam.t_vehicle_camera));
+        let size = cam.model.size();
+        let base = sums.len();
+        sums.resize(base + cells, (0.0, 0));
+        for o in matches {
+            let (f0, f1) = (o.f0.normalize(), o.f1.normalize());
+            let n0 = e * f0;
+            let n1 = e.transpose() * f1;
+            let (a, b) = (n0.norm(), n1.norm());
+            if a < 1e-15 || b < 1e-15 {
+                continue;
+            }
+            let c = f1.dot(&n0);
+            let r = 0.5 * (c / a + c / b);
+            if !(r.abs() < threshold) {
+                continue;
+            }
+            let cell = base + cell_of((o.px0.x, o.px0.y), size, grid);
+            sums[cell].0 += r;
+            sums[cell].1 += 1;
+            sq += r * r;
+            count += 1;
+        }
+    }
+    if count == 0 || !(sq > 0.0) {
+        return None;
+    }
+    let sigma2 = sq / count as f64;
+    let mut t = 0.0;
+    let mut used = 0usize;
+    for &(s, n) in &sums {
+        if n >= 2 {
+            t += s * s / (n as f64 * sigma2);
+            used += 1;
+        }
+    }
+    (used > 0).then_some((t, used))
+}
+
+/// The chi-square quantile with `k` degrees of freedom `z` standard normal deviations above
+/// the mean (Wilson-Hilferty: `k (1 - 2/(9k) + z √(2/(9k)))³`).
+pub fn chi_square_quantile(k: f64, z: f64) -> f64 {
+    let a = 2.0 / (9.0 * k);
+    k * (1.0 - a + z * a.sqrt()).powi(3)
+}
+
+/// The residual-clustering trigger of the jackknife ([`TrustOptions::clustering_z`]): fires
+/// on a frame whose [`cell_residual_statistic`] is above the chi-square quantile and keeps the
+/// jackknife on for [`TrustOptions::clustering_frames`] frames.
+#[derive(Clone, Debug, Default)]
+pub struct ClusteringTrigger {
+    /// Frames left in which the jackknife runs with the extra grids.
+    left: usize,
+}
+
+impl ClusteringTrigger {
+    /// Scores one moving frame (`statistic`: `T` and the cells used, if computed) and says
+    /// whether its jackknife should run with the extra grids.
+    pub fn observe(&mut self, options: &TrustOptions, statistic: Option<(f64, usize)>) -> bool {
+        if options.clustering_z > 0.0
+            && let Some((t, cells)) = statistic
+            && cells > 0
+            && t > chi_square_quantile(cells as f64, options.clustering_z)
+        {
+            self.left = options.clustering_frames.max(1);
+        }
+        if self.left > 0 {
+            self.left -= 1;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// Whether the mixture term of [`mixture_covariance`] dominates `cov` along the difference
+/// `d = b - a`: `w (1 - w) dᵀ Σ⁻¹ d > 1` (the two motions are further apart than the frame's
+/// own uncertainty). `false` where `cov` cannot be inverted or the inputs do not fit.
+pub fn mixture_dominates(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> bool {
+    if a.len() != cov.nrows() || b.len() != a.len() || cov.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    let d = DVector::from_iterator(a.len(), b.iter().zip(a).map(|(b, a)| b - a));
+    let Some(inv) = cov.clone().try_inverse() else {
+        return false;
+    };
+    let m = (d.transpose() * inv * &d)[(0, 0)];
+    m.is_finite() && w * (1.0 - w) * m > 1.0
 }

@@ -498,6 +498,8 @@ fn a_rigid_object_moving_differently_widens_the_covariance() {
     };
     let mut off = Config::default();
     off.trust.jackknife_grids.clear();
+    off.trust.clustering_grids.clear();
+    off.trust.clustering_z = 0.0;
     let (with, without) = (inside(Config::default()), inside(off));
     eprintln!("inside the 95 % bound: {with:.2} with the jackknife, {without:.2} without");
     assert!(
@@ -505,4 +507,45 @@ fn a_rigid_object_moving_differently_widens_the_covariance() {
         "the classical covariance is over-confident here"
     );
     assert!(with >= 0.75, "{with}");
+}
+
+/// The residual-clustering test (`trust.clustering_z`): on a clean drive the per-cell sums of
+/// the signed residuals are noise (T / cells about 1); with 45 % of the matches on a rigid
+/// object moving with the vehicle, the compromise motion leaves whole image regions with
+/// residuals of one sign.
+#[test]
+fn residuals_cluster_in_the_image_where_a_rigid_object_pulls_the_estimate() {
+    let run = |mut cfg: momo_sim::SimConfig| {
+        cfg.frames = 42;
+        cfg.seed = 2;
+        if let Some(o) = cfg.moving_object.as_mut() {
+            o.frames = 30..42;
+        }
+        let sim = momo_sim::simulate(&cfg).expect("simulated");
+        let seq = &sim.sequence;
+        let mut vo = Odometry::new(seq.rig.clone(), Config::default()).expect("valid");
+        (1..seq.num_frames())
+            .map(|k| {
+                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+                let d = vo.process(&seq.frames[k], arc).diagnostics;
+                (d.residual_clustering, d.jackknife)
+            })
+            .collect::<Vec<_>>()
+    };
+    let clean = run(momo_sim::SimConfig::clean_pinhole());
+    let object = run(momo_sim::SimConfig::moving_object());
+    let mean = |v: &[(f64, bool)]| v.iter().map(|x| x.0).sum::<f64>() / v.len() as f64;
+    let (c, o) = (mean(&clean), mean(&object[29..]));
+    eprintln!(
+        "T / cells: clean {c:.2} (max {:.2}), object frames {o:.2}",
+        clean.iter().map(|x| x.0).fold(0.0, f64::max)
+    );
+    assert!(
+        clean.iter().all(|x| x.0.is_finite() && x.0 < 2.0),
+        "{clean:?}"
+    );
+    assert!(c < 1.3 && o > 1.5 * c, "clean {c}, object {o}");
+    // The jackknife runs on the object frames once the test fired.
+    let jk = object[29..].iter().filter(|x| x.1).count();
+    assert!(jk >= 10, "{jk} of 12 object frames jackknifed");
 }
