@@ -992,16 +992,58 @@ impl Odometry {
         for &[gx, gy] in t.jackknife_grids.iter().chain(extra) {
             let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
                 .iter()
-                .filter_map(|o| {
-                    let s = self.solve_once(o, &sol.params, &fixed, false)?;
-                    Some(sol.free.iter().map(|&i| s.params[i]).collect())
-                })
+                .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
                 .collect();
             if let Some(j) = trust::jackknife_covariance(&samples) {
                 cov = trust::widen(&cov, &j, self.config.trust.jackknife_min_ratio);
             }
         }
         Some(cov)
+    }
+
+    /// One leave-one-cell-out re-estimate of the jackknife (its free parameters) from the
+    /// matches `obs` without one cell: `trust.jackknife_steps` Gauss-Newton steps from the
+    /// frame's solution, each one linearisation of the same cost the solver minimised (loss,
+    /// priors), or a full solve where it is 0. `None` where a step is not defined (the normal
+    /// matrix not positive definite, a non-finite point).
+    fn jackknife_sample(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+    ) -> Option<Vec<f64>> {
+        let steps = self.config.trust.jackknife_steps;
+        if steps == 0 {
+            let s = self.solve_once(obs, &sol.params, fixed, false)?;
+            return Some(sol.free.iter().map(|&i| s.params[i]).collect());
+        }
+        let req = SolveRequest {
+            rig: &self.rig,
+            observations: obs,
+            // The stage whose minimum the frame's solution is.
+            loss: self
+                .config
+                .refine_loss
+                .as_deref()
+                .unwrap_or(self.config.loss.as_ref()),
+            solver: self.config.solver.as_ref(),
+            initial: &sol.params,
+            fixed,
+            rotation_only: false,
+            motion_prior: Some(&self.motion_prior),
+        };
+        let n = sol.free.len();
+        let mut params = sol.params.clone();
+        for _ in 0..steps {
+            let lin = self.estimator.linearize(&req, &params).ok()?;
+            let step =
+                momo_core::solve_normal_equations(&lin.hessian, &lin.gradient, n, 0.0, false)?;
+            for (k, &i) in sol.free.iter().enumerate() {
+                params[i] += step[k];
+            }
+        }
+        let out: Vec<f64> = sol.free.iter().map(|&i| params[i]).collect();
+        out.iter().all(|v| v.is_finite()).then_some(out)
     }
 
     /// A second motion that explains at least `trust.competing_min_fraction` of the matches
