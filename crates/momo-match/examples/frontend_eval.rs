@@ -14,7 +14,8 @@
 //! p95 / max / count above 1 degree, and the front end's ms per frame as `momo vo` reports it.
 //! Timing: one thread, mean CPU ms per frame and stage
 //! (the thread's CPU time, so that waiting for the shared cores does not count) over the 50
-//! frame pairs of each snippet, mono (image_0) and stereo (image_0 + image_1).
+//! frame pairs of each snippet, mono (image_0) and stereo (image_0 + image_1); environment
+//! `MOMO_FRONTEND_FRAMES=N` times the first N frames only (for `valgrind --tool=callgrind`).
 //!
 //! Usage: `cargo run --release -p momo-match --example frontend_eval -- accuracy ../shared/data
 //! /tmp/frontend`.
@@ -172,6 +173,13 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
         "threads {}: mean ms per frame (decode, extract = detect + describe + index, match)",
         rayon::current_num_threads()
     );
+    // `MOMO_FRONTEND_FRAMES=N`: the first N frames of each snippet only (instruction counts
+    // under callgrind).
+    let frame_limit = std::env::var("MOMO_FRONTEND_FRAMES")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(usize::MAX)
+        .max(2);
     for s in SNIPPETS {
         let dir = snippet_dir(data, s);
         let mut cams: Vec<Vec<GrayImage>> = Vec::new();
@@ -179,7 +187,7 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
         for cam in ["image_0", "image_1"] {
             let seq = momo_match::ImageSequence::open(&[dir.join(cam)])?;
             let mut imgs = Vec::new();
-            for k in 0..seq.len() {
+            for k in 0..seq.len().min(frame_limit) {
                 let t = cpu_seconds();
                 imgs.extend(seq.load(k, None)?);
                 decode += cpu_seconds() - t;
