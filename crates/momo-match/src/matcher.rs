@@ -6,7 +6,9 @@
 //!    cell the `candidates_per_cell` strongest features of each class in frame `k-1` are
 //!    matched (so that effort goes where the output will come from, spread over the image).
 //! 2. *Forward*: the feature of the same class in frame `k` with the smallest SAD inside the
-//!    search window (`max_flow_u` x `max_flow_v` pixels around the candidate's position).
+//!    search window (`max_flow_u` x `max_flow_v` pixels around the candidate's position; in a
+//!    [`FrameMatcher`] with `prior_margin`, the window of the [`FlowPrior`] of the last frame
+//!    pair's matches: their flows near the candidate plus the margin).
 //! 3. *Backward (circular check)*: from that feature, the best feature of frame `k-1` in the
 //!    same window must be the candidate itself; otherwise the match is dropped.
 //!    Before that, the forward match must be unique: its SAD at most `uniqueness` times the
@@ -614,5 +616,47 @@ impl FrameMatcher {
         } else {
             Some(results.into_iter().map(Option::unwrap_or_default).collect())
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flow(u1: f64, v1: f64, du: f64, dv: f64) -> Match {
+        Match {
+            u0: u1 - du,
+            v0: v1 - dv,
+            u1,
+            v1,
+            sad: 0,
+        }
+    }
+
+    /// The window of a cell spans the flows of the matches in it and the 8 cells around it plus
+    /// the margin (clamped to the full window); cells with fewer than 2 flows around search the
+    /// full window.
+    #[test]
+    fn the_prior_window_spans_the_neighbouring_flows() {
+        let matches = [
+            flow(10.0, 10.0, 5.0, 1.0),
+            flow(70.0, 20.0, -3.0, 2.0),
+            flow(100.0, 100.0, 190.0, 0.0),
+            flow(300.0, 100.0, 7.0, 7.0),
+        ];
+        let prior = FlowPrior::from_matches(&matches, (400, 200), [4, 2], [200, 100]);
+        // Cell (0, 0) sees the flows of cells (0..2, 0..2): u in [-3, 190], v in [0, 2].
+        let [ou, ov, ru, rv] = prior.window(0, 0).expect("a window");
+        assert!(ou - ru <= -3 - 4 && ou + ru >= 190 + 4, "{ou} {ru}");
+        assert!(
+            ov - rv <= -2 && ov + rv >= 4 && ov - rv >= -3 && ov + rv <= 5,
+            "{ov} {rv}"
+        );
+        // Clamped to the full window in u.
+        assert!(ou + ru <= 200 + 1);
+        // Cell (4, 1) sees only the match at (300, 100): one flow, the full window.
+        assert_eq!(prior.window(300, 100), None);
+        // Far from every match: the full window.
+        assert_eq!(prior.window(399, 199), None);
     }
 }
