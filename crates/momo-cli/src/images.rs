@@ -33,6 +33,10 @@ pub(crate) struct FrontEndArgs {
     /// 2026-11-24).
     #[arg(long)]
     no_klt: bool,
+    /// Search the whole --max-flow window for every match (no prediction from the last frame
+    /// pair's flow; slower).
+    #[arg(long)]
+    no_flow_prior: bool,
 }
 
 impl From<FrontEndArgs> for momo_match::FrontEndOptions {
@@ -49,6 +53,11 @@ impl From<FrontEndArgs> for momo_match::FrontEndOptions {
                 },
                 threads: a.threads,
                 klt: if a.no_klt { None } else { d.klt },
+                prior_margin: if a.no_flow_prior {
+                    None
+                } else {
+                    d.prior_margin
+                },
                 ..d
             },
             gamma: a.gamma,

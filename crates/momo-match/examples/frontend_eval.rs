@@ -9,12 +9,14 @@
 //! `DATA_DIR` holds `kitti_stereo_snippets/`. `KEY=VALUE` set matcher options:
 //! `matches`, `refine` (none | klt), `patch` (KLT half-width), `iterations`, `max_shift`, `fb`
 //! (forward-backward threshold, pixels; 0 = off), `subpixel` (true | false), `uniqueness`,
+//! `prior` (none | U,V: the flow prior's margin),
 //! `candidates`, `nms`, `threshold`, `threads` (accuracy only). Accuracy: the
 //! frame-to-frame rotation error of camera 0 against `poses.txt` (as `momo eval`), median /
 //! p95 / max / count above 1 degree, and the front end's ms per frame as `momo vo` reports it.
 //! Timing: one thread, mean CPU ms per frame and stage
 //! (the thread's CPU time, so that waiting for the shared cores does not count) over the 50
-//! frame pairs of each snippet, mono (image_0) and stereo (image_0 + image_1).
+//! frame pairs of each snippet, mono (image_0) and stereo (image_0 + image_1); environment
+//! `MOMO_FRONTEND_FRAMES=N` times the first N frames only (for `valgrind --tool=callgrind`).
 //!
 //! Usage: `cargo run --release -p momo-match --example frontend_eval -- accuracy ../shared/data
 //! /tmp/frontend`.
@@ -22,8 +24,8 @@
 use momo_core::{Pose, so3_log};
 use momo_match::kitti::{arc_lengths_from_poses, kitti_image_rig, read_kitti_projections};
 use momo_match::{
-    FrameFeatures, FrontEndOptions, GrayImage, MatchError, MatchOptions, VoRun, match_features,
-    vo_from_images,
+    FlowPrior, FrameFeatures, FrontEndOptions, GrayImage, MatchError, MatchOptions, VoRun,
+    match_features, match_features_with_prior, vo_from_images,
 };
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -80,6 +82,19 @@ fn parse_options(args: &[String]) -> Result<MatchOptions, String> {
                     v.parse().map_err(|e| bad(&e))?
             }
             "threads" => o.threads = v.parse().map_err(|e| bad(&e))?,
+            "prior" => {
+                o.prior_margin = if v == "none" {
+                    None
+                } else {
+                    let (a, b) = v
+                        .split_once(',')
+                        .ok_or_else(|| format!("prior: none or U,V, found {v}"))?;
+                    Some([
+                        a.parse().map_err(|e| bad(&e))?,
+                        b.parse().map_err(|e| bad(&e))?,
+                    ])
+                }
+            }
             _ => return Err(format!("unknown option {k}")),
         }
     }
@@ -172,6 +187,13 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
         "threads {}: mean ms per frame (decode, extract = detect + describe + index, match)",
         rayon::current_num_threads()
     );
+    // `MOMO_FRONTEND_FRAMES=N`: the first N frames of each snippet only (instruction counts
+    // under callgrind).
+    let frame_limit = std::env::var("MOMO_FRONTEND_FRAMES")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(usize::MAX)
+        .max(2);
     for s in SNIPPETS {
         let dir = snippet_dir(data, s);
         let mut cams: Vec<Vec<GrayImage>> = Vec::new();
@@ -179,7 +201,7 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
         for cam in ["image_0", "image_1"] {
             let seq = momo_match::ImageSequence::open(&[dir.join(cam)])?;
             let mut imgs = Vec::new();
-            for k in 0..seq.len() {
+            for k in 0..seq.len().min(frame_limit) {
                 let t = cpu_seconds();
                 imgs.extend(seq.load(k, None)?);
                 decode += cpu_seconds() - t;
@@ -192,6 +214,7 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
             let mut prev: Vec<FrameFeatures> = vec![FrameFeatures::default(); ncam];
             let mut cur: Vec<FrameFeatures> = vec![FrameFeatures::default(); ncam];
             let (mut t_extract, mut t_match, mut matches) = (0.0, 0.0, 0usize);
+            let mut priors: Vec<Option<FlowPrior>> = vec![None; ncam];
             // Two passes: the first warms caches and allocations, the second is timed.
             for pass in 0..2 {
                 for k in 0..frames {
@@ -201,8 +224,29 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
                     }
                     let t1 = cpu_seconds();
                     if k > 0 {
+                        // As `FrameMatcher::push`: the flow prior of the last pair, the full
+                        // window when it finds too few.
                         for j in 0..ncam {
-                            matches += match_features(&prev[j], &cur[j], &options).len();
+                            let mut m = match_features_with_prior(
+                                &prev[j],
+                                &cur[j],
+                                &options,
+                                priors[j].as_ref(),
+                            );
+                            if priors[j].is_some()
+                                && m.len() < options.matches_per_frame.div_ceil(2)
+                            {
+                                m = match_features(&prev[j], &cur[j], &options);
+                            }
+                            matches += m.len();
+                            priors[j] = options.prior_margin.map(|margin| {
+                                FlowPrior::from_matches(
+                                    &m,
+                                    (cur[j].width, cur[j].height),
+                                    margin,
+                                    [options.max_flow_u, options.max_flow_v],
+                                )
+                            });
                         }
                     }
                     let t2 = cpu_seconds();
@@ -215,6 +259,7 @@ fn timing(data: &Path, options: MatchOptions) -> Result<(), MatchError> {
                 if pass == 0 {
                     matches = 0;
                 }
+                priors.iter_mut().for_each(|p| *p = None);
             }
             let n = frames as f64;
             println!(

@@ -314,6 +314,10 @@ pub struct FrameFeatures {
     pixels: Vec<u8>,
     blob: Vec<i16>,
     corner: Vec<i16>,
+    /// Row-wise window extremes of the responses (blob max, blob min, corner max, corner min):
+    /// entry `(u, v)` is the extreme of the response over columns `u - n..=u + n` of row `v`
+    /// (the suppression's window check reads one column of them).
+    row_extremes: [Vec<i16>; CLASSES],
     /// The features per class: blob max, blob min, corner max, corner min.
     pub classes: [ClassFeatures; CLASSES],
 }
@@ -377,16 +381,37 @@ impl FrameFeatures {
     /// Block-wise non-maximum suppression (libviso2): the image inside the border is cut into
     /// `(n+1) x (n+1)` blocks; per block and class the extremum (the first in row-major order)
     /// is the only candidate, kept if it is strong enough and the strict extremum of its
-    /// `(2n+1)^2` window (ties go to the earlier pixel). Two passes over rows of blocks, each in
+    /// `(2n+1)^2` window (ties go to the earlier pixel). The row-wise window extremes of each
+    /// response (vectorised, rows in parallel), then two passes over rows of blocks, each in
     /// parallel: (1) the strong extrema of every block, from column-wise extremes (vectorised);
-    /// (2) per candidate, a quick rejection by the extrema of the 8 neighbouring blocks, then the
-    /// full window check; survivors are described and refined. The feature order is that of a
+    /// (2) per candidate, the window check from the row-wise extremes down its column
+    /// ([`window_check`]); survivors are described and refined. The feature order is that of a
     /// serial scan (block rows, then blocks).
     fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
         let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
         let step = n + 1;
+        // The row-wise window extremes of the four classes, rows in parallel.
+        for (class, ext) in self.row_extremes.iter_mut().enumerate() {
+            let img = if class < 2 { &self.blob } else { &self.corner };
+            ext.resize(w * h, 0);
+            let maximum = class % 2 == 0;
+            ext.par_chunks_mut(w)
+                .zip(img.par_chunks(w))
+                .with_min_len(8)
+                .for_each_init(
+                    || (vec![0i16; w], vec![0i16; w]),
+                    |(a, b), (out, row)| {
+                        if maximum {
+                            window_extreme_row::<true>(row, n, out, a, b);
+                        } else {
+                            window_extreme_row::<false>(row, n, out, a, b);
+                        }
+                    },
+                );
+        }
+        let row_ext = &self.row_extremes;
         let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
         let inner = w - 2 * BORDER;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
@@ -462,64 +487,25 @@ impl FrameFeatures {
             .into_par_iter()
             .map(|by| {
                 let mut out: [Vec<Feature>; CLASSES] = Default::default();
-                for (bx, ext) in extrema[by].iter().enumerate() {
-                    for (class, e) in ext.iter().enumerate() {
+                for block in &extrema[by] {
+                    for (class, e) in block.iter().enumerate() {
                         if e.is_none() {
                             continue;
                         }
                         let maximum = class % 2 == 0;
                         let (u, v) = (usize::from(e.u), usize::from(e.v));
                         let img = img_of(class);
-                        // The window lies inside the block grid: only the neighbouring blocks
-                        // whose extremum beats this one can hold a pixel that beats it (a
-                        // block without a strong extremum cannot); if that extremum lies in
-                        // the window it is rejected, else the block's part of the window is
-                        // scanned. Otherwise (near the border) the whole window is scanned.
-                        let inside = u >= BORDER + n
-                            && u + n < w - BORDER
-                            && v >= BORDER + n
-                            && v + n < h - BORDER;
-                        let keep = if inside {
-                            let mut keep = true;
-                            'blocks: for y in by.saturating_sub(1)..(by + 2).min(extrema.len()) {
-                                let row = &extrema[y];
-                                for x in bx.saturating_sub(1)..(bx + 2).min(row.len()) {
-                                    let o = row[x][class];
-                                    if (y, x) == (by, bx) || o.is_none() || !o.beats(e, maximum) {
-                                        continue;
-                                    }
-                                    if usize::from(o.u).abs_diff(u) <= n
-                                        && usize::from(o.v).abs_diff(v) <= n
-                                    {
-                                        keep = false;
-                                        break 'blocks;
-                                    }
-                                    // The block's part of the window.
-                                    let (bu0, bv0) = (BORDER + x * step, block_rows[y]);
-                                    let (x0, x1) = (bu0.max(u - n), (bu0 + step).min(u + n + 1));
-                                    let (y0, y1) = (bv0.max(v - n), (bv0 + step).min(v + n + 1));
-                                    if x0 < x1
-                                        && y0 < y1
-                                        && beaten_in(
-                                            img,
-                                            w,
-                                            (x0, x1),
-                                            (y0, y1),
-                                            (u, v),
-                                            e.val,
-                                            maximum,
-                                        )
-                                    {
-                                        keep = false;
-                                        break 'blocks;
-                                    }
-                                }
-                            }
-                            keep
-                        } else if maximum {
-                            is_extremum::<true>(img, w, h, u, v, n, e.val)
-                        } else {
-                            is_extremum::<false>(img, w, h, u, v, n, e.val)
+                        // Inside the image the window check reads the row-wise window
+                        // extremes down the candidate's column (2n + 1 values) and the centre
+                        // row's left and right halves; near the border the whole window is
+                        // scanned.
+                        let inside = u >= n && u + n < w && v >= n && v + n < h;
+                        let ext = &row_ext[class];
+                        let keep = match (inside, maximum) {
+                            (true, true) => window_check::<true>(img, ext, w, u, v, n, e.val),
+                            (true, false) => window_check::<false>(img, ext, w, u, v, n, e.val),
+                            (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
+                            (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
                         };
                         if !keep {
                             continue;
@@ -564,17 +550,6 @@ impl Extremum {
     fn is_none(&self) -> bool {
         self.u == 0
     }
-
-    /// True if `self` beats `other` in `other`'s window check: strictly better, or equal and
-    /// earlier in row-major order.
-    fn beats(&self, other: &Self, maximum: bool) -> bool {
-        let better = if maximum {
-            self.val > other.val
-        } else {
-            self.val < other.val
-        };
-        better || (self.val == other.val && (self.v, self.u) < (other.v, other.u))
-    }
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
@@ -602,42 +577,88 @@ fn vertex(a: f64, b: f64, c: f64) -> f64 {
     (0.5 * (a - c) / denom).clamp(-0.5, 0.5)
 }
 
-/// True if a pixel of `img` in columns `x0..x1` and rows `y0..y1` beats the extremum `val` at
-/// `(u, v)` (`maximum`, else minimum): better, or equal and earlier in row-major order.
-fn beaten_in(
+/// `out[x]` = the extreme (`MAX`: maximum, else minimum) of `src[x - n..=x + n]` for `x` in
+/// `n..w - n` (other entries unchanged), by doubling: windows of 2, 4, ... `p <= 2n + 1` pixels,
+/// then the two windows of `p` that cover `2n + 1` (vectorised slice passes; `a`, `b` are
+/// scratch rows of length `w`).
+fn window_extreme_row<const MAX: bool>(
+    src: &[i16],
+    n: usize,
+    out: &mut [i16],
+    a: &mut [i16],
+    b: &mut [i16],
+) {
+    let w = src.len();
+    let width = 2 * n + 1;
+    if n == 0 || w < width {
+        return;
+    }
+    #[inline(always)]
+    fn op<const MAX: bool>(x: i16, y: i16) -> i16 {
+        if MAX { x.max(y) } else { x.min(y) }
+    }
+    // Windows of 2: a[x] = ext(src[x..x + 2]), valid for x < w - 1.
+    let mut len = w - 1;
+    for ((o, &x), &y) in a[..len].iter_mut().zip(&src[..len]).zip(&src[1..len + 1]) {
+        *o = op::<MAX>(x, y);
+    }
+    let mut p = 2;
+    let (mut cur, mut next) = (a, b);
+    while 2 * p <= width {
+        let new_len = len - p;
+        for ((o, &x), &y) in next[..new_len]
+            .iter_mut()
+            .zip(&cur[..new_len])
+            .zip(&cur[p..p + new_len])
+        {
+            *o = op::<MAX>(x, y);
+        }
+        std::mem::swap(&mut cur, &mut next);
+        len = new_len;
+        p *= 2;
+    }
+    // Windows of `width` = two overlapping windows of `p`.
+    let count = w - width + 1;
+    let shift = width - p;
+    for ((o, &x), &y) in out[n..n + count]
+        .iter_mut()
+        .zip(&cur[..count])
+        .zip(&cur[shift..shift + count])
+    {
+        *o = op::<MAX>(x, y);
+    }
+}
+
+/// The window check of [`is_extremum`] for a window inside the image, from the row-wise window
+/// extremes `ext` ([`window_extreme_row`]): rows above `v` beat `val` when their extreme is at
+/// least as good, rows below when it is better; in row `v` the pixels left of `u` beat it when
+/// at least as good, those right of it when better.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn window_check<const MAX: bool>(
     img: &[i16],
+    ext: &[i16],
     w: usize,
-    (x0, x1): (usize, usize),
-    (y0, y1): (usize, usize),
-    (u, v): (usize, usize),
+    u: usize,
+    v: usize,
+    n: usize,
     val: i16,
-    maximum: bool,
 ) -> bool {
-    let extreme = |s: &[i16]| {
-        if maximum {
-            s.iter().copied().fold(i16::MIN, i16::max)
-        } else {
-            s.iter().copied().fold(i16::MAX, i16::min)
+    // `at_least(x)`: x at least as good as val; `better(x)`: strictly better.
+    let at_least = |x: i16| if MAX { x >= val } else { x <= val };
+    let better = |x: i16| if MAX { x > val } else { x < val };
+    for y in v - n..v {
+        if at_least(ext[y * w + u]) {
+            return false;
         }
-    };
-    // Pixels before `(u, v)` beat it when at least as good, pixels after when better.
-    let beats = |m: i16, earlier: bool| {
-        if maximum {
-            m > val || (earlier && m == val)
-        } else {
-            m < val || (earlier && m == val)
+    }
+    for y in v + 1..=v + n {
+        if better(ext[y * w + u]) {
+            return false;
         }
-    };
-    (y0..y1).any(|y| {
-        let row = &img[y * w..(y + 1) * w];
-        if y != v {
-            beats(extreme(&row[x0..x1]), y < v)
-        } else {
-            let split = u.clamp(x0, x1);
-            beats(extreme(&row[x0..split]), true)
-                || beats(extreme(&row[(u + 1).clamp(x0, x1)..x1]), false)
-        }
-    })
+    }
+    let row = &img[v * w..(v + 1) * w];
+    !(row[u - n..u].iter().any(|&x| at_least(x)) || row[u + 1..=u + n].iter().any(|&x| better(x)))
 }
 
 /// True if `val` at `(u, v)` is the strict maximum (`MAX`, else minimum) of `img` over the

@@ -74,7 +74,10 @@ pub use image::GrayImage;
 pub use images::{
     GammaTable, ImageSequence, decode_gray, image_size, image_size_from_bytes, load_gray,
 };
-pub use matcher::{FrameMatcher, Match, MatchOptions, match_features, match_images};
+pub use matcher::{
+    FlowPrior, FrameMatcher, Match, MatchOptions, match_features, match_features_with_prior,
+    match_images,
+};
 pub use pipeline::{
     FrontEndOptions, FrontEndStats, ImageFrontEnd, VoRun, VoSummary, match_to_sequence,
     vo_from_images,

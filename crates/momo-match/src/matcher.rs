@@ -6,7 +6,9 @@
 //!    cell the `candidates_per_cell` strongest features of each class in frame `k-1` are
 //!    matched (so that effort goes where the output will come from, spread over the image).
 //! 2. *Forward*: the feature of the same class in frame `k` with the smallest SAD inside the
-//!    search window (`max_flow_u` x `max_flow_v` pixels around the candidate's position).
+//!    search window (`max_flow_u` x `max_flow_v` pixels around the candidate's position; in a
+//!    [`FrameMatcher`] with `prior_margin`, the window of the [`FlowPrior`] of the last frame
+//!    pair's matches: their flows near the candidate plus the margin).
 //! 3. *Backward (circular check)*: from that feature, the best feature of frame `k-1` in the
 //!    same window must be the candidate itself; otherwise the match is dropped.
 //!    Before that, the forward match must be unique: its SAD at most `uniqueness` times the
@@ -53,6 +55,12 @@ pub struct MatchOptions {
     /// uses rayon's global pool (all cores), `n` a pool of its own with `n` threads. The
     /// matches do not depend on it.
     pub threads: usize,
+    /// Search around the predicted flow ([`FlowPrior`], the previous frame pair's matches, in
+    /// [`FrameMatcher`]): the window spans the flows of the previous matches near the candidate
+    /// plus this margin `[u, v]`, pixels (within the `max_flow` window); where too few previous
+    /// matches are near, or when fewer than half of `matches_per_frame` are found, the full
+    /// window is searched. `None`: always the full window.
+    pub prior_margin: Option<[u32; 2]>,
     /// The detector.
     pub detector: DetectorOptions,
 }
@@ -69,6 +77,7 @@ impl Default for MatchOptions {
             subpixel: true,
             klt: Some(KltOptions::default()),
             threads: 0,
+            prior_margin: Some([16, 8]),
             detector: DetectorOptions::default(),
         }
     }
@@ -189,12 +198,116 @@ impl Grid {
     }
 }
 
+/// Side of the cells of a [`FlowPrior`], pixels.
+const PRIOR_CELL: usize = 64;
+
+/// A prediction of the flow from frame k-1 to k: the flows `(u1 - u0, v1 - v0)` of the matches
+/// of the pair `(k-2, k-1)`, binned by their position in frame k-1 into cells of
+/// `PRIOR_CELL` pixels; a candidate's search window spans the flows of its cell and the 8
+/// around it (constant motion: a point keeps roughly the flow of its neighbours of the last
+/// pair), plus a margin.
+#[derive(Clone, Debug, Default)]
+pub struct FlowPrior {
+    cols: usize,
+    rows: usize,
+    /// Per cell: the window `(offset u, offset v, half-width, half-height)`, or `None` (full
+    /// window) with fewer than 2 flows around.
+    windows: Vec<Option<[i32; 4]>>,
+}
+
+impl FlowPrior {
+    /// The prior of the matches of one frame pair (positions in frame k of that pair) in a
+    /// `w x h` image, with the window margin `[u, v]` and the largest window `[ru, rv]`.
+    pub fn from_matches(
+        matches: &[Match],
+        (w, h): (usize, usize),
+        margin: [u32; 2],
+        max_flow: [u32; 2],
+    ) -> Self {
+        let cols = w.div_ceil(PRIOR_CELL).max(1);
+        let rows = h.div_ceil(PRIOR_CELL).max(1);
+        // Per cell: flow bounds (min u, max u, min v, max v) and count.
+        let mut bounds = vec![[i32::MAX, i32::MIN, i32::MAX, i32::MIN, 0]; cols * rows];
+        for m in matches {
+            if !(m.u1 >= 0.0 && m.v1 >= 0.0) {
+                continue;
+            }
+            let c = ((m.u1 as usize) / PRIOR_CELL).min(cols - 1);
+            let r = ((m.v1 as usize) / PRIOR_CELL).min(rows - 1);
+            let (du, dv) = ((m.u1 - m.u0).round() as i32, (m.v1 - m.v0).round() as i32);
+            let b = &mut bounds[r * cols + c];
+            b[0] = b[0].min(du);
+            b[1] = b[1].max(du);
+            b[2] = b[2].min(dv);
+            b[3] = b[3].max(dv);
+            b[4] += 1;
+        }
+        let (mu, mv) = (margin[0] as i32, margin[1] as i32);
+        let (fu, fv) = (max_flow[0] as i32, max_flow[1] as i32);
+        let mut windows = vec![None; cols * rows];
+        for r in 0..rows {
+            for c in 0..cols {
+                let mut acc = [i32::MAX, i32::MIN, i32::MAX, i32::MIN, 0];
+                for y in r.saturating_sub(1)..(r + 2).min(rows) {
+                    for x in c.saturating_sub(1)..(c + 2).min(cols) {
+                        let b = &bounds[y * cols + x];
+                        if b[4] > 0 {
+                            acc[0] = acc[0].min(b[0]);
+                            acc[1] = acc[1].max(b[1]);
+                            acc[2] = acc[2].min(b[2]);
+                            acc[3] = acc[3].max(b[3]);
+                            acc[4] += b[4];
+                        }
+                    }
+                }
+                if acc[4] < 2 {
+                    continue;
+                }
+                // The window [lo - margin, hi + margin], within the full window.
+                let (lo_u, hi_u) = ((acc[0] - mu).max(-fu), (acc[1] + mu).min(fu));
+                let (lo_v, hi_v) = ((acc[2] - mv).max(-fv), (acc[3] + mv).min(fv));
+                if lo_u > hi_u || lo_v > hi_v {
+                    continue;
+                }
+                // Centre rounded down, half-width rounded up: the window covers [lo, hi].
+                let (ou, ov) = ((lo_u + hi_u).div_euclid(2), (lo_v + hi_v).div_euclid(2));
+                windows[r * cols + c] = Some([ou, ov, hi_u - ou, hi_v - ov]);
+            }
+        }
+        Self {
+            cols,
+            rows,
+            windows,
+        }
+    }
+
+    /// The search window `(offset u, offset v, half-width, half-height)` of a feature at
+    /// `(u, v)` in frame k-1, or `None` (the full window).
+    fn window(&self, u: u16, v: u16) -> Option<[i32; 4]> {
+        let c = (usize::from(u) / PRIOR_CELL).min(self.cols.saturating_sub(1));
+        let r = (usize::from(v) / PRIOR_CELL).min(self.rows.saturating_sub(1));
+        *self.windows.get(r * self.cols + c)?
+    }
+}
+
 /// Matches the features of two frames of one camera (the steps of the module documentation).
 /// Both frames must have the same size.
 pub fn match_features(
     prev: &FrameFeatures,
     cur: &FrameFeatures,
     options: &MatchOptions,
+) -> Vec<Match> {
+    match_features_with_prior(prev, cur, options, None)
+}
+
+/// [`match_features`] with a flow prediction: each candidate's search window comes from
+/// `prior` ([`FlowPrior::window`]) where it has one; the circular check searches the mirrored
+/// window (so the candidate lies inside it).
+pub fn match_features_with_prior(
+    prev: &FrameFeatures,
+    cur: &FrameFeatures,
+    options: &MatchOptions,
+    prior: Option<&FlowPrior>,
 ) -> Vec<Match> {
     let (w, h) = (prev.width, prev.height);
     if w != cur.width || h != cur.height || w < MIN_SIDE || h < MIN_SIDE {
@@ -239,16 +352,20 @@ pub fn match_features(
         .filter_map(|&(class, i)| {
             let f = &prev.classes[class].points[i];
             let (u0, v0) = (i32::from(f.u), i32::from(f.v));
-            let (j, s, second) = cur.classes[class].best_in_window(&f.desc, u0, v0, ru, rv)?;
+            let [ou, ov, wu, wv] = prior
+                .and_then(|p| p.window(f.u, f.v))
+                .unwrap_or([0, 0, ru, rv]);
+            let (j, s, second) =
+                cur.classes[class].best_in_window(&f.desc, u0 + ou, v0 + ov, wu, wv)?;
             if s > options.max_sad || f64::from(s) > options.uniqueness * f64::from(second) {
                 return None;
             }
             let g = &cur.classes[class].points[j];
             let (u1, v1) = (i32::from(g.u), i32::from(g.v));
-            // The circular check: `f` must be the best match of `g` in frame k-1 (the window is
-            // symmetric, so `f` lies inside it; the scan stops at the first feature that beats
-            // `f`).
-            if !prev.classes[class].is_best_in_window(&g.desc, u1, v1, ru, rv, i, s) {
+            // The circular check: `f` must be the best match of `g` in frame k-1 (in the
+            // mirrored window, so `f` lies inside it; the scan stops at the first feature that
+            // beats `f`).
+            if !prev.classes[class].is_best_in_window(&g.desc, u1 - ou, v1 - ov, wu, wv, i, s) {
                 return None;
             }
             Some(if options.subpixel && options.klt.is_none() {
@@ -376,6 +493,8 @@ pub struct FrameMatcher {
     options: MatchOptions,
     prev: Vec<Option<FrameFeatures>>,
     spare: Vec<FrameFeatures>,
+    /// Per camera, the flow prior from the last frame pair's matches.
+    priors: Vec<Option<FlowPrior>>,
     frames: usize,
     pool: Option<rayon::ThreadPool>,
 }
@@ -400,6 +519,7 @@ impl FrameMatcher {
             options,
             prev: vec![None; cameras],
             spare: vec![FrameFeatures::default(); cameras],
+            priors: vec![None; cameras],
             frames: 0,
             pool: thread_pool(options.threads)?,
         })
@@ -450,15 +570,33 @@ impl FrameMatcher {
             }
         }
         let options = self.options;
-        let (prev, spare) = (&mut self.prev, &mut self.spare);
+        let (prev, spare, priors) = (&mut self.prev, &mut self.spare, &mut self.priors);
         let mut work = || -> Vec<Option<Vec<Match>>> {
             images
                 .par_iter()
                 .zip(prev.par_iter_mut())
                 .zip(spare.par_iter_mut())
-                .map(|((img, prev), spare)| {
+                .zip(priors.par_iter_mut())
+                .map(|(((img, prev), spare), prior)| {
                     spare.extract(img, &options.detector);
-                    let matches = prev.as_ref().map(|p| match_features(p, spare, &options));
+                    let matches = prev.as_ref().map(|p| {
+                        let m = match_features_with_prior(p, spare, &options, prior.as_ref());
+                        // Too few with the prediction (a change of motion): the full window.
+                        if prior.is_some() && m.len() < options.matches_per_frame.div_ceil(2) {
+                            match_features(p, spare, &options)
+                        } else {
+                            m
+                        }
+                    });
+                    *prior = match (&matches, options.prior_margin) {
+                        (Some(m), Some(margin)) => Some(FlowPrior::from_matches(
+                            m,
+                            (spare.width, spare.height),
+                            margin,
+                            [options.max_flow_u, options.max_flow_v],
+                        )),
+                        _ => None,
+                    };
                     // The current frame becomes the previous one; the old buffers are reused.
                     let old = prev.replace(std::mem::take(spare));
                     if let Some(old) = old {
@@ -478,5 +616,47 @@ impl FrameMatcher {
         } else {
             Some(results.into_iter().map(Option::unwrap_or_default).collect())
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flow(u1: f64, v1: f64, du: f64, dv: f64) -> Match {
+        Match {
+            u0: u1 - du,
+            v0: v1 - dv,
+            u1,
+            v1,
+            sad: 0,
+        }
+    }
+
+    /// The window of a cell spans the flows of the matches in it and the 8 cells around it plus
+    /// the margin (clamped to the full window); cells with fewer than 2 flows around search the
+    /// full window.
+    #[test]
+    fn the_prior_window_spans_the_neighbouring_flows() {
+        let matches = [
+            flow(10.0, 10.0, 5.0, 1.0),
+            flow(70.0, 20.0, -3.0, 2.0),
+            flow(100.0, 100.0, 190.0, 0.0),
+            flow(300.0, 100.0, 7.0, 7.0),
+        ];
+        let prior = FlowPrior::from_matches(&matches, (400, 200), [4, 2], [200, 100]);
+        // Cell (0, 0) sees the flows of cells (0..2, 0..2): u in [-3, 190], v in [0, 2].
+        let [ou, ov, ru, rv] = prior.window(0, 0).expect("a window");
+        assert!(ou - ru <= -3 - 4 && ou + ru >= 190 + 4, "{ou} {ru}");
+        assert!(
+            ov - rv <= -2 && ov + rv >= 4 && ov - rv >= -3 && ov + rv <= 5,
+            "{ov} {rv}"
+        );
+        // Clamped to the full window in u.
+        assert!(ou + ru <= 200 + 1);
+        // Cell (4, 1) sees only the match at (300, 100): one flow, the full window.
+        assert_eq!(prior.window(300, 100), None);
+        // Far from every match: the full window.
+        assert_eq!(prior.window(399, 199), None);
     }
 }
