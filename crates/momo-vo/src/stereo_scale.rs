@@ -147,8 +147,7 @@ pub fn measure_arc_length(
         return None;
     }
     let sigma_r2 = wr2 / (wsum - 1.0);
-    let mut sigma = (sigma_r2 / info).sqrt();
-    {
+    let sigma = {
         // A disparity offset shared by all matches of the frame (rectification, calibration):
         // the second camera yawed by `beta` about its vertical axis. Its uncertainty is
         // marginalised (beta free in the information matrix); the estimate keeps beta = 0.
@@ -170,12 +169,16 @@ pub fn measure_arc_length(
             ibb += w * db * db;
         }
         let det = ill * ibb - ilb * ilb;
-        if det > 1e-12 * ill * ibb {
-            sigma = (sigma_r2 * ibb / det).sqrt();
+        if !(ibb > 0.0) {
+            // The offset moves no residual: the one-dimensional sigma.
+            (sigma_r2 / info).sqrt()
+        } else if det > 1e-12 * ill * ibb {
+            (sigma_r2 * ibb / det).sqrt()
         } else {
-            sigma = f64::INFINITY;
+            // The offset and the arc length cannot be told apart.
+            f64::INFINITY
         }
-    }
+    };
     (l.is_finite() && sigma.is_finite()).then_some(CrossScale {
         arc_length: l,
         sigma,
