@@ -591,6 +591,12 @@ impl Odometry {
                 }
                 if let (Some(i), Some(sigma)) = (arc_index, cross_sigma) {
                     diag.param_sigmas[i] = sigma;
+                } else if let Some(i) = arc_index
+                    && diag.scale == ScaleSource::Estimated
+                {
+                    // The soft prior at its own strength (see estimated_arc_length_sigma).
+                    let sigma = self.estimated_arc_length_sigma(&sol, i);
+                    diag.param_sigmas[i] = diag.param_sigmas[i].max(sigma);
                 }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;
@@ -818,15 +824,76 @@ impl Odometry {
         var.sqrt()
     }
 
-    fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
+    /// The standard deviation of an arc length estimated from the per-camera matches (no
+    /// cross-camera matches: a mono rig's lever arm in a curve). As the calibrated covariance
+    /// ([`trust::calibrated_covariance`]), except that a soft model's prior (side slip, climb)
+    /// keeps its own strength: the calibrated covariance divides the whole normal matrix by the
+    /// residual variance `σ²`, which also scales the soft prior's information `s² JᵀJ` by
+    /// `(s/σ)²` (about 10x on KITTI) although the prior is no measurement. A mono rig's arc
+    /// length is observed only through that prior (with a free direction of travel its
+    /// information is zero), so there the inflated prior made a guess look measured: KITTI 01,
+    /// mono, without odometry, 41 frames `estimated` at sigmas of 4-20 % with errors up to
+    /// -78 % (the prior's centre drifts with the estimates,
+    /// `odometry.soft_prior_centring_frames`). Infinite if the information does not determine
+    /// the arc length.
+    fn estimated_arc_length_sigma(&self, sol: &FrameSolution, arc_index: usize) -> f64 {
         let Some(k) = sol.free.iter().position(|&f| f == arc_index) else {
-            return false;
+            return f64::INFINITY;
         };
+        let mut inp = self.covariance_inputs(sol);
+        let n = sol.free.len();
+        let q0 = self.estimator.prior_residuals(&sol.params);
+        // Jacobian of the soft prior's residuals (units of their sigmas) over the free
+        // parameters, by central differences.
+        let mut jq = nalgebra::DMatrix::zeros(q0.len(), n);
+        for (a, &f) in sol.free.iter().enumerate() {
+            let h = 1e-6 * (1.0 + sol.params[f].abs());
+            let (mut p, mut m) = (sol.params.clone(), sol.params.clone());
+            p[f] += h;
+            m[f] -= h;
+            let (qp, qm) = (
+                self.estimator.prior_residuals(&p),
+                self.estimator.prior_residuals(&m),
+            );
+            for r in 0..q0.len() {
+                jq[(r, a)] = (qp[r] - qm[r]) / (2.0 * h);
+            }
+        }
+        let jtj = jq.transpose() * &jq;
+        let s = self.motion_prior.scale;
+        if q0.is_empty() || !(s.is_finite() && s > 0.0) {
+            return self
+                .covariance(sol)
+                .map_or(f64::INFINITY, |c| c[(k, k)].max(0.0).sqrt());
+        }
+        inp.normal -= &jtj * (s * s);
+        let Some((mut info, _)) = trust::calibrated_information(&inp) else {
+            return f64::INFINITY;
+        };
+        info += jtj;
+        let info = (&info + info.transpose()) * 0.5;
+        // The arc length's variance: the inverse's diagonal entry (Schur complement), infinite
+        // where the information is singular in a direction that moves the arc length.
+        let eig = info.symmetric_eigen();
+        let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        if !(max > 0.0) {
+            return f64::INFINITY;
+        }
+        let mut var = 0.0;
+        for (e, &lambda) in eig.eigenvalues.iter().enumerate() {
+            let v = eig.eigenvectors[(k, e)];
+            if lambda > 1e-12 * max {
+                var += v * v / lambda;
+            } else if v.abs() > 1e-3 {
+                return f64::INFINITY;
+            }
+        }
+        var.max(0.0).sqrt()
+    }
+
+    fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {
         let l = sol.params[arc_index].abs();
-        let Some(cov) = self.covariance(sol) else {
-            return false;
-        };
-        let sigma = cov[(k, k)].max(0.0).sqrt();
+        let sigma = self.estimated_arc_length_sigma(sol, arc_index);
         // Vehicle dynamics: the arc length cannot jump by more than a factor from one frame to
         // the next. Zero flow fits any translation, and an estimate that ran off along that
         // valley (100 m per frame at a standstill) can come with a small formal sigma.
