@@ -1131,11 +1131,12 @@ impl Odometry {
         let angles = |params: &[f64]| {
             crate::separate::epipolar_angles(&self.rig, &self.estimator.motion(params), obs)
         };
-        let a = angles(&sol.params);
-        let outside: Vec<Vec<bool>> = a
-            .iter()
-            .map(|c| c.iter().map(|x| *x >= t.competing_threshold).collect())
-            .collect();
+        let outside = crate::separate::epipolar_at_least(
+            &self.rig,
+            &self.estimator.motion(&sol.params),
+            obs,
+            t.competing_threshold,
+        );
         let n_out = outside.iter().flatten().filter(|k| **k).count();
         if n_out < min_n {
             return None;

@@ -134,6 +134,50 @@ pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -
         .collect()
 }
 
+/// Whether each match's epipolar angle ([`epipolar_angles`]) is at least `threshold`
+/// (radians): the same answer as `epipolar_angles(..)[j][i] >= threshold`, without the two
+/// `asin` of a match whose two one-sided sines are both clearly below or both clearly above
+/// `sin(threshold)` (most matches; the competing-motions check runs it on every frame).
+pub fn epipolar_at_least(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    threshold: f64,
+) -> Vec<Vec<bool>> {
+    // A relative margin far above the rounding of `sin` and `asin`; outside (0, 1.5) rad, or
+    // between the bounds, the angle itself decides.
+    let shortcut = threshold > 0.0 && threshold < 1.5;
+    let s = threshold.sin();
+    let (lo, hi) = (s * (1.0 - 1e-9), s * (1.0 + 1e-9));
+    rig.cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .map(|(cam, matches)| {
+            let e = essential(&camera_motion(motion, &cam.t_vehicle_camera));
+            matches
+                .iter()
+                .map(|o| {
+                    let n0 = e * o.f0;
+                    let n1 = e.transpose() * o.f1;
+                    let c = o.f1.dot(&n0).abs();
+                    let (a, b) = (n0.norm(), n1.norm());
+                    if a < 1e-15 || b < 1e-15 {
+                        return 0.0 >= threshold;
+                    }
+                    let (u, v) = ((c / a).min(1.0), (c / b).min(1.0));
+                    if shortcut && u < lo && v < lo {
+                        return false;
+                    }
+                    if shortcut && u > hi && v > hi {
+                        return true;
+                    }
+                    0.5 * (u.asin() + v.asin()) >= threshold
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// A candidate motion and its support (per camera, per match).
 type Candidate = (FrameSolution, Vec<Vec<bool>>);
 
@@ -396,5 +440,34 @@ mod tests {
         assert!(o.final_robust);
         assert_eq!(o.plausibility_margin, 16.0);
         assert!(toml::from_str::<SeparateOptions>("final_robustness = true").is_err());
+    }
+
+    /// The shortcut gives the same mask as the angles, at and around the threshold.
+    #[test]
+    fn epipolar_at_least_matches_the_angles() {
+        let rig = momo_testing::canned::fisheye_rig();
+        let truth = Pose::new(
+            momo_core::so3_exp(&nalgebra::Vector3::new(0.01, -0.02, 0.03)),
+            nalgebra::Vector3::new(1.0, 0.05, 0.01),
+        );
+        let obs = momo_testing::canned::synthetic_observations(&rig, &truth, 60, 20, 5);
+        let off = Pose::new(
+            momo_core::so3_exp(&nalgebra::Vector3::new(0.0, 0.0, 0.035)),
+            nalgebra::Vector3::new(1.0, 0.0, 0.0),
+        );
+        for motion in [truth, off] {
+            let angles = epipolar_angles(&rig, &motion, &obs);
+            let mut thresholds = vec![-1.0, 0.0, 1e-3, 0.01, 0.1, 1.5, 2.0];
+            // Exactly at some matches' angles, where only the angle can decide.
+            thresholds.extend(angles.iter().flatten().step_by(7).copied());
+            for t in thresholds {
+                let mask = epipolar_at_least(&rig, &motion, &obs, t);
+                let want: Vec<Vec<bool>> = angles
+                    .iter()
+                    .map(|c| c.iter().map(|x| *x >= t).collect())
+                    .collect();
+                assert_eq!(mask, want, "threshold {t}");
+            }
+        }
     }
 }
