@@ -109,6 +109,17 @@ pub struct SeparationOutcome {
     pub switched: bool,
 }
 
+/// The sines of a match's two one-sided epipolar angles under the essential matrix `e`
+/// (`|f1ᵀ E f0|` over `|E f0|` and over `|Eᵀ f1|`, at most 1); `None` where an epipolar line is
+/// undefined (the angle is then taken as 0).
+fn one_sided_sines(e: &nalgebra::Matrix3<f64>, o: &momo_core::Observation) -> Option<(f64, f64)> {
+    let n0 = e * o.f0;
+    let n1 = e.transpose() * o.f1;
+    let c = o.f1.dot(&n0).abs();
+    let (a, b) = (n0.norm(), n1.norm());
+    (a >= 1e-15 && b >= 1e-15).then(|| ((c / a).min(1.0), (c / b).min(1.0)))
+}
+
 /// Epipolar angles (radians) of every match (per camera, in order) under a vehicle motion.
 pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -> Vec<Vec<f64>> {
     rig.cameras()
@@ -118,17 +129,7 @@ pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -
             let e = essential(&camera_motion(motion, &cam.t_vehicle_camera));
             matches
                 .iter()
-                .map(|o| {
-                    let n0 = e * o.f0;
-                    let n1 = e.transpose() * o.f1;
-                    let c = o.f1.dot(&n0).abs();
-                    let (a, b) = (n0.norm(), n1.norm());
-                    if a < 1e-15 || b < 1e-15 {
-                        0.0
-                    } else {
-                        0.5 * ((c / a).min(1.0).asin() + (c / b).min(1.0).asin())
-                    }
-                })
+                .map(|o| one_sided_sines(&e, o).map_or(0.0, |(u, v)| 0.5 * (u.asin() + v.asin())))
                 .collect()
         })
         .collect()
@@ -157,14 +158,9 @@ pub fn epipolar_at_least(
             matches
                 .iter()
                 .map(|o| {
-                    let n0 = e * o.f0;
-                    let n1 = e.transpose() * o.f1;
-                    let c = o.f1.dot(&n0).abs();
-                    let (a, b) = (n0.norm(), n1.norm());
-                    if a < 1e-15 || b < 1e-15 {
+                    let Some((u, v)) = one_sided_sines(&e, o) else {
                         return 0.0 >= threshold;
-                    }
-                    let (u, v) = ((c / a).min(1.0), (c / b).min(1.0));
+                    };
                     if shortcut && u < lo && v < lo {
                         return false;
                     }
