@@ -122,15 +122,24 @@ fn one_sided_sines(e: &nalgebra::Matrix3<f64>, o: &momo_core::Observation) -> Op
 
 /// Epipolar angles (radians) of every match (per camera, in order) under a vehicle motion.
 pub fn epipolar_angles(rig: &Rig, motion: &Pose<f64>, obs: &FrameObservations) -> Vec<Vec<f64>> {
+    per_match_sines(rig, motion, obs, |sines| {
+        sines.map_or(0.0, |(u, v)| 0.5 * (u.asin() + v.asin()))
+    })
+}
+
+/// `f` of every match's [`one_sided_sines`] under a vehicle motion, per camera, in order.
+fn per_match_sines<T>(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    f: impl Fn(Option<(f64, f64)>) -> T,
+) -> Vec<Vec<T>> {
     rig.cameras()
         .iter()
         .zip(&obs.per_camera)
         .map(|(cam, matches)| {
             let e = essential(&camera_motion(motion, &cam.t_vehicle_camera));
-            matches
-                .iter()
-                .map(|o| one_sided_sines(&e, o).map_or(0.0, |(u, v)| 0.5 * (u.asin() + v.asin())))
-                .collect()
+            matches.iter().map(|o| f(one_sided_sines(&e, o))).collect()
         })
         .collect()
 }
@@ -150,28 +159,18 @@ pub fn epipolar_at_least(
     let shortcut = threshold > 0.0 && threshold < 1.5;
     let s = threshold.sin();
     let (lo, hi) = (s * (1.0 - 1e-9), s * (1.0 + 1e-9));
-    rig.cameras()
-        .iter()
-        .zip(&obs.per_camera)
-        .map(|(cam, matches)| {
-            let e = essential(&camera_motion(motion, &cam.t_vehicle_camera));
-            matches
-                .iter()
-                .map(|o| {
-                    let Some((u, v)) = one_sided_sines(&e, o) else {
-                        return 0.0 >= threshold;
-                    };
-                    if shortcut && u < lo && v < lo {
-                        return false;
-                    }
-                    if shortcut && u > hi && v > hi {
-                        return true;
-                    }
-                    0.5 * (u.asin() + v.asin()) >= threshold
-                })
-                .collect()
-        })
-        .collect()
+    per_match_sines(rig, motion, obs, |sines| {
+        let Some((u, v)) = sines else {
+            return 0.0 >= threshold;
+        };
+        if shortcut && u < lo && v < lo {
+            return false;
+        }
+        if shortcut && u > hi && v > hi {
+            return true;
+        }
+        0.5 * (u.asin() + v.asin()) >= threshold
+    })
 }
 
 /// A candidate motion and its support (per camera, per match).
