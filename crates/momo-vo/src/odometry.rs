@@ -874,21 +874,7 @@ impl Odometry {
         let info = (&info + info.transpose()) * 0.5;
         // The arc length's variance: the inverse's diagonal entry (Schur complement), infinite
         // where the information is singular in a direction that moves the arc length.
-        let eig = info.symmetric_eigen();
-        let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        if !(max > 0.0) {
-            return f64::INFINITY;
-        }
-        let mut var = 0.0;
-        for (e, &lambda) in eig.eigenvalues.iter().enumerate() {
-            let v = eig.eigenvectors[(k, e)];
-            if lambda > 1e-12 * max {
-                var += v * v / lambda;
-            } else if v.abs() > 1e-3 {
-                return f64::INFINITY;
-            }
-        }
-        var.max(0.0).sqrt()
+        trust::invert_information(&info)[(k, k)].max(0.0).sqrt()
     }
 
     fn scale_ok(&self, sol: &FrameSolution, arc_index: usize) -> bool {

@@ -568,7 +568,7 @@ pub fn calibrated_information(inp: &CovarianceInputs) -> Option<(DMatrix<f64>, f
 /// The inverse of an information matrix; directions it does not constrain (eigenvalues below
 /// `1e-12` of the largest, or not positive) get infinite variance on every parameter they
 /// involve.
-fn invert_information(info: &DMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn invert_information(info: &DMatrix<f64>) -> DMatrix<f64> {
     let n = info.nrows();
     let eig = SymmetricEigen::new(info.clone());
     let max = eig.eigenvalues.iter().fold(0.0f64, |a, b| a.max(b.abs()));
