@@ -40,7 +40,7 @@ fn worst<M: Manifold, R: ResidualMetric>(
 ///
 /// The pixel metrics are checked divided by the focal length ([`FocalScaled`]), so that `tol`
 /// means the same for every metric: in pixels, the rounding noise of the finite differences
-/// (step 1e-6) alone reaches ~1e-6 for short motions seen by a camera with a lever arm.
+/// (steps 1e-6 and 5e-7) alone reaches ~1e-6 for short motions seen by a camera with a lever arm.
 ///
 /// Returns the largest relative error (`|ad - fd| / max(1, |fd|)`), or the first mismatch
 /// beyond `tol` (a parameter vector of the wrong length is reported as a mismatch, too).
