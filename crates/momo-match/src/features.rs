@@ -133,6 +133,7 @@ impl Window {
 }
 
 impl ClassFeatures {
+    #[inline(never)]
     fn build_index(&mut self, width: usize, height: usize) {
         self.cols = width.div_ceil(INDEX_CELL).max(1);
         self.rows = height.div_ceil(INDEX_CELL).max(1);
@@ -388,11 +389,18 @@ impl FrameFeatures {
     /// ([`window_check`]); survivors are described and refined. The feature order is that of a
     /// serial scan (block rows, then blocks).
     fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
-        let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
-        let step = n + 1;
-        // The row-wise window extremes of the four classes, rows in parallel.
+        self.row_extremes(n);
+        let extrema = self.block_extrema(n, tau);
+        self.check_and_describe(n, &extrema);
+    }
+
+    /// The row-wise window extremes of the four classes ([`window_extreme_row`]), rows in
+    /// parallel.
+    #[inline(never)]
+    fn row_extremes(&mut self, n: usize) {
+        let (w, h) = (self.width, self.height);
         for (class, ext) in self.row_extremes.iter_mut().enumerate() {
             let img = if class < 2 { &self.blob } else { &self.corner };
             ext.resize(w * h, 0);
@@ -411,82 +419,60 @@ impl FrameFeatures {
                     },
                 );
         }
-        let row_ext = &self.row_extremes;
-        let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
+    }
+
+    /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
+    /// class (the first pixel holding it).
+    #[inline(never)]
+    fn block_extrema(&self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
+        let (w, h) = (self.width, self.height);
+        let step = n + 1;
+        let (blob, corner) = (&self.blob, &self.corner);
         let inner = w - 2 * BORDER;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
-        let img_of = |class: usize| if class < 2 { blob } else { corner };
-
-        // Pass 1: per block row, per block, the strong extremum of each class.
-        let extrema: Vec<Vec<[Extremum; CLASSES]>> = block_rows
+        let responses = [blob, blob, corner, corner];
+        block_rows
             .par_iter()
             .map_init(
-                || [(); CLASSES].map(|()| vec![0i16; inner]),
+                || [(); 2 * CLASSES].map(|()| vec![0i16; inner]),
                 |cols, &v0| {
                     let v1 = (v0 + step).min(h - BORDER);
-                    let [bmax, bmin, cmax, cmin] = cols;
-                    let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
-                    let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
-                    bmax.fill(i16::MIN);
-                    bmin.fill(i16::MAX);
-                    cmax.fill(i16::MIN);
-                    cmin.fill(i16::MAX);
-                    for v in v0..v1 {
-                        let rb = &blob[v * w + BORDER..v * w + BORDER + inner];
-                        let rc = &corner[v * w + BORDER..v * w + BORDER + inner];
-                        for x in 0..inner {
-                            bmax[x] = bmax[x].max(rb[x]);
-                            bmin[x] = bmin[x].min(rb[x]);
-                            cmax[x] = cmax[x].max(rc[x]);
-                            cmin[x] = cmin[x].min(rc[x]);
+                    let [bmax, bmin, cmax, cmin, bmax_at, bmin_at, cmax_at, cmin_at] = cols;
+                    let ext: [&mut Vec<i16>; CLASSES] = [bmax, bmin, cmax, cmin];
+                    let at: [&mut Vec<i16>; CLASSES] = [bmax_at, bmin_at, cmax_at, cmin_at];
+                    let mut out = vec![[Extremum::NONE; CLASSES]; inner.div_ceil(step)];
+                    for (class, (e, a)) in ext.into_iter().zip(at).enumerate() {
+                        let (e, a) = (&mut e[..inner], &mut a[..inner]);
+                        let img = responses[class];
+                        let rows = (v0..v1).map(|v| &img[v * w + BORDER..v * w + BORDER + inner]);
+                        if class % 2 == 0 {
+                            column_extremes::<true>(rows, e, a);
+                            block_extremes::<true>(e, a, step, tau, (BORDER, v0), &mut out, class);
+                        } else {
+                            column_extremes::<false>(rows, e, a);
+                            block_extremes::<false>(e, a, step, tau, (BORDER, v0), &mut out, class);
                         }
                     }
-                    let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
-                    (0..inner.div_ceil(step))
-                        .map(|blk| {
-                            let u0 = BORDER + blk * step;
-                            let u1 = (u0 + step).min(w - BORDER);
-                            let mut out = [Extremum::NONE; CLASSES];
-                            for (class, col) in columns.iter().enumerate() {
-                                let part = &col[u0 - BORDER..u1 - BORDER];
-                                let maximum = class % 2 == 0;
-                                let (val, strong) = if maximum {
-                                    let m = part.iter().copied().fold(i16::MIN, i16::max);
-                                    (m, m >= tau)
-                                } else {
-                                    let m = part.iter().copied().fold(i16::MAX, i16::min);
-                                    (m, m <= -tau)
-                                };
-                                if !strong {
-                                    continue;
-                                }
-                                let img = img_of(class);
-                                // The first pixel of the block holding the extremum.
-                                if let Some((u, v)) = (v0..v1).find_map(|v| {
-                                    img[v * w + u0..v * w + u1]
-                                        .iter()
-                                        .position(|&x| x == val)
-                                        .map(|k| (u0 + k, v))
-                                }) {
-                                    out[class] = Extremum {
-                                        val,
-                                        u: u as u16,
-                                        v: v as u16,
-                                    };
-                                }
-                            }
-                            out
-                        })
-                        .collect()
+                    out
                 },
             )
-            .collect();
+            .collect()
+    }
 
-        // Pass 2: the window check of every strong block extremum.
+    /// Pass 2 of the suppression: the window check of every strong block extremum; survivors
+    /// are refined to sub-pixel and described, in the order of a serial scan.
+    #[inline(never)]
+    fn check_and_describe(&mut self, n: usize, extrema: &[Vec<[Extremum; CLASSES]>]) {
+        let (w, h) = (self.width, self.height);
+        let row_ext = &self.row_extremes;
+        let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
+        let img_of = |class: usize| if class < 2 { blob } else { corner };
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
-                let mut out: [Vec<Feature>; CLASSES] = Default::default();
+                // At most one feature per block and class: no reallocation.
+                let mut out: [Vec<Feature>; CLASSES] =
+                    [(); CLASSES].map(|()| Vec::with_capacity(extrema[by].len()));
                 for block in &extrema[by] {
                     for (class, e) in block.iter().enumerate() {
                         if e.is_none() {
@@ -575,6 +561,65 @@ fn vertex(a: f64, b: f64, c: f64) -> f64 {
         return 0.0;
     }
     (0.5 * (a - c) / denom).clamp(-0.5, 0.5)
+}
+
+/// The column-wise extremes (`MAX`: maxima, else minima) of a run of equally long rows, and
+/// for each column the index of the first row that holds it (vectorised: a compare and two
+/// selects per 8 columns and row).
+fn column_extremes<'a, const MAX: bool>(
+    mut rows: impl Iterator<Item = &'a [i16]>,
+    ext: &mut [i16],
+    at: &mut [i16],
+) {
+    let Some(first) = rows.next() else {
+        return;
+    };
+    let len = ext.len();
+    ext.copy_from_slice(&first[..len]);
+    at.fill(0);
+    for (k, row) in rows.enumerate() {
+        let k = (k + 1) as i16;
+        for ((e, a), &x) in ext.iter_mut().zip(at.iter_mut()).zip(&row[..len]) {
+            let better = if MAX { x > *e } else { x < *e };
+            *e = if better { x } else { *e };
+            *a = if better { k } else { *a };
+        }
+    }
+}
+
+/// Per block of `step` columns of the column extremes `ext` (first rows `at`): the block's
+/// extreme and the first pixel holding it in row-major order (the smallest row, then the
+/// smallest column), stored in `out[block][class]` when it is strong (at least `tau` in
+/// magnitude). `origin` is the pixel of column 0, row 0.
+fn block_extremes<const MAX: bool>(
+    ext: &[i16],
+    at: &[i16],
+    step: usize,
+    tau: i16,
+    origin: (usize, usize),
+    out: &mut [[Extremum; CLASSES]],
+    class: usize,
+) {
+    let blocks = ext.chunks(step).zip(at.chunks(step)).zip(out.iter_mut());
+    for (blk, ((e, a), o)) in blocks.enumerate() {
+        let (mut val, mut best) = (e[0], 0usize);
+        for k in 1..e.len() {
+            let x = e[k];
+            let better = if MAX { x > val } else { x < val };
+            if better || (x == val && a[k] < a[best]) {
+                val = x;
+                best = k;
+            }
+        }
+        let strong = if MAX { val >= tau } else { val <= -tau };
+        if strong {
+            o[class] = Extremum {
+                val,
+                u: (origin.0 + blk * step + best) as u16,
+                v: (origin.1 + a[best] as usize) as u16,
+            };
+        }
+    }
 }
 
 /// `out[x]` = the extreme (`MAX`: maximum, else minimum) of `src[x - n..=x + n]` for `x` in
@@ -713,6 +758,7 @@ fn is_extremum<const MAX: bool>(
 /// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). Each is a
 /// vertical pass over 3 or 5 rows into column sums, then a horizontal pass over shifted slices
 /// of those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+#[inline(never)]
 fn responses(
     px: &[u8],
     w: usize,
@@ -728,21 +774,13 @@ fn responses(
         .enumerate()
         .with_min_len(4)
         .for_each_init(
-            || {
-                (
-                    [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
-                    [vec![0u8; w], vec![0u8; w]],
-                )
-            },
-            |([s0, s1, s2], [ru, rv]), (y, ((rs, rb), rc))| {
+            || [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
+            |[s0, s1, s2], (y, ((rs, rb), rc))| {
                 let row = |k: usize| &px[k * w..(k + 1) * w];
                 if y == 0 || y + 1 == h {
                     rs.fill(SOBEL_FLAT);
                 } else {
-                    sobel_row(row(y - 1), row(y), row(y + 1), ru, rv, s0, s1);
-                    for ((s, &a), &b) in rs.iter_mut().zip(ru.iter()).zip(rv.iter()) {
-                        *s = u16::from(a) | u16::from(b) << 8;
-                    }
+                    sobel_row(row(y - 1), row(y), row(y + 1), rs, s0, s1);
                 }
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
@@ -755,18 +793,10 @@ fn responses(
         );
 }
 
-/// One row of the Sobel images from the rows above (`a`), at (`b`) and below (`c`); `vs` and
-/// `vd` are scratch rows.
-fn sobel_row(
-    a: &[u8],
-    b: &[u8],
-    c: &[u8],
-    ru: &mut [u8],
-    rv: &mut [u8],
-    vs: &mut [i16],
-    vd: &mut [i16],
-) {
-    let w = ru.len();
+/// One row of the interleaved Sobel images (`du | dv << 8`) from the rows above (`a`), at
+/// (`b`) and below (`c`); `vs` and `vd` are scratch rows.
+fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &mut [i16]) {
+    let w = rs.len();
     let (a, b, c) = (&a[..w], &b[..w], &c[..w]);
     let (vs, vd) = (&mut vs[..w], &mut vd[..w]);
     // Vertical: smoothing [1 2 1] and derivative [-1 0 1].
@@ -779,15 +809,14 @@ fn sobel_row(
     let n = w - 2;
     let (sl, sr) = (&vs[..n], &vs[2..2 + n]);
     let (dl, dc, dr) = (&vd[..n], &vd[1..1 + n], &vd[2..2 + n]);
-    let (ou, ov) = (&mut ru[1..1 + n], &mut rv[1..1 + n]);
+    let out = &mut rs[1..1 + n];
     for x in 0..n {
-        ou[x] = (128 + (sr[x] - sl[x]) / 4).clamp(0, 255) as u8;
-        ov[x] = (128 + (dl[x] + 2 * dc[x] + dr[x]) / 4).clamp(0, 255) as u8;
+        let du = (128 + (sr[x] - sl[x]) / 4).clamp(0, 255) as u16;
+        let dv = (128 + (dl[x] + 2 * dc[x] + dr[x]) / 4).clamp(0, 255) as u16;
+        out[x] = du | dv << 8;
     }
-    ru[0] = 128;
-    rv[0] = 128;
-    ru[w - 1] = 128;
-    rv[w - 1] = 128;
+    rs[0] = SOBEL_FLAT;
+    rs[w - 1] = SOBEL_FLAT;
 }
 
 /// One row of the blob and corner responses from the five rows around it; `c5`, `c3`, `d` are
