@@ -26,6 +26,8 @@ pub struct KltOptions {
     /// Forward-backward check: the largest disagreement of the two directions, pixels (0: no
     /// backward pass).
     pub fb_threshold: f64,
+    /// Convergence: the iteration stops after a step shorter than this, pixels.
+    pub converged: f64,
 }
 
 /// The largest patch half-width (the feature border leaves one pixel for the gradients).
@@ -38,6 +40,7 @@ impl Default for KltOptions {
             iterations: 8,
             max_shift: 2.0,
             fb_threshold: 0.3,
+            converged: 1e-3,
         }
     }
 }
@@ -121,6 +124,7 @@ pub fn align(
         &inv,
         iterations,
         options.max_shift,
+        options.converged,
     )
 }
 
@@ -189,6 +193,7 @@ fn iterate<const R: usize>(
     inv: &nalgebra::Matrix3<f64>,
     iterations: usize,
     max_shift: f64,
+    converged: f64,
 ) -> Option<[f64; 2]> {
     let side = 2 * R + 1;
     let mut d = d0;
@@ -235,7 +240,7 @@ fn iterate<const R: usize>(
         if (d[0] - d0[0]).hypot(d[1] - d0[1]) > max_shift {
             return None;
         }
-        if step[0].hypot(step[1]) < 1e-3 {
+        if step[0].hypot(step[1]) < converged {
             break;
         }
     }
