@@ -8,7 +8,7 @@
 //!
 //! `DATA_DIR` holds `kitti_stereo_snippets/`. `KEY=VALUE` set matcher options:
 //! `matches`, `refine` (none | klt), `patch` (KLT half-width), `iterations`, `max_shift`, `fb`
-//! (forward-backward threshold, pixels; 0 = off), `subpixel` (true | false), `uniqueness`,
+//! (forward-backward threshold, pixels; 0 = off), `converged` (KLT step that ends the iteration), `subpixel` (true | false), `uniqueness`,
 //! `prior` (none | U,V: the flow prior's margin),
 //! `candidates`, `nms`, `threshold`, `threads` (accuracy only). Accuracy: the
 //! frame-to-frame rotation error of camera 0 against `poses.txt` (as `momo eval`), median /
@@ -75,6 +75,10 @@ fn parse_options(args: &[String]) -> Result<MatchOptions, String> {
             }
             "max_shift" => {
                 o.klt.get_or_insert_with(Default::default).max_shift =
+                    v.parse().map_err(|e| bad(&e))?
+            }
+            "converged" => {
+                o.klt.get_or_insert_with(Default::default).converged =
                     v.parse().map_err(|e| bad(&e))?
             }
             "fb" => {

@@ -133,6 +133,7 @@ impl Window {
 }
 
 impl ClassFeatures {
+    #[inline(never)]
     fn build_index(&mut self, width: usize, height: usize) {
         self.cols = width.div_ceil(INDEX_CELL).max(1);
         self.rows = height.div_ceil(INDEX_CELL).max(1);
@@ -388,11 +389,18 @@ impl FrameFeatures {
     /// ([`window_check`]); survivors are described and refined. The feature order is that of a
     /// serial scan (block rows, then blocks).
     fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
-        let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
-        let step = n + 1;
-        // The row-wise window extremes of the four classes, rows in parallel.
+        self.row_extremes(n);
+        let extrema = self.block_extrema(n, tau);
+        self.check_and_describe(n, &extrema);
+    }
+
+    /// The row-wise window extremes of the four classes ([`window_extreme_row`]), rows in
+    /// parallel.
+    #[inline(never)]
+    fn row_extremes(&mut self, n: usize) {
+        let (w, h) = (self.width, self.height);
         for (class, ext) in self.row_extremes.iter_mut().enumerate() {
             let img = if class < 2 { &self.blob } else { &self.corner };
             ext.resize(w * h, 0);
@@ -411,14 +419,19 @@ impl FrameFeatures {
                     },
                 );
         }
-        let row_ext = &self.row_extremes;
-        let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
+    }
+
+    /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
+    /// class (the first pixel holding it).
+    #[inline(never)]
+    fn block_extrema<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
+        let (w, h) = (self.width, self.height);
+        let step = n + 1;
+        let (blob, corner) = (&self.blob, &self.corner);
         let inner = w - 2 * BORDER;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
-        let img_of = |class: usize| if class < 2 { blob } else { corner };
-
-        // Pass 1: per block row, per block, the strong extremum of each class.
-        let extrema: Vec<Vec<[Extremum; CLASSES]>> = block_rows
+        let responses = [blob, blob, corner, corner];
+        block_rows
             .par_iter()
             .map_init(
                 || [(); CLASSES].map(|()| vec![0i16; inner]),
@@ -427,13 +440,14 @@ impl FrameFeatures {
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
                     let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
-                    bmax.fill(i16::MIN);
-                    bmin.fill(i16::MAX);
-                    cmax.fill(i16::MIN);
-                    cmin.fill(i16::MAX);
-                    for v in v0..v1 {
-                        let rb = &blob[v * w + BORDER..v * w + BORDER + inner];
-                        let rc = &corner[v * w + BORDER..v * w + BORDER + inner];
+                    let row =
+                        |img: &'a [i16], v: usize| &img[v * w + BORDER..v * w + BORDER + inner];
+                    bmax.copy_from_slice(row(blob, v0));
+                    bmin.copy_from_slice(row(blob, v0));
+                    cmax.copy_from_slice(row(corner, v0));
+                    cmin.copy_from_slice(row(corner, v0));
+                    for v in v0 + 1..v1 {
+                        let (rb, rc) = (row(blob, v), row(corner, v));
                         for x in 0..inner {
                             bmax[x] = bmax[x].max(rb[x]);
                             bmin[x] = bmin[x].min(rb[x]);
@@ -449,8 +463,7 @@ impl FrameFeatures {
                             let mut out = [Extremum::NONE; CLASSES];
                             for (class, col) in columns.iter().enumerate() {
                                 let part = &col[u0 - BORDER..u1 - BORDER];
-                                let maximum = class % 2 == 0;
-                                let (val, strong) = if maximum {
+                                let (val, strong) = if class % 2 == 0 {
                                     let m = part.iter().copied().fold(i16::MIN, i16::max);
                                     (m, m >= tau)
                                 } else {
@@ -460,18 +473,24 @@ impl FrameFeatures {
                                 if !strong {
                                     continue;
                                 }
-                                let img = img_of(class);
-                                // The first pixel of the block holding the extremum.
-                                if let Some((u, v)) = (v0..v1).find_map(|v| {
-                                    img[v * w + u0..v * w + u1]
-                                        .iter()
-                                        .position(|&x| x == val)
-                                        .map(|k| (u0 + k, v))
-                                }) {
+                                // The first pixel of the block holding the extremum (row-major):
+                                // the first row of each column whose extreme it is, the smallest.
+                                let img = responses[class];
+                                let mut first = (usize::MAX, 0);
+                                for (k, _) in part.iter().enumerate().filter(|(_, c)| **c == val) {
+                                    let u = u0 + k;
+                                    let rows = v0..v1.min(first.0);
+                                    if let Some(v) =
+                                        rows.into_iter().find(|&v| img[v * w + u] == val)
+                                    {
+                                        first = (v, u);
+                                    }
+                                }
+                                if first.0 != usize::MAX {
                                     out[class] = Extremum {
                                         val,
-                                        u: u as u16,
-                                        v: v as u16,
+                                        u: first.1 as u16,
+                                        v: first.0 as u16,
                                     };
                                 }
                             }
@@ -480,9 +499,17 @@ impl FrameFeatures {
                         .collect()
                 },
             )
-            .collect();
+            .collect()
+    }
 
-        // Pass 2: the window check of every strong block extremum.
+    /// Pass 2 of the suppression: the window check of every strong block extremum; survivors
+    /// are refined to sub-pixel and described, in the order of a serial scan.
+    #[inline(never)]
+    fn check_and_describe(&mut self, n: usize, extrema: &[Vec<[Extremum; CLASSES]>]) {
+        let (w, h) = (self.width, self.height);
+        let row_ext = &self.row_extremes;
+        let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
+        let img_of = |class: usize| if class < 2 { blob } else { corner };
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
@@ -713,6 +740,7 @@ fn is_extremum<const MAX: bool>(
 /// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). Each is a
 /// vertical pass over 3 or 5 rows into column sums, then a horizontal pass over shifted slices
 /// of those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+#[inline(never)]
 fn responses(
     px: &[u8],
     w: usize,
@@ -728,21 +756,13 @@ fn responses(
         .enumerate()
         .with_min_len(4)
         .for_each_init(
-            || {
-                (
-                    [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
-                    [vec![0u8; w], vec![0u8; w]],
-                )
-            },
-            |([s0, s1, s2], [ru, rv]), (y, ((rs, rb), rc))| {
+            || [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
+            |[s0, s1, s2], (y, ((rs, rb), rc))| {
                 let row = |k: usize| &px[k * w..(k + 1) * w];
                 if y == 0 || y + 1 == h {
                     rs.fill(SOBEL_FLAT);
                 } else {
-                    sobel_row(row(y - 1), row(y), row(y + 1), ru, rv, s0, s1);
-                    for ((s, &a), &b) in rs.iter_mut().zip(ru.iter()).zip(rv.iter()) {
-                        *s = u16::from(a) | u16::from(b) << 8;
-                    }
+                    sobel_row(row(y - 1), row(y), row(y + 1), rs, s0, s1);
                 }
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
@@ -755,18 +775,10 @@ fn responses(
         );
 }
 
-/// One row of the Sobel images from the rows above (`a`), at (`b`) and below (`c`); `vs` and
-/// `vd` are scratch rows.
-fn sobel_row(
-    a: &[u8],
-    b: &[u8],
-    c: &[u8],
-    ru: &mut [u8],
-    rv: &mut [u8],
-    vs: &mut [i16],
-    vd: &mut [i16],
-) {
-    let w = ru.len();
+/// One row of the interleaved Sobel images (`du | dv << 8`) from the rows above (`a`), at
+/// (`b`) and below (`c`); `vs` and `vd` are scratch rows.
+fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &mut [i16]) {
+    let w = rs.len();
     let (a, b, c) = (&a[..w], &b[..w], &c[..w]);
     let (vs, vd) = (&mut vs[..w], &mut vd[..w]);
     // Vertical: smoothing [1 2 1] and derivative [-1 0 1].
@@ -779,15 +791,14 @@ fn sobel_row(
     let n = w - 2;
     let (sl, sr) = (&vs[..n], &vs[2..2 + n]);
     let (dl, dc, dr) = (&vd[..n], &vd[1..1 + n], &vd[2..2 + n]);
-    let (ou, ov) = (&mut ru[1..1 + n], &mut rv[1..1 + n]);
+    let out = &mut rs[1..1 + n];
     for x in 0..n {
-        ou[x] = (128 + (sr[x] - sl[x]) / 4).clamp(0, 255) as u8;
-        ov[x] = (128 + (dl[x] + 2 * dc[x] + dr[x]) / 4).clamp(0, 255) as u8;
+        let du = (128 + (sr[x] - sl[x]) / 4).clamp(0, 255) as u16;
+        let dv = (128 + (dl[x] + 2 * dc[x] + dr[x]) / 4).clamp(0, 255) as u16;
+        out[x] = du | dv << 8;
     }
-    ru[0] = 128;
-    rv[0] = 128;
-    ru[w - 1] = 128;
-    rv[w - 1] = 128;
+    rs[0] = SOBEL_FLAT;
+    rs[w - 1] = SOBEL_FLAT;
 }
 
 /// One row of the blob and corner responses from the five rows around it; `c5`, `c3`, `d` are

@@ -26,6 +26,10 @@ pub struct KltOptions {
     /// Forward-backward check: the largest disagreement of the two directions, pixels (0: no
     /// backward pass).
     pub fb_threshold: f64,
+    /// Convergence: the iteration stops after a step shorter than this, pixels (default 0.01:
+    /// what is left is a few thousandths of a pixel, far below the matches' noise; 0.001 took
+    /// 5.4 iterations per alignment on KITTI, 0.01 takes 4.1 with the same accuracy).
+    pub converged: f64,
 }
 
 /// The largest patch half-width (the feature border leaves one pixel for the gradients).
@@ -38,6 +42,7 @@ impl Default for KltOptions {
             iterations: 8,
             max_shift: 2.0,
             fb_threshold: 0.3,
+            converged: 1e-2,
         }
     }
 }
@@ -51,13 +56,6 @@ pub struct Plane<'a> {
     pub width: usize,
     /// Height.
     pub height: usize,
-}
-
-impl Plane<'_> {
-    #[inline]
-    fn at(&self, u: usize, v: usize) -> f32 {
-        f32::from(self.px[v * self.width + u])
-    }
 }
 
 /// The largest patch: `(2 MAX_HALF + 1)²` pixels.
@@ -79,26 +77,21 @@ pub fn align(
         return None;
     }
     // The template and its gradients (central differences), and the 3x3 normal matrix of
-    // (du, dv, b).
+    // (du, dv, b), with the patch side known at compile time (`r` is in 1..=MAX_HALF).
     let mut t = [0f32; MAX_PATCH];
     let mut gx = [0f32; MAX_PATCH];
     let mut gy = [0f32; MAX_PATCH];
-    let mut h = [0f64; 6]; // xx, xy, yy, x1, y1, 11
-    let mut n = 0;
-    for y in v - r..=v + r {
-        for x in u - r..=u + r {
-            t[n] = from.at(x, y);
-            gx[n] = 0.5 * (from.at(x + 1, y) - from.at(x - 1, y));
-            gy[n] = 0.5 * (from.at(x, y + 1) - from.at(x, y - 1));
-            let (a, b) = (f64::from(gx[n]), f64::from(gy[n]));
-            h[0] += a * a;
-            h[1] += a * b;
-            h[2] += b * b;
-            h[3] += a;
-            h[4] += b;
-            n += 1;
-        }
-    }
+    let setup = match r {
+        1 => template::<1>,
+        2 => template::<2>,
+        3 => template::<3>,
+        4 => template::<4>,
+        5 => template::<5>,
+        6 => template::<6>,
+        _ => template::<MAX_HALF>,
+    };
+    let mut h = setup(from, (u, v), &mut t, &mut gx, &mut gy).map(f64::from);
+    let n = (2 * r + 1) * (2 * r + 1);
     h[5] = n as f64;
     let m = nalgebra::Matrix3::new(h[0], h[1], h[3], h[1], h[2], h[4], h[3], h[4], h[5]);
     // A flat or one-dimensional patch has no well-defined position.
@@ -133,7 +126,59 @@ pub fn align(
         &inv,
         iterations,
         options.max_shift,
+        options.converged,
     )
+}
+
+/// The template of [`align`] for the half-width `R`: the patch of `from` around `(u, v)` into
+/// `t`, its central-difference gradients into `gx`, `gy` (row-major, `2R + 1` a row), and the
+/// sums `[Σ gx², Σ gx gy, Σ gy², Σ gx, Σ gy, 0]`. The sums are exact in `f32` in any order (the
+/// gradients are multiples of 1/2 below 128 in magnitude, so every product is a multiple of 1/4
+/// and every partial sum stays below 2^22), so they are accumulated per column (vectorised).
+fn template<const R: usize>(
+    from: Plane<'_>,
+    (u, v): (usize, usize),
+    t: &mut [f32; MAX_PATCH],
+    gx: &mut [f32; MAX_PATCH],
+    gy: &mut [f32; MAX_PATCH],
+) -> [f32; 6] {
+    let side = 2 * R + 1;
+    let w = from.width;
+    let mut acc = [[0f32; 2 * MAX_HALF + 1]; 5];
+    for j in 0..side {
+        let y = v - R + j;
+        let row = &from.px[y * w + u - R - 1..y * w + u + R + 2];
+        let up = &from.px[(y - 1) * w + u - R..(y - 1) * w + u + R + 1];
+        let down = &from.px[(y + 1) * w + u - R..(y + 1) * w + u + R + 1];
+        let k0 = j * side;
+        let (tj, gxj, gyj) = (
+            &mut t[k0..k0 + side],
+            &mut gx[k0..k0 + side],
+            &mut gy[k0..k0 + side],
+        );
+        let [axx, axy, ayy, ax, ay] = &mut acc;
+        for i in 0..side {
+            tj[i] = f32::from(row[i + 1]);
+            let a = 0.5 * (f32::from(row[i + 2]) - f32::from(row[i]));
+            let b = 0.5 * (f32::from(down[i]) - f32::from(up[i]));
+            gxj[i] = a;
+            gyj[i] = b;
+            axx[i] += a * a;
+            axy[i] += a * b;
+            ayy[i] += b * b;
+            ax[i] += a;
+            ay[i] += b;
+        }
+    }
+    let sum = |a: &[f32; 2 * MAX_HALF + 1]| a[..side].iter().sum::<f32>();
+    [
+        sum(&acc[0]),
+        sum(&acc[1]),
+        sum(&acc[2]),
+        sum(&acc[3]),
+        sum(&acc[4]),
+        0.0,
+    ]
 }
 
 /// The Gauss-Newton iterations of [`align`] for the half-width `R`: per iteration the patch of
@@ -150,6 +195,7 @@ fn iterate<const R: usize>(
     inv: &nalgebra::Matrix3<f64>,
     iterations: usize,
     max_shift: f64,
+    converged: f64,
 ) -> Option<[f64; 2]> {
     let side = 2 * R + 1;
     let mut d = d0;
@@ -196,7 +242,7 @@ fn iterate<const R: usize>(
         if (d[0] - d0[0]).hypot(d[1] - d0[1]) > max_shift {
             return None;
         }
-        if step[0].hypot(step[1]) < 1e-3 {
+        if step[0].hypot(step[1]) < converged {
             break;
         }
     }
