@@ -765,7 +765,11 @@ fn accumulate_robust<const N: usize>(
 /// the same order as the lifted composition, so the result is bit-identical to it).
 #[inline]
 pub fn camera_motion<T: Scalar>(vehicle_motion: &Pose<T>, t_vehicle_camera: &Pose<f64>) -> Pose<T> {
-    compose_const(&t_vehicle_camera.inverse(), vehicle_motion, t_vehicle_camera)
+    compose_const(
+        &t_vehicle_camera.inverse(),
+        vehicle_motion,
+        t_vehicle_camera,
+    )
 }
 
 /// The camera motion `C_ij = P_i⁻¹ M P_j` of a cross-camera match ([`CrossObservation`]): the

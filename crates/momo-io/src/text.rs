@@ -246,21 +246,27 @@ fn parse_plain_decimal(text: &str) -> Option<f64> {
 /// The correctly rounded (ties to even) `f64` of `w / d` for `d <= 10^19`, `w < 2^64` and a
 /// positive normal estimate `x` within a few units in the last place of it: the estimate is
 /// moved one `f64` at a time while `w / d` lies beyond the midpoint to a neighbour, the
-/// comparisons `w 2^s` against `(2 m + 1) d` exact in `u128`. `None` (the caller falls back to
+/// comparisons of `w 2^(1 - e)` with `(2 m + 1) d` exact in `u128`. `None` (the caller falls back to
 /// `str::parse`) when the estimate is not such a number or a comparison would not fit.
 fn round_quotient(w: u64, d: u64, mut x: f64) -> Option<f64> {
     // `w / d` against the midpoint `(2 m + 1) 2^(e - 1)` of `m 2^e` and `(m + 1) 2^e`.
     let above = |m: u64, e: i32| -> Option<std::cmp::Ordering> {
+        // `w 2^(1 - e)` against `(2 m + 1) d`, the power of two on the side where it is whole.
+        let (mut lhs, mut rhs) = (
+            u128::from(w),
+            u128::from(2 * m + 1).checked_mul(u128::from(d))?,
+        );
         let s = 1 - e;
-        if !(0..=127).contains(&s) {
+        let (side, shift) = if s >= 0 {
+            (&mut lhs, s.unsigned_abs())
+        } else {
+            (&mut rhs, s.unsigned_abs())
+        };
+        if shift >= 128 || side.leading_zeros() < shift {
             return None;
         }
-        let lhs = u128::from(w);
-        if lhs.leading_zeros() < s as u32 {
-            return None;
-        }
-        let rhs = u128::from(2 * m + 1).checked_mul(u128::from(d))?;
-        Some((lhs << s).cmp(&rhs))
+        *side <<= shift;
+        Some(lhs.cmp(&rhs))
     };
     use std::cmp::Ordering::{Equal, Greater, Less};
     for _ in 0..4 {
@@ -504,6 +510,27 @@ mod tests {
                 if a.is_empty() { "0" } else { a },
                 if b.is_empty() { "" } else { "." },
             );
+            let fast = parse_plain_decimal(&text);
+            let std = text.parse::<f64>().ok().map(f64::to_bits);
+            // With a leading `0.` the text may have 20 digits: then it may fall back.
+            if fast.is_some() || text.bytes().filter(u8::is_ascii_digit).count() <= 19 {
+                proptest::prop_assert_eq!(fast.map(f64::to_bits), std, "{}", text);
+            }
+        }
+
+        /// The same for integers and integer parts above `2^54`, where the midpoints are
+        /// whole numbers.
+        #[test]
+        fn large_decimals_are_bit_identical_to_std(
+            digits in "[1-9][0-9]{16,18}",
+            fraction in "[0-9]{0,2}",
+        ) {
+            let digits = &digits[..digits.len().min(19 - fraction.len())];
+            let text = if fraction.is_empty() {
+                digits.to_string()
+            } else {
+                format!("{digits}.{fraction}")
+            };
             let fast = parse_plain_decimal(&text);
             let std = text.parse::<f64>().ok().map(f64::to_bits);
             proptest::prop_assert_eq!(fast.map(f64::to_bits), std, "{}", text);
