@@ -10,7 +10,7 @@ use crate::metric::{MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric};
 use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
 use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
-use nalgebra::{DMatrix, SMatrix, SVector};
+use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
 use std::cell::RefCell;
 
@@ -206,10 +206,13 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
     }
 
     /// Adds the prior terms' Gauss-Newton normal equations (they are plain least squares) for
-    /// `N` free parameters; returns their cost.
+    /// `N` free parameters; returns their cost. `motion` is the model's motion at `x` on the
+    /// same dual numbers if the caller has it (else it is computed when the rotation prior
+    /// needs it).
     fn linearize_prior_n<const N: usize>(
         &self,
         x: &ParamVec,
+        motion: Option<&Pose<DualSVec64<N>>>,
         h: &mut SMatrix<f64, N, N>,
         g: &mut SVector<f64, N>,
     ) -> f64
@@ -249,7 +252,10 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             }
             if mp.rotation_inv_sigma != 0.0 {
                 // Iteratively reweighted: the Cauchy weight ρ'(|d|²) on the Gauss-Newton terms.
-                let w = so3_log(&self.model.motion_of(&p[..self.np]).rotation);
+                let w = match motion {
+                    Some(m) => so3_log(&m.rotation),
+                    None => so3_log(&self.model.motion_of(&p[..self.np]).rotation),
+                };
                 let k = mp.rotation_inv_sigma;
                 let d: [f64; 3] = std::array::from_fn(|a| k * (w[a].re - mp.rotation_center[a]));
                 let (rho, weight) = rotation_prior_rho(d.iter().map(|v| v * v).sum());
@@ -511,7 +517,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             }
         });
         drop(last);
-        self.finish_linearization(x, known_cost, cost, h, g)
+        self.finish_linearization(x, None, known_cost, cost, h, g)
     }
 
     /// The fused path of `linearize_n` ([`ResidualMetric::KERNEL_INPUTS`] `> 0`): the
@@ -591,15 +597,16 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             }
         }
         drop(last);
-        self.finish_linearization(x, known_cost, cost, h, g)
+        self.finish_linearization(x, Some(&m), known_cost, cost, h, g)
     }
 
-    /// Mirrors the upper triangle of the normal matrix, adds the prior terms and packs the
-    /// result.
+    /// Mirrors the upper triangle of the normal matrix, adds the prior terms (with the motion
+    /// at `x` if the caller has it) and packs the result.
     #[inline(always)]
     fn finish_linearization<const N: usize>(
         &self,
         x: &ParamVec,
+        motion: Option<&Pose<DualSVec64<N>>>,
         known_cost: Option<f64>,
         mut cost: f64,
         mut h: SMatrix<f64, N, N>,
@@ -614,7 +621,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             }
         }
         if self.has_prior() {
-            let prior_cost = self.linearize_prior_n::<N>(x, &mut h, &mut g);
+            let prior_cost = self.linearize_prior_n::<N>(x, motion, &mut h, &mut g);
             cost += prior_cost;
         }
         let mut out = Linearization {
@@ -752,11 +759,17 @@ fn accumulate_robust<const N: usize>(
 
 /// The camera motion `C_j = P_j⁻¹ M P_j` of a camera with extrinsic `P_j = T_vehicle_camera`
 /// for the vehicle motion `M` (`DESIGN.md`).
+///
+/// The extrinsic stays plain `f64`: on dual numbers each product with one of its entries scales
+/// the derivative part by a constant instead of going through a lifted constant (same sums in
+/// the same order as the lifted composition, so the result is bit-identical to it).
 #[inline]
 pub fn camera_motion<T: Scalar>(vehicle_motion: &Pose<T>, t_vehicle_camera: &Pose<f64>) -> Pose<T> {
-    let p = Pose::<T>::lift(t_vehicle_camera);
-    let p_inv = Pose::<T>::lift(&t_vehicle_camera.inverse());
-    p_inv.compose(&vehicle_motion.compose(&p))
+    compose_const(
+        &t_vehicle_camera.inverse(),
+        vehicle_motion,
+        t_vehicle_camera,
+    )
 }
 
 /// The camera motion `C_ij = P_i⁻¹ M P_j` of a cross-camera match ([`CrossObservation`]): the
@@ -769,9 +782,37 @@ pub fn cross_camera_motion<T: Scalar>(
     t_vehicle_camera_i: &Pose<f64>,
     t_vehicle_camera_j: &Pose<f64>,
 ) -> Pose<T> {
-    let p_j = Pose::<T>::lift(t_vehicle_camera_j);
-    let p_i_inv = Pose::<T>::lift(&t_vehicle_camera_i.inverse());
-    p_i_inv.compose(&vehicle_motion.compose(&p_j))
+    compose_const(
+        &t_vehicle_camera_i.inverse(),
+        vehicle_motion,
+        t_vehicle_camera_j,
+    )
+}
+
+/// `A M B` for constant poses `A`, `B` and a pose `M` of scalars, without lifting `A` and `B`:
+/// `R = R_A (R_M R_B)`, `t = R_A (R_M t_B + t_M) + t_A`, every matrix product summed as
+/// nalgebra's (`(x_0 y_0 + x_1 y_1) + x_2 y_2`).
+#[inline]
+fn compose_const<T: Scalar>(a: &Pose<f64>, m: &Pose<T>, b: &Pose<f64>) -> Pose<T> {
+    let rm = &m.rotation;
+    let rb = &b.rotation;
+    let ra = &a.rotation;
+    // R_M R_B and R_M t_B + t_M.
+    let mb = Matrix3::from_fn(|i, j| {
+        rm[(i, 0)] * rb[(0, j)] + rm[(i, 1)] * rb[(1, j)] + rm[(i, 2)] * rb[(2, j)]
+    });
+    let tb = &b.translation;
+    let mt = Vector3::from_fn(|i, _| {
+        (rm[(i, 0)] * tb.x + rm[(i, 1)] * tb.y + rm[(i, 2)] * tb.z) + m.translation[i]
+    });
+    // R_A (...) and R_A (...) + t_A.
+    let rotation = Matrix3::from_fn(|i, j| {
+        mb[(0, j)] * ra[(i, 0)] + mb[(1, j)] * ra[(i, 1)] + mb[(2, j)] * ra[(i, 2)]
+    });
+    let translation = Vector3::from_fn(|i, _| {
+        (mt.x * ra[(i, 0)] + mt.y * ra[(i, 1)] + mt.z * ra[(i, 2)]) + T::c(a.translation[i])
+    });
+    Pose::new(rotation, translation)
 }
 
 /// Ceres' Corrector (Triggs et al.) of a robustified residual block with squared norm `s` and
@@ -788,5 +829,79 @@ fn corrector(s: f64, rho1: f64, rho2: f64) -> (f64, f64, f64) {
         let d = 1.0 + 2.0 * s * rho2 / rho1;
         let alpha = 1.0 - d.sqrt();
         (sqrt_rho1, sqrt_rho1 / (1.0 - alpha), alpha / s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lie::so3_exp;
+    use proptest::prelude::*;
+
+    /// The composition with the extrinsics lifted to dual numbers (the reference).
+    fn lifted<T: Scalar>(m: &Pose<T>, a: &Pose<f64>, b: &Pose<f64>) -> Pose<T> {
+        Pose::<T>::lift(a).compose(&m.compose(&Pose::<T>::lift(b)))
+    }
+
+    fn pose(w: [f64; 3], t: [f64; 3]) -> Pose<f64> {
+        Pose::new(so3_exp(&Vector3::from(w)), Vector3::from(t))
+    }
+
+    fn bits(p: &Pose<DualSVec64<6>>) -> Vec<u64> {
+        let mut out = Vec::new();
+        for v in p.rotation.iter().chain(p.translation.iter()) {
+            out.push(v.re.to_bits());
+            match &v.eps.0 {
+                Some(e) => out.extend(e.iter().map(|x| x.to_bits())),
+                None => out.push(u64::MAX),
+            }
+        }
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// `camera_motion` and `cross_camera_motion` with plain `f64` extrinsics are
+        /// bit-identical (values and derivatives) to the lifted composition.
+        #[test]
+        fn constant_extrinsics_are_bit_identical_to_lifted(
+            wm in proptest::array::uniform3(-2.0..2.0f64),
+            tm in proptest::array::uniform3(-5.0..5.0f64),
+            wi in proptest::array::uniform3(-3.0..3.0f64),
+            ti in proptest::array::uniform3(-2.0..2.0f64),
+            wj in proptest::array::uniform3(-3.0..3.0f64),
+            tj in proptest::array::uniform3(-2.0..2.0f64),
+            seed in proptest::array::uniform6(-1.0..1.0f64),
+        ) {
+            // A dual motion whose derivatives are arbitrary (not unit seeds).
+            let m0 = pose(wm, tm);
+            let m = Pose::new(
+                m0.rotation.map(|v| {
+                    let mut d = DualSVec64::<6>::from_re(v);
+                    d.eps = num_dual::Derivative::some(SVector::from(seed) * v);
+                    d
+                }),
+                m0.translation.map(|v| DualSVec64::<6>::from_re(v).derivative(2)),
+            );
+            let (pi, pj) = (pose(wi, ti), pose(wj, tj));
+            let fast = camera_motion(&m, &pj);
+            let slow = lifted(&m, &pj.inverse(), &pj);
+            prop_assert_eq!(bits(&fast), bits(&slow));
+            let fast = cross_camera_motion(&m, &pi, &pj);
+            let slow = lifted(&m, &pi.inverse(), &pj);
+            prop_assert_eq!(bits(&fast), bits(&slow));
+            // And on plain f64.
+            let f = camera_motion(&m0, &pj);
+            let s = lifted(&m0, &pj.inverse(), &pj);
+            prop_assert_eq!(f, s);
+            // The essential matrix written out is bit-identical to `Rᵀ [t]_x` by nalgebra.
+            let c = cross_camera_motion(&m, &pi, &pj);
+            let e = crate::metric::essential(&c);
+            let e_ref = c.rotation.transpose() * crate::lie::hat(&c.translation);
+            let as_pose = |r| Pose::new(r, Vector3::repeat(DualSVec64::<6>::from_re(0.0)));
+            prop_assert_eq!(bits(&as_pose(e)), bits(&as_pose(e_ref)));
+            let e = crate::metric::essential(&m0);
+            prop_assert_eq!(e, m0.rotation.transpose() * crate::lie::hat(&m0.translation));
+        }
     }
 }

@@ -268,10 +268,14 @@ impl<R: BufRead> MatchReader<R> {
         let k = self.next_frame;
         self.next_frame += 1;
         let n = self.current.per_camera.len();
-        (
-            k,
-            std::mem::replace(&mut self.current, FrameObservations::new(n)),
-        )
+        let done = std::mem::replace(&mut self.current, FrameObservations::new(n));
+        // The next frame pair has about as many matches: reserve them once instead of
+        // growing each vector by doubling (a reallocation and copy per doubling).
+        for (v, d) in self.current.per_camera.iter_mut().zip(&done.per_camera) {
+            v.reserve(d.len());
+        }
+        self.current.cross_camera.reserve(done.cross_camera.len());
+        (k, done)
     }
 }
 

@@ -190,7 +190,9 @@ fn trim(s: &str) -> &str {
 /// `None` when the text is anything else. Clinger's fast path: when the digits form an integer
 /// `w < 2^53` and there are `k <= 22` of them after the point, `w` and `10^k` are exact `f64`s,
 /// so the one correctly rounded division `w / 10^k` is the correctly rounded value of the text:
-/// bit-identical to [`str::parse`], which is correctly rounded too.
+/// bit-identical to [`str::parse`], which is correctly rounded too. Longer mantissas (17 to 19
+/// digits, as a shortest round-trip print of a pixel coordinate has) take the division as an
+/// estimate and correct it by exact integer comparisons ([`round_quotient`]).
 fn parse_plain_decimal(text: &str) -> Option<f64> {
     const POW10: [f64; 23] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
@@ -224,12 +226,82 @@ fn parse_plain_decimal(text: &str) -> Option<f64> {
             return None;
         }
     }
-    if i != n || int_digits == 0 || int_digits + k > 19 || w >= 1 << 53 || k > 22 {
+    if i != n || int_digits == 0 || int_digits + k > 19 || k > 22 {
         return None;
     }
-    // `w < 2^53` converts exactly.
-    let v = w as f64 / POW10[k];
+    let v = if w < 1 << 53 {
+        // `w < 2^53` converts exactly.
+        w as f64 / POW10[k]
+    } else if k == 0 {
+        // One conversion, correctly rounded (ties to even).
+        w as f64
+    } else {
+        // 17 to 19 digits: `w < 10^19` and `10^k` exact, `w / 10^k` correctly rounded by
+        // integer comparisons with the midpoints around an estimate.
+        round_quotient(w, POW10[k] as u64, w as f64 / POW10[k])?
+    };
     Some(if negative { -v } else { v })
+}
+
+/// The correctly rounded (ties to even) `f64` of `w / d` for `d <= 10^19`, `w < 2^64` and a
+/// positive normal estimate `x` within a few units in the last place of it: the estimate is
+/// moved one `f64` at a time while `w / d` lies beyond the midpoint to a neighbour, the
+/// comparisons of `w 2^(1 - e)` with `(2 m + 1) d` exact in `u128`. `None` (the caller falls back to
+/// `str::parse`) when the estimate is not such a number or a comparison would not fit.
+fn round_quotient(w: u64, d: u64, mut x: f64) -> Option<f64> {
+    // `w / d` against the midpoint `(2 m + 1) 2^(e - 1)` of `m 2^e` and `(m + 1) 2^e`.
+    let above = |m: u64, e: i32| -> Option<std::cmp::Ordering> {
+        // `w 2^(1 - e)` against `(2 m + 1) d`, the power of two on the side where it is whole.
+        let (mut lhs, mut rhs) = (
+            u128::from(w),
+            u128::from(2 * m + 1).checked_mul(u128::from(d))?,
+        );
+        let s = 1 - e;
+        let (side, shift) = if s >= 0 {
+            (&mut lhs, s.unsigned_abs())
+        } else {
+            (&mut rhs, s.unsigned_abs())
+        };
+        if shift >= 128 || side.leading_zeros() < shift {
+            return None;
+        }
+        *side <<= shift;
+        Some(lhs.cmp(&rhs))
+    };
+    use std::cmp::Ordering::{Equal, Greater, Less};
+    for _ in 0..4 {
+        if !x.is_normal() || x < 0.0 {
+            return None;
+        }
+        let bits = x.to_bits();
+        let e = ((bits >> 52) & 0x7ff) as i32 - 1075;
+        let m = (bits & ((1 << 52) - 1)) | (1 << 52);
+        // The midpoint to the next larger `f64` (`m + 1` may be `2^53`: same midpoint).
+        match above(m, e)? {
+            Greater => {
+                x = f64::from_bits(bits + 1);
+                continue;
+            }
+            Equal if m & 1 == 1 => return Some(f64::from_bits(bits + 1)),
+            _ => {}
+        }
+        // The midpoint to the next smaller `f64` (half as far below a power of two).
+        let (ml, el) = if m == 1 << 52 {
+            ((1 << 53) - 1, e - 1)
+        } else {
+            (m - 1, e)
+        };
+        match above(ml, el)? {
+            Less => {
+                x = f64::from_bits(bits - 1);
+                continue;
+            }
+            Equal if m & 1 == 1 => return Some(f64::from_bits(bits - 1)),
+            _ => {}
+        }
+        return Some(x);
+    }
+    None
 }
 
 /// Parses a finite `f64`.
@@ -416,6 +488,104 @@ mod tests {
                 fast.map(f64::to_bits),
                 text.parse::<f64>().ok().map(f64::to_bits),
                 "{}", text
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+        /// 16 to 19 digits (mantissas above `2^53`, corrected by `round_quotient`), with the
+        /// point anywhere: bit-identical to `str::parse`, and the fast path takes every one.
+        #[test]
+        fn long_decimals_are_bit_identical_to_std(
+            digits in "[1-9][0-9]{15,18}",
+            point in 0usize..19,
+            negative in proptest::bool::ANY,
+        ) {
+            let point = point.min(digits.len());
+            let (a, b) = digits.split_at(point);
+            let text = format!(
+                "{}{}{}{b}",
+                if negative { "-" } else { "" },
+                if a.is_empty() { "0" } else { a },
+                if b.is_empty() { "" } else { "." },
+            );
+            let fast = parse_plain_decimal(&text);
+            let std = text.parse::<f64>().ok().map(f64::to_bits);
+            // With a leading `0.` the text may have 20 digits: then it may fall back.
+            if fast.is_some() || text.bytes().filter(u8::is_ascii_digit).count() <= 19 {
+                proptest::prop_assert_eq!(fast.map(f64::to_bits), std, "{}", text);
+            }
+        }
+
+        /// The same for integers and integer parts above `2^54`, where the midpoints are
+        /// whole numbers.
+        #[test]
+        fn large_decimals_are_bit_identical_to_std(
+            digits in "[1-9][0-9]{16,18}",
+            fraction in "[0-9]{0,2}",
+        ) {
+            let digits = &digits[..digits.len().min(19 - fraction.len())];
+            let text = if fraction.is_empty() {
+                digits.to_string()
+            } else {
+                format!("{digits}.{fraction}")
+            };
+            let fast = parse_plain_decimal(&text);
+            let std = text.parse::<f64>().ok().map(f64::to_bits);
+            proptest::prop_assert_eq!(fast.map(f64::to_bits), std, "{}", text);
+        }
+
+        /// Shortest round-trip prints of pixel-like `f64`s (what a writer of `matches.csv`
+        /// with full precision produces) and fixed 12-15 decimals: bit-identical to `str::parse`.
+        #[test]
+        fn printed_pixels_are_bit_identical_to_std(
+            bits in 0u64..(1 << 52),
+            exp in 0i32..12,
+            decimals in 12usize..16,
+        ) {
+            let x = f64::from_bits(bits | (1023 << 52)) * f64::from(1 << exp);
+            for text in [format!("{x}"), format!("{x:.decimals$}"), format!("{}", x / 7.0)] {
+                let fast = parse_plain_decimal(&text);
+                let std = text.parse::<f64>().ok().map(f64::to_bits);
+                if fast.is_some() || text.len() <= 20 {
+                    proptest::prop_assert_eq!(fast.map(f64::to_bits), std, "{}", text);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rounding_corner_cases_match_std() {
+        // Exact ties between two f64s, values next to powers of two, the largest mantissas.
+        for text in [
+            "9007199254740993",
+            "9007199254740995",
+            "18014398509481990",
+            "18014398509481986",
+            "9223372036854775807",
+            "9999999999999999999",
+            "1000000000000000000",
+            "0.999999999999999999",
+            "0.500000000000000001",
+            "4503599627370496.5",
+            "4503599627370497.5",
+            "2251799813685248.25",
+            "1.000000000000000111",
+            "1.000000000000000112",
+            "1.000000000000000222",
+            "1.000000000000000223",
+            "0.000000000000000001",
+            "0.001234567890123456",
+            "123.45678901234567",
+            "-612.31250000000001",
+        ] {
+            let fast = parse_plain_decimal(text);
+            assert!(fast.is_some(), "{text}");
+            assert_eq!(
+                fast.map(f64::to_bits),
+                text.parse::<f64>().ok().map(f64::to_bits),
+                "{text}"
             );
         }
     }
