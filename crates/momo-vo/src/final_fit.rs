@@ -26,8 +26,8 @@
 //! support was over-confident (rotation NEES, docs/RESULTS.md §9).
 
 use momo_core::{
-    FrameEstimator, FrameObservations, FrameSolution, MotionPrior, RobustLoss, SolveRequest,
-    Solver, Termination, TrivialLoss,
+    FrameEstimator, FrameObservations, FrameSolution, MetricSpec, MotionPrior, RobustLoss,
+    SolveRequest, Solver, Termination, TrivialLoss,
 };
 use serde::{Deserialize, Serialize};
 
@@ -76,6 +76,14 @@ pub struct FinalFitOptions {
     /// Passes of noise estimate, support and refit, each from the previous pass's solution
     /// (default 1).
     pub passes: usize,
+    /// The residual metric of the stage, by its registered type tag (e.g. `"angle_plane_ml"`,
+    /// [`momo_core::register_metric!`]); none (the default): the first stage's metric. The
+    /// noise `σ̂`, the support and the refit are all in this metric, so only the final stage
+    /// pays for a costlier one. Its residuals must be in the first stage's units (the clamps
+    /// and `start_scales` are in units of the first stage's loss scale `b`): `angle_plane_ml`
+    /// after `angle_plane` (both radians).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub metric: Option<String>,
 }
 
 impl Default for FinalFitOptions {
@@ -96,13 +104,26 @@ impl Default for FinalFitOptions {
             max_scale_ratio: 5.0,
             first_stage_covariance: true,
             passes: 1,
+            metric: None,
         }
     }
 }
 
 impl FinalFitOptions {
+    /// The stage's own metric (`metric`), built through the registry; `Ok(None)` without one.
+    /// Errors name the unknown type tag (and the registered ones).
+    pub fn metric_spec(&self) -> Result<Option<Box<dyn MetricSpec>>, String> {
+        let Some(name) = &self.metric else {
+            return Ok(None);
+        };
+        serde_json::from_value::<Box<dyn MetricSpec>>(serde_json::json!({ "type": name }))
+            .map(Some)
+            .map_err(|e| format!("odometry.final_fit.metric: `{name}`: {e}"))
+    }
+
     /// Checks the options; the message names the first bad one.
     pub fn validate(&self) -> Result<(), String> {
+        self.metric_spec()?;
         let positive = [
             ("start_scales", self.start_scales),
             ("inlier_sigmas", self.inlier_sigmas),
@@ -174,7 +195,7 @@ pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Opti
 pub struct FinalFitContext<'a> {
     /// The rig.
     pub rig: &'a momo_core::Rig,
-    /// The frame estimator (model and metric).
+    /// The frame estimator of the stage (the model with the stage's metric).
     pub estimator: &'a dyn FrameEstimator,
     /// The first stage's loss (its scale `b` is the unit of the clamps).
     pub loss: &'a dyn RobustLoss,
@@ -382,5 +403,16 @@ mod tests {
         let o: FinalFitOptions = toml::from_str("cauchy_sigmas = 0.0").unwrap();
         assert_eq!(o.cauchy_sigmas, 0.0);
         assert!(toml::from_str::<FinalFitOptions>("cauchy = 1.0").is_err());
+        // The stage's own metric, by registered name.
+        let o: FinalFitOptions = toml::from_str("metric = \"angle_plane_ml\"").unwrap();
+        assert!(o.validate().is_ok());
+        assert!(o.metric_spec().unwrap().is_some());
+        assert!(FinalFitOptions::default().metric_spec().unwrap().is_none());
+        let o: FinalFitOptions = toml::from_str("metric = \"no_such_metric\"").unwrap();
+        let e = o.validate().unwrap_err();
+        assert!(
+            e.contains("final_fit.metric") && e.contains("no_such_metric"),
+            "{e}"
+        );
     }
 }
