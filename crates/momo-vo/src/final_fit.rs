@@ -359,6 +359,46 @@ mod tests {
         );
     }
 
+    /// `metric = "angle_plane_ml"` runs the final stage with that metric: the odometry builds
+    /// and runs, the estimate stays at the truth on the canned fisheye rig (noise-free inliers,
+    /// 25 % far outliers) as without the option, but is not the same estimate (another
+    /// metric's refit); an unknown metric is an error at its line.
+    #[test]
+    fn the_final_stage_refits_with_its_own_metric() {
+        use crate::{Config, Odometry};
+        use momo_core::Manifold;
+        let truth = [0.002, -0.001, 0.02, 0.01, 0.0, 1.0];
+        let rig = momo_testing::canned::fisheye_rig();
+        let obs = momo_testing::canned::synthetic_observations(
+            &rig,
+            &momo_models::Se3.motion(&truth),
+            30,
+            10,
+            3,
+        );
+        let run = |extra: &str| {
+            let text = format!("[odometry.final_fit]\nenabled = true\n{extra}");
+            let config = Config::from_toml_str(&text, "ff.toml").unwrap();
+            let mut vo = Odometry::new(rig.clone(), config).unwrap();
+            let r = vo.process(&obs, Some(1.0));
+            vo.estimator().motion(&r.diagnostics.params)
+        };
+        let (plain, ml) = (run(""), run("metric = \"angle_plane_ml\"\n"));
+        let motion = momo_models::Se3.motion(&truth);
+        let off = |m: &momo_core::Pose<f64>| {
+            momo_core::so3_log(&(m.rotation.transpose() * motion.rotation)).norm()
+        };
+        assert!(off(&plain) < 1e-6 && off(&ml) < 1e-6, "{} {}", off(&plain), off(&ml));
+        assert!(ml.rotation != plain.rotation || ml.translation != plain.translation);
+        let err = Config::from_toml_str(
+            "[odometry.final_fit]\nenabled = true\nmetric = \"nope\"\n",
+            "bad.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.starts_with("bad.toml:") && err.contains("nope"), "{err}");
+    }
+
     /// `Φ⁻¹((1 + p) / 2)` by bisection on a numerically integrated Gaussian density.
     fn half_normal_quantile(p: f64) -> f64 {
         let cdf = |x: f64| {
