@@ -388,7 +388,12 @@ mod tests {
         let off = |m: &momo_core::Pose<f64>| {
             momo_core::so3_log(&(m.rotation.transpose() * motion.rotation)).norm()
         };
-        assert!(off(&plain) < 1e-6 && off(&ml) < 1e-6, "{} {}", off(&plain), off(&ml));
+        assert!(
+            off(&plain) < 1e-6 && off(&ml) < 1e-6,
+            "{} {}",
+            off(&plain),
+            off(&ml)
+        );
         assert!(ml.rotation != plain.rotation || ml.translation != plain.translation);
         let err = Config::from_toml_str(
             "[odometry.final_fit]\nenabled = true\nmetric = \"nope\"\n",
@@ -396,7 +401,10 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(err.starts_with("bad.toml:") && err.contains("nope"), "{err}");
+        assert!(
+            err.starts_with("bad.toml:") && err.contains("nope"),
+            "{err}"
+        );
     }
 
     /// `Φ⁻¹((1 + p) / 2)` by bisection on a numerically integrated Gaussian density.
