@@ -4,8 +4,8 @@
 
 use crate::NORM_EPS_SQ;
 use momo_core::{
-    Camera, CameraModel, Observation, Pose, ResidualMetric, Scalar, dot_const, essential,
-    mul_const, tr_mul_const,
+    Camera, CameraModel, MAX_KERNEL_INPUTS, Observation, Pose, ResidualMetric, Scalar, dot_const,
+    essential, mul_const, tr_mul_const,
 };
 use nalgebra::{Matrix2, Matrix3, Matrix3x2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -31,7 +31,13 @@ use serde::{Deserialize, Serialize};
 /// `Jᵢ` is `U (∂π/∂x · U)⁻¹` with `U` an orthonormal basis of the tangent plane at the bearing
 /// and `∂π/∂x` the projection's Jacobian by central differences (projection is closed-form for
 /// every model); where that fails (a pixel outside the model's domain) the isotropic
-/// `(I − f fᵀ) / fₚₓ²` is used. No fused kernel: Jacobians by automatic differentiation.
+/// `(I − f fᵀ) / fₚₓ²` is used.
+///
+/// Fused kernel ([`ResidualMetric::kernel`]): the inputs are the nine entries of `E`
+/// (row-major), as for [`crate::AnglePlane`]; the residual in the automatic path's order of
+/// operations (the linearisation's cost is bit-identical to it), its derivatives by hand in
+/// plain `f64` (see [`AnglePlaneMl::kernel`]); the `Σᵢ` (constants of the match) are computed
+/// once per match and linearisation either way.
 ///
 /// ```
 /// use momo_core::{Camera, Observation, Pose, ResidualMetric, Pinhole};
@@ -132,12 +138,14 @@ impl ResidualMetric for AnglePlaneMl {
         obs: &Observation,
         out: &mut [T],
     ) {
+        // Every operation in a fixed order: the fused kernel repeats it in plain f64 (as
+        // num-dual divides: times the reciprocal), so the linearisation's cost is bit-identical.
         let e = &prep.e;
         let n = mul_const(e, &obs.f0);
         let d = (n.norm_squared() + T::c(NORM_EPS_SQ)).sqrt();
         let r = dot_const(&n, &obs.f1) / d;
         let g1 = n / d;
-        let etn = e.transpose() * n;
+        let etn = tr_mul(e, &n);
         let g0 = (tr_mul_const(e, &obs.f1) - etn * (r / d)) / d;
         let s1 = bearing_covariance(&prep.camera, &obs.f1);
         let s0 = bearing_covariance(&prep.camera, &obs.f0);
@@ -146,6 +154,87 @@ impl ResidualMetric for AnglePlaneMl {
         let floor = T::c(1e-6 * prep.s_ref * prep.s_ref);
         out[0] = r * T::c(prep.s_ref) / (var + floor).sqrt();
     }
+
+    const KERNEL_INPUTS: usize = 9;
+
+    /// The essential matrix `E = Rᵀ [t]ₓ`, row-major.
+    fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, motion: &Pose<T>, out: &mut [T]) {
+        let e = essential(motion);
+        for a in 0..3 {
+            for b in 0..3 {
+                out[3 * a + b] = e[(a, b)];
+            }
+        }
+    }
+
+    /// `r_ml = r · s_ref · w`, `w = (v + floor)^(-1/2)`, `v = g₁ᵀ Σ₁ g₁ + g₀ᵀ Σ₀ g₀` (the
+    /// type's doc: `g₁ = n / d`, `g₀ = Eᵀ g`, `g = ∂r/∂n = (f1 − r g₁) / d`, `n = E f0`). With
+    /// `m = Σ₀ g₀`, `u = E m`, `p = (2/d)(Σ₁ g₁ − (g₁ᵀ Σ₁ g₁) g₁)` and
+    /// `c = −[(u·g₁) g + (r/d)(u − (u·g₁) g₁) + (u·g) g₁] / d`:
+    /// `∂v/∂E_ab = (p_a + 2 c_a) f0_b + 2 g_a m_b`, and
+    /// `∂r_ml/∂E_ab = s_ref (w g_a f0_b − ½ r w³ ∂v/∂E_ab)`.
+    #[inline(always)]
+    fn kernel(
+        &self,
+        camera: &Camera,
+        e: &[f64],
+        obs: &Observation,
+        out: &mut [f64],
+        dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
+    ) {
+        let (f0, f1) = (&obs.f0, &obs.f1);
+        let s_ref = std::f64::consts::SQRT_2 / camera.focal_length();
+        let n = [
+            e[0] * f0.x + e[1] * f0.y + e[2] * f0.z,
+            e[3] * f0.x + e[4] * f0.y + e[5] * f0.z,
+            e[6] * f0.x + e[7] * f0.y + e[8] * f0.z,
+        ];
+        let d = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] + NORM_EPS_SQ).sqrt();
+        let inv_d = d.recip();
+        let r = (n[0] * f1.x + n[1] * f1.y + n[2] * f1.z) * inv_d;
+        let g1 = Vector3::new(n[0] * inv_d, n[1] * inv_d, n[2] * inv_d);
+        let rd = r * inv_d;
+        let mut g0 = Vector3::zeros();
+        for i in 0..3 {
+            let etn = e[i] * n[0] + e[3 + i] * n[1] + e[6 + i] * n[2];
+            let etf1 = e[i] * f1.x + e[3 + i] * f1.y + e[6 + i] * f1.z;
+            g0[i] = (etf1 - etn * rd) * inv_d;
+        }
+        let s1 = bearing_covariance(camera, f1);
+        let s0 = bearing_covariance(camera, f0);
+        let var = quad(&s1, &g1) + quad(&s0, &g0);
+        let floor = 1e-6 * s_ref * s_ref;
+        let w = (var + floor).sqrt().recip();
+        out[0] = r * s_ref * w;
+        // Derivatives (plain f64; rounding differs from the automatic path's, the value not).
+        let g = (f1 - g1 * r) * inv_d;
+        let s1g1 = s1 * g1;
+        let p = (s1g1 - g1 * g1.dot(&s1g1)) * (2.0 * inv_d);
+        let m = s0 * g0;
+        let em = Matrix3::new(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]) * m;
+        let (ug1, ug) = (em.dot(&g1), em.dot(&g));
+        let c = -(g * ug1 + (em - g1 * ug1) * rd + g1 * ug) * inv_d;
+        let k = 0.5 * r * w * w * w;
+        let row = &mut dr_de[0];
+        for a in 0..3 {
+            let along_f0 = s_ref * (w * g[a] - k * (p[a] + 2.0 * c[a]));
+            let along_m = -s_ref * 2.0 * k * g[a];
+            for b in 0..3 {
+                row[3 * a + b] = along_f0 * f0[b] + along_m * m[b];
+            }
+        }
+    }
+}
+
+/// `mᵀ v` for a matrix and a vector of scalars, in a fixed order of operations (the fused
+/// kernel repeats it).
+#[inline(always)]
+fn tr_mul<T: Scalar>(m: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
+    Vector3::new(
+        m[(0, 0)] * v.x + m[(1, 0)] * v.y + m[(2, 0)] * v.z,
+        m[(0, 1)] * v.x + m[(1, 1)] * v.y + m[(2, 1)] * v.z,
+        m[(0, 2)] * v.x + m[(1, 2)] * v.y + m[(2, 2)] * v.z,
+    )
 }
 
 momo_core::register_metric!(AnglePlaneMl, "angle_plane_ml");

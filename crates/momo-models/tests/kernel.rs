@@ -7,7 +7,7 @@ use momo_core::{
     LeastSquares, Linearization, Manifold, MotionPrior, Pose, Problem, ResidualMetric, Rig,
     RobustLoss, RotationOnly, so3_exp,
 };
-use momo_costs::{AnglePlane, Cauchy, Huber, Trivial, Tukey};
+use momo_costs::{AnglePlane, AnglePlaneMl, Cauchy, Huber, Trivial, Tukey};
 use momo_models::{Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack};
 use momo_testing::canned;
 use nalgebra::Vector3;
@@ -127,10 +127,10 @@ proptest! {
         let loss = loss(loss_kind, scale);
         let loss = loss.as_ref();
         let models: [&dyn Fn() -> Result<f64, TestCaseError>; 4] = [
-            &|| run(&Se3, &start, &rig, &obs, loss, fix_arc, with_prior),
-            &|| run(&SingleTrack2d, &start, &rig, &obs, loss, fix_arc, with_prior),
-            &|| run(&SingleTrack3d::default(), &start, &rig, &obs, loss, fix_arc, with_prior),
-            &|| run(&SoftSingleTrack::default(), &start, &rig, &obs, loss, fix_arc, with_prior),
+            &|| run(&Se3, &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
+            &|| run(&SingleTrack2d, &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
+            &|| run(&SingleTrack3d::default(), &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
+            &|| run(&SoftSingleTrack::default(), &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
         ];
         for m in models {
             m()?;
@@ -145,9 +145,41 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// AnglePlaneMl's kernel (issue 14), as AnglePlane's above: every built-in model, both
+    /// canned rigs (its pixel-noise weights differ most on the fisheye), every loss, a start off
+    /// the true motion, the arc length fixed or free, with and without a motion prior.
+    #[test]
+    fn angle_plane_ml_kernel_equals_automatic(
+        truth in motion(),
+        start in motion(),
+        seed in 0u64..1000,
+        outliers in 0usize..20,
+        loss_kind in 0usize..4,
+        scale in 1e-4..1e-2f64,
+        fisheye in any::<bool>(),
+        fix_arc in any::<bool>(),
+        with_prior in any::<bool>(),
+    ) {
+        let rig = if fisheye { canned::fisheye_rig() } else { canned::pinhole_rig() };
+        let obs = canned::synthetic_observations(&rig, &truth, 40, outliers, seed);
+        let loss = loss(loss_kind, scale);
+        let loss = loss.as_ref();
+        let ml = &AnglePlaneMl;
+        run(&Se3, ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
+        run(&SingleTrack2d, ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
+        run(&SingleTrack3d::default(), ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
+        run(&SoftSingleTrack::default(), ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
+    }
+}
+
 /// One model: parameters from the start motion where it has a closed form, else neutral.
-fn run<M: Manifold>(
+#[allow(clippy::too_many_arguments)]
+fn run<M: Manifold, R: ResidualMetric>(
     model: &M,
+    metric: &R,
     start: &Pose<f64>,
     rig: &Rig,
     obs: &momo_core::FrameObservations,
@@ -176,7 +208,7 @@ fn run<M: Manifold>(
     };
     compare(
         model,
-        &AnglePlane,
+        metric,
         loss,
         rig,
         obs,

@@ -401,7 +401,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "odometry.final_fit",
         "# Final efficient stage: the noise sigma from the residuals (median absolute value),\n\
          # then a refit on the matches within inlier_sigmas sigmas with Cauchy at cauchy_sigmas\n\
-         # sigmas (0: least squares) and the priors in units of sigma (prior_in_sigma).",
+         # sigmas (0: least squares) and the priors in units of sigma (prior_in_sigma);\n\
+         # metric = \"angle_plane_ml\": refit with that registered metric (default: the first's).",
     ),
     (
         "odometry.motion_prior_sigmas",

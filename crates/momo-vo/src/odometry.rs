@@ -151,6 +151,8 @@ pub struct Odometry {
     rig: Rig,
     config: Config,
     estimator: Box<dyn FrameEstimator>,
+    /// The final stage's estimator where `odometry.final_fit.metric` names its own metric.
+    final_estimator: Option<Box<dyn FrameEstimator>>,
     previous: Vec<f64>,
     last_arc_length: Option<f64>,
     /// The last frame pair was a standstill: its motion says nothing about the direction of
@@ -197,6 +199,16 @@ impl Odometry {
     pub fn new(rig: Rig, config: Config) -> Result<Self, VoError> {
         config.validate_for_rig(&rig)?;
         let estimator = config.model.build(config.metric.as_ref())?;
+        let final_estimator = match config.odometry.final_fit.metric_spec() {
+            Ok(Some(m)) => Some(config.model.build(m.as_ref())?),
+            Ok(None) => None,
+            Err(reason) => {
+                return Err(VoError::Config(ConfigError::Invalid {
+                    path: config.source_name().into(),
+                    reason,
+                }));
+            }
+        };
         let observable = estimator.observable(&rig);
         let scale_observable = estimator.arc_length_index().is_some_and(|i| observable[i]);
         let previous = estimator.initial_params(config.odometry.initial_arc_length);
@@ -231,6 +243,7 @@ impl Odometry {
             rig,
             config,
             estimator,
+            final_estimator,
             previous,
             last_arc_length: None,
             after_standstill: false,
@@ -958,7 +971,10 @@ impl Odometry {
         }
         let ctx = crate::final_fit::FinalFitContext {
             rig: &self.rig,
-            estimator: self.estimator.as_ref(),
+            estimator: self
+                .final_estimator
+                .as_deref()
+                .unwrap_or(self.estimator.as_ref()),
             loss: self.config.loss.as_ref(),
             solver: self.config.solver.as_ref(),
             fixed: &fixed,
