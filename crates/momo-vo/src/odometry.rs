@@ -1269,6 +1269,17 @@ impl Odometry {
         }
         let mut rest = crate::separate::subset(obs, &outside);
         rest.cross_camera.clear();
+        let cap = t.competing_fit_matches;
+        if cap > 0 && n_out > cap {
+            // Every k-th of the outside matches (the support is counted over all of them).
+            let mut k = 0usize;
+            for m in &mut rest.per_camera {
+                m.retain(|_| {
+                    k += 1;
+                    (k - 1) * cap / n_out != k * cap / n_out
+                });
+            }
+        }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let mut ahead = self.estimator.initial_params(

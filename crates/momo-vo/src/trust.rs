@@ -90,6 +90,10 @@ pub struct TrustOptions {
     /// fitted to them; if it explains that share of the matches, the frame's covariance is
     /// that of the mixture of the two motions ([`mixture_covariance`]). 0: off. Default 0.15.
     pub competing_min_fraction: f64,
+    /// The competing motion is fitted to at most this many of the matches outside the
+    /// estimate's support (every k-th, in order); its support is still counted over all of
+    /// them. 0: all. Default 0.
+    pub competing_fit_matches: usize,
     /// On a weak frame (matches along a line, too little flow) every prior term (the soft
     /// manifold's side slip and climb, the change-of-motion priors) is weighted by this factor
     /// squared, so that the prior yields to weak but consistent evidence as the rotation prior
@@ -134,6 +138,7 @@ impl Default for TrustOptions {
             jackknife_influence: false,
             jackknife_solves: 0,
             competing_min_fraction: 0.15,
+            competing_fit_matches: 0,
             weak_prior_factor: 0.1,
             competing_threshold: 0.003,
             clustering_grid: [8, 4],
