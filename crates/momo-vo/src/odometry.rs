@@ -1058,11 +1058,20 @@ impl Odometry {
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let t = &self.config.trust;
         let extra: &[[usize; 2]] = if clustered { &t.clustering_grids } else { &[] };
+        // The one-linearisation jackknife: the frame's exact Hessian and gradient once.
+        let frame = if t.jackknife_influence {
+            self.influence_frame(obs, sol, &fixed)
+        } else {
+            None
+        };
         for &[gx, gy] in t.jackknife_grids.iter().chain(extra) {
-            let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
-                .iter()
-                .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
-                .collect();
+            let samples: Vec<Vec<f64>> = match &frame {
+                Some(f) => self.influence_samples(f, obs, sol, &fixed, &cov, (gx, gy)),
+                None => trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
+                    .iter()
+                    .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
+                    .collect(),
+            };
             if let Some(j) = trust::jackknife_covariance(&samples) {
                 cov = trust::widen(&cov, &j, self.config.trust.jackknife_min_ratio);
             }
@@ -1115,6 +1124,137 @@ impl Odometry {
         out.iter().all(|v| v.is_finite()).then_some(out)
     }
 
+    /// The request whose minimum the frame's solution is (the refinement stage's loss where
+    /// there is one), on `obs`.
+    fn stage_request<'a>(
+        &'a self,
+        obs: &'a FrameObservations,
+        loss: &'a dyn momo_core::RobustLoss,
+        sol: &'a FrameSolution,
+        fixed: &'a [bool],
+    ) -> SolveRequest<'a> {
+        SolveRequest {
+            rig: &self.rig,
+            observations: obs,
+            loss,
+            solver: self.config.solver.as_ref(),
+            initial: &sol.params,
+            fixed,
+            rotation_only: false,
+            motion_prior: Some(&self.motion_prior),
+        }
+    }
+
+    /// The frame's part of the one-linearisation jackknife
+    /// ([`trust::TrustOptions::jackknife_influence`]): the stage's loss wrapped as its
+    /// [`trust::NegativeCurvature`], the prior terms' linearisation alone (no match) and the
+    /// frame's exact Hessian and gradient at the solution. `None` where a linearisation fails.
+    fn influence_frame(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+    ) -> Option<InfluenceFrame> {
+        let loss = self
+            .config
+            .refine_loss
+            .as_deref()
+            .unwrap_or(self.config.loss.as_ref());
+        let curvature = trust::NegativeCurvature::of(loss)?;
+        let lin = |o: &FrameObservations, l: &dyn momo_core::RobustLoss| {
+            self.estimator
+                .linearize(&self.stage_request(o, l, sol, fixed), &sol.params)
+                .ok()
+        };
+        let empty = FrameObservations {
+            per_camera: vec![Vec::new(); obs.per_camera.len()],
+            cross_camera: Vec::new(),
+        };
+        let prior = lin(&empty, loss)?;
+        let a = lin(obs, loss)?;
+        let n = lin(obs, &curvature)?;
+        Some(InfluenceFrame {
+            hessian: trust::exact_hessian(&a, &n),
+            gradient: a.gradient,
+            prior,
+            curvature,
+        })
+    }
+
+    /// The leave-one-cell-out re-estimates of one `grid` from the frame's linearisation
+    /// ([`trust::influence_step`]); cells whose step is not defined, and the
+    /// `trust.jackknife_solves` cells that move farthest under `cov`, get a full solve.
+    fn influence_samples(
+        &self,
+        frame: &InfluenceFrame,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        cov: &nalgebra::DMatrix<f64>,
+        grid: (usize, usize),
+    ) -> Vec<Vec<f64>> {
+        let loss = self
+            .config
+            .refine_loss
+            .as_deref()
+            .unwrap_or(self.config.loss.as_ref());
+        let n = sol.free.len();
+        let theta: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
+        let cells = trust::cells_alone(&self.rig, obs, grid);
+        let mut samples: Vec<Option<Vec<f64>>> = cells
+            .iter()
+            .map(|cell| {
+                let lin = |l: &dyn momo_core::RobustLoss| {
+                    self.estimator
+                        .linearize(&self.stage_request(cell, l, sol, fixed), &sol.params)
+                        .ok()
+                };
+                let a = lin(loss)?;
+                let c = lin(&frame.curvature)?;
+                // The cell's data terms: its linearisation less the prior terms' (in both).
+                let h_c = trust::exact_hessian(&a, &c) - frame.prior.hessian;
+                let g_c = a.gradient - frame.prior.gradient;
+                trust::influence_step(&theta, (&frame.hessian, &frame.gradient), (&h_c, &g_c), n)
+            })
+            .collect();
+        // The cells to solve in full: undefined steps, and the farthest steps.
+        let info = cov.clone().try_inverse();
+        let distance = |s: &Vec<f64>| match &info {
+            Some(info) if info.iter().all(|v| v.is_finite()) => {
+                let d =
+                    nalgebra::DVector::from_iterator(n, s.iter().zip(&theta).map(|(a, b)| a - b));
+                (d.transpose() * info * &d)[(0, 0)]
+            }
+            _ => 0.0,
+        };
+        let mut order: Vec<(usize, f64)> = samples
+            .iter()
+            .enumerate()
+            .filter_map(|(k, s)| s.as_ref().map(|s| (k, distance(s))))
+            .collect();
+        order.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let mut solve: Vec<usize> = (0..samples.len())
+            .filter(|&k| samples[k].is_none())
+            .collect();
+        solve.extend(
+            order
+                .iter()
+                .take(self.config.trust.jackknife_solves)
+                .map(|&(k, _)| k),
+        );
+        if !solve.is_empty() {
+            let without = trust::leave_one_cell_out(&self.rig, obs, grid);
+            for k in solve {
+                if let Some(o) = without.get(k) {
+                    samples[k] = self
+                        .solve_once(o, &sol.params, fixed, false)
+                        .map(|s| sol.free.iter().map(|&i| s.params[i]).collect());
+                }
+            }
+        }
+        samples.into_iter().flatten().collect()
+    }
+
     /// A second motion that explains at least `trust.competing_min_fraction` of the matches
     /// outside the estimate's support (fitted to them from the previous frame's motion and
     /// straight ahead): its free parameters and its weight `w` (its support's share of the two
@@ -1145,6 +1285,17 @@ impl Odometry {
         }
         let mut rest = crate::separate::subset(obs, &outside);
         rest.cross_camera.clear();
+        let cap = t.competing_fit_matches;
+        if cap > 0 && n_out > cap {
+            // Every k-th of the outside matches (the support is counted over all of them).
+            let mut k = 0usize;
+            for m in &mut rest.per_camera {
+                m.retain(|_| {
+                    k += 1;
+                    (k - 1) * cap / n_out != k * cap / n_out
+                });
+            }
+        }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let mut ahead = self.estimator.initial_params(
@@ -1260,6 +1411,18 @@ impl Odometry {
             diag.covariance = cov.transpose().iter().copied().collect();
         }
     }
+}
+
+/// The frame's part of the one-linearisation jackknife (`Odometry::influence_frame`).
+struct InfluenceFrame {
+    /// The exact robust Hessian of the frame at its solution (data and prior terms).
+    hessian: momo_core::NormalMatrix,
+    /// The gradient there.
+    gradient: momo_core::ParamVec,
+    /// The prior terms' linearisation alone.
+    prior: momo_core::Linearization,
+    /// The stage's loss as its negative curvature.
+    curvature: trust::NegativeCurvature,
 }
 
 /// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:

@@ -549,3 +549,128 @@ fn residuals_cluster_in_the_image_where_a_rigid_object_pulls_the_estimate() {
     let jk = object[29..].iter().filter(|x| x.1).count();
     assert!(jk >= 10, "{jk} of 12 object frames jackknifed");
 }
+
+/// The one-step leave-one-group-out re-estimate of [`momo_vo::trust::influence_step`] is the
+/// exact minimum of a quadratic cost without the group: `Σ_c ½ (θ - μ_c)ᵀ H_c (θ - μ_c)`
+/// over three groups, linearised at a point that is not the minimum.
+#[test]
+fn the_influence_step_is_the_minimum_of_a_quadratic_without_the_group() {
+    use momo_core::{NormalMatrix, ParamVec};
+    use nalgebra::{DMatrix, DVector};
+    let n = 3;
+    let spd = |seed: f64| {
+        let a = DMatrix::from_fn(n, n, |i, j| ((i * 3 + j) as f64 * 1.7 + seed).sin());
+        &a * a.transpose() + DMatrix::identity(n, n) * 0.5
+    };
+    let groups: Vec<(DMatrix<f64>, DVector<f64>)> = (0..3)
+        .map(|c| {
+            let mu = DVector::from_fn(n, |i, _| ((c * n + i) as f64 * 0.9).cos());
+            (spd(c as f64), mu)
+        })
+        .collect();
+    let theta = DVector::from_vec(vec![0.3, -0.2, 0.1]);
+    let pad = |m: &DMatrix<f64>| {
+        NormalMatrix::from_fn(|i, j| if i < n && j < n { m[(i, j)] } else { 0.0 })
+    };
+    let padv = |v: &DVector<f64>| ParamVec::from_fn(|i, _| if i < n { v[i] } else { 0.0 });
+    let (mut h, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
+    for (hc, mu) in &groups {
+        h += hc;
+        g += hc * (&theta - mu);
+    }
+    for (c, (hc, mu)) in groups.iter().enumerate() {
+        let got = momo_vo::trust::influence_step(
+            theta.as_slice(),
+            (&pad(&h), &padv(&g)),
+            (&pad(hc), &padv(&(hc * (&theta - mu)))),
+            n,
+        )
+        .expect("positive definite");
+        let (mut hr, mut b) = (DMatrix::zeros(n, n), DVector::zeros(n));
+        for (d, (hd, md)) in groups.iter().enumerate() {
+            if d != c {
+                hr += hd;
+                b += hd * md;
+            }
+        }
+        let want = hr.try_inverse().expect("invertible") * b;
+        for i in 0..n {
+            assert!(
+                (got[i] - want[i]).abs() < 1e-12,
+                "group {c}: {got:?} vs {want}"
+            );
+        }
+    }
+    // Without any positive definite remainder there is no step.
+    let z = NormalMatrix::zeros();
+    assert!(
+        momo_vo::trust::influence_step(
+            &[0.0; 3],
+            (&z, &ParamVec::zeros()),
+            (&z, &ParamVec::zeros()),
+            3
+        )
+        .is_none()
+    );
+}
+
+/// The negative-curvature loss of the one-linearisation jackknife is the wrapped loss with
+/// `ρ''` negated (and cut at 0), and the wrapped loss survives the copy.
+#[test]
+fn the_negative_curvature_loss_negates_the_second_derivative() {
+    use momo_core::RobustLoss;
+    let cauchy = momo_costs::Cauchy::new(0.001);
+    let wrapped = momo_vo::trust::NegativeCurvature::of(&cauchy).expect("round-trips");
+    assert_eq!(wrapped.scale(), cauchy.scale());
+    for s in [0.0, 1e-8, 1e-6, 4e-6, 1e-3] {
+        let [r, d1, d2] = cauchy.evaluate(s);
+        assert!(d2 < 0.0);
+        assert_eq!(wrapped.evaluate(s), [r, d1, -d2]);
+    }
+}
+
+/// The one-linearisation jackknife (`trust.jackknife_influence`, the default) changes only the
+/// covariance: the poses are bit-identical to the solve-per-cell jackknife's (on this drive; a
+/// frame whose status turns on the widened covariance changes the next frame's prior); and
+/// with every cell solved in full (`trust.jackknife_solves` above the cell count) the
+/// covariance is too (the cells line up with [`momo_vo::trust::leave_one_cell_out`]'s).
+#[test]
+fn the_one_linearisation_jackknife_changes_only_the_covariance() {
+    let mut cfg = momo_sim::SimConfig::moving_object();
+    cfg.frames = 36;
+    cfg.seed = 3;
+    if let Some(o) = cfg.moving_object.as_mut() {
+        o.frames = 28..36;
+    }
+    let sim = momo_sim::simulate(&cfg).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |config: Config| {
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+        (1..seq.num_frames())
+            .map(|k| {
+                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+                let r = vo.process(&seq.frames[k], arc);
+                (r.motion, r.diagnostics)
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut solves = Config::default();
+    solves.trust.jackknife_influence = false;
+    let base = run(solves);
+    let one = Config::default();
+    assert!(one.trust.jackknife_influence);
+    let cheap = run(one);
+    let mut every = Config::default();
+    every.trust.jackknife_solves = 64;
+    let all = run(every);
+    let mut jackknifed = 0;
+    for ((b, c), a) in base.iter().zip(&cheap).zip(&all) {
+        assert_eq!(b.0.rotation, c.0.rotation);
+        assert_eq!(b.0.translation, c.0.translation);
+        assert_eq!(b.0.rotation, a.0.rotation);
+        assert_eq!(b.1.covariance, a.1.covariance);
+        assert_eq!(b.1.jackknife, c.1.jackknife);
+        jackknifed += usize::from(b.1.jackknife);
+    }
+    assert!(jackknifed >= 5, "{jackknifed} frames jackknifed");
+}
