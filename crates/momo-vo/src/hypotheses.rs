@@ -76,6 +76,13 @@ pub struct HypothesesOptions {
     /// Standard deviation of a bearing's angle (radians; 1 px at f = 718 px is 0.0014), for
     /// the height tolerance of triangulated road points.
     pub noise_angle: f64,
+    /// Score a motion by the **spread** of its ground (or parallax) support instead of its
+    /// count: the image cells (columns, rows per camera, frame k-1 pixels) holding at least
+    /// one of its road points. Object points low in the image can land near the road plane
+    /// under the object's motion, but they are compact; the road of the static world spreads
+    /// over the lower image. None (default): the count.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spread_grid: Option<(usize, usize)>,
 }
 
 impl Default for HypothesesOptions {
@@ -90,6 +97,7 @@ impl Default for HypothesesOptions {
             ground_z: 0.0,
             ground_tolerance: 0.08,
             noise_angle: 0.0014,
+            spread_grid: None,
         }
     }
 }
@@ -119,6 +127,14 @@ impl HypothesesOptions {
         if !(self.noise_angle.is_finite() && self.noise_angle >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.noise_angle must be a non-negative number".into(),
+            );
+        }
+        if let Some((c, r)) = self.spread_grid
+            && (c == 0 || r == 0 || c.checked_mul(r).is_none_or(|n| n > 10_000))
+        {
+            return Err(
+                "odometry.separate.hypotheses.spread_grid must be (columns, rows), 1 to 10000 cells"
+                    .into(),
             );
         }
         if !self.margin.is_finite() {
@@ -153,8 +169,33 @@ pub fn parallax_support(
     support: &[Vec<bool>],
     min_angle: f64,
 ) -> usize {
-    let mut n = 0;
-    for ((cam, matches), mask) in rig.cameras().iter().zip(&obs.per_camera).zip(support) {
+    parallax_mask(rig, motion, obs, support, min_angle)
+        .iter()
+        .flatten()
+        .filter(|p| **p)
+        .count()
+}
+
+/// The matches of [`parallax_support`] as a mask (per camera, per match).
+pub fn parallax_mask(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    min_angle: f64,
+) -> Vec<Vec<bool>> {
+    let mut out: Vec<Vec<bool>> = obs
+        .per_camera
+        .iter()
+        .map(|m| vec![false; m.len()])
+        .collect();
+    for (((cam, matches), mask), out) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(support)
+        .zip(&mut out)
+    {
         let c = camera_motion(motion, &cam.t_vehicle_camera);
         let t = c.translation;
         let tn = t.norm();
@@ -162,7 +203,12 @@ pub fn parallax_support(
             continue;
         }
         let t = t / tn;
-        for (o, _) in matches.iter().zip(mask).filter(|(_, k)| **k) {
+        for ((o, _), p_out) in matches
+            .iter()
+            .zip(mask)
+            .zip(out.iter_mut())
+            .filter(|((_, k), _)| **k)
+        {
             let rf1 = c.rotation * o.f1;
             let away = t.cross(&o.f0);
             let a = away.norm();
@@ -170,12 +216,10 @@ pub fn parallax_support(
                 continue;
             }
             let p = o.f0.cross(&rf1).dot(&away) / a;
-            if p >= min_angle {
-                n += 1;
-            }
+            *p_out = p >= min_angle;
         }
     }
-    n
+    out
 }
 
 /// The ground support of a motion (see the module doc): the matches of `support` with at least
@@ -266,7 +310,8 @@ pub fn ground_mask(
 }
 
 /// A motion's score for the choice: its ground support if [`HypothesesOptions::ground`], else
-/// its parallax support.
+/// its parallax support; with [`HypothesesOptions::spread_grid`] the image cells that support
+/// covers rather than its count.
 pub fn score(
     opts: &HypothesesOptions,
     rig: &Rig,
@@ -274,10 +319,17 @@ pub fn score(
     obs: &FrameObservations,
     support: &[Vec<bool>],
 ) -> usize {
-    if opts.ground {
-        ground_support(rig, motion, obs, support, opts)
-    } else {
-        parallax_support(rig, motion, obs, support, opts.parallax)
+    match (opts.ground, opts.spread_grid) {
+        (true, None) => ground_support(rig, motion, obs, support, opts),
+        (false, None) => parallax_support(rig, motion, obs, support, opts.parallax),
+        (ground, Some(grid)) => {
+            let mask = if ground {
+                ground_mask(rig, motion, obs, support, opts)
+            } else {
+                parallax_mask(rig, motion, obs, support, opts.parallax)
+            };
+            crate::separate::cells(rig, obs, &mask, grid)
+        }
     }
 }
 
