@@ -541,6 +541,65 @@ mod tests {
     }
 
     #[test]
+    fn the_spread_score_counts_image_cells_not_matches() {
+        let p_vc = Pose::new(
+            Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
+            Vector3::new(1.0, 0.0, 1.65),
+        );
+        let (fx, cx, cy) = (718.0, 607.0, 185.0);
+        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+            fx,
+            fy: fx,
+            cx,
+            cy,
+            width: 1241.0,
+            height: 376.0,
+        });
+        let rig = Rig::mono(cam, p_vc).unwrap();
+        let road: Vec<Vector3<f64>> = (0..30)
+            .map(|i| {
+                let x = 5.0 + 0.3 * i as f64;
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (2.0 + 0.066 * i as f64);
+                p_vc.rotation.transpose() * (Vector3::new(x, y, 0.0) - p_vc.translation)
+            })
+            .collect();
+        let ego = Pose::new(
+            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
+            Vector3::new(1.0, 0.0, 0.0),
+        );
+        let mut obs = obs_of(&road, &camera_motion(&ego, &p_vc));
+        for (o, x) in obs.per_camera[0].iter_mut().zip(&road) {
+            o.px0 = Vector2::new(fx * x.x / x.z + cx, fx * x.y / x.z + cy);
+        }
+        let all = vec![vec![true; road.len()]];
+        let count = HypothesesOptions::default();
+        let spread = HypothesesOptions {
+            spread_grid: Some((16, 8)),
+            ..count.clone()
+        };
+        let n = score(&count, &rig, &ego, &obs, &all);
+        let cells = score(&spread, &rig, &ego, &obs, &all);
+        let mask = ground_mask(&rig, &ego, &obs, &all, &count);
+        assert_eq!(cells, crate::separate::cells(&rig, &obs, &mask, (16, 8)));
+        assert!(
+            n >= 27 && (4..n).contains(&cells),
+            "{n} matches, {cells} cells"
+        );
+        // The same road points seen in one spot of the image: one cell, the count unchanged.
+        for o in &mut obs.per_camera[0] {
+            o.px0 = Vector2::new(600.0, 300.0);
+        }
+        assert_eq!(score(&count, &rig, &ego, &obs, &all), n);
+        assert_eq!(score(&spread, &rig, &ego, &obs, &all), 1);
+        // The parallax support in cells, too.
+        let par = HypothesesOptions {
+            ground: false,
+            ..spread.clone()
+        };
+        assert_eq!(score(&par, &rig, &ego, &obs, &all), 1);
+    }
+
+    #[test]
     fn options_validate_and_parse() {
         assert!(HypothesesOptions::default().validate().is_ok());
         let d = HypothesesOptions {
@@ -551,5 +610,12 @@ mod tests {
         let o: HypothesesOptions = toml::from_str("decay = 0.5\nmargin = 0.2").unwrap();
         assert_eq!((o.decay, o.margin), (0.5, 0.2));
         assert!(toml::from_str::<HypothesesOptions>("decays = 0.5").is_err());
+        let o: HypothesesOptions = toml::from_str("spread_grid = [16, 8]").unwrap();
+        assert_eq!(o.spread_grid, Some((16, 8)));
+        let bad = HypothesesOptions {
+            spread_grid: Some((0, 8)),
+            ..HypothesesOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("spread_grid"));
     }
 }

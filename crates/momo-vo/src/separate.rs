@@ -68,6 +68,10 @@ pub struct SeparateOptions {
     /// also explains (object points near the focus of expansion fit the static motion within
     /// the threshold and bias it); not applied if fewer than half of the chosen support remain.
     pub final_exclusive: bool,
+    /// Run the final stage only in frames where two motions competed (elsewhere the frame's
+    /// solve stands): on static scenes the support's threshold cuts the noise tail of the
+    /// static matches (wide-angle cameras, heavy outliers) and costs efficiency.
+    pub final_competing_only: bool,
     /// Passes of the final stage: each later pass re-selects the support under the previous
     /// pass's motion (at least 1).
     pub final_passes: usize,
@@ -86,6 +90,7 @@ impl Default for SeparateOptions {
             hypotheses: None,
             min_cell_ratio: 0.0,
             final_exclusive: false,
+            final_competing_only: false,
             final_passes: 1,
         }
     }
@@ -437,7 +442,7 @@ pub fn separate(
         tracker.idle(h);
     }
     let (mut sol, mut mask) = chosen;
-    if !opts.final_stage {
+    if !opts.final_stage || (opts.final_competing_only && !outcome.competing) {
         return (sol, outcome);
     }
     // Leaves out the rejected motion's support (`final_exclusive`).
@@ -500,6 +505,20 @@ mod tests {
         assert!(o.final_robust);
         assert_eq!(o.plausibility_margin, 16.0);
         assert!(toml::from_str::<SeparateOptions>("final_robustness = true").is_err());
+        let o: SeparateOptions = toml::from_str(
+            "min_cell_ratio = 0.5\nfinal_exclusive = true\nfinal_competing_only = true\nfinal_passes = 2",
+        )
+        .unwrap();
+        assert_eq!((o.min_cell_ratio, o.final_passes), (0.5, 2));
+        assert!(o.final_exclusive && o.final_competing_only);
+        for bad in [
+            "min_cell_ratio = -1.0",
+            "final_passes = 0",
+            "final_passes = 11",
+        ] {
+            let o: SeparateOptions = toml::from_str(bad).unwrap();
+            assert!(o.validate().is_err(), "{bad}");
+        }
     }
 
     /// The shortcut gives the same mask as the angles, at and around the threshold.
