@@ -76,6 +76,13 @@ pub struct HypothesesOptions {
     /// Standard deviation of a bearing's angle (radians; 1 px at f = 718 px is 0.0014), for
     /// the height tolerance of triangulated road points.
     pub noise_angle: f64,
+    /// Score a motion by the **spread** of its ground (or parallax) support instead of its
+    /// count: the image cells (columns, rows per camera, frame k-1 pixels) holding at least
+    /// one of its road points. Object points low in the image can land near the road plane
+    /// under the object's motion, but they are compact; the road of the static world spreads
+    /// over the lower image. None (default): the count.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spread_grid: Option<(usize, usize)>,
 }
 
 impl Default for HypothesesOptions {
@@ -90,6 +97,7 @@ impl Default for HypothesesOptions {
             ground_z: 0.0,
             ground_tolerance: 0.08,
             noise_angle: 0.0014,
+            spread_grid: None,
         }
     }
 }
@@ -119,6 +127,14 @@ impl HypothesesOptions {
         if !(self.noise_angle.is_finite() && self.noise_angle >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.noise_angle must be a non-negative number".into(),
+            );
+        }
+        if let Some((c, r)) = self.spread_grid
+            && (c == 0 || r == 0 || c.checked_mul(r).is_none_or(|n| n > 10_000))
+        {
+            return Err(
+                "odometry.separate.hypotheses.spread_grid must be (columns, rows), 1 to 10000 cells"
+                    .into(),
             );
         }
         if !self.margin.is_finite() {
@@ -153,8 +169,33 @@ pub fn parallax_support(
     support: &[Vec<bool>],
     min_angle: f64,
 ) -> usize {
-    let mut n = 0;
-    for ((cam, matches), mask) in rig.cameras().iter().zip(&obs.per_camera).zip(support) {
+    parallax_mask(rig, motion, obs, support, min_angle)
+        .iter()
+        .flatten()
+        .filter(|p| **p)
+        .count()
+}
+
+/// The matches of [`parallax_support`] as a mask (per camera, per match).
+pub fn parallax_mask(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    min_angle: f64,
+) -> Vec<Vec<bool>> {
+    let mut out: Vec<Vec<bool>> = obs
+        .per_camera
+        .iter()
+        .map(|m| vec![false; m.len()])
+        .collect();
+    for (((cam, matches), mask), out) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(support)
+        .zip(&mut out)
+    {
         let c = camera_motion(motion, &cam.t_vehicle_camera);
         let t = c.translation;
         let tn = t.norm();
@@ -162,7 +203,12 @@ pub fn parallax_support(
             continue;
         }
         let t = t / tn;
-        for (o, _) in matches.iter().zip(mask).filter(|(_, k)| **k) {
+        for ((o, _), p_out) in matches
+            .iter()
+            .zip(mask)
+            .zip(out.iter_mut())
+            .filter(|((_, k), _)| **k)
+        {
             let rf1 = c.rotation * o.f1;
             let away = t.cross(&o.f0);
             let a = away.norm();
@@ -170,12 +216,10 @@ pub fn parallax_support(
                 continue;
             }
             let p = o.f0.cross(&rf1).dot(&away) / a;
-            if p >= min_angle {
-                n += 1;
-            }
+            *p_out = p >= min_angle;
         }
     }
-    n
+    out
 }
 
 /// The ground support of a motion (see the module doc): the matches of `support` with at least
@@ -266,7 +310,8 @@ pub fn ground_mask(
 }
 
 /// A motion's score for the choice: its ground support if [`HypothesesOptions::ground`], else
-/// its parallax support.
+/// its parallax support; with [`HypothesesOptions::spread_grid`] the image cells that support
+/// covers rather than its count.
 pub fn score(
     opts: &HypothesesOptions,
     rig: &Rig,
@@ -274,10 +319,17 @@ pub fn score(
     obs: &FrameObservations,
     support: &[Vec<bool>],
 ) -> usize {
-    if opts.ground {
-        ground_support(rig, motion, obs, support, opts)
-    } else {
-        parallax_support(rig, motion, obs, support, opts.parallax)
+    match (opts.ground, opts.spread_grid) {
+        (true, None) => ground_support(rig, motion, obs, support, opts),
+        (false, None) => parallax_support(rig, motion, obs, support, opts.parallax),
+        (ground, Some(grid)) => {
+            let mask = if ground {
+                ground_mask(rig, motion, obs, support, opts)
+            } else {
+                parallax_mask(rig, motion, obs, support, opts.parallax)
+            };
+            crate::separate::cells(rig, obs, &mask, grid)
+        }
     }
 }
 
@@ -489,6 +541,65 @@ mod tests {
     }
 
     #[test]
+    fn the_spread_score_counts_image_cells_not_matches() {
+        let p_vc = Pose::new(
+            Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
+            Vector3::new(1.0, 0.0, 1.65),
+        );
+        let (fx, cx, cy) = (718.0, 607.0, 185.0);
+        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+            fx,
+            fy: fx,
+            cx,
+            cy,
+            width: 1241.0,
+            height: 376.0,
+        });
+        let rig = Rig::mono(cam, p_vc).unwrap();
+        let road: Vec<Vector3<f64>> = (0..30)
+            .map(|i| {
+                let x = 5.0 + 0.3 * i as f64;
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (2.0 + 0.066 * i as f64);
+                p_vc.rotation.transpose() * (Vector3::new(x, y, 0.0) - p_vc.translation)
+            })
+            .collect();
+        let ego = Pose::new(
+            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
+            Vector3::new(1.0, 0.0, 0.0),
+        );
+        let mut obs = obs_of(&road, &camera_motion(&ego, &p_vc));
+        for (o, x) in obs.per_camera[0].iter_mut().zip(&road) {
+            o.px0 = Vector2::new(fx * x.x / x.z + cx, fx * x.y / x.z + cy);
+        }
+        let all = vec![vec![true; road.len()]];
+        let count = HypothesesOptions::default();
+        let spread = HypothesesOptions {
+            spread_grid: Some((16, 8)),
+            ..count.clone()
+        };
+        let n = score(&count, &rig, &ego, &obs, &all);
+        let cells = score(&spread, &rig, &ego, &obs, &all);
+        let mask = ground_mask(&rig, &ego, &obs, &all, &count);
+        assert_eq!(cells, crate::separate::cells(&rig, &obs, &mask, (16, 8)));
+        assert!(
+            n >= 27 && (4..n).contains(&cells),
+            "{n} matches, {cells} cells"
+        );
+        // The same road points seen in one spot of the image: one cell, the count unchanged.
+        for o in &mut obs.per_camera[0] {
+            o.px0 = Vector2::new(600.0, 300.0);
+        }
+        assert_eq!(score(&count, &rig, &ego, &obs, &all), n);
+        assert_eq!(score(&spread, &rig, &ego, &obs, &all), 1);
+        // The parallax support in cells, too.
+        let par = HypothesesOptions {
+            ground: false,
+            ..spread.clone()
+        };
+        assert_eq!(score(&par, &rig, &ego, &obs, &all), 1);
+    }
+
+    #[test]
     fn options_validate_and_parse() {
         assert!(HypothesesOptions::default().validate().is_ok());
         let d = HypothesesOptions {
@@ -499,5 +610,12 @@ mod tests {
         let o: HypothesesOptions = toml::from_str("decay = 0.5\nmargin = 0.2").unwrap();
         assert_eq!((o.decay, o.margin), (0.5, 0.2));
         assert!(toml::from_str::<HypothesesOptions>("decays = 0.5").is_err());
+        let o: HypothesesOptions = toml::from_str("spread_grid = [16, 8]").unwrap();
+        assert_eq!(o.spread_grid, Some((16, 8)));
+        let bad = HypothesesOptions {
+            spread_grid: Some((0, 8)),
+            ..HypothesesOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("spread_grid"));
     }
 }

@@ -60,6 +60,21 @@ pub struct SeparateOptions {
     /// ([`crate::hypotheses`], `[odometry.separate.hypotheses]`); none by default.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hypotheses: Option<HypothesesOptions>,
+    /// Spatial plausibility of a switch: the alternative replaces A only if its support covers
+    /// at least this fraction of the image cells ([`SeparateOptions::grid`]) A's support
+    /// covers (0: no such test). A compact object cannot be the static world.
+    pub min_cell_ratio: f64,
+    /// When two motions competed, the final stage leaves out the matches the rejected motion
+    /// also explains (object points near the focus of expansion fit the static motion within
+    /// the threshold and bias it); not applied if fewer than half of the chosen support remain.
+    pub final_exclusive: bool,
+    /// Run the final stage only in frames where two motions competed (elsewhere the frame's
+    /// solve stands): on static scenes the support's threshold cuts the noise tail of the
+    /// static matches (wide-angle cameras, heavy outliers) and costs efficiency.
+    pub final_competing_only: bool,
+    /// Passes of the final stage: each later pass re-selects the support under the previous
+    /// pass's motion (at least 1).
+    pub final_passes: usize,
 }
 
 impl Default for SeparateOptions {
@@ -73,6 +88,10 @@ impl Default for SeparateOptions {
             second_motion: true,
             plausibility_margin: -1.0,
             hypotheses: None,
+            min_cell_ratio: 0.0,
+            final_exclusive: false,
+            final_competing_only: false,
+            final_passes: 1,
         }
     }
 }
@@ -92,6 +111,12 @@ impl SeparateOptions {
         let cells = self.grid.0.checked_mul(self.grid.1);
         if self.grid.0 == 0 || self.grid.1 == 0 || cells.is_none_or(|c| c > 10_000) {
             return Err("odometry.separate.grid must be (columns, rows), 1 to 10000 cells".into());
+        }
+        if !(self.min_cell_ratio.is_finite() && self.min_cell_ratio >= 0.0) {
+            return Err("odometry.separate.min_cell_ratio must be a non-negative number".into());
+        }
+        if !(1..=10).contains(&self.final_passes) {
+            return Err("odometry.separate.final_passes must be 1 to 10".into());
         }
         if let Some(h) = &self.hypotheses {
             h.validate()?;
@@ -196,7 +221,12 @@ pub(crate) fn subset(obs: &FrameObservations, mask: &[Vec<bool>]) -> FrameObserv
 }
 
 /// Image cells holding at least one match of `mask` (frame k-1 pixels), over all cameras.
-fn cells(rig: &Rig, obs: &FrameObservations, mask: &[Vec<bool>], grid: (usize, usize)) -> usize {
+pub(crate) fn cells(
+    rig: &Rig,
+    obs: &FrameObservations,
+    mask: &[Vec<bool>],
+    grid: (usize, usize),
+) -> usize {
     use momo_core::CameraModel;
     let mut total = 0;
     for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
@@ -345,6 +375,14 @@ pub fn separate(
         }
     }
     outcome.competing = !alternatives.is_empty();
+    // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
+    let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
+        opts.min_cell_ratio <= 0.0
+            || cells(ctx.rig, obs, b, opts.grid) as f64
+                >= opts.min_cell_ratio * cells(ctx.rig, obs, a, opts.grid) as f64
+    };
+    // The support of the motion not chosen (for `final_exclusive`).
+    let mut other: Option<Vec<Vec<bool>>> = None;
     if let Some(h) = &opts.hypotheses
         && !alternatives.is_empty()
     {
@@ -369,9 +407,13 @@ pub fn separate(
             motion: ctx.estimator.motion(&best.0.params),
             support: &best.1,
         };
-        if tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true) {
+        if tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true)
+            && spread_ok(&best.1, &chosen.1)
+        {
             outcome.switched = true;
-            chosen = best;
+            other = Some(std::mem::replace(&mut chosen, best).1);
+        } else {
+            other = Some(best.1);
         }
     } else if let Some(b) = alternatives.pop() {
         let (pa, pb) = (
@@ -387,9 +429,11 @@ pub fn separate(
             }
             _ => cells(ctx.rig, obs, &b.1, opts.grid) > cells(ctx.rig, obs, &chosen.1, opts.grid),
         };
-        if switch {
+        if switch && spread_ok(&b.1, &chosen.1) {
             outcome.switched = true;
-            chosen = b;
+            other = Some(std::mem::replace(&mut chosen, b).1);
+        } else {
+            other = Some(b.1);
         }
     }
     if !outcome.competing
@@ -397,16 +441,42 @@ pub fn separate(
     {
         tracker.idle(h);
     }
-    let (sol, mask) = chosen;
-    if opts.final_stage && count(&mask) >= 8 {
-        let core = subset(obs, &mask);
-        let loss: &dyn RobustLoss = if opts.final_robust {
-            ctx.loss
-        } else {
-            &TrivialLoss
+    let (mut sol, mut mask) = chosen;
+    if !opts.final_stage || (opts.final_competing_only && !outcome.competing) {
+        return (sol, outcome);
+    }
+    // Leaves out the rejected motion's support (`final_exclusive`).
+    let exclusive = |mask: Vec<Vec<bool>>| -> Vec<Vec<bool>> {
+        let Some(other) = other.as_ref().filter(|_| opts.final_exclusive) else {
+            return mask;
         };
-        if let Some(fin) = ctx.solve(&core, &sol.params, loss, !outcome.competing) {
-            return (fin, outcome);
+        let only: Vec<Vec<bool>> = mask
+            .iter()
+            .zip(other)
+            .map(|(m, o)| m.iter().zip(o).map(|(m, o)| *m && !*o).collect())
+            .collect();
+        if 2 * count(&only) >= count(&mask) {
+            only
+        } else {
+            mask
+        }
+    };
+    let loss: &dyn RobustLoss = if opts.final_robust {
+        ctx.loss
+    } else {
+        &TrivialLoss
+    };
+    for pass in 0..opts.final_passes.max(1) {
+        if pass > 0 {
+            mask = support(&sol.params);
+        }
+        mask = exclusive(mask);
+        if count(&mask) < 8 {
+            break;
+        }
+        match ctx.solve(&subset(obs, &mask), &sol.params, loss, !outcome.competing) {
+            Some(fin) => sol = fin,
+            None => break,
         }
     }
     (sol, outcome)
@@ -435,6 +505,20 @@ mod tests {
         assert!(o.final_robust);
         assert_eq!(o.plausibility_margin, 16.0);
         assert!(toml::from_str::<SeparateOptions>("final_robustness = true").is_err());
+        let o: SeparateOptions = toml::from_str(
+            "min_cell_ratio = 0.5\nfinal_exclusive = true\nfinal_competing_only = true\nfinal_passes = 2",
+        )
+        .unwrap();
+        assert_eq!((o.min_cell_ratio, o.final_passes), (0.5, 2));
+        assert!(o.final_exclusive && o.final_competing_only);
+        for bad in [
+            "min_cell_ratio = -1.0",
+            "final_passes = 0",
+            "final_passes = 11",
+        ] {
+            let o: SeparateOptions = toml::from_str(bad).unwrap();
+            assert!(o.validate().is_err(), "{bad}");
+        }
     }
 
     /// The shortcut gives the same mask as the angles, at and around the threshold.
