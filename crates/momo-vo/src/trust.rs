@@ -670,6 +670,28 @@ pub fn widen(base: &DMatrix<f64>, other: &DMatrix<f64>, min_ratio: f64) -> DMatr
     (&out + out.transpose()) * 0.5
 }
 
+/// Per camera of the rig that has matches in `obs`: its index and each match's image cell
+/// ([`cell_of`] of the frame-(k-1) pixel), the split shared by [`leave_one_cell_out`] and
+/// [`cells_alone`].
+fn cells_per_camera(
+    rig: &Rig,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+) -> Vec<(usize, Vec<usize>)> {
+    obs.per_camera
+        .iter()
+        .enumerate()
+        .filter_map(|(j, matches)| {
+            let size = rig.cameras().get(j)?.model.size();
+            let of = matches
+                .iter()
+                .map(|o| cell_of((o.px0.x, o.px0.y), size, grid))
+                .collect();
+            Some((j, of))
+        })
+        .collect()
+}
+
 /// The matches of every image cell but one, for each cell that holds matches (`grid` per
 /// camera, cells of the frame-(k-1) pixels): the samples of the leave-one-cell-out
 /// [`jackknife_covariance`]. Cross-camera matches are kept in every sample.
@@ -680,15 +702,8 @@ pub fn leave_one_cell_out(
 ) -> Vec<FrameObservations> {
     let cells = grid.0.max(1) * grid.1.max(1);
     let mut out = Vec::new();
-    for (j, matches) in obs.per_camera.iter().enumerate() {
-        let Some(cam) = rig.cameras().get(j) else {
-            continue;
-        };
-        let size = cam.model.size();
-        let of: Vec<usize> = matches
-            .iter()
-            .map(|o| cell_of((o.px0.x, o.px0.y), size, grid))
-            .collect();
+    for (j, of) in cells_per_camera(rig, obs, grid) {
+        let matches = &obs.per_camera[j];
         for c in 0..cells {
             if !of.contains(&c) {
                 continue;
@@ -717,14 +732,10 @@ pub fn cells_alone(
 ) -> Vec<FrameObservations> {
     let cells = grid.0.max(1) * grid.1.max(1);
     let mut out = Vec::new();
-    for (j, matches) in obs.per_camera.iter().enumerate() {
-        let Some(cam) = rig.cameras().get(j) else {
-            continue;
-        };
-        let size = cam.model.size();
+    for (j, of) in cells_per_camera(rig, obs, grid) {
         let mut by_cell: Vec<Vec<Observation>> = vec![Vec::new(); cells];
-        for o in matches {
-            by_cell[cell_of((o.px0.x, o.px0.y), size, grid)].push(*o);
+        for (o, &c) in obs.per_camera[j].iter().zip(&of) {
+            by_cell[c].push(*o);
         }
         for cell in by_cell.into_iter().filter(|c| !c.is_empty()) {
             let mut sample = FrameObservations {
