@@ -53,6 +53,13 @@ pub struct SoftSingleTrack {
     pub side_slip_sigma: f64,
     /// Standard deviation of the vertical slip (climb plus half the pitch change), radians.
     pub climb_sigma: f64,
+    /// Standard deviation of the slips as a sideways / vertical *displacement* over the frame
+    /// pair, metres (0: none). It adds to each angle's variance as `(σ_d / s)²` with `s` the
+    /// arc length, so that a short step may point anywhere a few centimetres allow: slow
+    /// manoeuvres, the bounce of the body, and ground truth whose positions jitter by
+    /// centimetres (KITTI's) all make the direction of a short step much noisier than the
+    /// angle-only prior allows.
+    pub slip_distance_sigma: f64,
 }
 
 impl Default for SoftSingleTrack {
@@ -63,6 +70,7 @@ impl Default for SoftSingleTrack {
         Self {
             side_slip_sigma: 0.01,
             climb_sigma: 0.01,
+            slip_distance_sigma: 0.0,
         }
     }
 }
@@ -73,6 +81,7 @@ impl Default for SoftSingleTrack {
 struct SoftSingleTrackFields {
     side_slip_sigma: f64,
     climb_sigma: f64,
+    slip_distance_sigma: f64,
 }
 
 impl Default for SoftSingleTrackFields {
@@ -81,6 +90,7 @@ impl Default for SoftSingleTrackFields {
         Self {
             side_slip_sigma: d.side_slip_sigma,
             climb_sigma: d.climb_sigma,
+            slip_distance_sigma: d.slip_distance_sigma,
         }
     }
 }
@@ -96,9 +106,16 @@ impl TryFrom<SoftSingleTrackFields> for SoftSingleTrack {
                 return Err(format!("{name} must be finite and > 0, got {v}"));
             }
         }
+        if !(f.slip_distance_sigma.is_finite() && f.slip_distance_sigma >= 0.0) {
+            return Err(format!(
+                "slip_distance_sigma must be finite and >= 0, got {}",
+                f.slip_distance_sigma
+            ));
+        }
         Ok(Self {
             side_slip_sigma: f.side_slip_sigma,
             climb_sigma: f.climb_sigma,
+            slip_distance_sigma: f.slip_distance_sigma,
         })
     }
 }
@@ -120,7 +137,18 @@ impl Manifold for SoftSingleTrack {
     #[inline]
     fn prior_residuals<T: Scalar>(&self, p: &[T], out: &mut [T]) {
         let (rot_y, rot_z, heading, climb) = (p[1], p[2], p[3], p[4]);
-        out[0] = (heading - rot_z * 0.5) * (1.0 / self.side_slip_sigma);
-        out[1] = (climb + rot_y * 0.5) * (1.0 / self.climb_sigma);
+        let side = heading - rot_z * 0.5;
+        let vertical = climb + rot_y * 0.5;
+        if self.slip_distance_sigma > 0.0 {
+            // 1 / sqrt(σ² + (σ_d / s)²) = |s| / sqrt(σ² s² + σ_d²): finite at s = 0.
+            let s = p[5].abs();
+            let d2 = T::c(self.slip_distance_sigma * self.slip_distance_sigma);
+            let w = |sigma: f64| s / (s * s * (sigma * sigma) + d2).sqrt();
+            out[0] = side * w(self.side_slip_sigma);
+            out[1] = vertical * w(self.climb_sigma);
+        } else {
+            out[0] = side * (1.0 / self.side_slip_sigma);
+            out[1] = vertical * (1.0 / self.climb_sigma);
+        }
     }
 }

@@ -36,6 +36,7 @@ fn gradient_matches_the_cost_with_priors() {
     let model = SoftSingleTrack {
         side_slip_sigma: 0.004,
         climb_sigma: 0.006,
+        slip_distance_sigma: 0.005,
     };
     let loss = Cauchy::new(0.001);
     let prior = MotionPrior {
@@ -164,4 +165,32 @@ fn the_prior_scale_keeps_the_prior_weight_across_losses() {
     };
     let c = cost(&tukey, &unscaled);
     assert!((c / a - 56.25).abs() < 1e-6, "{c} / {a}");
+}
+
+/// `slip_distance_sigma`: the slip's standard deviation grows as `σ_d / s` on short steps, so
+/// the same side slip costs less the shorter the step, and nothing at a standstill; at long
+/// steps the prior tends to the angle-only one. Without it (`σ_d = 0`) the cost does not
+/// depend on the arc length.
+#[test]
+fn the_slip_distance_sigma_frees_short_steps() {
+    let angle_only = SoftSingleTrack::default();
+    let with_distance = SoftSingleTrack {
+        slip_distance_sigma: 0.02,
+        ..SoftSingleTrack::default()
+    };
+    let slip = 0.01;
+    let residual = |m: &SoftSingleTrack, s: f64| {
+        let mut q = [0.0; 2];
+        m.prior_residuals(&[0.0, 0.0, 0.04, 0.02 + slip, 0.0, s], &mut q);
+        q[0]
+    };
+    for s in [0.05, 0.3, 1.0, 3.0] {
+        assert!((residual(&angle_only, s) - slip / 0.01).abs() < 1e-12);
+        let expected = slip / (0.01f64.powi(2) + (0.02 / s).powi(2)).sqrt();
+        assert!((residual(&with_distance, s) - expected).abs() < 1e-12 * expected.abs());
+    }
+    assert!(residual(&with_distance, 0.05) < 0.3 * residual(&with_distance, 3.0));
+    assert_eq!(residual(&with_distance, 0.0), 0.0);
+    // Reversing is symmetric.
+    assert!((residual(&with_distance, -0.3) - residual(&with_distance, 0.3)).abs() < 1e-15);
 }

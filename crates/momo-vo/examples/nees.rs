@@ -13,7 +13,9 @@
 //! NEES 0. Standstill, degenerate and held frames are not scored (column "not scored").
 //!
 //! Usage: `cargo run --release -p momo-vo --example nees [FRAMES] [SEEDS...]`
-//! (default 100 frames, seeds 1 2 3); `MOMO_NEES_CONFIG=cfg.toml` scores another configuration.
+//! (default 100 frames, seeds 1 2 3); `MOMO_NEES_CONFIG=cfg.toml` scores another configuration;
+//! `MOMO_NEES_TRAJECTORY=poses.txt` drives every scenario along a KITTI poses file (e.g. a KITTI
+//! ground truth, as `momo simulate --trajectory`) instead of the built-in drive.
 //! Prints one Markdown row per scenario.
 
 use momo_core::{FrameEstimator, so3_log};
@@ -63,6 +65,12 @@ fn main() {
     println!("|---|---|---|---|---|---|---|");
     // `MOMO_NEES_SCENARIOS=a,b`: only these scenarios.
     let only = std::env::var("MOMO_NEES_SCENARIOS").ok();
+    let trajectory = std::env::var("MOMO_NEES_TRAJECTORY").ok().map(|path| {
+        momo_io::read_poses(std::path::Path::new(&path)).unwrap_or_else(|e| {
+            eprintln!("nees: {e}");
+            std::process::exit(2)
+        })
+    });
     for name in scenarios {
         if only
             .as_deref()
@@ -80,6 +88,7 @@ fn main() {
             };
             cfg.frames = frames;
             cfg.seed = seed;
+            cfg.camera_trajectory.clone_from(&trajectory);
             let sim = match simulate(&cfg) {
                 Ok(s) => s,
                 Err(e) => {

@@ -25,6 +25,7 @@ fn the_side_slip_prior_trades_data_against_the_model() {
         model: Box::new(SoftSingleTrack {
             side_slip_sigma: sigma,
             climb_sigma: sigma,
+            slip_distance_sigma: 0.0,
         }),
         ..Config::default()
     };
@@ -229,6 +230,7 @@ fn soft_prior_centring_learns_a_mount_offset() {
             model: Box::new(SoftSingleTrack {
                 side_slip_sigma: sigma,
                 climb_sigma: sigma,
+                slip_distance_sigma: 0.0,
             }),
             ..Config::default()
         };
