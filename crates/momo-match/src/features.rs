@@ -315,10 +315,6 @@ pub struct FrameFeatures {
     pixels: Vec<u8>,
     blob: Vec<i16>,
     corner: Vec<i16>,
-    /// Row-wise window extremes of the responses (blob max, blob min, corner max, corner min):
-    /// entry `(u, v)` is the extreme of the response over columns `u - n..=u + n` of row `v`
-    /// (the suppression's window check reads one column of them).
-    row_extremes: [Vec<i16>; CLASSES],
     /// The features per class: blob max, blob min, corner max, corner min.
     pub classes: [ClassFeatures; CLASSES],
 }
@@ -382,43 +378,17 @@ impl FrameFeatures {
     /// Block-wise non-maximum suppression (libviso2): the image inside the border is cut into
     /// `(n+1) x (n+1)` blocks; per block and class the extremum (the first in row-major order)
     /// is the only candidate, kept if it is strong enough and the strict extremum of its
-    /// `(2n+1)^2` window (ties go to the earlier pixel). The row-wise window extremes of each
-    /// response (vectorised, rows in parallel), then two passes over rows of blocks, each in
-    /// parallel: (1) the strong extrema of every block, from column-wise extremes (vectorised);
-    /// (2) per candidate, the window check from the row-wise extremes down its column
-    /// ([`window_check`]); survivors are described and refined. The feature order is that of a
-    /// serial scan (block rows, then blocks).
+    /// `(2n+1)^2` window (ties go to the earlier pixel). Two passes over rows of blocks, each in
+    /// parallel: (1) the strong extrema of every block, from column-wise extremes (vectorised),
+    /// less those that a column extreme of their own block row beats within their window (a
+    /// necessary condition, [`beaten_in_block_row`]); (2) per remaining candidate, the exact
+    /// window check, 16 columns at a time ([`window_check`]); survivors are described and
+    /// refined. The feature order is that of a serial scan (block rows, then blocks).
     fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
-        self.row_extremes(n);
         let extrema = self.block_extrema(n, tau);
         self.check_and_describe(n, &extrema);
-    }
-
-    /// The row-wise window extremes of the four classes ([`window_extreme_row`]), rows in
-    /// parallel.
-    #[inline(never)]
-    fn row_extremes(&mut self, n: usize) {
-        let (w, h) = (self.width, self.height);
-        for (class, ext) in self.row_extremes.iter_mut().enumerate() {
-            let img = if class < 2 { &self.blob } else { &self.corner };
-            ext.resize(w * h, 0);
-            let maximum = class % 2 == 0;
-            ext.par_chunks_mut(w)
-                .zip(img.par_chunks(w))
-                .with_min_len(8)
-                .for_each_init(
-                    || (vec![0i16; w], vec![0i16; w]),
-                    |(a, b), (out, row)| {
-                        if maximum {
-                            window_extreme_row::<true>(row, n, out, a, b);
-                        } else {
-                            window_extreme_row::<false>(row, n, out, a, b);
-                        }
-                    },
-                );
-        }
     }
 
     /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
@@ -431,6 +401,7 @@ impl FrameFeatures {
         let inner = w - 2 * BORDER;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
         let responses = [blob, blob, corner, corner];
+        let lanes = &LaneOffsets::new(n);
         block_rows
             .par_iter()
             .map_init(
@@ -486,7 +457,18 @@ impl FrameFeatures {
                                         first = (v, u);
                                     }
                                 }
-                                if first.0 != usize::MAX {
+                                if first.0 == usize::MAX {
+                                    continue;
+                                }
+                                // Within the candidate's window, the block row's columns
+                                // `u - n..=u + n`: a column extreme strictly better rejects it.
+                                let k0 = (first.1 - BORDER).wrapping_sub(n);
+                                let beaten = if class % 2 == 0 {
+                                    beaten_in_block_row::<true>(col, k0, &lanes.block_row[0], val)
+                                } else {
+                                    beaten_in_block_row::<false>(col, k0, &lanes.block_row[1], val)
+                                };
+                                if !beaten {
                                     out[class] = Extremum {
                                         val,
                                         u: first.1 as u16,
@@ -507,7 +489,7 @@ impl FrameFeatures {
     #[inline(never)]
     fn check_and_describe(&mut self, n: usize, extrema: &[Vec<[Extremum; CLASSES]>]) {
         let (w, h) = (self.width, self.height);
-        let row_ext = &self.row_extremes;
+        let lanes = &LaneOffsets::new(n);
         let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
         let img_of = |class: usize| if class < 2 { blob } else { corner };
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
@@ -522,15 +504,13 @@ impl FrameFeatures {
                         let maximum = class % 2 == 0;
                         let (u, v) = (usize::from(e.u), usize::from(e.v));
                         let img = img_of(class);
-                        // Inside the image the window check reads the row-wise window
-                        // extremes down the candidate's column (2n + 1 values) and the centre
-                        // row's left and right halves; near the border the whole window is
-                        // scanned.
-                        let inside = u >= n && u + n < w && v >= n && v + n < h;
-                        let ext = &row_ext[class];
-                        let keep = match (inside, maximum) {
-                            (true, true) => window_check::<true>(img, ext, w, u, v, n, e.val),
-                            (true, false) => window_check::<false>(img, ext, w, u, v, n, e.val),
+                        // The 16-column check where the window fits it, else the whole
+                        // window is scanned.
+                        let fits =
+                            lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
+                        let keep = match (fits, maximum) {
+                            (true, true) => window_check::<true>(img, w, u, v, n, lanes, e.val),
+                            (true, false) => window_check::<false>(img, w, u, v, n, lanes, e.val),
                             (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
                             (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
                         };
@@ -604,88 +584,134 @@ fn vertex(a: f64, b: f64, c: f64) -> f64 {
     (0.5 * (a - c) / denom).clamp(-0.5, 0.5)
 }
 
-/// `out[x]` = the extreme (`MAX`: maximum, else minimum) of `src[x - n..=x + n]` for `x` in
-/// `n..w - n` (other entries unchanged), by doubling: windows of 2, 4, ... `p <= 2n + 1` pixels,
-/// then the two windows of `p` that cover `2n + 1` (vectorised slice passes; `a`, `b` are
-/// scratch rows of length `w`).
-fn window_extreme_row<const MAX: bool>(
-    src: &[i16],
-    n: usize,
-    out: &mut [i16],
-    a: &mut [i16],
-    b: &mut [i16],
-) {
-    let w = src.len();
-    let width = 2 * n + 1;
-    if n == 0 || w < width {
-        return;
-    }
-    #[inline(always)]
-    fn op<const MAX: bool>(x: i16, y: i16) -> i16 {
-        if MAX { x.max(y) } else { x.min(y) }
-    }
-    // Windows of 2: a[x] = ext(src[x..x + 2]), valid for x < w - 1.
-    let mut len = w - 1;
-    for ((o, &x), &y) in a[..len].iter_mut().zip(&src[..len]).zip(&src[1..len + 1]) {
-        *o = op::<MAX>(x, y);
-    }
-    let mut p = 2;
-    let (mut cur, mut next) = (a, b);
-    while 2 * p <= width {
-        let new_len = len - p;
-        for ((o, &x), &y) in next[..new_len]
-            .iter_mut()
-            .zip(&cur[..new_len])
-            .zip(&cur[p..p + new_len])
-        {
-            *o = op::<MAX>(x, y);
+/// Lanes of the vectorised window checks: a window row of up to 16 columns (`2n + 1 <= 16`).
+const LANES: usize = 16;
+
+/// Per-lane offsets that turn the window checks into one strict comparison per lane: lane `k`
+/// is column `u - n + k`; a lane beats the candidate `val` when it is strictly better than
+/// `val + offset` (saturating). Offset 0: strictly better beats; -1 (maxima) or +1 (minima):
+/// at least as good beats; `i16::MAX` (maxima) or `i16::MIN` (minima): never (lanes outside
+/// the window, and the candidate itself). Index 0: maxima, 1: minima.
+#[derive(Clone, Copy, Debug)]
+struct LaneOffsets {
+    /// The window fits in [`LANES`] columns.
+    fits: bool,
+    /// Rows above the candidate (at least as good beats).
+    above: [[i16; LANES]; 2],
+    /// Rows below (strictly better beats).
+    below: [[i16; LANES]; 2],
+    /// The candidate's row (left: at least as good, right: strictly better).
+    centre: [[i16; LANES]; 2],
+    /// The block row's column extremes (strictly better beats; ties are left to the exact
+    /// check).
+    block_row: [[i16; LANES]; 2],
+}
+
+impl LaneOffsets {
+    fn new(n: usize) -> Self {
+        let inside = |k: usize| k <= 2 * n;
+        // `NEVER` marks lanes that cannot beat the candidate, `AT_LEAST` those that beat it when
+        // equal (maxima's offsets; minima's are mirrored).
+        const NEVER: i16 = i16::MAX;
+        const AT_LEAST: i16 = -1;
+        let lane = |f: &dyn Fn(usize) -> i16| -> [[i16; LANES]; 2] {
+            let max: [i16; LANES] = std::array::from_fn(f);
+            let min = max.map(|o| if o == NEVER { i16::MIN } else { -o });
+            [max, min]
+        };
+        Self {
+            fits: 2 * n < LANES,
+            above: lane(&|k| if inside(k) { AT_LEAST } else { NEVER }),
+            below: lane(&|k| if inside(k) { 0 } else { NEVER }),
+            centre: lane(&|k| match k.cmp(&n) {
+                std::cmp::Ordering::Less => AT_LEAST,
+                std::cmp::Ordering::Equal => NEVER,
+                std::cmp::Ordering::Greater if inside(k) => 0,
+                std::cmp::Ordering::Greater => NEVER,
+            }),
+            block_row: lane(&|k| if inside(k) { 0 } else { NEVER }),
         }
-        std::mem::swap(&mut cur, &mut next);
-        len = new_len;
-        p *= 2;
-    }
-    // Windows of `width` = two overlapping windows of `p`.
-    let count = w - width + 1;
-    let shift = width - p;
-    for ((o, &x), &y) in out[n..n + count]
-        .iter_mut()
-        .zip(&cur[..count])
-        .zip(&cur[shift..shift + count])
-    {
-        *o = op::<MAX>(x, y);
     }
 }
 
-/// The window check of [`is_extremum`] for a window inside the image, from the row-wise window
-/// extremes `ext` ([`window_extreme_row`]): rows above `v` beat `val` when their extreme is at
-/// least as good, rows below when it is better; in row `v` the pixels left of `u` beat it when
-/// at least as good, those right of it when better.
-#[allow(clippy::too_many_arguments)]
-#[inline]
+/// `x` strictly better than `t` (`MAX`: greater, else smaller).
+#[inline(always)]
+fn better<const MAX: bool>(x: i16, t: i16) -> bool {
+    if MAX { x > t } else { x < t }
+}
+
+/// The extreme of two values (`MAX`: maximum, else minimum).
+#[inline(always)]
+fn extreme<const MAX: bool>(x: i16, y: i16) -> i16 {
+    if MAX { x.max(y) } else { x.min(y) }
+}
+
+/// True if any lane of `x` is strictly better than `val` plus its lane offset (`offsets`: the
+/// class's row of a [`LaneOffsets`] array; branch-free, so that it compiles to a few vector
+/// comparisons).
+#[inline(always)]
+fn any_better<const MAX: bool>(x: &[i16; LANES], offsets: &[i16; LANES], val: i16) -> bool {
+    let mut any = false;
+    for k in 0..LANES {
+        any |= better::<MAX>(x[k], val.saturating_add(offsets[k]));
+    }
+    any
+}
+
+/// Pass 1's necessary condition: true if a column extreme of the candidate's block row,
+/// `col[k0..k0 + 2n + 1]` (columns `u - n..=u + n`), is strictly better than `val` (then a
+/// pixel of the window beats the candidate; ties are left to [`window_check`]). False where the
+/// 16 lanes do not fit in `col` (`k0` wraps below zero near the left border).
+#[inline(always)]
+fn beaten_in_block_row<const MAX: bool>(
+    col: &[i16],
+    k0: usize,
+    offsets: &[i16; LANES],
+    val: i16,
+) -> bool {
+    let lanes: Option<&[i16; LANES]> = col
+        .get(k0..k0.wrapping_add(LANES))
+        .and_then(|x| x.try_into().ok());
+    lanes.is_some_and(|x| any_better::<MAX>(x, offsets, val))
+}
+
+/// The window check of [`is_extremum`] for a window of at most 16 columns whose 16 lanes from
+/// column `u - n` fit in the image: the rows above `v` reduced to their column-wise extremes,
+/// likewise the rows below, then per lane one comparison of each ([`LaneOffsets`]): above, a
+/// pixel at least as good beats `val`, below one strictly better; in row `v` those left of `u`
+/// when at least as good, those right of it when better.
+#[inline(always)]
 fn window_check<const MAX: bool>(
     img: &[i16],
-    ext: &[i16],
     w: usize,
     u: usize,
     v: usize,
     n: usize,
+    lanes: &LaneOffsets,
     val: i16,
 ) -> bool {
-    // `at_least(x)`: x at least as good as val; `better(x)`: strictly better.
-    let at_least = |x: i16| if MAX { x >= val } else { x <= val };
-    let better = |x: i16| if MAX { x > val } else { x < val };
-    for y in v - n..v {
-        if at_least(ext[y * w + u]) {
-            return false;
+    let start = u - n;
+    let row = |y: usize| -> [i16; LANES] {
+        let s = &img[y * w + start..y * w + start + LANES];
+        s.try_into().unwrap_or([val; LANES])
+    };
+    let reduce = |ys: std::ops::Range<usize>| {
+        let mut acc = [if MAX { i16::MIN } else { i16::MAX }; LANES];
+        for y in ys {
+            let r = row(y);
+            for k in 0..LANES {
+                acc[k] = extreme::<MAX>(acc[k], r[k]);
+            }
         }
-    }
-    for y in v + 1..=v + n {
-        if better(ext[y * w + u]) {
-            return false;
-        }
-    }
-    let row = &img[v * w..(v + 1) * w];
-    !(row[u - n..u].iter().any(|&x| at_least(x)) || row[u + 1..=u + n].iter().any(|&x| better(x)))
+        acc
+    };
+    let above = reduce(v - n..v);
+    let below = reduce(v + 1..v + n + 1);
+    let centre = row(v);
+    let m = usize::from(!MAX);
+    !(any_better::<MAX>(&above, &lanes.above[m], val)
+        | any_better::<MAX>(&below, &lanes.below[m], val)
+        | any_better::<MAX>(&centre, &lanes.centre[m], val))
 }
 
 /// True if `val` at `(u, v)` is the strict maximum (`MAX`, else minimum) of `img` over the
@@ -936,7 +962,7 @@ mod tests {
     /// values) for several radii.
     #[test]
     fn suppression_equals_the_brute_force_definition() {
-        for (seed, n) in [(1u64, 5usize), (2, 3), (3, 1), (4, 7)] {
+        for (seed, n) in [(1u64, 5usize), (2, 3), (3, 1), (4, 7), (5, 8)] {
             let (w, h) = (97usize, 61usize);
             let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
             let mut img = GrayImage::new(w as u32, h as u32);
