@@ -23,7 +23,7 @@
 //!    (bucketed again). Step 4 is then skipped.
 
 use crate::error::MatchError;
-use crate::features::{CLASSES, DetectorOptions, FrameFeatures, MIN_SIDE};
+use crate::features::{CLASSES, DetectorOptions, Feature, FrameFeatures, MIN_SIDE};
 use crate::refine::{KltOptions, MAX_HALF, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
@@ -315,25 +315,25 @@ pub fn match_features_with_prior(
     }
     let grid = Grid::new(w, h, options.matches_per_frame);
 
-    // 1. Candidates: the strongest features per cell and class.
+    // 1. Candidates: the strongest features per cell and class (ordered by cell, strength,
+    // index; the three packed into one `u64` where they fit, which sorts several times faster).
     let mut candidates: Vec<(usize, usize)> = Vec::new();
+    let packed = grid.len() < 1 << 16;
+    let mut keys: Vec<u64> = Vec::new();
+    let mut keyed: Vec<(usize, i32, usize)> = Vec::new();
     for class in 0..CLASSES {
         let points = &prev.classes[class].points;
-        let mut keyed: Vec<(usize, i32, usize)> = points
-            .iter()
-            .enumerate()
-            .map(|(i, f)| {
-                (
-                    grid.of(f64::from(f.u), f64::from(f.v)),
-                    -i32::from(f.response).abs(),
-                    i,
-                )
-            })
-            .collect();
-        keyed.sort_unstable();
+        let key = |(i, f): (usize, &Feature)| {
+            (
+                grid.of(f64::from(f.u), f64::from(f.v)),
+                -i32::from(f.response).abs(),
+                i,
+            )
+        };
+        // The first `candidates_per_cell` of each cell, in the sorted order.
         let mut last_cell = usize::MAX;
         let mut taken = 0;
-        for (cell, _, i) in keyed {
+        let mut take = |cell: usize, i: usize| {
             if cell != last_cell {
                 last_cell = cell;
                 taken = 0;
@@ -341,6 +341,25 @@ pub fn match_features_with_prior(
             if taken < options.candidates_per_cell {
                 candidates.push((class, i));
                 taken += 1;
+            }
+        };
+        if packed && u32::try_from(points.len()).is_ok() {
+            // cell < 2^16, 0 <= -|response| + 2^15 <= 2^15, index < 2^32.
+            keys.clear();
+            keys.extend(points.iter().enumerate().map(|p| {
+                let (cell, strength, i) = key(p);
+                (cell as u64) << 48 | ((strength + (1 << 15)) as u64) << 32 | i as u64
+            }));
+            keys.sort_unstable();
+            for &k in &keys {
+                take((k >> 48) as usize, (k & 0xffff_ffff) as usize);
+            }
+        } else {
+            keyed.clear();
+            keyed.extend(points.iter().enumerate().map(key));
+            keyed.sort_unstable();
+            for &(cell, _, i) in &keyed {
+                take(cell, i);
             }
         }
     }
