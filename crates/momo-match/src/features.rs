@@ -495,7 +495,10 @@ impl FrameFeatures {
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
-                let mut out: [Vec<Feature>; CLASSES] = Default::default();
+                // Sized for every candidate of the class in this block row (no regrowth).
+                let mut out: [Vec<Feature>; CLASSES] = std::array::from_fn(|class| {
+                    Vec::with_capacity(extrema[by].iter().filter(|b| !b[class].is_none()).count())
+                });
                 for block in &extrema[by] {
                     for (class, e) in block.iter().enumerate() {
                         if e.is_none() {
