@@ -594,7 +594,9 @@ const LANES: usize = 16;
 /// is column `u - n + k`; a lane beats the candidate `val` when it is strictly better than
 /// `val + offset` (saturating). Offset 0: strictly better beats; -1 (maxima) or +1 (minima):
 /// at least as good beats; `i16::MAX` (maxima) or `i16::MIN` (minima): never (lanes outside
-/// the window, and the candidate itself). Index 0: maxima, 1: minima.
+/// the window, and the candidate itself). Index 0: maxima, 1: minima. Exact for the
+/// candidates' signs (strong maxima are at least 1, strong minima at most -1): the offsets -1 /
+/// +1 never saturate, and `i16::MAX` / `i16::MIN` always do.
 #[derive(Clone, Copy, Debug)]
 struct LaneOffsets {
     /// The window fits in [`LANES`] columns.

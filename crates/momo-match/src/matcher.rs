@@ -315,54 +315,8 @@ pub fn match_features_with_prior(
     }
     let grid = Grid::new(w, h, options.matches_per_frame);
 
-    // 1. Candidates: the strongest features per cell and class (ordered by cell, strength,
-    // index; the three packed into one `u64` where they fit, which sorts several times faster).
-    let mut candidates: Vec<(usize, usize)> = Vec::new();
-    let packed = grid.len() < 1 << 16;
-    let mut keys: Vec<u64> = Vec::new();
-    let mut keyed: Vec<(usize, i32, usize)> = Vec::new();
-    for class in 0..CLASSES {
-        let points = &prev.classes[class].points;
-        let key = |(i, f): (usize, &Feature)| {
-            (
-                grid.of(f64::from(f.u), f64::from(f.v)),
-                -i32::from(f.response).abs(),
-                i,
-            )
-        };
-        // The first `candidates_per_cell` of each cell, in the sorted order.
-        let mut last_cell = usize::MAX;
-        let mut taken = 0;
-        let mut take = |cell: usize, i: usize| {
-            if cell != last_cell {
-                last_cell = cell;
-                taken = 0;
-            }
-            if taken < options.candidates_per_cell {
-                candidates.push((class, i));
-                taken += 1;
-            }
-        };
-        if packed && u32::try_from(points.len()).is_ok() {
-            // cell < 2^16, 0 <= -|response| + 2^15 <= 2^15, index < 2^32.
-            keys.clear();
-            keys.extend(points.iter().enumerate().map(|p| {
-                let (cell, strength, i) = key(p);
-                (cell as u64) << 48 | ((strength + (1 << 15)) as u64) << 32 | i as u64
-            }));
-            keys.sort_unstable();
-            for &k in &keys {
-                take((k >> 48) as usize, (k & 0xffff_ffff) as usize);
-            }
-        } else {
-            keyed.clear();
-            keyed.extend(points.iter().enumerate().map(key));
-            keyed.sort_unstable();
-            for &(cell, _, i) in &keyed {
-                take(cell, i);
-            }
-        }
-    }
+    // 1. Candidates: the strongest features per cell and class.
+    let candidates = strongest_per_cell(prev, &grid, options.candidates_per_cell, true);
 
     // 2.-4. Forward, backward, sub-pixel.
     let (ru, rv) = (options.max_flow_u as i32, options.max_flow_v as i32);
@@ -443,6 +397,65 @@ pub fn match_features_with_prior(
             bucket(refined, &grid, options.matches_per_frame)
         }
     }
+}
+
+/// The `per_cell` strongest features of each grid cell and class, `(class, index)`, in the
+/// order (class, cell, strength, index). With `packed` (and fewer than 2^16 cells, 2^32
+/// features) the three keys are packed into one `u64`, which sorts several times faster than
+/// the tuple (the same order).
+fn strongest_per_cell(
+    frame: &FrameFeatures,
+    grid: &Grid,
+    per_cell: usize,
+    packed: bool,
+) -> Vec<(usize, usize)> {
+    let mut candidates: Vec<(usize, usize)> = Vec::new();
+    let packed = packed && grid.len() < 1 << 16;
+    let mut keys: Vec<u64> = Vec::new();
+    let mut keyed: Vec<(usize, i32, usize)> = Vec::new();
+    for class in 0..CLASSES {
+        let points = &frame.classes[class].points;
+        let key = |(i, f): (usize, &Feature)| {
+            (
+                grid.of(f64::from(f.u), f64::from(f.v)),
+                -i32::from(f.response).abs(),
+                i,
+            )
+        };
+        // The first `per_cell` of each cell, in the sorted order.
+        let mut last_cell = usize::MAX;
+        let mut taken = 0;
+        let mut take = |cell: usize, i: usize| {
+            if cell != last_cell {
+                last_cell = cell;
+                taken = 0;
+            }
+            if taken < per_cell {
+                candidates.push((class, i));
+                taken += 1;
+            }
+        };
+        if packed && u32::try_from(points.len()).is_ok() {
+            // cell < 2^16, 0 <= -|response| + 2^15 <= 2^15, index < 2^32.
+            keys.clear();
+            keys.extend(points.iter().enumerate().map(|p| {
+                let (cell, strength, i) = key(p);
+                (cell as u64) << 48 | ((strength + (1 << 15)) as u64) << 32 | i as u64
+            }));
+            keys.sort_unstable();
+            for &k in &keys {
+                take((k >> 48) as usize, (k & 0xffff_ffff) as usize);
+            }
+        } else {
+            keyed.clear();
+            keyed.extend(points.iter().enumerate().map(key));
+            keyed.sort_unstable();
+            for &(cell, _, i) in &keyed {
+                take(cell, i);
+            }
+        }
+    }
+    candidates
 }
 
 /// At most `n` matches, spread over the grid: one per cell and round, best SAD first; in the last
@@ -649,6 +662,23 @@ mod tests {
             u1,
             v1,
             sad: 0,
+        }
+    }
+
+    /// The packed-key sort picks the same candidates in the same order as the tuple sort, on a
+    /// textured image with many equal responses, for several grids and numbers per cell.
+    #[test]
+    fn packed_candidates_equal_the_tuple_sort() {
+        let img = crate::synthetic::dead_leaves(160, 96, 300, 3);
+        let mut f = FrameFeatures::default();
+        f.extract(&img, &DetectorOptions::default());
+        assert!(f.len() > 100, "{}", f.len());
+        for (n, per_cell) in [(10, 1), (50, 2), (300, 3), (2000, 2)] {
+            let grid = Grid::new(f.width, f.height, n);
+            let packed = strongest_per_cell(&f, &grid, per_cell, true);
+            let tuple = strongest_per_cell(&f, &grid, per_cell, false);
+            assert!(!packed.is_empty());
+            assert_eq!(packed, tuple, "n {n} per cell {per_cell}");
         }
     }
 
