@@ -12,6 +12,7 @@
 //! - Or a drive along real camera poses ([`SimConfig::camera_trajectory`], e.g. a KITTI
 //!   ground-truth file; [`vehicle_poses_from_camera_poses`]).
 //! - The Cramér-Rao bound of every frame pair's rotation from its static matches ([`bound`]).
+//! - The true label of every match as `labels.csv` ([`labels`]).
 //! - Presets by name: [`SimConfig::SCENARIOS`], [`SimConfig::scenario`].
 //! - Matches ([`sim`]): uniform pixels, depths from a ground plane / facade / far-point scene,
 //!   Gaussian pixel noise, outliers, blinded cameras, an independently moving object; every match
@@ -49,6 +50,7 @@
 pub mod bound;
 pub mod camera_scenarios;
 pub mod drive;
+pub mod labels;
 pub mod rigs;
 pub mod sim;
 pub mod traffic;

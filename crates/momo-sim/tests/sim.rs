@@ -400,3 +400,76 @@ fn invalid_configs_are_errors_not_panics() {
     .unwrap();
     assert!(all.labels[1][0].iter().all(|l| *l == MatchLabel::Outlier));
 }
+
+/// `labels.csv` has one row per row of `matches.csv`, in the same order (same frame and
+/// camera), and each row is the simulator's label of that match; a multi-camera rig with an
+/// outlier-blinded camera and outliers gives every kind of label.
+#[test]
+fn labels_csv_matches_matches_csv_row_for_row() {
+    use momo_sim::labels::{LABELS_FILE, labels_csv, write_labels_csv};
+    let traffic = SimConfig {
+        frames: 12,
+        seed: 3,
+        ..SimConfig::scenario("moving_traffic").unwrap()
+    };
+    let rig = SimConfig {
+        frames: 12,
+        seed: 4,
+        outlier_ratio: 0.2,
+        blinded: vec![Blinding {
+            camera: 1,
+            frames: 3..6,
+            mode: BlindMode::Outliers,
+        }],
+        ..SimConfig::fisheye_surround()
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    for cfg in [traffic, rig] {
+        let sim = simulate(&cfg).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        sim.write(dir.path()).unwrap();
+        write_labels_csv(dir.path(), &sim).unwrap();
+        let labels = std::fs::read_to_string(dir.path().join(LABELS_FILE)).unwrap();
+        assert_eq!(labels, labels_csv(&sim));
+        let matches = std::fs::read_to_string(dir.path().join("matches.csv")).unwrap();
+        let mut m = matches.lines();
+        let mut l = labels.lines();
+        assert_eq!(l.next(), Some("frame,camera,label"));
+        let header: Vec<&str> = m.next().unwrap().split(',').collect();
+        let (fi, ci) = (
+            header.iter().position(|h| *h == "frame").unwrap(),
+            header.iter().position(|h| *h == "camera").unwrap(),
+        );
+        let truth: Vec<(usize, usize, MatchLabel)> = sim
+            .labels
+            .iter()
+            .enumerate()
+            .flat_map(|(k, f)| {
+                f.iter()
+                    .enumerate()
+                    .flat_map(move |(j, c)| c.iter().map(move |x| (k, j, *x)))
+            })
+            .collect();
+        let mut rows = 0;
+        for ((mrow, lrow), (k, j, label)) in m.by_ref().zip(l.by_ref()).zip(&truth) {
+            let mf: Vec<&str> = mrow.split(',').collect();
+            let lf: Vec<&str> = lrow.split(',').collect();
+            assert_eq!((mf[fi], mf[ci]), (lf[0], lf[1]), "row {rows}");
+            assert_eq!(
+                (lf[0], lf[1]),
+                (k.to_string().as_str(), j.to_string().as_str())
+            );
+            assert_eq!(lf[2], label.name());
+            seen.insert(lf[2].to_string());
+            rows += 1;
+        }
+        assert_eq!((m.next(), l.next()), (None, None), "same number of rows");
+        assert_eq!(rows, truth.len());
+        assert_eq!(rows, sim.sequence.num_matches());
+    }
+    let all: std::collections::BTreeSet<String> = ["blinded", "inlier", "moving_object", "outlier"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    assert_eq!(seen, all);
+}
