@@ -309,6 +309,88 @@ pub fn ground_mask(
     out
 }
 
+/// The parameters of [`under_road_mask`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnderRoad {
+    /// Height of the road in the vehicle frame, metres.
+    pub ground_z: f64,
+    /// Standard deviation of a bearing's angle, radians.
+    pub noise_angle: f64,
+    /// A match is flagged when its inverse range falls short of the road's by more than this
+    /// many standard deviations of its parallax noise.
+    pub sigmas: f64,
+    /// The road may descend away from the vehicle by this slope (radians): the bound on a
+    /// ray's range is that of a road tilted down by it.
+    pub slope: f64,
+}
+
+/// The matches of `support` that cannot be static points on or above the road (issue 14): a
+/// static point seen below the horizon lies no farther than the road plane `z = ground_z` of
+/// the vehicle frame at frame k-1 allows along its ray (`h / (sin α - slope)`, `h` the camera's
+/// height above the road, `α` the ray's angle below the horizon). Its inverse range from the
+/// derotated parallax under `motion` (metric: the motion's translation at the odometry arc
+/// length), `1/z0 = p / (‖t‖ sin θ)` (`θ` the angle between the bearing and the translation),
+/// has the standard deviation `√2 σ / (‖t‖ sin θ)` (`σ` the bearing noise on both bearings); a
+/// match whose inverse range is below the road's by more than `sigmas` of them is flagged: an
+/// object moving with the ego vehicle (no parallax, so an infinite range below the horizon),
+/// or a mismatch. Rays at or above the horizon (within the slope) and cameras less than 0.2 m
+/// above the road are never flagged.
+pub fn under_road_mask(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    opts: &UnderRoad,
+) -> Vec<Vec<bool>> {
+    let mut out: Vec<Vec<bool>> = obs
+        .per_camera
+        .iter()
+        .map(|m| vec![false; m.len()])
+        .collect();
+    for (((cam, matches), mask), out) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(support)
+        .zip(&mut out)
+    {
+        let p_vc = &cam.t_vehicle_camera;
+        let height = p_vc.translation.z - opts.ground_z;
+        if !(height > 0.2) {
+            continue;
+        }
+        let c = camera_motion(motion, p_vc);
+        let t = c.translation;
+        let tn = t.norm();
+        if !(tn > 1e-6) {
+            continue;
+        }
+        let th = t / tn;
+        for ((o, _), flag) in matches
+            .iter()
+            .zip(mask)
+            .zip(out.iter_mut())
+            .filter(|((_, k), _)| **k)
+        {
+            // Sine of the ray's angle below the horizon, less the slope margin.
+            let down = -(p_vc.rotation * o.f0).z / o.f0.norm() - opts.slope;
+            if !(down > 1e-6) {
+                continue;
+            }
+            let away = th.cross(&o.f0);
+            let a = away.norm();
+            if a < 1e-9 {
+                continue;
+            }
+            let p = o.f0.cross(&(c.rotation * o.f1)).dot(&away) / a;
+            let inverse = p / (tn * a);
+            let sigma = std::f64::consts::SQRT_2 * opts.noise_angle / (tn * a);
+            *flag = down / height - inverse > opts.sigmas * sigma;
+        }
+    }
+    out
+}
+
 /// A motion's score for the choice: its ground support if [`HypothesesOptions::ground`], else
 /// its parallax support; with [`HypothesesOptions::spread_grid`] the image cells that support
 /// covers rather than its count.
@@ -538,6 +620,72 @@ mod tests {
             m <= 3,
             "{m} of 30 road points on the road at the wrong scale"
         );
+    }
+
+    #[test]
+    fn points_moving_with_the_ego_vehicle_lie_under_the_road_static_ones_do_not() {
+        let p_vc = Pose::new(
+            Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
+            Vector3::new(1.0, 0.0, 1.65),
+        );
+        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+            fx: 718.0,
+            fy: 718.0,
+            cx: 607.0,
+            cy: 185.0,
+            width: 1241.0,
+            height: 376.0,
+        });
+        let rig = Rig::mono(cam, p_vc).unwrap();
+        let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
+        // Static: road points 5-40 m ahead, a facade's points above and below the horizon.
+        let mut pts: Vec<Vector3<f64>> = (0..30)
+            .map(|i| {
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (2.0 + 0.1 * i as f64);
+                to_cam(Vector3::new(5.0 + 1.2 * i as f64, y, 0.0))
+            })
+            .collect();
+        pts.extend((0..10).map(|i| to_cam(Vector3::new(12.0, -6.0, 0.3 * i as f64))));
+        let ego = Pose::new(
+            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
+            Vector3::new(1.0, 0.0, 0.0),
+        );
+        let c = camera_motion(&ego, &p_vc);
+        let obs = obs_of(&pts, &c);
+        let all = vec![vec![true; pts.len()]];
+        let test = UnderRoad {
+            ground_z: 0.0,
+            noise_angle: 0.0014,
+            sigmas: 3.0,
+            slope: 0.02,
+        };
+        let flagged = under_road_mask(&rig, &ego, &obs, &all, &test);
+        assert!(flagged.iter().flatten().all(|f| !f), "static points flagged");
+        // A car in the next lane, 6 m ahead, moving with the ego vehicle: its points keep
+        // their place in the camera (the object's camera motion is the identity), below the
+        // horizon but without parallax.
+        let car: Vec<Vector3<f64>> = (0..12)
+            .map(|i| to_cam(Vector3::new(6.0, 1.5 + 0.125 * i as f64, 0.2 + 0.07 * i as f64)))
+            .collect();
+        let moving = obs_of(&car, &Pose::identity());
+        let all = vec![vec![true; car.len()]];
+        let flagged = under_road_mask(&rig, &ego, &moving, &all, &test);
+        assert!(flagged.iter().flatten().all(|f| *f), "{flagged:?}");
+        // The same car 20 m straight ahead, near the focus of expansion: a static point there
+        // has too little parallax to bound its range, so the test has no power.
+        let ahead: Vec<Vector3<f64>> = (0..12)
+            .map(|i| to_cam(Vector3::new(20.0, -0.8 + 0.15 * i as f64, 0.2 + 0.07 * i as f64)))
+            .collect();
+        let lead = obs_of(&ahead, &Pose::identity());
+        let flagged = under_road_mask(&rig, &ego, &lead, &all, &test);
+        assert!(flagged.iter().flatten().all(|f| !f), "{flagged:?}");
+        // Only the support is tested; without translation nothing is.
+        let none = vec![vec![false; car.len()]];
+        let flagged = under_road_mask(&rig, &ego, &moving, &none, &test);
+        assert!(flagged.iter().flatten().all(|f| !f));
+        let still = Pose::new(ego.rotation, Vector3::zeros());
+        let flagged = under_road_mask(&rig, &still, &moving, &all, &test);
+        assert!(flagged.iter().flatten().all(|f| !f));
     }
 
     #[test]

@@ -26,7 +26,9 @@
 //!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches
 //!    under Gaussian noise ([`SeparateOptions::final_robust`]: the frame's robust loss instead).
 
-use crate::hypotheses::{HypothesesOptions, Hypothesis, HypothesisTracker, ground_mask, score};
+use crate::hypotheses::{
+    HypothesesOptions, Hypothesis, HypothesisTracker, UnderRoad, ground_mask, score, under_road_mask,
+};
 use momo_core::{
     FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
     Solver, TrivialLoss, camera_motion, essential,
@@ -75,6 +77,18 @@ pub struct SeparateOptions {
     /// Passes of the final stage: each later pass re-selects the support under the previous
     /// pass's motion (at least 1).
     pub final_passes: usize,
+    /// The final stage leaves out the support matches "under the road" (0: off): seen below
+    /// the horizon, with an inverse range (triangulated under the chosen motion at the
+    /// odometry's scale) smaller than the road plane allows by more than this many standard
+    /// deviations of its parallax noise ([`crate::hypotheses::under_road_mask`]): objects
+    /// moving with the ego vehicle, which fit the static motion like points at infinity. Needs
+    /// odometry; not applied if fewer than half of the support remain.
+    pub under_road: f64,
+    /// The bearing noise (radians) of the under-the-road test.
+    pub under_road_noise: f64,
+    /// The road's slope margin (radians) of the under-the-road test: the road may descend
+    /// away from the vehicle by this much.
+    pub under_road_slope: f64,
 }
 
 impl Default for SeparateOptions {
@@ -92,6 +106,9 @@ impl Default for SeparateOptions {
             final_exclusive: false,
             final_competing_only: false,
             final_passes: 1,
+            under_road: 0.0,
+            under_road_noise: 0.0014,
+            under_road_slope: 0.02,
         }
     }
 }
@@ -117,6 +134,15 @@ impl SeparateOptions {
         }
         if !(1..=10).contains(&self.final_passes) {
             return Err("odometry.separate.final_passes must be 1 to 10".into());
+        }
+        if !(self.under_road.is_finite() && self.under_road >= 0.0) {
+            return Err("odometry.separate.under_road must be a non-negative number".into());
+        }
+        if !(self.under_road_noise.is_finite() && self.under_road_noise > 0.0) {
+            return Err("odometry.separate.under_road_noise must be a positive number".into());
+        }
+        if !(self.under_road_slope.is_finite() && self.under_road_slope.abs() < 1.0) {
+            return Err("odometry.separate.under_road_slope must be in (-1, 1)".into());
         }
         if let Some(h) = &self.hypotheses {
             h.validate()?;
@@ -461,6 +487,30 @@ pub fn separate(
             mask
         }
     };
+    // Leaves out the matches under the road (`under_road`).
+    let ground_z = opts.hypotheses.as_ref().map_or(0.0, |h| h.ground_z);
+    let road = |mask: Vec<Vec<bool>>, params: &[f64]| -> Vec<Vec<bool>> {
+        if !(opts.under_road > 0.0 && arc_length.is_some()) {
+            return mask;
+        }
+        let test = UnderRoad {
+            ground_z,
+            noise_angle: opts.under_road_noise,
+            sigmas: opts.under_road,
+            slope: opts.under_road_slope,
+        };
+        let flagged = under_road_mask(ctx.rig, &ctx.estimator.motion(params), obs, &mask, &test);
+        let kept: Vec<Vec<bool>> = mask
+            .iter()
+            .zip(&flagged)
+            .map(|(m, f)| m.iter().zip(f).map(|(m, f)| *m && !*f).collect())
+            .collect();
+        if 2 * count(&kept) >= count(&mask) {
+            kept
+        } else {
+            mask
+        }
+    };
     let loss: &dyn RobustLoss = if opts.final_robust {
         ctx.loss
     } else {
@@ -471,6 +521,7 @@ pub fn separate(
             mask = support(&sol.params);
         }
         mask = exclusive(mask);
+        mask = road(mask, &sol.params);
         if count(&mask) < 8 {
             break;
         }
@@ -511,7 +562,15 @@ mod tests {
         .unwrap();
         assert_eq!((o.min_cell_ratio, o.final_passes), (0.5, 2));
         assert!(o.final_exclusive && o.final_competing_only);
+        let o: SeparateOptions =
+            toml::from_str("under_road = 3.0\nunder_road_slope = 0.05").unwrap();
+        assert_eq!((o.under_road, o.under_road_slope), (3.0, 0.05));
+        assert!(o.validate().is_ok());
+        assert_eq!(SeparateOptions::default().under_road, 0.0, "off by default");
         for bad in [
+            "under_road = -1.0",
+            "under_road_noise = 0.0",
+            "under_road_slope = 1.5",
             "min_cell_ratio = -1.0",
             "final_passes = 0",
             "final_passes = 11",
