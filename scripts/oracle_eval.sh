@@ -83,6 +83,10 @@ for t in $trajectories; do
     done
 done
 
+if ((${#names[@]} == 0)); then
+    echo "oracle_eval: no sequences" >&2
+    exit 1
+fi
 python3 - "$out" "${THRESHOLD:-0.003}" "${names[@]}" >"$out/summary.md" <<'PY'
 import json, math, statistics, sys
 from collections import defaultdict
@@ -120,8 +124,9 @@ def rel(p, k):  # pose of camera 0 at k in camera 0 at k-1
     return mul(rat, rb), mv(rat, [tb[i] - ta[i] for i in range(3)])
 
 def angle_deg(r):
-    c = (r[0][0] + r[1][1] + r[2][2] - 1) / 2
-    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
+    # atan2 of the skew part over the trace: accurate for small angles (acos is not).
+    s = math.sqrt((r[2][1] - r[1][2]) ** 2 + (r[0][2] - r[2][0]) ** 2 + (r[1][0] - r[0][1]) ** 2) / 2
+    return math.degrees(math.atan2(s, (r[0][0] + r[1][1] + r[2][2] - 1) / 2))
 
 def per_frame_err(gt, est):
     return {k: angle_deg(mul(tr(rel(est, k)[0]), rel(gt, k)[0])) for k in range(1, min(len(gt), len(est)))}

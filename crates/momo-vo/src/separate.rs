@@ -25,6 +25,10 @@
 //! 4. **Final efficient stage**: the chosen motion is re-solved on its support alone with plain
 //!    least squares (the trivial loss), the maximum-likelihood estimate of the static matches
 //!    under Gaussian noise ([`SeparateOptions::final_robust`]: the frame's robust loss instead).
+//!    With [`SeparateOptions::under_road`] (and odometry) the support first loses the matches
+//!    that lie under the road ([`crate::hypotheses::under_road_mask`]): objects moving with the
+//!    ego vehicle fit the static motion like points at infinity, but a static point below the
+//!    horizon is no farther than the road.
 
 use crate::hypotheses::{
     HypothesesOptions, Hypothesis, HypothesisTracker, UnderRoad, ground_mask, score, under_road_mask,
