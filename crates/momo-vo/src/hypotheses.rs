@@ -660,12 +660,21 @@ mod tests {
             slope: 0.02,
         };
         let flagged = under_road_mask(&rig, &ego, &obs, &all, &test);
-        assert!(flagged.iter().flatten().all(|f| !f), "static points flagged");
+        assert!(
+            flagged.iter().flatten().all(|f| !f),
+            "static points flagged"
+        );
         // A car in the next lane, 6 m ahead, moving with the ego vehicle: its points keep
         // their place in the camera (the object's camera motion is the identity), below the
         // horizon but without parallax.
         let car: Vec<Vector3<f64>> = (0..12)
-            .map(|i| to_cam(Vector3::new(6.0, 1.5 + 0.125 * i as f64, 0.2 + 0.07 * i as f64)))
+            .map(|i| {
+                to_cam(Vector3::new(
+                    6.0,
+                    1.5 + 0.125 * i as f64,
+                    0.2 + 0.07 * i as f64,
+                ))
+            })
             .collect();
         let moving = obs_of(&car, &Pose::identity());
         let all = vec![vec![true; car.len()]];
@@ -674,7 +683,13 @@ mod tests {
         // The same car 20 m straight ahead, near the focus of expansion: a static point there
         // has too little parallax to bound its range, so the test has no power.
         let ahead: Vec<Vector3<f64>> = (0..12)
-            .map(|i| to_cam(Vector3::new(20.0, -0.8 + 0.15 * i as f64, 0.2 + 0.07 * i as f64)))
+            .map(|i| {
+                to_cam(Vector3::new(
+                    20.0,
+                    -0.8 + 0.15 * i as f64,
+                    0.2 + 0.07 * i as f64,
+                ))
+            })
             .collect();
         let lead = obs_of(&ahead, &Pose::identity());
         let flagged = under_road_mask(&rig, &ego, &lead, &all, &test);
