@@ -116,6 +116,16 @@ pub struct OdometryOptions {
     /// (docs/RESULTS.md): on KITTI 00 it lowers the soft model's r_err and t_err, on the
     /// simulated drives (nominal mount) it follows the estimates' own bias and raises t_err.
     pub soft_prior_centring_frames: usize,
+    /// Learn a soft manifold's prior standard deviations (side slip, climb) from the data, as
+    /// its centre is learnt (empirical Bayes over the same recent moving frames, at least
+    /// [`SOFT_SIGMA_MIN_FRAMES`](crate::odometry::SOFT_SIGMA_MIN_FRAMES) of them): each
+    /// residual's `σ` becomes the robust estimate of the true slip's spread, clamped to
+    /// `[σ_model, soft_prior_sigma_max · σ_model]` ([`crate::Odometry::soft_prior_sigma`]).
+    /// Needs `soft_prior_centring_frames > 0`. No effect on hard models.
+    pub soft_prior_sigma_learning: bool,
+    /// The largest learnt soft-prior standard deviation, in units of the model's `σ`
+    /// (`soft_prior_sigma_learning`); at least 1.
+    pub soft_prior_sigma_max: f64,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -141,6 +151,8 @@ impl Default for OdometryOptions {
             separate: None,
             final_fit: crate::final_fit::FinalFitOptions::default(),
             soft_prior_centring_frames: 100,
+            soft_prior_sigma_learning: false,
+            soft_prior_sigma_max: 10.0,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -395,7 +407,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "# Odometry driver: degenerate frames, scale, restarts and the rotation prior\n\
          # (rotation_change_sigma: how much the rotation may change from one frame to the next,\n\
          # radians per frame, for every model; 0: none) and the centring of a soft model's prior\n\
-         # (soft_prior_centring_frames: running mean over that many moving frames; 0: none).",
+         # (soft_prior_centring_frames: running mean over that many moving frames; 0: none;\n\
+         # soft_prior_sigma_learning: its sigmas learnt from the same frames, at most\n\
+         # soft_prior_sigma_max times the model's).",
     ),
     (
         "odometry.final_fit",
@@ -666,6 +680,15 @@ impl Config {
             bad(
                 &["odometry.max_arc_length_ratio"],
                 "odometry.max_arc_length_ratio must be finite and above 1".into(),
+            );
+        }
+        if !(o.soft_prior_sigma_max.is_finite() && o.soft_prior_sigma_max >= 1.0) {
+            bad(
+                &["odometry.soft_prior_sigma_max"],
+                format!(
+                    "odometry.soft_prior_sigma_max must be finite and at least 1, got {}",
+                    o.soft_prior_sigma_max
+                ),
             );
         }
         if !(0.0..=1.0).contains(&o.restart_inlier_ratio) {
