@@ -120,12 +120,17 @@ pub struct OdometryOptions {
     /// its centre is learnt (empirical Bayes over the same recent moving frames, at least
     /// [`SOFT_SIGMA_MIN_FRAMES`](crate::odometry::SOFT_SIGMA_MIN_FRAMES) of them): each
     /// residual's `σ` becomes the robust estimate of the true slip's spread, clamped to
-    /// `[σ_model, soft_prior_sigma_max · σ_model]` ([`crate::Odometry::soft_prior_sigma`]).
+    /// `[σ_model, soft_prior_sigma_max · σ_model]` after multiplication by
+    /// `soft_prior_sigma_factor` ([`crate::Odometry::soft_prior_sigma`]).
     /// Needs `soft_prior_centring_frames > 0`. No effect on hard models.
     pub soft_prior_sigma_learning: bool,
     /// The largest learnt soft-prior standard deviation, in units of the model's `σ`
     /// (`soft_prior_sigma_learning`); at least 1.
     pub soft_prior_sigma_max: f64,
+    /// The learnt soft-prior standard deviation is this multiple of the estimated spread of the
+    /// true slip (`soft_prior_sigma_learning`; > 0): the prior is a nuisance for the rotation,
+    /// so a wider one trades a little variance for less bias where the slip is heavy-tailed.
+    pub soft_prior_sigma_factor: f64,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -153,6 +158,7 @@ impl Default for OdometryOptions {
             soft_prior_centring_frames: 100,
             soft_prior_sigma_learning: false,
             soft_prior_sigma_max: 10.0,
+            soft_prior_sigma_factor: 1.0,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -680,6 +686,15 @@ impl Config {
             bad(
                 &["odometry.max_arc_length_ratio"],
                 "odometry.max_arc_length_ratio must be finite and above 1".into(),
+            );
+        }
+        if !(o.soft_prior_sigma_factor.is_finite() && o.soft_prior_sigma_factor > 0.0) {
+            bad(
+                &["odometry.soft_prior_sigma_factor"],
+                format!(
+                    "odometry.soft_prior_sigma_factor must be finite and > 0, got {}",
+                    o.soft_prior_sigma_factor
+                ),
             );
         }
         if !(o.soft_prior_sigma_max.is_finite() && o.soft_prior_sigma_max >= 1.0) {

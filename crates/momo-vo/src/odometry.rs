@@ -308,7 +308,8 @@ impl Odometry {
     /// trusted moving frames (those that centre the prior, at least
     /// [`SOFT_SIGMA_MIN_FRAMES`]), `σ_true²` is the robust (median) solution of
     /// `median_j d_j² / (σ_true² + v_j) = χ²₁ median` (frames where an object pulls the data
-    /// do not inflate it), and `σ = clamp(σ_true, 1, odometry.soft_prior_sigma_max)`.
+    /// do not inflate it), and `σ = clamp(f · σ_true, 1, odometry.soft_prior_sigma_max)` with
+    /// `f = odometry.soft_prior_sigma_factor`.
     pub fn soft_prior_sigma(&self) -> Vec<f64> {
         self.soft_inv_scale.iter().map(|k| 1.0 / k).collect()
     }
@@ -377,7 +378,8 @@ impl Odometry {
     /// ([`Odometry::soft_prior_sigma`]).
     fn learn_soft_sigma(&mut self) {
         let max = self.config.odometry.soft_prior_sigma_max.max(1.0);
-        if self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES {
+        let factor = self.config.odometry.soft_prior_sigma_factor;
+        if self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES || !(factor > 0.0) {
             return;
         }
         for (r, k) in self.soft_inv_scale.iter_mut().enumerate() {
@@ -392,7 +394,8 @@ impl Odometry {
                 z.sort_by(f64::total_cmp);
                 z.get(z.len() / 2).copied().unwrap_or(0.0)
             };
-            let (mut lo, mut hi) = (1.0, max * max);
+            // σ_true² within [1, max²] / f².
+            let (mut lo, mut hi) = (1.0 / (factor * factor), max * max / (factor * factor));
             let s2 = if median_ratio(lo) <= CHI2_1_MEDIAN {
                 lo
             } else if median_ratio(hi) >= CHI2_1_MEDIAN {
@@ -408,7 +411,7 @@ impl Odometry {
                 }
                 (lo * hi).sqrt()
             };
-            *k = 1.0 / s2.sqrt();
+            *k = 1.0 / (factor * s2.sqrt()).clamp(1.0, max);
         }
     }
 
