@@ -7,7 +7,9 @@ use momo_vo::{Config, Odometry};
 
 /// A standard normal draw per frame, deterministic (sum of 12 uniforms of an LCG, minus 6).
 fn normals(n: usize, seed: u64) -> Vec<f64> {
-    let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut x = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (0..n)
         .map(|_| {
             (0..12)
