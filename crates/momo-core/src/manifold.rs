@@ -53,6 +53,13 @@ pub struct MotionPrior {
     /// (a camera mount a few tenths of a degree off nominal turns into a constant side slip)
     /// from the model prior. Unlike the other parts it applies on every frame.
     pub soft_center: Vec<f64>,
+    /// Per prior residual of a soft manifold, a factor `k_i ≤ 1` on its centred residual
+    /// `q_i − c_i` (empty: 1 for all): the residual's standard deviation becomes `σ_i / k_i`.
+    /// The odometry learns it from the data (`odometry.soft_prior_sigma_learning`): where the
+    /// true motion slips more than the model's `σ` (the KITTI ground truth's jittery direction
+    /// of travel), a prior at the model's `σ` would bias the rotation. Like `soft_center`, it
+    /// applies on every frame.
+    pub soft_inv_scale: Vec<f64>,
     /// The unit `s` of the prior terms, the data's noise in the metric's units (0: the loss
     /// scale). The odometry sets it to the first stage's loss scale, so that a second stage
     /// with a wider loss (`[refine_loss]`, Tukey 0.0075) weighs the priors as the first does:

@@ -18,8 +18,9 @@ use std::cell::RefCell;
 ///
 /// `min_p ½ Σ_j Σ_i ρ(|r(C_j(p), x_ij)|²)`, with camera motion `C_j = P_j⁻¹ M(p) P_j`,
 /// plus, in units `s` of the data's noise ([`MotionPrior::scale`], by default the loss scale),
-/// the soft manifold's prior residuals `½ Σ_k (s · (q_k(p) − c_k))²`
-/// ([`Manifold::prior_residuals`], centre `c` from [`MotionPrior::soft_center`]) and an
+/// the soft manifold's prior residuals `½ Σ_k (s · κ_k · (q_k(p) − c_k))²`
+/// ([`Manifold::prior_residuals`], centre `c` from [`MotionPrior::soft_center`], factors `κ`
+/// from [`MotionPrior::soft_inv_scale`], 1 by default) and an
 /// optional [`MotionPrior`] on the change of motion, per parameter
 /// `½ Σ_i (s · (p_i − c_i) / σ_i)²` and on the rotation vector
 /// `½ s² ρ(|(log R(p) − w_c) / σ_w|²)` (Cauchy `ρ`, the only robustified prior term).
@@ -169,6 +170,19 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         c
     }
 
+    /// The factors `k` on the soft manifold's centred prior residuals
+    /// ([`MotionPrior::soft_inv_scale`]; ones unless the motion prior has them at the right
+    /// length).
+    fn soft_inv_scale(&self) -> [f64; MAX_PRIOR_RESIDUALS] {
+        let mut k = [1.0; MAX_PRIOR_RESIDUALS];
+        if let Some(mp) = self.motion_prior
+            && mp.soft_inv_scale.len() == self.n_prior
+        {
+            k[..self.n_prior].copy_from_slice(&mp.soft_inv_scale);
+        }
+        k
+    }
+
     /// The prior terms' cost `½ Σ (s q)²` at the full parameters `params` (plain `f64`).
     pub fn prior_cost(&self, params: &[f64]) -> f64 {
         if !self.has_prior() {
@@ -180,11 +194,12 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             let mut q = [0.0; MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals_of(params, &mut q[..self.n_prior]);
-            let c = self.soft_center();
+            let (c, k) = (self.soft_center(), self.soft_inv_scale());
             cost += q[..self.n_prior]
                 .iter()
                 .zip(c)
-                .map(|(v, c)| 0.5 * (s * (v - c)) * (s * (v - c)))
+                .zip(k)
+                .map(|((v, c), k)| 0.5 * (s * k * (v - c)) * (s * k * (v - c)))
                 .sum::<f64>();
         }
         if let Some(mp) = self.motion_prior {
@@ -226,11 +241,12 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             let mut q = [DualSVec64::<N>::from_re(0.0); MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals_of(&p[..self.np], &mut q[..self.n_prior]);
-            for (v, c) in q[..self.n_prior].iter().zip(self.soft_center()) {
-                let r = s * (v.re - c);
+            let k = self.soft_inv_scale();
+            for ((v, c), k) in q[..self.n_prior].iter().zip(self.soft_center()).zip(k) {
+                let r = s * k * (v.re - c);
                 cost += 0.5 * r * r;
                 if let Some(e) = &v.eps.0 {
-                    let j = e * s;
+                    let j = e * (s * k);
                     *h += j * j.transpose();
                     *g += j * r;
                 }

@@ -45,6 +45,7 @@ fn gradient_matches_the_cost_with_priors() {
         rotation_center: [0.002, -0.001, 0.015],
         rotation_inv_sigma: 300.0,
         soft_center: vec![0.5, -0.3],
+        soft_inv_scale: vec![0.5, 0.25],
         scale: 0.0,
     };
     let start = [0.001, 0.002, 0.025, 0.03, 0.001, 1.2];

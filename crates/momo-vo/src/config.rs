@@ -116,6 +116,25 @@ pub struct OdometryOptions {
     /// (docs/RESULTS.md): on KITTI 00 it lowers the soft model's r_err and t_err, on the
     /// simulated drives (nominal mount) it follows the estimates' own bias and raises t_err.
     pub soft_prior_centring_frames: usize,
+    /// Learn a soft manifold's prior standard deviations (side slip, climb) from the data, as
+    /// its centre is learnt (empirical Bayes over the same recent moving frames, at least
+    /// [`SOFT_SIGMA_MIN_FRAMES`](crate::odometry::SOFT_SIGMA_MIN_FRAMES) of them): each
+    /// residual's `σ` becomes the robust estimate of the true slip's spread, clamped to
+    /// `[σ_model, soft_prior_sigma_max · σ_model]` after multiplication by
+    /// `soft_prior_sigma_factor` ([`crate::Odometry::soft_prior_sigma`]).
+    /// Needs `soft_prior_centring_frames > 0`. No effect on hard models. On by default since
+    /// 2026-11-25 (docs/RESULTS.md §9, seventh session): along the KITTI ground-truth
+    /// trajectories (simulated, their direction of travel jitters) it lowers the clean
+    /// scenario's efficiency ratio from 1.48 / 2.34 to 1.26 / 1.23 (00 / 08); on the built-in
+    /// drive and on the real KITTI 00 matches it learns the model's own sigmas (no change).
+    pub soft_prior_sigma_learning: bool,
+    /// The largest learnt soft-prior standard deviation, in units of the model's `σ`
+    /// (`soft_prior_sigma_learning`); at least 1.
+    pub soft_prior_sigma_max: f64,
+    /// The learnt soft-prior standard deviation is this multiple of the estimated spread of the
+    /// true slip (`soft_prior_sigma_learning`; > 0): the prior is a nuisance for the rotation,
+    /// so a wider one trades a little variance for less bias where the slip is heavy-tailed.
+    pub soft_prior_sigma_factor: f64,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -141,6 +160,9 @@ impl Default for OdometryOptions {
             separate: None,
             final_fit: crate::final_fit::FinalFitOptions::default(),
             soft_prior_centring_frames: 100,
+            soft_prior_sigma_learning: true,
+            soft_prior_sigma_max: 10.0,
+            soft_prior_sigma_factor: 1.0,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -395,7 +417,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "# Odometry driver: degenerate frames, scale, restarts and the rotation prior\n\
          # (rotation_change_sigma: how much the rotation may change from one frame to the next,\n\
          # radians per frame, for every model; 0: none) and the centring of a soft model's prior\n\
-         # (soft_prior_centring_frames: running mean over that many moving frames; 0: none).",
+         # (soft_prior_centring_frames: running mean over that many moving frames; 0: none;\n\
+         # soft_prior_sigma_learning: its sigmas learnt from the same frames, at most\n\
+         # soft_prior_sigma_max times the model's).",
     ),
     (
         "odometry.final_fit",
@@ -666,6 +690,24 @@ impl Config {
             bad(
                 &["odometry.max_arc_length_ratio"],
                 "odometry.max_arc_length_ratio must be finite and above 1".into(),
+            );
+        }
+        if !(o.soft_prior_sigma_factor.is_finite() && o.soft_prior_sigma_factor > 0.0) {
+            bad(
+                &["odometry.soft_prior_sigma_factor"],
+                format!(
+                    "odometry.soft_prior_sigma_factor must be finite and > 0, got {}",
+                    o.soft_prior_sigma_factor
+                ),
+            );
+        }
+        if !(o.soft_prior_sigma_max.is_finite() && o.soft_prior_sigma_max >= 1.0) {
+            bad(
+                &["odometry.soft_prior_sigma_max"],
+                format!(
+                    "odometry.soft_prior_sigma_max must be finite and at least 1, got {}",
+                    o.soft_prior_sigma_max
+                ),
             );
         }
         if !(0.0..=1.0).contains(&o.restart_inlier_ratio) {

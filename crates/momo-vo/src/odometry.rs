@@ -133,6 +133,13 @@ pub struct FrameResult {
 /// drop of the support against it triggers the jackknife of the covariance.
 const INLIER_SHARE_PEAK_DECAY: f64 = 0.995;
 
+/// The fewest moving frames whose innovations learn a soft prior's standard deviations
+/// (`odometry.soft_prior_sigma_learning`); before that, the model's own.
+pub const SOFT_SIGMA_MIN_FRAMES: usize = 20;
+
+/// The median of a chi-square variable with one degree of freedom.
+const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_8;
+
 /// The frame-to-frame odometry: feed it frame pairs in order with [`Odometry::process`].
 ///
 /// Behaviour on degenerate frames (documented in the README and tested):
@@ -186,6 +193,13 @@ pub struct Odometry {
     soft_center: Vec<f64>,
     /// Moving frames that went into `soft_center`.
     soft_count: usize,
+    /// The factors `k_i = σ_model / σ_i` of the learnt soft-prior sigmas
+    /// (`odometry.soft_prior_sigma_learning`; empty if off or the model is hard; ones until
+    /// [`SOFT_SIGMA_MIN_FRAMES`]).
+    soft_inv_scale: Vec<f64>,
+    /// The recent moving frames' soft-prior innovations `(d_i², v_i)` per residual, newest last
+    /// (at most `soft_prior_centring_frames`), see [`Odometry::soft_prior_sigma`].
+    soft_samples: std::collections::VecDeque<Vec<(f64, f64)>>,
     /// The metric's residual is an angle (radians): `angle_plane`.
     metric_is_angular: bool,
     /// Multi-frame evidence of the motion separation's hypothesis choice (crate::hypotheses).
@@ -239,6 +253,11 @@ impl Odometry {
         } else {
             Vec::new()
         };
+        let soft_inv_scale = if config.odometry.soft_prior_sigma_learning {
+            vec![1.0; soft_center.len()]
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             rig,
             config,
@@ -260,6 +279,8 @@ impl Odometry {
             prior_ready: false,
             soft_center,
             soft_count: 0,
+            soft_inv_scale,
+            soft_samples: Default::default(),
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
             clustering: Default::default(),
@@ -271,6 +292,127 @@ impl Odometry {
     /// `soft_single_track`: the mean side slip and climb in units of their sigmas.
     pub fn soft_prior_center(&self) -> &[f64] {
         &self.soft_center
+    }
+
+    /// The soft manifold's prior standard deviations in use, in units of the model's
+    /// (`soft_single_track`: side slip, climb): learnt from the data with
+    /// `odometry.soft_prior_sigma_learning` (empirical Bayes), else empty.
+    ///
+    /// In a linear-Gaussian model with a prior `N(c, σ²)` on a function `q` of the
+    /// parameters, the estimate `q̂` lies between the data's own `q_d` (variance `v_d`) and
+    /// `c`: the cost's stationarity gives `q_d = q̂ + J_q H_d⁻¹ J_qᵀ s² k² (q̂ − c)`, with `H_d`
+    /// the normal matrix without the soft prior (the cost's units, `½ Σ r² + ½ s² Σ k² (q − c)²`,
+    /// `s` the prior's unit, `k = 1/σ`) and `J_q = ∂q/∂p`; `v_d = J_q Σ_d J_qᵀ` with `Σ_d` the
+    /// calibrated covariance without the soft prior ([`trust::calibrated_covariance`]).
+    /// Each frame's innovation `d = q_d − c` then has `E[d²] = σ_true² + v_d`. Over the recent
+    /// trusted moving frames (those that centre the prior, at least
+    /// [`SOFT_SIGMA_MIN_FRAMES`]), `σ_true²` is the robust (median) solution of
+    /// `median_j d_j² / (σ_true² + v_j) = χ²₁ median` (frames where an object pulls the data
+    /// do not inflate it), and `σ = clamp(f · σ_true, 1, odometry.soft_prior_sigma_max)` with
+    /// `f = odometry.soft_prior_sigma_factor`.
+    pub fn soft_prior_sigma(&self) -> Vec<f64> {
+        self.soft_inv_scale.iter().map(|k| 1.0 / k).collect()
+    }
+
+    /// The soft prior's residuals at `params` and their Jacobian over the free parameters
+    /// `free` (central differences; units of the model's sigmas).
+    fn soft_jacobian(&self, params: &[f64], free: &[usize]) -> (Vec<f64>, nalgebra::DMatrix<f64>) {
+        let q0 = self.estimator.prior_residuals(params);
+        let mut jq = nalgebra::DMatrix::zeros(q0.len(), free.len());
+        for (a, &f) in free.iter().enumerate() {
+            let h = 1e-6 * (1.0 + params[f].abs());
+            let (mut p, mut m) = (params.to_vec(), params.to_vec());
+            p[f] += h;
+            m[f] -= h;
+            let (qp, qm) = (
+                self.estimator.prior_residuals(&p),
+                self.estimator.prior_residuals(&m),
+            );
+            for r in 0..q0.len() {
+                jq[(r, a)] = (qp[r] - qm[r]) / (2.0 * h);
+            }
+        }
+        (q0, jq)
+    }
+
+    /// `Jᵀ K² J` of the soft prior at the current factors `K` ([`Odometry::soft_prior_sigma`]).
+    fn soft_information(&self, jq: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
+        let mut kj = jq.clone();
+        for (r, k) in self.soft_inv_scale.iter().enumerate().take(kj.nrows()) {
+            kj.row_mut(r).scale_mut(*k);
+        }
+        kj.transpose() * kj
+    }
+
+    /// This frame's soft-prior innovations `(d_i², v_i)` ([`Odometry::soft_prior_sigma`]), if
+    /// the data determine every residual.
+    fn soft_innovation(&self, sol: &FrameSolution) -> Option<Vec<(f64, f64)>> {
+        let c = &self.motion_prior.soft_center;
+        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
+        let s = self.motion_prior.scale;
+        if q.is_empty() || c.len() != q.len() || !(s.is_finite() && s > 0.0) {
+            return None;
+        }
+        let mut inp = self.covariance_inputs(sol);
+        inp.normal -= self.soft_information(&jq) * (s * s);
+        let h_d = (&inp.normal + inp.normal.transpose()) * 0.5;
+        let a = trust::invert_information(&h_d);
+        let (info, _) = trust::calibrated_information(&inp)?;
+        let cov = trust::invert_information(&info);
+        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+        let pull: nalgebra::DVector<f64> = nalgebra::DVector::from_iterator(
+            q.len(),
+            (0..q.len()).map(|r| s * s * k(r) * k(r) * (q[r] - c[r])),
+        );
+        let q_d = nalgebra::DVector::from_column_slice(&q) + &jq * (&a * (jq.transpose() * pull));
+        let v = &jq * cov * jq.transpose();
+        let out: Vec<(f64, f64)> = (0..q.len())
+            .map(|r| ((q_d[r] - c[r]).powi(2), v[(r, r)]))
+            .collect();
+        out.iter()
+            .all(|(d2, v)| d2.is_finite() && v.is_finite() && *v >= 0.0)
+            .then_some(out)
+    }
+
+    /// Re-learns the soft prior's factors from the recent innovations
+    /// ([`Odometry::soft_prior_sigma`]).
+    fn learn_soft_sigma(&mut self) {
+        let max = self.config.odometry.soft_prior_sigma_max.max(1.0);
+        let factor = self.config.odometry.soft_prior_sigma_factor;
+        if self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES || !(factor > 0.0) {
+            return;
+        }
+        for (r, k) in self.soft_inv_scale.iter_mut().enumerate() {
+            let samples: Vec<(f64, f64)> = self
+                .soft_samples
+                .iter()
+                .filter_map(|f| f.get(r).copied())
+                .collect();
+            // median_j d_j² / (σ² + v_j), decreasing in σ².
+            let median_ratio = |s2: f64| {
+                let mut z: Vec<f64> = samples.iter().map(|(d2, v)| d2 / (s2 + v)).collect();
+                z.sort_by(f64::total_cmp);
+                z.get(z.len() / 2).copied().unwrap_or(0.0)
+            };
+            // σ_true² within [1, max²] / f².
+            let (mut lo, mut hi) = (1.0 / (factor * factor), max * max / (factor * factor));
+            let s2 = if median_ratio(lo) <= CHI2_1_MEDIAN {
+                lo
+            } else if median_ratio(hi) >= CHI2_1_MEDIAN {
+                hi
+            } else {
+                for _ in 0..40 {
+                    let mid = (lo * hi).sqrt();
+                    if median_ratio(mid) > CHI2_1_MEDIAN {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                (lo * hi).sqrt()
+            };
+            *k = 1.0 / (factor * s2.sqrt()).clamp(1.0, max);
+        }
     }
 
     /// The rig.
@@ -325,6 +467,12 @@ impl Odometry {
             Vec::new()
         };
         self.soft_count = 0;
+        self.soft_inv_scale = if self.config.odometry.soft_prior_sigma_learning {
+            vec![1.0; self.soft_center.len()]
+        } else {
+            Vec::new()
+        };
+        self.soft_samples.clear();
         self.hypotheses.reset();
     }
 
@@ -446,6 +594,7 @@ impl Odometry {
                 prior.rotation_inv_sigma = 0.0;
             }
             prior.soft_center.clone_from(&self.soft_center);
+            prior.soft_inv_scale.clone_from(&self.soft_inv_scale);
         }
         let enough = matches >= self.config.odometry.min_matches.max(1);
         let verdict = if !enough && repeated > 0 {
@@ -528,6 +677,8 @@ impl Odometry {
 
         // Whether this frame may centre the next frame's change-of-motion prior.
         let mut trusted = false;
+        // Its soft-prior innovations (odometry.soft_prior_sigma_learning).
+        let mut soft_sample = None;
         let params = match result {
             Some(sol) => {
                 if standstill {
@@ -596,6 +747,9 @@ impl Odometry {
                     jackknife |= clustered;
                 }
                 self.fill_diagnostics(obs, &sol, !standstill, (jackknife, clustered), &mut diag);
+                if !standstill && !self.soft_inv_scale.is_empty() {
+                    soft_sample = self.soft_innovation(&sol);
+                }
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {
                         Some(p) => share.max(INLIER_SHARE_PEAK_DECAY * p),
@@ -667,6 +821,13 @@ impl Odometry {
             let q = self.estimator.prior_residuals(&params);
             for (c, q) in self.soft_center.iter_mut().zip(q) {
                 *c += alpha * (q - *c);
+            }
+            if let Some(sample) = soft_sample {
+                self.soft_samples.push_back(sample);
+                while self.soft_samples.len() > n {
+                    self.soft_samples.pop_front();
+                }
+                self.learn_soft_sigma();
             }
         }
         let motion = self.estimator.motion(&params);
@@ -854,25 +1015,10 @@ impl Odometry {
             return f64::INFINITY;
         };
         let mut inp = self.covariance_inputs(sol);
-        let n = sol.free.len();
-        let q0 = self.estimator.prior_residuals(&sol.params);
-        // Jacobian of the soft prior's residuals (units of their sigmas) over the free
-        // parameters, by central differences.
-        let mut jq = nalgebra::DMatrix::zeros(q0.len(), n);
-        for (a, &f) in sol.free.iter().enumerate() {
-            let h = 1e-6 * (1.0 + sol.params[f].abs());
-            let (mut p, mut m) = (sol.params.clone(), sol.params.clone());
-            p[f] += h;
-            m[f] -= h;
-            let (qp, qm) = (
-                self.estimator.prior_residuals(&p),
-                self.estimator.prior_residuals(&m),
-            );
-            for r in 0..q0.len() {
-                jq[(r, a)] = (qp[r] - qm[r]) / (2.0 * h);
-            }
-        }
-        let jtj = jq.transpose() * &jq;
+        // The soft prior's residuals (units of their sigmas) and their Jacobian over the free
+        // parameters; its information at the learnt sigmas, if any.
+        let (q0, jq) = self.soft_jacobian(&sol.params, &sol.free);
+        let jtj = self.soft_information(&jq);
         let s = self.motion_prior.scale;
         if q0.is_empty() || !(s.is_finite() && s > 0.0) {
             return self

@@ -273,15 +273,23 @@ pub(crate) fn cells(
     total
 }
 
-/// Squared distance (sigma units) of a soft model's prior residuals to the soft prior's centre;
-/// `None` for a hard model (no prior residuals) or without a centre.
+/// Squared distance (sigma units, the learnt sigmas if any: `MotionPrior::soft_inv_scale`) of a
+/// soft model's prior residuals to the soft prior's centre; `None` for a hard model (no prior
+/// residuals) or without a centre.
 fn implausibility(ctx: &SolveContext<'_>, params: &[f64]) -> Option<f64> {
-    let center = &ctx.motion_prior?.soft_center;
+    let prior = ctx.motion_prior?;
+    let center = &prior.soft_center;
     let q = ctx.estimator.prior_residuals(params);
     if q.is_empty() || q.len() != center.len() {
         return None;
     }
-    let d: f64 = q.iter().zip(center).map(|(q, c)| (q - c).powi(2)).sum();
+    let k = |r: usize| prior.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+    let d: f64 = q
+        .iter()
+        .zip(center)
+        .enumerate()
+        .map(|(r, (q, c))| (k(r) * (q - c)).powi(2))
+        .sum();
     d.is_finite().then_some(d)
 }
 
