@@ -13,6 +13,7 @@ use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, Param
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
 use std::cell::RefCell;
+use wide::f64x4;
 
 /// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
 ///
@@ -60,6 +61,11 @@ pub struct Problem<'a, R: ResidualMetric> {
     /// the inlier count after a solve reads them instead of evaluating the residuals again.
     last_norms: RefCell<(ParamVec, Vec<f64>)>,
 }
+
+/// Matches per step of the one-residual fused linearisation
+/// (`Problem::linearize_kernel_lanes_n`): four `f64` lanes, two SSE2 registers on the baseline
+/// x86-64 target (one AVX register where it is enabled).
+const LANES: usize = 4;
 
 /// The rotation prior's loss `ρ(z) = c² ln(1 + z / c²)` and its derivative `ρ'(z)`, with `c` =
 /// [`ROTATION_PRIOR_CAUCHY`] and `z` the squared normalised rotation change.
@@ -552,6 +558,9 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             assert!(R::KERNEL_INPUTS <= MAX_KERNEL_INPUTS);
             assert!(R::RESIDUALS <= MAX_RESIDUALS);
         }
+        if R::RESIDUALS == 1 {
+            return self.linearize_kernel_lanes_n::<N>(x, known_cost);
+        }
         let k_in = R::KERNEL_INPUTS;
         let n_res = R::RESIDUALS;
         let mut h = SMatrix::<f64, N, N>::zeros();
@@ -613,6 +622,132 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             }
         }
         drop(last);
+        self.finish_linearization(x, Some(&m), known_cost, cost, h, g)
+    }
+
+    /// The fused path for a metric with one residual per match (AnglePlane): the same sums as
+    /// [`linearize_kernel_n`](Self::linearize_kernel_n), laid out across [`LANES`] matches at
+    /// a time (structure of arrays) so that the Jacobian rows `J = (dr/dq)(dq/dp)` and the
+    /// normal equations vectorise across matches; each lane accumulates its own share of
+    /// `J̃ᵀJ̃` and `J̃ᵀr̃`, summed once at the end. The per-match Jacobian rows, weights and
+    /// the cost are those of the per-match path bit for bit; only the order of the sums over
+    /// the matches in the normal equations differs.
+    fn linearize_kernel_lanes_n<const N: usize>(
+        &self,
+        x: &ParamVec,
+        known_cost: Option<f64>,
+    ) -> Linearization
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
+        // Called only for `R::RESIDUALS == 1` (a const assert would fire on the other
+        // metrics' monomorphisations of the caller).
+        debug_assert_eq!(R::RESIDUALS, 1);
+        let k_in = R::KERNEL_INPUTS;
+        let mut cost = 0.0;
+        let p = self.seeded::<N>(x);
+        let m = self.model.motion_of(&p[..self.np]);
+        let mut q_dual = [DualSVec64::<N>::from_re(0.0); MAX_KERNEL_INPUTS];
+        let mut q = [0.0; MAX_KERNEL_INPUTS];
+        let mut dq = [[0.0; N]; MAX_KERNEL_INPUTS];
+        let mut r = [0.0; MAX_RESIDUALS];
+        let mut dr_dq = [[0.0; MAX_KERNEL_INPUTS]; MAX_RESIDUALS];
+        // Per lane: the upper triangle of J̃ᵀJ̃ (row-major, N (N + 1) / 2 entries) and J̃ᵀr̃.
+        let mut h_lanes = [f64x4::ZERO; MAX_PARAMS * (MAX_PARAMS + 1) / 2];
+        let mut g_lanes = [f64x4::ZERO; N];
+        let mut last = self.record_norms(x);
+        let weights_only = known_cost.is_some();
+        for (j, cam) in self.rig.cameras().iter().enumerate() {
+            let Some(obs) = self.obs.per_camera.get(j) else {
+                continue;
+            };
+            if obs.is_empty() {
+                continue;
+            }
+            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            self.metric
+                .kernel_inputs(&cam.model, &c, &mut q_dual[..k_in]);
+            for i in 0..k_in {
+                q[i] = q_dual[i].re;
+                dq[i] = match &q_dual[i].eps.0 {
+                    Some(e) => std::array::from_fn(|k| e[k]),
+                    None => [0.0; N],
+                };
+            }
+            for chunk in obs.chunks(LANES) {
+                // The kernel per match, its derivatives transposed into lanes; unused lanes
+                // stay zero (and weigh zero).
+                let mut dr = [[0.0; LANES]; MAX_KERNEL_INPUTS];
+                // Per lane: the row's weight √ρ' (1 − α) and the weighted residual.
+                let mut wj = [0.0; LANES];
+                let mut wr = [0.0; LANES];
+                for (l, o) in chunk.iter().enumerate() {
+                    self.metric
+                        .kernel(&cam.model, &q[..k_in], o, &mut r[..1], &mut dr_dq[..1]);
+                    for a in 0..k_in {
+                        dr[a][l] = dr_dq[0][a];
+                    }
+                    let v = r[0];
+                    let s = v * v;
+                    last.put(s);
+                    let [rho1, rho2] = if weights_only {
+                        self.loss.weights(s)
+                    } else {
+                        let [rho, rho1, rho2] = self.loss.evaluate(s);
+                        cost += 0.5 * rho;
+                        [rho1, rho2]
+                    };
+                    if rho1 <= 0.0 {
+                        continue; // Tukey beyond its scale: no pull, no curvature.
+                    }
+                    let (sqrt_rho1, residual_scaling, alpha_sq_norm) = corrector(s, rho1, rho2);
+                    // One residual: J̃ = (J − (rJ) α/s r) √ρ' = J (1 − α) √ρ' (exactly J √ρ'
+                    // without the curvature term, as the per-match path).
+                    wj[l] = if alpha_sq_norm != 0.0 {
+                        (1.0 - alpha_sq_norm * s) * sqrt_rho1
+                    } else {
+                        sqrt_rho1
+                    };
+                    wr[l] = residual_scaling * v;
+                }
+                // J̃ rows across the lanes: the same sum over the inputs, in the same order, as
+                // the per-match path.
+                let mut jt = [f64x4::ZERO; N];
+                for a in 0..k_in {
+                    let d = f64x4::new(dr[a]);
+                    for k in 0..N {
+                        jt[k] += d * f64x4::splat(dq[a][k]);
+                    }
+                }
+                let (wj, wr) = (f64x4::new(wj), f64x4::new(wr));
+                for row in &mut jt {
+                    *row *= wj;
+                }
+                let mut e = 0;
+                for a in 0..N {
+                    g_lanes[a] += jt[a] * wr;
+                    for b in a..N {
+                        h_lanes[e] += jt[a] * jt[b];
+                        e += 1;
+                    }
+                }
+            }
+        }
+        drop(last);
+        let mut h = SMatrix::<f64, N, N>::zeros();
+        let mut g = SVector::<f64, N>::zeros();
+        let sum = |v: f64x4| {
+            let v = v.to_array();
+            (v[0] + v[1]) + (v[2] + v[3])
+        };
+        let mut e = 0;
+        for a in 0..N {
+            g[a] = sum(g_lanes[a]);
+            for b in a..N {
+                h[(a, b)] = sum(h_lanes[e]);
+                e += 1;
+            }
+        }
         self.finish_linearization(x, Some(&m), known_cost, cost, h, g)
     }
 

@@ -481,9 +481,8 @@ impl Odometry {
     pub fn process(&mut self, obs: &FrameObservations, arc_length: Option<f64>) -> FrameResult {
         let start = Instant::now();
         // Repeated matches count once.
-        let mut unique = obs.clone();
-        let repeated = trust::dedupe(&mut unique);
-        let obs = &unique;
+        let (unique, repeated) = trust::deduped(obs);
+        let obs = &*unique;
         self.frame += 1;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();

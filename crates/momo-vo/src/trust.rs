@@ -315,50 +315,84 @@ impl Reason {
 /// Removes repeated matches (the same two pixels, bit for bit, in the same camera): each
 /// counts once (the first is kept). Returns the number removed.
 pub fn dedupe(obs: &mut FrameObservations) -> usize {
-    let mut removed = 0;
     let mut table: Vec<u32> = Vec::new();
     let mut repeated: Vec<bool> = Vec::new();
+    let mut removed = 0;
     for matches in &mut obs.per_camera {
-        let n = matches.len();
-        if n < 2 {
-            continue;
-        }
-        // Open addressing over match indices (`u32::MAX`: empty), at most half full, keyed by
-        // the pixels' bits; a hash collision costs a comparison, never a wrong answer.
-        let bits = (2 * n).next_power_of_two().trailing_zeros();
-        let slots = 1usize << bits;
-        table.clear();
-        table.resize(slots, u32::MAX);
-        repeated.clear();
-        repeated.resize(n, false);
-        let mut found = 0;
-        for (i, o) in matches.iter().enumerate() {
-            let k = key(o);
-            let mut slot = (hash(&k) >> (64 - bits)) as usize;
-            loop {
-                let held = table[slot];
-                if held == u32::MAX {
-                    table[slot] = i as u32;
-                    break;
-                }
-                if key(&matches[held as usize]) == k {
-                    repeated[i] = true;
-                    found += 1;
-                    break;
-                }
-                slot = (slot + 1) & (slots - 1);
-            }
-        }
+        let found = mark_repeated(matches, &mut table, &mut repeated);
         if found > 0 {
-            let mut i = 0;
-            matches.retain(|_| {
-                i += 1;
-                !repeated[i - 1]
-            });
+            retain_unmarked(matches, &repeated);
             removed += found;
         }
     }
     removed
+}
+
+/// [`dedupe`] without a copy when no match repeats (the usual frame): the matches themselves
+/// (borrowed) or, if some repeat, a copy without the repeats; and the number removed. The
+/// same matches in the same order as `dedupe` on a copy.
+pub fn deduped(obs: &FrameObservations) -> (std::borrow::Cow<'_, FrameObservations>, usize) {
+    let mut table: Vec<u32> = Vec::new();
+    let mut repeated: Vec<bool> = Vec::new();
+    let mut removed = 0;
+    let mut copy: Option<FrameObservations> = None;
+    for (j, matches) in obs.per_camera.iter().enumerate() {
+        let found = mark_repeated(matches, &mut table, &mut repeated);
+        if found > 0 {
+            let c = copy.get_or_insert_with(|| obs.clone());
+            retain_unmarked(&mut c.per_camera[j], &repeated);
+            removed += found;
+        }
+    }
+    match copy {
+        Some(c) => (std::borrow::Cow::Owned(c), removed),
+        None => (std::borrow::Cow::Borrowed(obs), 0),
+    }
+}
+
+/// Marks in `repeated` (resized to the matches) every match whose two pixels equal, bit for
+/// bit, those of an earlier one; returns how many. `table` is scratch space.
+fn mark_repeated(matches: &[Observation], table: &mut Vec<u32>, repeated: &mut Vec<bool>) -> usize {
+    let n = matches.len();
+    if n < 2 {
+        return 0;
+    }
+    // Open addressing over match indices (`u32::MAX`: empty), at most half full, keyed by
+    // the pixels' bits; a hash collision costs a comparison, never a wrong answer.
+    let bits = (2 * n).next_power_of_two().trailing_zeros();
+    let slots = 1usize << bits;
+    table.clear();
+    table.resize(slots, u32::MAX);
+    repeated.clear();
+    repeated.resize(n, false);
+    let mut found = 0;
+    for (i, o) in matches.iter().enumerate() {
+        let k = key(o);
+        let mut slot = (hash(&k) >> (64 - bits)) as usize;
+        loop {
+            let held = table[slot];
+            if held == u32::MAX {
+                table[slot] = i as u32;
+                break;
+            }
+            if key(&matches[held as usize]) == k {
+                repeated[i] = true;
+                found += 1;
+                break;
+            }
+            slot = (slot + 1) & (slots - 1);
+        }
+    }
+    found
+}
+
+/// Keeps the matches not marked in `repeated` (as marked by [`mark_repeated`]).
+fn retain_unmarked(matches: &mut Vec<Observation>, repeated: &[bool]) {
+    let mut i = 0;
+    matches.retain(|_| {
+        i += 1;
+        !repeated[i - 1]
+    });
 }
 
 /// A match's identity: its two pixels, bit for bit.

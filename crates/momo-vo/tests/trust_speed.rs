@@ -156,6 +156,15 @@ fn dedupe_keeps_the_first_of_each_repeated_match() {
             }
             *list = kept;
         }
+        // The copy-free form: the same matches, borrowed when none repeats.
+        let (distinct, removed) = momo_vo::trust::deduped(&obs);
+        assert_eq!(removed, expected_removed, "case {case}");
+        assert_eq!(*distinct, expected, "case {case}");
+        assert_eq!(
+            matches!(distinct, std::borrow::Cow::Borrowed(_)),
+            expected_removed == 0,
+            "case {case}"
+        );
         let removed = momo_vo::trust::dedupe(&mut obs);
         assert_eq!(removed, expected_removed, "case {case}");
         assert_eq!(obs, expected, "case {case}");
