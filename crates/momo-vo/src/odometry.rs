@@ -374,6 +374,53 @@ impl Odometry {
             .then_some(out)
     }
 
+    /// The shift `b = H_d⁻¹ J_qᵀ s² K² (q̂ − c)` of the free parameters that the soft prior
+    /// causes (the data's own estimate minus the solution; [`Odometry::soft_prior_sigma`] has
+    /// the notation), if some prior residual's innovation exceeds
+    /// `trust.prior_conflict_chi2`: `d_r² / (σ_r² + v_r)` with `σ_r` the prior's standard
+    /// deviation in use and `v_r` the data's variance of `q_r`. `None` where the data agree
+    /// with the prior, the model has no soft prior, or the check is off.
+    fn prior_conflict_shift(&self, sol: &FrameSolution) -> Option<nalgebra::DVector<f64>> {
+        let limit = self.config.trust.prior_conflict_chi2;
+        let s = self.motion_prior.scale;
+        if !(limit > 0.0) || !(s.is_finite() && s > 0.0) {
+            return None;
+        }
+        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
+        if q.is_empty() {
+            return None;
+        }
+        let c: Vec<f64> = if self.motion_prior.soft_center.len() == q.len() {
+            self.motion_prior.soft_center.clone()
+        } else {
+            vec![0.0; q.len()]
+        };
+        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+        let mut inp = self.covariance_inputs(sol);
+        let mut kj = jq.clone();
+        for r in 0..kj.nrows() {
+            kj.row_mut(r).scale_mut(k(r));
+        }
+        inp.normal -= (kj.transpose() * kj) * (s * s);
+        let h_d = (&inp.normal + inp.normal.transpose()) * 0.5;
+        let a = trust::invert_information(&h_d);
+        let (info, _) = trust::calibrated_information(&inp)?;
+        let cov_d = trust::invert_information(&info);
+        let pull = nalgebra::DVector::from_iterator(
+            q.len(),
+            (0..q.len()).map(|r| s * s * k(r) * k(r) * (q[r] - c[r])),
+        );
+        let b = &a * (jq.transpose() * pull);
+        let q_d = nalgebra::DVector::from_column_slice(&q) + &jq * &b;
+        let v = &jq * cov_d * jq.transpose();
+        let conflict = (0..q.len()).any(|r| {
+            let sigma = 1.0 / k(r);
+            let z = (q_d[r] - c[r]).powi(2) / (sigma * sigma + v[(r, r)].max(0.0));
+            z.is_finite() && z > limit
+        });
+        (conflict && b.iter().all(|v| v.is_finite())).then_some(b)
+    }
+
     /// Re-learns the soft prior's factors from the recent innovations
     /// ([`Odometry::soft_prior_sigma`]).
     fn learn_soft_sigma(&mut self) {
@@ -1196,6 +1243,13 @@ impl Odometry {
         clustered: bool,
     ) -> Option<nalgebra::DMatrix<f64>> {
         let mut cov = self.covariance(sol)?;
+        // Where the data contradict the soft prior, its pull on the estimate is an error the
+        // posterior covariance does not hold: add it (`trust.prior_conflict_chi2`).
+        if let Some(b) = self.prior_conflict_shift(sol)
+            && b.len() == cov.nrows()
+        {
+            cov += &b * b.transpose();
+        }
         if !jackknife {
             return Some(cov);
         }

@@ -57,6 +57,14 @@ pub struct TrustOptions {
     /// more than this factor (a jackknife over few cells is itself noisy: widening on every
     /// small excess would make well-behaved frames under-confident). Default 2.
     pub jackknife_min_ratio: f64,
+    /// Where the data contradict the soft model's prior (a soft manifold such as
+    /// `soft_single_track`): if a prior residual's innovation, the data's own value against the
+    /// prior's centre, exceeds this many of its standard deviations squared (`d² / (σ² + v_d)`,
+    /// chi-square with one degree of freedom under the prior), the reported covariance adds
+    /// `b bᵀ`, with `b` the shift of the estimate that the prior causes. A prior that holds the
+    /// estimate against a moving object, or pulls it off a motion no car makes but the data
+    /// show, then says so in the sigma. Default 3.84 (the 95 % point); 0: off.
+    pub prior_conflict_chi2: f64,
     /// The jackknife (a dozen extra solves) runs on a frame whose inlier share is below this
     /// factor times the best share of the recent frames (a maximum decaying by 0.5 % per
     /// frame), on a frame with a competing motion, and on the first frame; at least 1: on every
@@ -138,6 +146,7 @@ impl Default for TrustOptions {
             max_failed_share: 0.5,
             jackknife_grids: vec![[3, 2], [4, 2]],
             jackknife_min_ratio: 2.0,
+            prior_conflict_chi2: 3.84,
             jackknife_support_drop: 0.7,
             jackknife_steps: 0,
             jackknife_influence: true,
@@ -192,6 +201,15 @@ impl TrustOptions {
                 format!(
                     "trust.jackknife_support_drop must be a finite number of at least 0, got {}",
                     self.jackknife_support_drop
+                ),
+            ));
+        }
+        if !(self.prior_conflict_chi2 >= 0.0 && self.prior_conflict_chi2.is_finite()) {
+            out.push((
+                vec!["trust.prior_conflict_chi2"],
+                format!(
+                    "trust.prior_conflict_chi2 must be a finite number of at least 0, got {}",
+                    self.prior_conflict_chi2
                 ),
             ));
         }

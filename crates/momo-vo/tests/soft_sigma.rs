@@ -71,3 +71,58 @@ fn the_soft_prior_learns_the_true_slip_spread() {
     assert!(exact.iter().all(|s| *s < 1.3), "{exact:?}");
     assert!(err_learnt < 0.8 * err_model, "{err_learnt} vs {err_model}");
 }
+
+/// Runs 60 frames as [`run`] with the learning off (the prior stays at the model's 0.01 rad)
+/// and `trust.prior_conflict_chi2 = chi2`; returns the share of frames whose yaw error is
+/// within 2 reported sigmas and the yaw sigmas.
+fn coverage(chi2: f64, slip_std: f64) -> (f64, Vec<f64>) {
+    let rig = canned::pinhole_rig();
+    let mut config = Config {
+        model: Box::new(SoftSingleTrack::default()),
+        ..Config::default()
+    };
+    config.odometry.soft_prior_sigma_learning = false;
+    config.trust.prior_conflict_chi2 = chi2;
+    let mut vo = Odometry::new(rig.clone(), config).expect("valid config");
+    let slip = normals(60, 11);
+    let (mut inside, mut sigmas) = (0usize, Vec::new());
+    for (k, s) in slip.iter().enumerate() {
+        let yaw = 0.02 * (k as f64 * 0.15).sin();
+        let truth = [0.0, 0.0, yaw, yaw / 2.0 + slip_std * s, 0.0, 1.0];
+        let obs = canned::synthetic_observations(&rig, &Se3.motion(&truth), 150, 0, 900 + k as u64);
+        let d = vo.process(&obs, Some(1.0)).diagnostics;
+        let sigma = d.param_sigmas[2];
+        inside += usize::from((d.params[2] - yaw).abs() <= 2.0 * sigma);
+        sigmas.push(sigma);
+    }
+    (inside as f64 / slip.len() as f64, sigmas)
+}
+
+/// `trust.prior_conflict_chi2`: where the true side slip (3 model sigmas) contradicts the
+/// prior, the yaw sigma grows on the frames where the data show it and covers more of the
+/// errors than the posterior alone; where the motion is single-track, the sigmas are as
+/// without the check on nearly every frame.
+#[test]
+fn a_prior_the_data_contradict_widens_the_sigma() {
+    let (with, s_with) = coverage(3.84, 0.03);
+    let (without, s_without) = coverage(0.0, 0.03);
+    eprintln!("yaw within 2 sigma: {with:.2} with the check, {without:.2} without");
+    let widened = s_with.iter().zip(&s_without).filter(|(a, b)| a > b).count();
+    assert!(widened >= 10, "widened on {widened} frames");
+    eprintln!("widened on {widened} frames");
+    // (Not every frame: a wider base leaves less for the jackknife to widen.)
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    assert!(mean(&s_with) > mean(&s_without));
+    assert!(with > without, "{with} vs {without}");
+    let (_, e_with) = coverage(3.84, 0.0);
+    let (_, e_without) = coverage(0.0, 0.0);
+    let same = e_with
+        .iter()
+        .zip(&e_without)
+        .filter(|(a, b)| a == b)
+        .count();
+    assert!(
+        same >= 54,
+        "only {same} of 60 frames unchanged on single-track motion"
+    );
+}
