@@ -383,7 +383,7 @@ impl Odometry {
     fn prior_conflict_shift(&self, sol: &FrameSolution) -> Option<nalgebra::DVector<f64>> {
         let limit = self.config.trust.prior_conflict_chi2;
         let s = self.motion_prior.scale;
-        if !(limit > 0.0) || !(s.is_finite() && s > 0.0) {
+        if !(limit > 0.0 && s.is_finite() && s > 0.0) {
             return None;
         }
         let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
