@@ -542,6 +542,30 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         self.finish_linearization(x, None, known_cost, cost, h, g)
     }
 
+    /// The metric's kernel inputs `q(C_j(p))` of one camera at its dual motion `c`, split into
+    /// their values `q` and derivatives `dq/dp` over the `N` free parameters (`q_dual` is
+    /// scratch of the inputs' length).
+    #[inline(always)]
+    fn split_kernel_inputs<const N: usize>(
+        &self,
+        camera: &crate::Camera,
+        c: &Pose<DualSVec64<N>>,
+        q_dual: &mut [DualSVec64<N>],
+        q: &mut [f64],
+        dq: &mut [[f64; N]],
+    ) where
+        DualSVec64<N>: ErasedScalar,
+    {
+        self.metric.kernel_inputs(camera, c, q_dual);
+        for (i, v) in q_dual.iter().enumerate() {
+            q[i] = v.re;
+            dq[i] = match &v.eps.0 {
+                Some(e) => std::array::from_fn(|k| e[k]),
+                None => [0.0; N],
+            };
+        }
+    }
+
     /// The fused path of `linearize_n` ([`ResidualMetric::KERNEL_INPUTS`] `> 0`): the
     /// kernel's per-camera inputs `q(C_j(p))` and `dq/dp` on dual numbers once per camera, then
     /// per match the metric's [`kernel`](ResidualMetric::kernel) in plain `f64`,
@@ -583,15 +607,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                 continue;
             }
             let c = camera_motion(&m, &cam.t_vehicle_camera);
-            self.metric
-                .kernel_inputs(&cam.model, &c, &mut q_dual[..k_in]);
-            for i in 0..k_in {
-                q[i] = q_dual[i].re;
-                dq[i] = match &q_dual[i].eps.0 {
-                    Some(e) => std::array::from_fn(|k| e[k]),
-                    None => [0.0; N],
-                };
-            }
+            self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
             for o in obs {
                 self.metric.kernel(
                     &cam.model,
@@ -665,15 +681,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                 continue;
             }
             let c = camera_motion(&m, &cam.t_vehicle_camera);
-            self.metric
-                .kernel_inputs(&cam.model, &c, &mut q_dual[..k_in]);
-            for i in 0..k_in {
-                q[i] = q_dual[i].re;
-                dq[i] = match &q_dual[i].eps.0 {
-                    Some(e) => std::array::from_fn(|k| e[k]),
-                    None => [0.0; N],
-                };
-            }
+            self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
             for chunk in obs.chunks(LANES) {
                 // The kernel per match, its derivatives transposed into lanes; unused lanes
                 // stay zero (and weigh zero).

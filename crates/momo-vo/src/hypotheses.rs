@@ -248,6 +248,66 @@ pub fn ground_mask(
     support: &[Vec<bool>],
     opts: &HypothesesOptions,
 ) -> Vec<Vec<bool>> {
+    road_mask(
+        rig,
+        motion,
+        obs,
+        support,
+        (opts.ground_z, 1e-9),
+        |cam, o| {
+            let (c, t, p_vc, height) =
+                (&cam.motion, &cam.motion.translation, cam.mount, cam.height);
+            let rf1 = c.rotation * o.f1;
+            let away = cam.direction.cross(&o.f0);
+            let a = away.norm();
+            if a < 1e-9 {
+                return false;
+            }
+            let p = o.f0.cross(&rf1).dot(&away) / a;
+            if p < 0.5 * opts.parallax {
+                return false;
+            }
+            // z0 f0 - z1 R f1 = t in the least-squares sense (2 x 2 normal equations).
+            let (a11, a12, a22) = (1.0, -o.f0.dot(&rf1), 1.0);
+            let (b1, b2) = (o.f0.dot(t), -rf1.dot(t));
+            let det = a11 * a22 - a12 * a12;
+            if det.abs() < 1e-12 {
+                return false;
+            }
+            let z0 = (b1 * a22 - a12 * b2) / det;
+            if !(z0 > 0.0) {
+                return false;
+            }
+            let x_v = p_vc.rotation * (o.f0 * z0) + p_vc.translation;
+            let tol = opts
+                .ground_tolerance
+                .max(2.0 * height * opts.noise_angle / p);
+            tol < 0.5 * height && (x_v.z - opts.ground_z).abs() < tol
+        },
+    )
+}
+
+/// A camera of [`road_mask`]: its mount, its motion, the unit direction and length of its
+/// translation, and its height above the road.
+struct RoadCamera<'a> {
+    mount: &'a Pose<f64>,
+    motion: Pose<f64>,
+    direction: nalgebra::Vector3<f64>,
+    travel: f64,
+    height: f64,
+}
+
+/// The mask (per camera, per match) of the supported matches for which `test` holds, on the
+/// cameras more than 0.2 m above the road (`ground_z`) that moved more than `min_travel`
+/// (metres) under `motion`; every other match is `false`.
+fn road_mask(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    (ground_z, min_travel): (f64, f64),
+    mut test: impl FnMut(&RoadCamera<'_>, &momo_core::Observation) -> bool,
+) -> Vec<Vec<bool>> {
     let mut out: Vec<Vec<bool>> = obs
         .per_camera
         .iter()
@@ -260,50 +320,30 @@ pub fn ground_mask(
         .zip(support)
         .zip(&mut out)
     {
-        let p_vc = &cam.t_vehicle_camera;
-        let height = p_vc.translation.z - opts.ground_z;
+        let mount = &cam.t_vehicle_camera;
+        let height = mount.translation.z - ground_z;
         if !(height > 0.2) {
             continue;
         }
-        let c = camera_motion(motion, p_vc);
-        let t = c.translation;
-        let tn = t.norm();
-        if !(tn > 1e-9) {
+        let c = camera_motion(motion, mount);
+        let travel = c.translation.norm();
+        if !(travel > min_travel) {
             continue;
         }
-        let th = t / tn;
-        for ((o, _), g) in matches
+        let road = RoadCamera {
+            mount,
+            direction: c.translation / travel,
+            motion: c,
+            travel,
+            height,
+        };
+        for ((o, _), flag) in matches
             .iter()
             .zip(mask)
             .zip(out.iter_mut())
             .filter(|((_, k), _)| **k)
         {
-            let rf1 = c.rotation * o.f1;
-            let away = th.cross(&o.f0);
-            let a = away.norm();
-            if a < 1e-9 {
-                continue;
-            }
-            let p = o.f0.cross(&rf1).dot(&away) / a;
-            if p < 0.5 * opts.parallax {
-                continue;
-            }
-            // z0 f0 - z1 R f1 = t in the least-squares sense (2 x 2 normal equations).
-            let (a11, a12, a22) = (1.0, -o.f0.dot(&rf1), 1.0);
-            let (b1, b2) = (o.f0.dot(&t), -rf1.dot(&t));
-            let det = a11 * a22 - a12 * a12;
-            if det.abs() < 1e-12 {
-                continue;
-            }
-            let z0 = (b1 * a22 - a12 * b2) / det;
-            if !(z0 > 0.0) {
-                continue;
-            }
-            let x_v = p_vc.rotation * (o.f0 * z0) + p_vc.translation;
-            let tol = opts
-                .ground_tolerance
-                .max(2.0 * height * opts.noise_angle / p);
-            *g = tol < 0.5 * height && (x_v.z - opts.ground_z).abs() < tol;
+            *flag = test(&road, o);
         }
     }
     out
@@ -342,53 +382,29 @@ pub fn under_road_mask(
     support: &[Vec<bool>],
     opts: &UnderRoad,
 ) -> Vec<Vec<bool>> {
-    let mut out: Vec<Vec<bool>> = obs
-        .per_camera
-        .iter()
-        .map(|m| vec![false; m.len()])
-        .collect();
-    for (((cam, matches), mask), out) in rig
-        .cameras()
-        .iter()
-        .zip(&obs.per_camera)
-        .zip(support)
-        .zip(&mut out)
-    {
-        let p_vc = &cam.t_vehicle_camera;
-        let height = p_vc.translation.z - opts.ground_z;
-        if !(height > 0.2) {
-            continue;
-        }
-        let c = camera_motion(motion, p_vc);
-        let t = c.translation;
-        let tn = t.norm();
-        if !(tn > 1e-6) {
-            continue;
-        }
-        let th = t / tn;
-        for ((o, _), flag) in matches
-            .iter()
-            .zip(mask)
-            .zip(out.iter_mut())
-            .filter(|((_, k), _)| **k)
-        {
+    road_mask(
+        rig,
+        motion,
+        obs,
+        support,
+        (opts.ground_z, 1e-6),
+        |cam, o| {
             // Sine of the ray's angle below the horizon, less the slope margin.
-            let down = -(p_vc.rotation * o.f0).z / o.f0.norm() - opts.slope;
+            let down = -(cam.mount.rotation * o.f0).z / o.f0.norm() - opts.slope;
             if !(down > 1e-6) {
-                continue;
+                return false;
             }
-            let away = th.cross(&o.f0);
+            let away = cam.direction.cross(&o.f0);
             let a = away.norm();
             if a < 1e-9 {
-                continue;
+                return false;
             }
-            let p = o.f0.cross(&(c.rotation * o.f1)).dot(&away) / a;
-            let inverse = p / (tn * a);
-            let sigma = std::f64::consts::SQRT_2 * opts.noise_angle / (tn * a);
-            *flag = down / height - inverse > opts.sigmas * sigma;
-        }
-    }
-    out
+            let p = o.f0.cross(&(cam.motion.rotation * o.f1)).dot(&away) / a;
+            let inverse = p / (cam.travel * a);
+            let sigma = std::f64::consts::SQRT_2 * opts.noise_angle / (cam.travel * a);
+            down / cam.height - inverse > opts.sigmas * sigma
+        },
+    )
 }
 
 /// A motion's score for the choice: its ground support if [`HypothesesOptions::ground`], else
