@@ -594,9 +594,9 @@ mod tests {
         assert_eq!(t.evidence, 0.0, "the evidence restarts after a switch");
     }
 
-    #[test]
-    fn the_road_lies_at_the_mount_height_only_under_the_true_motion_at_its_scale() {
-        // The KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above the road.
+    /// A KITTI pinhole at the KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above
+    /// the road, looking forward; the rig and the mount.
+    fn kitti_mono() -> (Rig, Pose<f64>) {
         let p_vc = Pose::new(
             Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
             Vector3::new(1.0, 0.0, 1.65),
@@ -609,7 +609,12 @@ mod tests {
             width: 1241.0,
             height: 376.0,
         });
-        let rig = Rig::mono(cam, p_vc).unwrap();
+        (Rig::mono(cam, p_vc).unwrap(), p_vc)
+    }
+
+    #[test]
+    fn the_road_lies_at_the_mount_height_only_under_the_true_motion_at_its_scale() {
+        let (rig, p_vc) = kitti_mono();
         // Road points 5-14 m ahead, 2-4 m left and right (vehicle frame, z = 0): near enough
         // for parallax that tells their height.
         let road: Vec<Vector3<f64>> = (0..30)
@@ -640,19 +645,7 @@ mod tests {
 
     #[test]
     fn points_moving_with_the_ego_vehicle_lie_under_the_road_static_ones_do_not() {
-        let p_vc = Pose::new(
-            Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
-            Vector3::new(1.0, 0.0, 1.65),
-        );
-        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
-            fx: 718.0,
-            fy: 718.0,
-            cx: 607.0,
-            cy: 185.0,
-            width: 1241.0,
-            height: 376.0,
-        });
-        let rig = Rig::mono(cam, p_vc).unwrap();
+        let (rig, p_vc) = kitti_mono();
         let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
         // Static: road points 5-40 m ahead, a facade's points above and below the horizon.
         let mut pts: Vec<Vector3<f64>> = (0..30)
