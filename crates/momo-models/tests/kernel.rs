@@ -126,15 +126,7 @@ proptest! {
         let obs = canned::synthetic_observations(&rig, &truth, 40, outliers, seed);
         let loss = loss(loss_kind, scale);
         let loss = loss.as_ref();
-        let models: [&dyn Fn() -> Result<f64, TestCaseError>; 4] = [
-            &|| run(&Se3, &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
-            &|| run(&SingleTrack2d, &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
-            &|| run(&SingleTrack3d::default(), &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
-            &|| run(&SoftSingleTrack::default(), &AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior),
-        ];
-        for m in models {
-            m()?;
-        }
+        every_model(&AnglePlane, &start, &rig, &obs, loss, fix_arc, with_prior)?;
         // The comparison is not empty: away from a redescending loss's cut-off, the
         // linearisation has a normal matrix.
         if loss_kind != 3 {
@@ -167,12 +159,53 @@ proptest! {
         let obs = canned::synthetic_observations(&rig, &truth, 40, outliers, seed);
         let loss = loss(loss_kind, scale);
         let loss = loss.as_ref();
-        let ml = &AnglePlaneMl;
-        run(&Se3, ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
-        run(&SingleTrack2d, ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
-        run(&SingleTrack3d::default(), ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
-        run(&SoftSingleTrack::default(), ml, &start, &rig, &obs, loss, fix_arc, with_prior)?;
+        every_model(&AnglePlaneMl, &start, &rig, &obs, loss, fix_arc, with_prior)?;
     }
+}
+
+/// [`run`] on every built-in model with `metric`.
+#[allow(clippy::too_many_arguments)]
+fn every_model<R: ResidualMetric>(
+    metric: &R,
+    start: &Pose<f64>,
+    rig: &Rig,
+    obs: &momo_core::FrameObservations,
+    loss: &dyn RobustLoss,
+    fix_arc: bool,
+    with_prior: bool,
+) -> Result<(), TestCaseError> {
+    run(&Se3, metric, start, rig, obs, loss, fix_arc, with_prior)?;
+    run(
+        &SingleTrack2d,
+        metric,
+        start,
+        rig,
+        obs,
+        loss,
+        fix_arc,
+        with_prior,
+    )?;
+    run(
+        &SingleTrack3d::default(),
+        metric,
+        start,
+        rig,
+        obs,
+        loss,
+        fix_arc,
+        with_prior,
+    )?;
+    run(
+        &SoftSingleTrack::default(),
+        metric,
+        start,
+        rig,
+        obs,
+        loss,
+        fix_arc,
+        with_prior,
+    )?;
+    Ok(())
 }
 
 /// One model: parameters from the start motion where it has a closed form, else neutral.
