@@ -344,81 +344,80 @@ impl Odometry {
         kj.transpose() * kj
     }
 
-    /// This frame's soft-prior innovations `(d_i², v_i)` ([`Odometry::soft_prior_sigma`]), if
-    /// the data determine every residual.
-    fn soft_innovation(&self, sol: &FrameSolution) -> Option<Vec<(f64, f64)>> {
-        let c = &self.motion_prior.soft_center;
-        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
+    /// The data's own view of the soft prior's residuals at the solution
+    /// ([`Odometry::soft_prior_sigma`] has the notation): the residuals `q̂`, the centre `c`
+    /// (zeros where the motion prior has none of their length) and whether it was the motion
+    /// prior's, the shift `b = H_d⁻¹ J_qᵀ s² K² (q̂ − c)` of the free parameters that the prior
+    /// causes, `q_d = q̂ + J_q b` and the data's covariance of `q`, `J_q Σ_d J_qᵀ`. `None` for a
+    /// model without a soft prior, without a prior unit, or without a calibrated covariance.
+    fn soft_data_view(&self, sol: &FrameSolution) -> Option<SoftDataView> {
         let s = self.motion_prior.scale;
-        if q.is_empty() || c.len() != q.len() || !(s.is_finite() && s > 0.0) {
-            return None;
-        }
-        let mut inp = self.covariance_inputs(sol);
-        inp.normal -= self.soft_information(&jq) * (s * s);
-        let h_d = (&inp.normal + inp.normal.transpose()) * 0.5;
-        let a = trust::invert_information(&h_d);
-        let (info, _) = trust::calibrated_information(&inp)?;
-        let cov = trust::invert_information(&info);
-        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
-        let pull: nalgebra::DVector<f64> = nalgebra::DVector::from_iterator(
-            q.len(),
-            (0..q.len()).map(|r| s * s * k(r) * k(r) * (q[r] - c[r])),
-        );
-        let q_d = nalgebra::DVector::from_column_slice(&q) + &jq * (&a * (jq.transpose() * pull));
-        let v = &jq * cov * jq.transpose();
-        let out: Vec<(f64, f64)> = (0..q.len())
-            .map(|r| ((q_d[r] - c[r]).powi(2), v[(r, r)]))
-            .collect();
-        out.iter()
-            .all(|(d2, v)| d2.is_finite() && v.is_finite() && *v >= 0.0)
-            .then_some(out)
-    }
-
-    /// The shift `b = H_d⁻¹ J_qᵀ s² K² (q̂ − c)` of the free parameters that the soft prior
-    /// causes (the data's own estimate minus the solution; [`Odometry::soft_prior_sigma`] has
-    /// the notation), if some prior residual's innovation exceeds
-    /// `trust.prior_conflict_chi2`: `d_r² / (σ_r² + v_r)` with `σ_r` the prior's standard
-    /// deviation in use and `v_r` the data's variance of `q_r`. `None` where the data agree
-    /// with the prior, the model has no soft prior, or the check is off.
-    fn prior_conflict_shift(&self, sol: &FrameSolution) -> Option<nalgebra::DVector<f64>> {
-        let limit = self.config.trust.prior_conflict_chi2;
-        let s = self.motion_prior.scale;
-        if !(limit > 0.0 && s.is_finite() && s > 0.0) {
+        if !(s.is_finite() && s > 0.0) {
             return None;
         }
         let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
         if q.is_empty() {
             return None;
         }
-        let c: Vec<f64> = if self.motion_prior.soft_center.len() == q.len() {
+        let centred = self.motion_prior.soft_center.len() == q.len();
+        let c = if centred {
             self.motion_prior.soft_center.clone()
         } else {
             vec![0.0; q.len()]
         };
-        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
         let mut inp = self.covariance_inputs(sol);
-        let mut kj = jq.clone();
-        for r in 0..kj.nrows() {
-            kj.row_mut(r).scale_mut(k(r));
-        }
-        inp.normal -= (kj.transpose() * kj) * (s * s);
+        inp.normal -= self.soft_information(&jq) * (s * s);
         let h_d = (&inp.normal + inp.normal.transpose()) * 0.5;
         let a = trust::invert_information(&h_d);
         let (info, _) = trust::calibrated_information(&inp)?;
         let cov_d = trust::invert_information(&info);
-        let pull = nalgebra::DVector::from_iterator(
+        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+        let pull: nalgebra::DVector<f64> = nalgebra::DVector::from_iterator(
             q.len(),
             (0..q.len()).map(|r| s * s * k(r) * k(r) * (q[r] - c[r])),
         );
-        let b = &a * (jq.transpose() * pull);
-        let q_d = nalgebra::DVector::from_column_slice(&q) + &jq * &b;
+        let shift = &a * (jq.transpose() * pull);
+        let q_d = nalgebra::DVector::from_column_slice(&q) + &jq * &shift;
         let v = &jq * cov_d * jq.transpose();
-        let conflict = (0..q.len()).any(|r| {
+        Some(SoftDataView {
+            c,
+            centred,
+            shift,
+            q_d,
+            v,
+        })
+    }
+
+    /// This frame's soft-prior innovations `(d_i², v_i)` ([`Odometry::soft_prior_sigma`]), if
+    /// the data determine every residual.
+    fn soft_innovation(&self, sol: &FrameSolution) -> Option<Vec<(f64, f64)>> {
+        let view = self.soft_data_view(sol).filter(|v| v.centred)?;
+        let out: Vec<(f64, f64)> = (0..view.c.len())
+            .map(|r| ((view.q_d[r] - view.c[r]).powi(2), view.v[(r, r)]))
+            .collect();
+        out.iter()
+            .all(|(d2, v)| d2.is_finite() && v.is_finite() && *v >= 0.0)
+            .then_some(out)
+    }
+
+    /// The shift `b` of the free parameters that the soft prior causes
+    /// ([`Odometry::soft_prior_sigma`] has the notation), if some prior residual's innovation
+    /// exceeds `trust.prior_conflict_chi2`: `d_r² / (σ_r² + v_r)` with `σ_r` the prior's
+    /// standard deviation in use and `v_r` the data's variance of `q_r`. `None` where the data
+    /// agree with the prior, the model has no soft prior, or the check is off.
+    fn prior_conflict_shift(&self, sol: &FrameSolution) -> Option<nalgebra::DVector<f64>> {
+        let limit = self.config.trust.prior_conflict_chi2;
+        if !(limit > 0.0) {
+            return None;
+        }
+        let view = self.soft_data_view(sol)?;
+        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+        let conflict = (0..view.c.len()).any(|r| {
             let sigma = 1.0 / k(r);
-            let z = (q_d[r] - c[r]).powi(2) / (sigma * sigma + v[(r, r)].max(0.0));
+            let z = (view.q_d[r] - view.c[r]).powi(2) / (sigma * sigma + view.v[(r, r)].max(0.0));
             z.is_finite() && z > limit
         });
-        (conflict && b.iter().all(|v| v.is_finite())).then_some(b)
+        (conflict && view.shift.iter().all(|v| v.is_finite())).then_some(view.shift)
     }
 
     /// Re-learns the soft prior's factors from the recent innovations
@@ -1661,4 +1660,19 @@ impl Trajectory {
     pub fn vehicle(&self) -> Pose<f64> {
         self.vehicle
     }
+}
+
+/// The data's own view of the soft prior's residuals at a solution
+/// ([`Odometry::soft_data_view`]).
+struct SoftDataView {
+    /// The prior's centre.
+    c: Vec<f64>,
+    /// Whether `c` is the motion prior's (else zeros).
+    centred: bool,
+    /// The shift of the free parameters that the prior causes.
+    shift: nalgebra::DVector<f64>,
+    /// The data's own values of the residuals.
+    q_d: nalgebra::DVector<f64>,
+    /// The data's covariance of the residuals.
+    v: nalgebra::DMatrix<f64>,
 }
