@@ -304,6 +304,14 @@ pub trait MetricSpec: Debug + Send + Sync {
     /// The estimator of this metric with any motion model (the per-match loop compiled for
     /// this metric).
     fn estimator(&self, model: Box<dyn DynManifold>) -> Box<dyn FrameEstimator>;
+    /// The registered type tag of the metric a final efficient stage should refit with after
+    /// this one: the same residual in the same units, weighted for efficiency (e.g.
+    /// `angle_plane` names `angle_plane_ml`, its maximum-likelihood weighting). `None` (the
+    /// default): this metric itself. Declared with
+    /// `register_metric!(Type, "name", final_stage = "other")`.
+    fn final_stage_metric(&self) -> Option<&'static str> {
+        None
+    }
 }
 
 /// Registers a motion model: implements [`ModelSpec`] for `$ty` under the type tag `$name`,
@@ -370,6 +378,24 @@ macro_rules! register_metric {
                     model: ::std::boxed::Box<dyn $crate::DynManifold>,
                 ) -> ::std::boxed::Box<dyn $crate::FrameEstimator> {
                     $crate::estimator::erase_dyn(model, ::core::clone::Clone::clone(self))
+                }
+            }
+        };
+    };
+    ($ty:ty, $name:literal, final_stage = $final_stage:literal) => {
+        const _: () = {
+            use $crate::typetag;
+
+            #[typetag::serde(name = $name)]
+            impl $crate::MetricSpec for $ty {
+                fn estimator(
+                    &self,
+                    model: ::std::boxed::Box<dyn $crate::DynManifold>,
+                ) -> ::std::boxed::Box<dyn $crate::FrameEstimator> {
+                    $crate::estimator::erase_dyn(model, ::core::clone::Clone::clone(self))
+                }
+                fn final_stage_metric(&self) -> ::core::option::Option<&'static str> {
+                    ::core::option::Option::Some($final_stage)
                 }
             }
         };

@@ -108,4 +108,6 @@ impl ResidualMetric for AnglePlane {
     }
 }
 
-momo_core::register_metric!(AnglePlane, "angle_plane");
+// The final efficient stage (`[odometry.final_fit]`) refits with the maximum-likelihood
+// weighting of the same angle (docs/RESULTS.md §9, eighth session).
+momo_core::register_metric!(AnglePlane, "angle_plane", final_stage = "angle_plane_ml");

@@ -14,6 +14,8 @@
 //!
 //! Usage: `cargo run --release -p momo-vo --example nees [FRAMES] [SEEDS...]`
 //! (default 100 frames, seeds 1 2 3); `MOMO_NEES_CONFIG=cfg.toml` scores another configuration;
+//! `MOMO_NEES_SCENARIOS=a,b` scores these scenarios (any `momo simulate --scenario`, e.g.
+//! `moving_traffic`) instead of the default six;
 //! `MOMO_NEES_TRAJECTORY=poses.txt` drives every scenario along a KITTI poses file (e.g. a KITTI
 //! ground truth, as `momo simulate --trajectory`) instead of the built-in drive.
 //! Prints one Markdown row per scenario.
@@ -51,7 +53,10 @@ fn main() {
     };
     // `MOMO_NEES_FRAMES=scenario`: one line per scored frame of that scenario.
     let verbose = std::env::var("MOMO_NEES_FRAMES").ok();
-    let scenarios = [
+    // `MOMO_NEES_SCENARIOS=a,b`: these scenarios (any of `momo simulate`'s, e.g. the
+    // moving_traffic family) instead of the six static-world ones and moving_object.
+    let only = std::env::var("MOMO_NEES_SCENARIOS").ok();
+    let default_scenarios = [
         "clean_pinhole",
         "outliers",
         "sparse_outliers",
@@ -59,12 +64,18 @@ fn main() {
         "moving_object",
         "fisheye_surround",
     ];
+    let scenarios: Vec<&str> = match only.as_deref() {
+        Some(list) => list
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .collect(),
+        None => default_scenarios.to_vec(),
+    };
     println!(
         "| scenario | frames scored | not scored | mean NEES | median NEES | inside 95 % chi2(3) | mean NEES per seed |"
     );
     println!("|---|---|---|---|---|---|---|");
-    // `MOMO_NEES_SCENARIOS=a,b`: only these scenarios.
-    let only = std::env::var("MOMO_NEES_SCENARIOS").ok();
     let trajectory = std::env::var("MOMO_NEES_TRAJECTORY").ok().map(|path| {
         momo_io::read_poses(std::path::Path::new(&path)).unwrap_or_else(|e| {
             eprintln!("nees: {e}");
@@ -72,12 +83,6 @@ fn main() {
         })
     });
     for name in scenarios {
-        if only
-            .as_deref()
-            .is_some_and(|o| !o.split(',').any(|s| s == name))
-        {
-            continue;
-        }
         let mut all = Vec::new();
         let mut held = 0usize;
         let mut per_seed = Vec::new();

@@ -200,6 +200,13 @@ pub struct Odometry {
     /// The recent moving frames' soft-prior innovations `(d_i², v_i)` per residual, newest last
     /// (at most `soft_prior_centring_frames`), see [`Odometry::soft_prior_sigma`].
     soft_samples: std::collections::VecDeque<Vec<(f64, f64)>>,
+    /// This frame's first-stage solution where the final efficient stage replaced it (`None`
+    /// otherwise): the soft prior's data view ([`Odometry::soft_data_view`]) needs the solution
+    /// whose normal matrix and prior weighting it inverts; the refit weighs the priors in units
+    /// of its own noise estimate, so its parameters with the first stage's normal matrix would
+    /// understate the data's disagreement with the prior (learnt side slip 1.9 instead of 3.3
+    /// in `tests/soft_sigma.rs`).
+    first_stage: Option<FrameSolution>,
     /// The metric's residual is an angle (radians): `angle_plane`.
     metric_is_angular: bool,
     /// Multi-frame evidence of the motion separation's hypothesis choice (crate::hypotheses).
@@ -213,7 +220,11 @@ impl Odometry {
     pub fn new(rig: Rig, config: Config) -> Result<Self, VoError> {
         config.validate_for_rig(&rig)?;
         let estimator = config.model.build(config.metric.as_ref())?;
-        let final_estimator = match config.odometry.final_fit.metric_spec() {
+        let final_estimator = match config
+            .odometry
+            .final_fit
+            .resolved_metric_spec(config.metric.as_ref())
+        {
             Ok(Some(m)) => Some(config.model.build(m.as_ref())?),
             Ok(None) => None,
             Err(reason) => {
@@ -281,6 +292,7 @@ impl Odometry {
             soft_count: 0,
             soft_inv_scale,
             soft_samples: Default::default(),
+            first_stage: None,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
             clustering: Default::default(),
@@ -405,12 +417,22 @@ impl Odometry {
     /// exceeds `trust.prior_conflict_chi2`: `d_r² / (σ_r² + v_r)` with `σ_r` the prior's
     /// standard deviation in use and `v_r` the data's variance of `q_r`. `None` where the data
     /// agree with the prior, the model has no soft prior, or the check is off.
+    ///
+    /// Where the final stage replaced the first stage's solution (`first_stage`), the view is
+    /// the first stage's and the shift is that of the final estimate from the data's own
+    /// estimate `p̂₁ + b₁`: `b = b₁ + p̂₁ − p̂`.
     fn prior_conflict_shift(&self, sol: &FrameSolution) -> Option<nalgebra::DVector<f64>> {
         let limit = self.config.trust.prior_conflict_chi2;
         if !(limit > 0.0) {
             return None;
         }
-        let view = self.soft_data_view(sol)?;
+        let first = self.first_stage.as_ref().filter(|f| f.free == sol.free);
+        let mut view = self.soft_data_view(first.unwrap_or(sol))?;
+        if let Some(f) = first {
+            for (j, &i) in sol.free.iter().enumerate().take(view.shift.len()) {
+                view.shift[j] += f.params[i] - sol.params[i];
+            }
+        }
         let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
         let conflict = (0..view.c.len()).any(|r| {
             let sigma = 1.0 / k(r);
@@ -766,8 +788,11 @@ impl Odometry {
                         sol.params[i] = held_init[i];
                     }
                 }
+                self.first_stage = None;
                 if !standstill && self.config.odometry.separate.is_none() {
+                    let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
                     sol = self.final_fit(obs, sol, &fixed, diag.scale);
+                    self.first_stage = first.filter(|f| f.params != sol.params);
                 }
                 // The jackknife (a dozen solves) only where the support dropped against the
                 // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
@@ -793,7 +818,7 @@ impl Odometry {
                 }
                 self.fill_diagnostics(obs, &sol, !standstill, (jackknife, clustered), &mut diag);
                 if !standstill && !self.soft_inv_scale.is_empty() {
-                    soft_sample = self.soft_innovation(&sol);
+                    soft_sample = self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol));
                 }
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {

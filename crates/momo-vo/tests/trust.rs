@@ -313,9 +313,24 @@ fn a_tukey_scale_so_small_that_nothing_is_an_inlier_is_degenerate() {
         "{d:?}"
     );
     assert!(d.inliers < 10);
-    // The ordinary estimator on the same frame is fine.
+    // The ordinary estimator on the same frame is fine: an estimate near the truth on its
+    // inliers. (Since the final efficient stage is on by default, this 2 px frame is `weak`
+    // with `competing_motions`: at 2 px the noise is about the competing-motions threshold,
+    // 3e-3 rad, and a second motion fitted to the noise's tail explains 21 % of the matches;
+    // before, it was `estimated`. A false alarm on the safe side, docs/RESULTS.md §9.)
     let r = vo.process(&obs, Some(1.0));
-    assert_eq!(r.diagnostics.status, FrameStatus::Estimated);
+    let d = &r.diagnostics;
+    eprintln!(
+        "ordinary: {:?} {:?} inliers {}",
+        d.status, d.reason, d.inliers
+    );
+    assert!(
+        matches!(d.status, FrameStatus::Estimated | FrameStatus::Weak),
+        "{d:?}"
+    );
+    assert!(d.inliers >= 30, "{d:?}");
+    let err = rot_err_deg(&r.motion, &drive(0.01, 1.0));
+    assert!(err < 0.2, "ordinary estimator {err} deg off");
     let _ = previous;
 }
 
