@@ -317,10 +317,10 @@ struct Query([safe_arch::m128i; 2]);
 impl Query {
     #[inline(always)]
     fn halves(d: &Descriptor) -> [safe_arch::m128i; 2] {
-        let (halves, _) = d.as_chunks::<16>();
+        let half = |k: usize| -> [u8; 16] { std::array::from_fn(|i| d[16 * k + i]) };
         [
-            safe_arch::m128i::from(halves[0]),
-            safe_arch::m128i::from(halves[1]),
+            safe_arch::m128i::from(half(0)),
+            safe_arch::m128i::from(half(1)),
         ]
     }
 

@@ -67,11 +67,12 @@ const VECS: usize = (2 * MAX_HALF + 1).div_ceil(4);
 type Rows = [[f32x4; VECS]; 2 * MAX_HALF + 2];
 
 /// The template of one alignment: the patch `t` of frame `from` and its central-difference
-/// gradients `gx`, `gy`, row by row, zero past the patch side.
-struct Template {
-    t: Rows,
-    gx: Rows,
-    gy: Rows,
+/// gradients `gx`, `gy`, row by row, zero past the patch side. Three arrays of their own (1 KB
+/// each), so that their zeroing stays three short vector loops.
+struct Template<'a> {
+    t: &'a mut Rows,
+    gx: &'a mut Rows,
+    gy: &'a mut Rows,
 }
 
 /// Aligns the patch of `from` around the integer pixel `(u, v)` with `to`, starting at the
@@ -91,10 +92,13 @@ pub fn align(
     }
     // The template and its gradients, and the 3x3 normal matrix of (du, dv, b), with the
     // patch side known at compile time (`r` is in 1..=MAX_HALF).
+    let mut t: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
+    let mut gx: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
+    let mut gy: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
     let mut tpl = Template {
-        t: [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2],
-        gx: [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2],
-        gy: [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2],
+        t: &mut t,
+        gx: &mut gx,
+        gy: &mut gy,
     };
     let setup = match r {
         1 => template::<1>,
@@ -156,7 +160,7 @@ fn lanes(row: &[f32; 4 * VECS], k: usize) -> f32x4 {
 fn template<const R: usize>(
     from: Plane<'_>,
     (u, v): (usize, usize),
-    tpl: &mut Template,
+    tpl: &mut Template<'_>,
 ) -> [f64; 6] {
     let side = 2 * R + 1;
     let w = from.width;
@@ -206,7 +210,7 @@ fn iterate<const R: usize>(
     to: Plane<'_>,
     (u, v): (usize, usize),
     d0: [f64; 2],
-    tpl: &Template,
+    tpl: &Template<'_>,
     inv: &nalgebra::Matrix3<f64>,
     iterations: usize,
     max_shift: f64,
