@@ -1094,6 +1094,40 @@ mod tests {
         }
     }
 
+    /// The SAD (`psadbw` on x86-64, the query held in registers in the window scans) equals the
+    /// byte-wise sum of absolute differences, extremes 0 and 255 included.
+    #[test]
+    fn sad_equals_the_byte_loop() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut descs: Vec<Descriptor> = vec![[0; 32], [255; 32]];
+        for _ in 0..200 {
+            descs.push(std::array::from_fn(|_| match next() % 5 {
+                0 => 0,
+                1 => 255,
+                _ => (next() >> 40) as u8,
+            }));
+        }
+        for a in &descs {
+            let query = Query::new(a);
+            for b in &descs {
+                let expected: u32 = a
+                    .iter()
+                    .zip(b)
+                    .map(|(x, y)| u32::from(x.abs_diff(*y)))
+                    .sum();
+                assert_eq!(sad(a, b), expected);
+                assert_eq!(query.sad(b), expected);
+            }
+        }
+        assert_eq!(sad(&descs[0], &descs[1]), 32 * 255);
+    }
+
     /// A bright dot is a blob maximum at its pixel.
     #[test]
     fn a_bright_dot_is_a_blob_maximum() {
