@@ -12,6 +12,7 @@
 //! errors of the two directions are partly independent).
 
 use crate::features::BORDER;
+use wide::f32x4;
 
 /// Options of the KLT refinement.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,8 +59,21 @@ pub struct Plane<'a> {
     pub height: usize,
 }
 
-/// The largest patch: `(2 MAX_HALF + 1)²` pixels.
-const MAX_PATCH: usize = (2 * MAX_HALF + 1) * (2 * MAX_HALF + 1);
+/// Lanes of the patch rows: each row of up to `2 MAX_HALF + 1` samples is held in
+/// [`VECS`] vectors of 4 `f32` (the lanes past the patch side are zero).
+const VECS: usize = (2 * MAX_HALF + 1).div_ceil(4);
+
+/// The rows of a patch, `VECS` vectors of 4 lanes each (zero past the patch side).
+type Rows = [[f32x4; VECS]; 2 * MAX_HALF + 2];
+
+/// The template of one alignment: the patch `t` of frame `from` and its central-difference
+/// gradients `gx`, `gy`, row by row, zero past the patch side. Three arrays of their own (1 KB
+/// each), so that their zeroing stays three short vector loops.
+struct Template<'a> {
+    t: &'a mut Rows,
+    gx: &'a mut Rows,
+    gy: &'a mut Rows,
+}
 
 /// Aligns the patch of `from` around the integer pixel `(u, v)` with `to`, starting at the
 /// displacement `d0`: the displacement `d` with `to(p + d) ≈ from(p) + b`, or `None` if the
@@ -76,11 +90,16 @@ pub fn align(
     if u < r + 1 || v < r + 1 || u + r + 1 >= from.width || v + r + 1 >= from.height {
         return None;
     }
-    // The template and its gradients (central differences), and the 3x3 normal matrix of
-    // (du, dv, b), with the patch side known at compile time (`r` is in 1..=MAX_HALF).
-    let mut t = [0f32; MAX_PATCH];
-    let mut gx = [0f32; MAX_PATCH];
-    let mut gy = [0f32; MAX_PATCH];
+    // The template and its gradients, and the 3x3 normal matrix of (du, dv, b), with the
+    // patch side known at compile time (`r` is in 1..=MAX_HALF).
+    let mut t: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
+    let mut gx: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
+    let mut gy: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
+    let mut tpl = Template {
+        t: &mut t,
+        gx: &mut gx,
+        gy: &mut gy,
+    };
     let setup = match r {
         1 => template::<1>,
         2 => template::<2>,
@@ -90,7 +109,7 @@ pub fn align(
         6 => template::<6>,
         _ => template::<MAX_HALF>,
     };
-    let mut h = setup(from, (u, v), &mut t, &mut gx, &mut gy).map(f64::from);
+    let mut h = setup(from, (u, v), &mut tpl);
     let n = (2 * r + 1) * (2 * r + 1);
     h[5] = n as f64;
     let m = nalgebra::Matrix3::new(h[0], h[1], h[3], h[1], h[2], h[4], h[3], h[4], h[5]);
@@ -105,8 +124,8 @@ pub fn align(
     }
     let inv = m.try_inverse()?;
     let iterations = options.iterations.max(1);
-    // The iterations with the patch side known at compile time (the loops unroll and
-    // vectorise); `r` is in 1..=MAX_HALF.
+    // The iterations with the patch side known at compile time (the loops unroll); `r` is in
+    // 1..=MAX_HALF.
     let run = match r {
         1 => iterate::<1>,
         2 => iterate::<2>,
@@ -120,9 +139,7 @@ pub fn align(
         to,
         (u, v),
         d0,
-        &t,
-        &gx,
-        &gy,
+        &tpl,
         &inv,
         iterations,
         options.max_shift,
@@ -130,77 +147,83 @@ pub fn align(
     )
 }
 
-/// The template of [`align`] for the half-width `R`: the patch of `from` around `(u, v)` into
-/// `t`, its central-difference gradients into `gx`, `gy` (row-major, `2R + 1` a row), and the
-/// sums `[Σ gx², Σ gx gy, Σ gy², Σ gx, Σ gy, 0]`. The sums are exact in `f32` in any order (the
-/// gradients are multiples of 1/2 below 128 in magnitude, so every product is a multiple of 1/4
-/// and every partial sum stays below 2^22), so they are accumulated per column (vectorised).
+/// Four lanes from `row[k..k + 4]`, zero where `k + lane >= side`.
+#[inline(always)]
+fn lanes(row: &[f32; 4 * VECS], k: usize) -> f32x4 {
+    f32x4::from([row[k], row[k + 1], row[k + 2], row[k + 3]])
+}
+
+/// The template of [`align`] for the half-width `R`: the patch of `from` around `(u, v)`, its
+/// central-difference gradients, and the sums `[Σ gx², Σ gx gy, Σ gy², Σ gx, Σ gy, 0]`. The
+/// differences and sums are taken in integers (twice the gradients), so the sums are exact; the
+/// gradients are multiples of 1/2, exact in `f32`.
 fn template<const R: usize>(
     from: Plane<'_>,
     (u, v): (usize, usize),
-    t: &mut [f32; MAX_PATCH],
-    gx: &mut [f32; MAX_PATCH],
-    gy: &mut [f32; MAX_PATCH],
-) -> [f32; 6] {
+    tpl: &mut Template<'_>,
+) -> [f64; 6] {
     let side = 2 * R + 1;
     let w = from.width;
-    let mut acc = [[0f32; 2 * MAX_HALF + 1]; 5];
+    let (mut sxx, mut sxy, mut syy, mut sx, mut sy) = (0i32, 0i32, 0i32, 0i32, 0i32);
     for j in 0..side {
         let y = v - R + j;
         let row = &from.px[y * w + u - R - 1..y * w + u + R + 2];
         let up = &from.px[(y - 1) * w + u - R..(y - 1) * w + u + R + 1];
         let down = &from.px[(y + 1) * w + u - R..(y + 1) * w + u + R + 1];
-        let k0 = j * side;
-        let (tj, gxj, gyj) = (
-            &mut t[k0..k0 + side],
-            &mut gx[k0..k0 + side],
-            &mut gy[k0..k0 + side],
-        );
-        let [axx, axy, ayy, ax, ay] = &mut acc;
+        let mut t = [0f32; 4 * VECS];
+        let mut gx = [0f32; 4 * VECS];
+        let mut gy = [0f32; 4 * VECS];
         for i in 0..side {
-            tj[i] = f32::from(row[i + 1]);
-            let a = 0.5 * (f32::from(row[i + 2]) - f32::from(row[i]));
-            let b = 0.5 * (f32::from(down[i]) - f32::from(up[i]));
-            gxj[i] = a;
-            gyj[i] = b;
-            axx[i] += a * a;
-            axy[i] += a * b;
-            ayy[i] += b * b;
-            ax[i] += a;
-            ay[i] += b;
+            let a = i32::from(row[i + 2]) - i32::from(row[i]);
+            let b = i32::from(down[i]) - i32::from(up[i]);
+            t[i] = f32::from(row[i + 1]);
+            gx[i] = 0.5 * a as f32;
+            gy[i] = 0.5 * b as f32;
+            sxx += a * a;
+            sxy += a * b;
+            syy += b * b;
+            sx += a;
+            sy += b;
+        }
+        for k in 0..side.div_ceil(4) {
+            tpl.t[j][k] = lanes(&t, 4 * k);
+            tpl.gx[j][k] = lanes(&gx, 4 * k);
+            tpl.gy[j][k] = lanes(&gy, 4 * k);
         }
     }
-    let sum = |a: &[f32; 2 * MAX_HALF + 1]| a[..side].iter().sum::<f32>();
     [
-        sum(&acc[0]),
-        sum(&acc[1]),
-        sum(&acc[2]),
-        sum(&acc[3]),
-        sum(&acc[4]),
+        0.25 * f64::from(sxx),
+        0.25 * f64::from(sxy),
+        0.25 * f64::from(syy),
+        0.5 * f64::from(sx),
+        0.5 * f64::from(sy),
         0.0,
     ]
 }
 
 /// The Gauss-Newton iterations of [`align`] for the half-width `R`: per iteration the patch of
 /// `to` is sampled bilinearly (rows interpolated in u first, then pairs of rows in v) and
-/// compared with the template `t`.
+/// compared with the template, four columns at a time. The pixels of `to` under the patch are
+/// converted once per integer position (the iterations usually stay within one pixel).
 #[allow(clippy::too_many_arguments)]
 fn iterate<const R: usize>(
     to: Plane<'_>,
     (u, v): (usize, usize),
     d0: [f64; 2],
-    t: &[f32; MAX_PATCH],
-    gx: &[f32; MAX_PATCH],
-    gy: &[f32; MAX_PATCH],
+    tpl: &Template<'_>,
     inv: &nalgebra::Matrix3<f64>,
     iterations: usize,
     max_shift: f64,
     converged: f64,
 ) -> Option<[f64; 2]> {
     let side = 2 * R + 1;
+    let nv = side.div_ceil(4);
     let mut d = d0;
-    // The patch's rows interpolated in u: `side + 1` rows of `side` samples.
-    let mut hrow = [[0f32; 2 * MAX_HALF + 1]; 2 * MAX_HALF + 2];
+    // `to`'s pixels under the patch at the integer position `at`: columns `ix + i` (`left`)
+    // and `ix + i + 1` (`right`) of `side + 1` rows, zero past the patch side.
+    let mut at = (usize::MAX, usize::MAX);
+    let mut left: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
+    let mut right: Rows = [[f32x4::ZERO; VECS]; 2 * MAX_HALF + 2];
     for _ in 0..iterations {
         let (cx, cy) = (u as f64 + d[0], v as f64 + d[1]);
         // The patch in `to` must stay inside with one pixel for bilinear sampling.
@@ -214,29 +237,52 @@ fn iterate<const R: usize>(
         }
         let (ix, iy) = (x0.floor() as usize, y0.floor() as usize);
         let (fx, fy) = ((x0 - ix as f64) as f32, (y0 - iy as f64) as f32);
-        for (j, out) in hrow[..side + 1].iter_mut().enumerate() {
-            let start = (iy + j) * to.width + ix;
-            let row = &to.px[start..start + side + 1];
-            let out = &mut out[..side];
-            for i in 0..side {
-                let (a, b) = (f32::from(row[i]), f32::from(row[i + 1]));
-                out[i] = a + fx * (b - a);
+        if at != (ix, iy) {
+            at = (ix, iy);
+            for j in 0..side + 1 {
+                let start = (iy + j) * to.width + ix;
+                let row = &to.px[start..start + side + 1];
+                let mut l = [0f32; 4 * VECS];
+                let mut r = [0f32; 4 * VECS];
+                for i in 0..side {
+                    l[i] = f32::from(row[i]);
+                    r[i] = f32::from(row[i + 1]);
+                }
+                for k in 0..nv {
+                    left[j][k] = lanes(&l, 4 * k);
+                    right[j][k] = lanes(&r, 4 * k);
+                }
             }
         }
-        let (mut bx, mut by, mut bb) = (0f32, 0f32, 0f32);
+        let (fx, fy) = (f32x4::splat(fx), f32x4::splat(fy));
+        // Row `j` interpolated in u.
+        let hrow = |j: usize| -> [f32x4; VECS] {
+            let mut out = [f32x4::ZERO; VECS];
+            for k in 0..nv {
+                let (a, b) = (left[j][k], right[j][k]);
+                out[k] = a + fx * (b - a);
+            }
+            out
+        };
+        let (mut bx, mut by, mut bb) = (f32x4::ZERO, f32x4::ZERO, f32x4::ZERO);
+        let mut h0 = hrow(0);
         for j in 0..side {
-            let (h0, h1) = (&hrow[j][..side], &hrow[j + 1][..side]);
-            let k0 = j * side;
-            let (tj, gxj, gyj) = (&t[k0..k0 + side], &gx[k0..k0 + side], &gy[k0..k0 + side]);
-            for i in 0..side {
-                let s = h0[i] + fy * (h1[i] - h0[i]);
-                let e = s - tj[i];
-                bx += gxj[i] * e;
-                by += gyj[i] * e;
+            let h1 = hrow(j + 1);
+            for k in 0..nv {
+                let s = h0[k] + fy * (h1[k] - h0[k]);
+                let e = s - tpl.t[j][k];
+                bx += tpl.gx[j][k] * e;
+                by += tpl.gy[j][k] * e;
                 bb += e;
             }
+            h0 = h1;
         }
-        let step = inv * nalgebra::Vector3::new(f64::from(bx), f64::from(by), f64::from(bb));
+        let step = inv
+            * nalgebra::Vector3::new(
+                f64::from(bx.reduce_add()),
+                f64::from(by.reduce_add()),
+                f64::from(bb.reduce_add()),
+            );
         d[0] -= step[0];
         d[1] -= step[1];
         if (d[0] - d0[0]).hypot(d[1] - d0[1]) > max_shift {
