@@ -25,6 +25,19 @@ pub trait RobustLoss: Debug + Send + Sync {
         self.evaluate(s)[0]
     }
 
+    /// [`evaluate`](Self::evaluate) of four squared norms at once (the lanes of the fused
+    /// linearisation, `Problem`): one call instead of four. Each entry must equal
+    /// `evaluate(s[l])` bit for bit; the default loops. Override it to save the virtual calls.
+    fn evaluate_lanes(&self, s: &[f64; 4]) -> [[f64; 3]; 4] {
+        s.map(|v| self.evaluate(v))
+    }
+
+    /// [`weights`](Self::weights) of four squared norms at once; each entry must equal
+    /// `weights(s[l])` bit for bit. The default loops.
+    fn weights_lanes(&self, s: &[f64; 4]) -> [[f64; 2]; 4] {
+        s.map(|v| self.weights(v))
+    }
+
     /// The residual magnitude that separates inliers from outliers (`|r| <= scale`), in the
     /// metric's units; `f64::INFINITY` for a non-robust loss.
     fn scale(&self) -> f64;

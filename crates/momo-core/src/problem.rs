@@ -689,25 +689,34 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                 // Per lane: the row's weight √ρ' (1 − α) and the weighted residual.
                 let mut wj = [0.0; LANES];
                 let mut wr = [0.0; LANES];
+                // The kernel per match; the squared norms of the lanes.
+                let mut v = [0.0; LANES];
+                let mut sq = [0.0; LANES];
                 for (l, o) in chunk.iter().enumerate() {
                     self.metric
                         .kernel(&cam.model, &q[..k_in], o, &mut r[..1], &mut dr_dq[..1]);
                     for a in 0..k_in {
                         dr[a][l] = dr_dq[0][a];
                     }
-                    let v = r[0];
-                    let s = v * v;
-                    last.put(s);
-                    let [rho1, rho2] = if weights_only {
-                        self.loss.weights(s)
-                    } else {
-                        let [rho, rho1, rho2] = self.loss.evaluate(s);
-                        cost += 0.5 * rho;
-                        [rho1, rho2]
-                    };
+                    v[l] = r[0];
+                    sq[l] = r[0] * r[0];
+                    last.put(sq[l]);
+                }
+                // The loss's weights of the lanes in one call (no virtual call per match);
+                // unused lanes are evaluated at 0 and skipped below.
+                let rho = if weights_only {
+                    self.loss.weights_lanes(&sq).map(|[d1, d2]| [0.0, d1, d2])
+                } else {
+                    self.loss.evaluate_lanes(&sq)
+                };
+                for (l, &[rho0, rho1, rho2]) in rho.iter().enumerate().take(chunk.len()) {
+                    if !weights_only {
+                        cost += 0.5 * rho0;
+                    }
                     if rho1 <= 0.0 {
                         continue; // Tukey beyond its scale: no pull, no curvature.
                     }
+                    let s = sq[l];
                     let (sqrt_rho1, residual_scaling, alpha_sq_norm) = corrector(s, rho1, rho2);
                     // One residual: J̃ = (J − (rJ) α/s r) √ρ' = J (1 − α) √ρ' (exactly J √ρ'
                     // without the curvature term, as the per-match path).
@@ -716,7 +725,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                     } else {
                         sqrt_rho1
                     };
-                    wr[l] = residual_scaling * v;
+                    wr[l] = residual_scaling * v[l];
                 }
                 // J̃ rows across the lanes: the same sum over the inputs, in the same order, as
                 // the per-match path.

@@ -172,3 +172,34 @@ fn json_and_toml_round_trips() {
         assert!(t.starts_with("type = "), "{t}");
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// The four-lane evaluations (`evaluate_lanes`, `weights_lanes`, used by the fused
+    /// linearisation) equal the per-value ones bit for bit, on both sides of every loss's kink
+    /// and at zero.
+    #[test]
+    fn lanes_are_the_per_value_evaluations_bit_for_bit(
+        e in proptest::array::uniform4(-14.0..3.0f64),
+        zero in 0usize..5,
+        scale in 0usize..SCALES.len(),
+    ) {
+        let b = SCALES[scale];
+        let mut s = e.map(|e| b * b * 10f64.powf(e) * 10.0);
+        if zero < 4 {
+            s[zero] = 0.0;
+        }
+        let trivial: Box<dyn RobustLoss> = Box::new(Trivial);
+        for loss in losses(b).iter().chain([&trivial]) {
+            let lanes = loss.evaluate_lanes(&s);
+            let weights = loss.weights_lanes(&s);
+            for l in 0..4 {
+                let want = loss.evaluate(s[l]).map(f64::to_bits);
+                prop_assert_eq!(lanes[l].map(f64::to_bits), want, "{:?} at {}", loss, s[l]);
+                let want = loss.weights(s[l]).map(f64::to_bits);
+                prop_assert_eq!(weights[l].map(f64::to_bits), want, "{:?} at {}", loss, s[l]);
+            }
+        }
+    }
+}

@@ -707,7 +707,7 @@ impl Odometry {
                         diag.status = FrameStatus::Degenerate;
                         diag.constraint = Constraint::Degenerate;
                         diag.reason = Some(reason);
-                        self.fill_diagnostics(obs, &sol, false, (false, false), &mut diag);
+                        self.fill_diagnostics(obs, &sol, false, (false, false), None, &mut diag);
                         None
                     }
                     None => Some(sol),
@@ -803,20 +803,30 @@ impl Odometry {
                 // And on the frames where the residuals cluster in the image (a rigid object in
                 // a compromise motion), with the half-image grids too.
                 let mut clustered = false;
+                // The statistic and the competing-motions mask share one pass over the matches.
+                let mut outside = None;
                 if !standstill {
                     let t = &self.config.trust;
-                    let stat = trust::cell_residual_statistic(
+                    let (stat, mask) = trust::residual_statistic_and_outside(
                         &self.rig,
                         &self.estimator.motion(&sol.params),
                         obs,
                         (t.clustering_grid[0], t.clustering_grid[1]),
                         t.competing_threshold,
                     );
+                    outside = Some(mask);
                     diag.residual_clustering = stat.map_or(f64::NAN, |(t, c)| t / c as f64);
                     clustered = self.clustering.observe(t, stat);
                     jackknife |= clustered;
                 }
-                self.fill_diagnostics(obs, &sol, !standstill, (jackknife, clustered), &mut diag);
+                self.fill_diagnostics(
+                    obs,
+                    &sol,
+                    !standstill,
+                    (jackknife, clustered),
+                    outside,
+                    &mut diag,
+                );
                 if !standstill && !self.soft_inv_scale.is_empty() {
                     soft_sample = self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol));
                 }
@@ -1481,11 +1491,14 @@ impl Odometry {
     /// A second motion that explains at least `trust.competing_min_fraction` of the matches
     /// outside the estimate's support (fitted to them from the previous frame's motion and
     /// straight ahead): its free parameters and its weight `w` (its support's share of the two
-    /// supports).
+    /// supports). `outside` is the mask of the matches outside the support
+    /// ([`separate::epipolar_at_least`](crate::separate::epipolar_at_least)) if the caller has
+    /// it already ([`trust::residual_statistic_and_outside`]).
     fn competing_motion(
         &self,
         obs: &FrameObservations,
         sol: &FrameSolution,
+        outside: Option<Vec<Vec<bool>>>,
     ) -> Option<(Vec<f64>, f64)> {
         let t = &self.config.trust;
         let n = obs.len();
@@ -1496,12 +1509,14 @@ impl Odometry {
         let angles = |params: &[f64]| {
             crate::separate::epipolar_angles(&self.rig, &self.estimator.motion(params), obs)
         };
-        let outside = crate::separate::epipolar_at_least(
-            &self.rig,
-            &self.estimator.motion(&sol.params),
-            obs,
-            t.competing_threshold,
-        );
+        let outside = outside.unwrap_or_else(|| {
+            crate::separate::epipolar_at_least(
+                &self.rig,
+                &self.estimator.motion(&sol.params),
+                obs,
+                t.competing_threshold,
+            )
+        });
         let n_out = outside.iter().flatten().filter(|k| **k).count();
         if n_out < min_n {
             return None;
@@ -1589,6 +1604,7 @@ impl Odometry {
         sol: &FrameSolution,
         moving: bool,
         jackknife: (bool, bool),
+        outside: Option<Vec<Vec<bool>>>,
         diag: &mut FrameDiagnostics,
     ) {
         diag.initial_cost = sol.report.initial_cost;
@@ -1599,7 +1615,7 @@ impl Odometry {
         diag.inliers_per_camera = sol.inliers_per_camera.clone();
         diag.free = sol.free.clone();
         let competing = if moving {
-            self.competing_motion(obs, sol)
+            self.competing_motion(obs, sol, outside)
         } else {
             None
         };

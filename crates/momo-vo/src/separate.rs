@@ -210,12 +210,19 @@ pub fn epipolar_at_least(
     obs: &FrameObservations,
     threshold: f64,
 ) -> Vec<Vec<bool>> {
+    per_match_sines(rig, motion, obs, angle_at_least(threshold))
+}
+
+/// The decision of [`epipolar_at_least`] for one match from its [`one_sided_sines`]: whether
+/// its epipolar angle is at least `threshold` (radians), without the two `asin` where both
+/// sines are clearly on one side of `sin(threshold)`.
+pub(crate) fn angle_at_least(threshold: f64) -> impl Fn(Option<(f64, f64)>) -> bool {
     // A relative margin far above the rounding of `sin` and `asin`; outside (0, 1.5) rad, or
     // between the bounds, the angle itself decides.
     let shortcut = threshold > 0.0 && threshold < 1.5;
     let s = threshold.sin();
     let (lo, hi) = (s * (1.0 - 1e-9), s * (1.0 + 1e-9));
-    per_match_sines(rig, motion, obs, |sines| {
+    move |sines| {
         let Some((u, v)) = sines else {
             return 0.0 >= threshold;
         };
@@ -226,7 +233,7 @@ pub fn epipolar_at_least(
             return true;
         }
         0.5 * (u.asin() + v.asin()) >= threshold
-    })
+    }
 }
 
 /// A candidate motion and its support (per camera, per match).
@@ -590,6 +597,49 @@ mod tests {
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
+        }
+    }
+
+    /// The one-pass statistic and mask of the odometry (`trust::residual_statistic_and_outside`):
+    /// the mask is `epipolar_at_least`'s, the statistic `cell_residual_statistic`'s to rounding.
+    #[test]
+    fn one_pass_statistic_and_mask_match_the_two_passes() {
+        for (rig, n) in [
+            (momo_testing::canned::fisheye_rig(), 60),
+            (momo_testing::canned::pinhole_rig(), 300),
+        ] {
+            let truth = Pose::new(
+                momo_core::so3_exp(&nalgebra::Vector3::new(0.01, -0.02, 0.03)),
+                nalgebra::Vector3::new(1.0, 0.05, 0.01),
+            );
+            let obs = momo_testing::canned::synthetic_observations(&rig, &truth, n, 20, 5);
+            let off = Pose::new(
+                momo_core::so3_exp(&nalgebra::Vector3::new(0.0, 0.0, 0.035)),
+                nalgebra::Vector3::new(1.0, 0.0, 0.0),
+            );
+            let mut compared = 0;
+            for motion in [truth, off] {
+                for t in [1e-3, 0.01, 0.05, 0.1] {
+                    for grid in [(8, 4), (3, 2)] {
+                        let (stat, mask) = crate::trust::residual_statistic_and_outside(
+                            &rig, &motion, &obs, grid, t,
+                        );
+                        assert_eq!(mask, epipolar_at_least(&rig, &motion, &obs, t), "{t}");
+                        let want =
+                            crate::trust::cell_residual_statistic(&rig, &motion, &obs, grid, t);
+                        match (stat, want) {
+                            (Some((a, ca)), Some((b, cb))) => {
+                                assert_eq!(ca, cb, "cells, threshold {t}");
+                                assert!((a - b).abs() <= 1e-12 * b.abs(), "{a} vs {b}, {t}");
+                                compared += 1;
+                            }
+                            (None, None) => {}
+                            other => panic!("threshold {t}: {other:?}"),
+                        }
+                    }
+                }
+            }
+            assert!(compared >= 8, "only {compared} statistics compared");
         }
     }
 

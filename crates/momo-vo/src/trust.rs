@@ -949,13 +949,74 @@ pub fn cell_residual_statistic(
             count += 1;
         }
     }
+    clustering_of(&sums, sq, count)
+}
+
+/// [`cell_residual_statistic`] and the competing-motions mask
+/// ([`crate::separate::epipolar_at_least`] at the same `threshold`) from one pass over the
+/// matches: both need each match's `E f0`, `Eᵀ f1` and `f1ᵀ E f0` at the same motion (issue 19:
+/// the statistic was a second pass of about 1.3 cost evaluations per moving frame).
+///
+/// The mask is [`epipolar_at_least`](crate::separate::epipolar_at_least)'s bit for bit. The
+/// statistic takes the bearings as they are (unit by [`momo_core::Observation`]'s contract)
+/// where [`cell_residual_statistic`] normalises them again, so the two agree to rounding
+/// (about `1e-15` relative), not bit for bit.
+pub fn residual_statistic_and_outside(
+    rig: &Rig,
+    motion: &momo_core::Pose<f64>,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+    threshold: f64,
+) -> (Option<(f64, usize)>, Vec<Vec<bool>>) {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let at_least = crate::separate::angle_at_least(threshold);
+    let mut sums: Vec<(f64, usize)> = Vec::new();
+    let mut sq = 0.0;
+    let mut count = 0usize;
+    let mut outside = Vec::with_capacity(rig.len());
+    for (cam, matches) in rig.cameras().iter().zip(&obs.per_camera) {
+        let e = momo_core::essential(&momo_core::camera_motion(motion, &cam.t_vehicle_camera));
+        let size = cam.model.size();
+        let base = sums.len();
+        sums.resize(base + cells, (0.0, 0));
+        let mut mask = Vec::with_capacity(matches.len());
+        for o in matches {
+            let n0 = e * o.f0;
+            let n1 = e.transpose() * o.f1;
+            let c = o.f1.dot(&n0);
+            let (a, b) = (n0.norm(), n1.norm());
+            let defined = a >= 1e-15 && b >= 1e-15;
+            // `separate::one_sided_sines`, the same operations.
+            let sines = defined.then(|| ((c.abs() / a).min(1.0), (c.abs() / b).min(1.0)));
+            mask.push(at_least(sines));
+            if !defined {
+                continue;
+            }
+            let r = 0.5 * (c / a + c / b);
+            if !(r.abs() < threshold) {
+                continue;
+            }
+            let cell = base + cell_of((o.px0.x, o.px0.y), size, grid);
+            sums[cell].0 += r;
+            sums[cell].1 += 1;
+            sq += r * r;
+            count += 1;
+        }
+        outside.push(mask);
+    }
+    (clustering_of(&sums, sq, count), outside)
+}
+
+/// `T = Σ_cells (Σ r)² / (n σ²)` over the cells with at least 2 matches and their number, from
+/// the per-cell sums and counts of the signed residuals and `σ² = Σ r² / count`.
+fn clustering_of(sums: &[(f64, usize)], sq: f64, count: usize) -> Option<(f64, usize)> {
     if count == 0 || !(sq > 0.0) {
         return None;
     }
     let sigma2 = sq / count as f64;
     let mut t = 0.0;
     let mut used = 0usize;
-    for &(s, n) in &sums {
+    for &(s, n) in sums {
         if n >= 2 {
             t += s * s / (n as f64 * sigma2);
             used += 1;
