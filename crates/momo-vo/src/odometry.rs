@@ -315,6 +315,70 @@ impl Odometry {
         self.soft_inv_scale.iter().map(|k| 1.0 / k).collect()
     }
 
+    /// The soft prior's factors of the current frame: the learnt ones
+    /// ([`Odometry::soft_prior_sigma`]), times `√w` where the Student-t prior reweighted them
+    /// (`odometry.soft_prior_student_nu`).
+    fn frame_soft_inv_scale(&self) -> &[f64] {
+        if self.motion_prior.soft_inv_scale.len() == self.soft_inv_scale.len() {
+            &self.motion_prior.soft_inv_scale
+        } else {
+            &self.soft_inv_scale
+        }
+    }
+
+    /// The Student-t soft prior (`odometry.soft_prior_student_nu`): iteratively reweighted,
+    /// `k_r √w_r` with `w_r = 1 / (1 + (k_r (q̂_r − c_r))² / ν)` at the solution, solved again
+    /// from it while some factor changes by more than 5 % (at most 3 times). Only once the
+    /// sigmas are learnt (before, the model's sigma is a guess, not a scale).
+    fn student_soft_prior(
+        &mut self,
+        obs: &FrameObservations,
+        sol: FrameSolution,
+        fixed: &[bool],
+    ) -> FrameSolution {
+        let nu = self.config.odometry.soft_prior_student_nu;
+        if !(nu > 0.0)
+            || self.soft_inv_scale.is_empty()
+            || self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES
+        {
+            return sol;
+        }
+        let mut sol = sol;
+        for _ in 0..3 {
+            let q = self.estimator.prior_residuals(&sol.params);
+            if q.len() != self.soft_inv_scale.len() {
+                return sol;
+            }
+            let c = &self.motion_prior.soft_center;
+            let target: Vec<f64> = self
+                .soft_inv_scale
+                .iter()
+                .enumerate()
+                .map(|(r, k)| {
+                    let z = k * (q[r] - c.get(r).copied().unwrap_or(0.0));
+                    k * (1.0 / (1.0 + z * z / nu)).sqrt()
+                })
+                .collect();
+            let current = self.frame_soft_inv_scale().to_vec();
+            let changed = target
+                .iter()
+                .zip(&current)
+                .any(|(t, c)| (t - c).abs() > 0.05 * c.abs());
+            if !changed || target.iter().any(|t| !t.is_finite()) {
+                return sol;
+            }
+            self.motion_prior.soft_inv_scale = target;
+            match self.solve_once(obs, &sol.params, fixed, false) {
+                Some(s2) => sol = s2,
+                None => {
+                    self.motion_prior.soft_inv_scale = current;
+                    return sol;
+                }
+            }
+        }
+        sol
+    }
+
     /// The soft prior's residuals at `params` and their Jacobian over the free parameters
     /// `free` (central differences; units of the model's sigmas).
     fn soft_jacobian(&self, params: &[f64], free: &[usize]) -> (Vec<f64>, nalgebra::DMatrix<f64>) {
@@ -339,7 +403,12 @@ impl Odometry {
     /// `Jᵀ K² J` of the soft prior at the current factors `K` ([`Odometry::soft_prior_sigma`]).
     fn soft_information(&self, jq: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
         let mut kj = jq.clone();
-        for (r, k) in self.soft_inv_scale.iter().enumerate().take(kj.nrows()) {
+        for (r, k) in self
+            .frame_soft_inv_scale()
+            .iter()
+            .enumerate()
+            .take(kj.nrows())
+        {
             kj.row_mut(r).scale_mut(*k);
         }
         kj.transpose() * kj
@@ -372,7 +441,7 @@ impl Odometry {
         let a = trust::invert_information(&h_d);
         let (info, _) = trust::calibrated_information(&inp)?;
         let cov_d = trust::invert_information(&info);
-        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+        let k = |r: usize| self.frame_soft_inv_scale().get(r).copied().unwrap_or(1.0);
         let pull: nalgebra::DVector<f64> = nalgebra::DVector::from_iterator(
             q.len(),
             (0..q.len()).map(|r| s * s * k(r) * k(r) * (q[r] - c[r])),
@@ -517,7 +586,7 @@ impl Odometry {
         let n = cov.nrows();
         let mut extra = nalgebra::DMatrix::zeros(n, n);
         for (r, t2) in tau2.iter().enumerate() {
-            let k = self.soft_inv_scale[r];
+            let k = self.frame_soft_inv_scale()[r];
             let lambda = s * s * k * k / sigma2;
             let excess = lambda * lambda * t2 - lambda;
             if excess > 0.0 && excess.is_finite() {
@@ -787,6 +856,10 @@ impl Odometry {
             None
         } else {
             let sol = self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag);
+            let sol = match sol {
+                Some(sol) if !standstill => Some(self.student_soft_prior(obs, sol, &fixed)),
+                other => other,
+            };
             match sol {
                 Some(sol) if !standstill => match self.after_solve(obs, &sol) {
                     Some(reason) => {
