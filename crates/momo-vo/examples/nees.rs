@@ -157,7 +157,7 @@ fn main() {
                         &r.motion,
                         (nees, nees_classical.unwrap_or(f64::NAN)),
                         vo.rig(),
-                        vo.estimator(),
+                        (vo.estimator(), &vo.soft_prior_sigma()),
                     );
                 }
                 nees_seed.push(nees);
@@ -197,7 +197,7 @@ fn print_frame(
     est: &momo_core::Pose<f64>,
     (nees, nees_classical): (f64, f64),
     rig: &momo_core::Rig,
-    model: &dyn FrameEstimator,
+    (model, soft_sigma): (&dyn FrameEstimator, &[f64]),
 ) {
     let truth = &sim.vehicle_motions[k];
     let e = so3_log(&(truth.rotation.transpose() * est.rotation));
@@ -230,8 +230,9 @@ fn print_frame(
         }
         None => "-".into(),
     };
+    let arc = model.arc_length_index().map_or(f64::NAN, |i| d.params[i]);
     println!(
-        "seed {seed} k {k:3} turn {turn:.2} err {:.3} nees {nees:8.2} classical {nees_classical:8.2} \
+        "seed {seed} k {k:3} arc {arc:.3} soft_sigma {soft_sigma:.2?} turn {turn:.2} err {:.3} nees {nees:8.2} classical {nees_classical:8.2} \
          inl {}/{} obj {obj} obj_in {obj_in} out_est {outside} out_true {static_out_true} \
          {:?} jk {} clu {:.2} comp {competing}",
         e.norm().to_degrees(),

@@ -135,6 +135,12 @@ pub struct OdometryOptions {
     /// true slip (`soft_prior_sigma_learning`; > 0): the prior is a nuisance for the rotation,
     /// so a wider one trades a little variance for less bias where the slip is heavy-tailed.
     pub soft_prior_sigma_factor: f64,
+    /// Degrees of freedom `ν` of a Student-t soft prior (0: Gaussian, the default): once the
+    /// sigmas are learnt (`soft_prior_sigma_learning`), each frame's soft-prior residuals are
+    /// reweighted by `w = 1 / (1 + z² / ν)`, `z = (q̂ − c) / σ` at the solution, and the frame
+    /// solved again from its solution (at most 3 times): the prior yields on the frames in the
+    /// slip's tails and keeps its pull on the typical ones (`ν = 1`: Cauchy).
+    pub soft_prior_student_nu: f64,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -163,6 +169,7 @@ impl Default for OdometryOptions {
             soft_prior_sigma_learning: true,
             soft_prior_sigma_max: 10.0,
             soft_prior_sigma_factor: 1.0,
+            soft_prior_student_nu: 0.0,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -698,6 +705,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_sigma_factor must be finite and > 0, got {}",
                     o.soft_prior_sigma_factor
+                ),
+            );
+        }
+        if !(o.soft_prior_student_nu.is_finite() && o.soft_prior_student_nu >= 0.0) {
+            bad(
+                &["odometry.soft_prior_student_nu"],
+                format!(
+                    "odometry.soft_prior_student_nu must be finite and at least 0, got {}",
+                    o.soft_prior_student_nu
                 ),
             );
         }

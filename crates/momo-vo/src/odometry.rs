@@ -197,9 +197,10 @@ pub struct Odometry {
     /// (`odometry.soft_prior_sigma_learning`; empty if off or the model is hard; ones until
     /// [`SOFT_SIGMA_MIN_FRAMES`]).
     soft_inv_scale: Vec<f64>,
-    /// The recent moving frames' soft-prior innovations `(d_i², v_i)` per residual, newest last
-    /// (at most `soft_prior_centring_frames`), see [`Odometry::soft_prior_sigma`].
-    soft_samples: std::collections::VecDeque<Vec<(f64, f64)>>,
+    /// The recent moving frames' arc lengths and soft-prior innovations `(d_i², v_i)` per
+    /// residual, newest last (at most `soft_prior_centring_frames`), see
+    /// [`Odometry::soft_prior_sigma`].
+    soft_samples: std::collections::VecDeque<(f64, Vec<(f64, f64)>)>,
     /// This frame's first-stage solution where the final efficient stage replaced it (`None`
     /// otherwise): the soft prior's data view ([`Odometry::soft_data_view`]) needs the solution
     /// whose normal matrix and prior weighting it inverts; the refit weighs the priors in units
@@ -326,6 +327,70 @@ impl Odometry {
         self.soft_inv_scale.iter().map(|k| 1.0 / k).collect()
     }
 
+    /// The soft prior's factors of the current frame: the learnt ones
+    /// ([`Odometry::soft_prior_sigma`]), times `√w` where the Student-t prior reweighted them
+    /// (`odometry.soft_prior_student_nu`).
+    fn frame_soft_inv_scale(&self) -> &[f64] {
+        if self.motion_prior.soft_inv_scale.len() == self.soft_inv_scale.len() {
+            &self.motion_prior.soft_inv_scale
+        } else {
+            &self.soft_inv_scale
+        }
+    }
+
+    /// The Student-t soft prior (`odometry.soft_prior_student_nu`): iteratively reweighted,
+    /// `k_r √w_r` with `w_r = 1 / (1 + (k_r (q̂_r − c_r))² / ν)` at the solution, solved again
+    /// from it while some factor changes by more than 5 % (at most 3 times). Only once the
+    /// sigmas are learnt (before, the model's sigma is a guess, not a scale).
+    fn student_soft_prior(
+        &mut self,
+        obs: &FrameObservations,
+        sol: FrameSolution,
+        fixed: &[bool],
+    ) -> FrameSolution {
+        let nu = self.config.odometry.soft_prior_student_nu;
+        if !(nu > 0.0)
+            || self.soft_inv_scale.is_empty()
+            || self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES
+        {
+            return sol;
+        }
+        let mut sol = sol;
+        for _ in 0..3 {
+            let q = self.estimator.prior_residuals(&sol.params);
+            if q.len() != self.soft_inv_scale.len() {
+                return sol;
+            }
+            let c = &self.motion_prior.soft_center;
+            let target: Vec<f64> = self
+                .soft_inv_scale
+                .iter()
+                .enumerate()
+                .map(|(r, k)| {
+                    let z = k * (q[r] - c.get(r).copied().unwrap_or(0.0));
+                    k * (1.0 / (1.0 + z * z / nu)).sqrt()
+                })
+                .collect();
+            let current = self.frame_soft_inv_scale().to_vec();
+            let changed = target
+                .iter()
+                .zip(&current)
+                .any(|(t, c)| (t - c).abs() > 0.05 * c.abs());
+            if !changed || target.iter().any(|t| !t.is_finite()) {
+                return sol;
+            }
+            self.motion_prior.soft_inv_scale = target;
+            match self.solve_once(obs, &sol.params, fixed, false) {
+                Some(s2) => sol = s2,
+                None => {
+                    self.motion_prior.soft_inv_scale = current;
+                    return sol;
+                }
+            }
+        }
+        sol
+    }
+
     /// The soft prior's residuals at `params` and their Jacobian over the free parameters
     /// `free` (central differences; units of the model's sigmas).
     fn soft_jacobian(&self, params: &[f64], free: &[usize]) -> (Vec<f64>, nalgebra::DMatrix<f64>) {
@@ -350,7 +415,12 @@ impl Odometry {
     /// `Jᵀ K² J` of the soft prior at the current factors `K` ([`Odometry::soft_prior_sigma`]).
     fn soft_information(&self, jq: &nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64> {
         let mut kj = jq.clone();
-        for (r, k) in self.soft_inv_scale.iter().enumerate().take(kj.nrows()) {
+        for (r, k) in self
+            .frame_soft_inv_scale()
+            .iter()
+            .enumerate()
+            .take(kj.nrows())
+        {
             kj.row_mut(r).scale_mut(*k);
         }
         kj.transpose() * kj
@@ -383,7 +453,7 @@ impl Odometry {
         let a = trust::invert_information(&h_d);
         let (info, _) = trust::calibrated_information(&inp)?;
         let cov_d = trust::invert_information(&info);
-        let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
+        let k = |r: usize| self.frame_soft_inv_scale().get(r).copied().unwrap_or(1.0);
         let pull: nalgebra::DVector<f64> = nalgebra::DVector::from_iterator(
             q.len(),
             (0..q.len()).map(|r| s * s * k(r) * k(r) * (q[r] - c[r])),
@@ -442,6 +512,113 @@ impl Odometry {
         (conflict && view.shift.iter().all(|v| v.is_finite())).then_some(view.shift)
     }
 
+    /// The mean-square spread `τ_r²(s)` of each soft-prior residual around its centre at arc
+    /// length `s` ([`Odometry::soft_prior_sigma`] has the notation; units of the model's
+    /// sigmas): the least-squares fit `d_j² − v_j ≈ a_r + b_r / s_j²` (`a_r, b_r ≥ 0`) over the
+    /// recent trusted moving frames, evaluated at `s` (`b_r` holds a sideways / vertical
+    /// *displacement* jitter, whose angle grows as the step shortens: the KITTI ground truth's
+    /// slow frames). `None` before [`SOFT_SIGMA_MIN_FRAMES`] frames.
+    fn soft_prior_spread(&self, arc: f64) -> Option<Vec<f64>> {
+        if self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES {
+            return None;
+        }
+        let n = self.soft_inv_scale.len();
+        let tau2: Vec<f64> = (0..n)
+            .map(|r| {
+                let pts: Vec<(f64, f64)> = self
+                    .soft_samples
+                    .iter()
+                    .filter_map(|(s, f)| {
+                        let (d2, v) = f.get(r)?;
+                        let x = if self.config.trust.prior_spread_arc && *s > 0.0 {
+                            1.0 / (s * s)
+                        } else {
+                            0.0
+                        };
+                        Some((x, d2 - v))
+                    })
+                    .collect();
+                let (a, b) = nonnegative_line_fit(&pts);
+                let x = if self.config.trust.prior_spread_arc && arc > 0.0 {
+                    1.0 / (arc * arc)
+                } else {
+                    0.0
+                };
+                (a + b * x).max(0.0)
+            })
+            .collect();
+        tau2.iter().all(|t| t.is_finite()).then_some(tau2)
+    }
+
+    /// With `trust.prior_spread_covariance`, before the soft prior's spread is learnt (fewer
+    /// than [`SOFT_SIGMA_MIN_FRAMES`] trusted moving frames): the calibrated covariance without
+    /// the soft prior's information (the width the estimate uses is the model's guess, not yet
+    /// the data's). `None` otherwise.
+    fn unlearnt_prior_covariance(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+        if !self.config.trust.prior_spread_covariance
+            || self.soft_inv_scale.is_empty()
+            || self.soft_samples.len() >= SOFT_SIGMA_MIN_FRAMES
+        {
+            return None;
+        }
+        let s = self.motion_prior.scale;
+        if !(s.is_finite() && s > 0.0) {
+            return None;
+        }
+        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
+        if q.is_empty() {
+            return None;
+        }
+        let mut inp = self.covariance_inputs(sol);
+        inp.normal -= self.soft_information(&jq) * (s * s);
+        trust::calibrated_covariance(&inp)
+    }
+
+    /// The covariance the reported one adds where the soft prior's true spread exceeds the
+    /// width the estimate uses (`trust.prior_spread_covariance`): the estimate's error holds
+    /// `Σ Σ_r λ_r j_rᵀ (c_r − q_r)`, so with `E[(q_r − c_r)²] = τ_r²`
+    /// ([`Odometry::soft_prior_spread`]) its covariance is
+    /// `Σ (I_d + Σ_r λ_r² τ_r² j_rᵀ j_r) Σ = Σ + Σ_r (λ_r² τ_r² − λ_r) u_r u_rᵀ`, with
+    /// `Σ` the calibrated posterior covariance (`Σ⁻¹ = I_d + Σ_r λ_r j_rᵀ j_r`),
+    /// `λ_r = s² k_r² / σ̂²` the prior's weight in that information (`σ̂²` the residual variance
+    /// of [`trust::calibrated_information`]), `j_r = ∂q_r/∂p` and `u_r = Σ j_rᵀ`. Only the
+    /// residuals with `λ_r τ_r² > 1` add. `None` if off, not learnt yet, or not defined.
+    fn prior_spread_widening(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+        if !self.config.trust.prior_spread_covariance || self.soft_inv_scale.is_empty() {
+            return None;
+        }
+        let arc = self
+            .estimator
+            .arc_length_index()
+            .map_or(f64::NAN, |i| sol.params[i].abs());
+        let tau2 = self.soft_prior_spread(arc)?;
+        let s = self.motion_prior.scale;
+        if !(s.is_finite() && s > 0.0) {
+            return None;
+        }
+        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
+        if q.len() != tau2.len() {
+            return None;
+        }
+        let (info, sigma2) = trust::calibrated_information(&self.covariance_inputs(sol))?;
+        let cov = trust::invert_information(&info);
+        if cov.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let n = cov.nrows();
+        let mut extra = nalgebra::DMatrix::zeros(n, n);
+        for (r, t2) in tau2.iter().enumerate() {
+            let k = self.frame_soft_inv_scale()[r];
+            let lambda = s * s * k * k / sigma2;
+            let excess = lambda * lambda * t2 - lambda;
+            if excess > 0.0 && excess.is_finite() {
+                let u = &cov * jq.row(r).transpose();
+                extra += &u * u.transpose() * excess;
+            }
+        }
+        Some(extra)
+    }
+
     /// Re-learns the soft prior's factors from the recent innovations
     /// ([`Odometry::soft_prior_sigma`]).
     fn learn_soft_sigma(&mut self) {
@@ -454,7 +631,7 @@ impl Odometry {
             let samples: Vec<(f64, f64)> = self
                 .soft_samples
                 .iter()
-                .filter_map(|f| f.get(r).copied())
+                .filter_map(|(_, f)| f.get(r).copied())
                 .collect();
             // median_j d_j² / (σ² + v_j), decreasing in σ².
             let median_ratio = |s2: f64| {
@@ -701,6 +878,10 @@ impl Odometry {
             None
         } else {
             let sol = self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag);
+            let sol = match sol {
+                Some(sol) if !standstill => Some(self.student_soft_prior(obs, sol, &fixed)),
+                other => other,
+            };
             match sol {
                 Some(sol) if !standstill => match self.after_solve(obs, &sol) {
                     Some(reason) => {
@@ -903,7 +1084,8 @@ impl Odometry {
                 *c += alpha * (q - *c);
             }
             if let Some(sample) = soft_sample {
-                self.soft_samples.push_back(sample);
+                let arc = arc_index.map_or(f64::NAN, |i| params[i].abs());
+                self.soft_samples.push_back((arc, sample));
                 while self.soft_samples.len() > n {
                     self.soft_samples.pop_front();
                 }
@@ -1276,13 +1458,23 @@ impl Odometry {
         jackknife: bool,
         clustered: bool,
     ) -> Option<nalgebra::DMatrix<f64>> {
-        let mut cov = self.covariance(sol)?;
+        let mut cov = match self.unlearnt_prior_covariance(sol) {
+            Some(c) => c,
+            None => self.covariance(sol)?,
+        };
         // Where the data contradict the soft prior, its pull on the estimate is an error the
         // posterior covariance does not hold: add it (`trust.prior_conflict_chi2`).
         if let Some(b) = self.prior_conflict_shift(sol)
             && b.len() == cov.nrows()
         {
             cov += &b * b.transpose();
+        }
+        // Where the true slip is heavy-tailed, the prior at its learnt (median) width is
+        // over-confident: hold it at the mean-square spread (`trust.prior_spread_covariance`).
+        if let Some(w) = self.prior_spread_widening(sol)
+            && w.nrows() == cov.nrows()
+        {
+            cov += w;
         }
         if !jackknife {
             return Some(cov);
@@ -1701,6 +1893,42 @@ impl Trajectory {
     pub fn vehicle(&self) -> Pose<f64> {
         self.vehicle
     }
+}
+
+/// The least-squares line `y ≈ a + b x` through `(x, y)` with `a, b ≥ 0` (`b = 0` where all
+/// `x` coincide); `(0, 0)` for no points.
+fn nonnegative_line_fit(pts: &[(f64, f64)]) -> (f64, f64) {
+    let n = pts.len() as f64;
+    if pts.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let (a, b) = if sxx > 0.0 {
+        let b = sxy / sxx;
+        (my - b * mx, b)
+    } else {
+        (my, 0.0)
+    };
+    if b < 0.0 {
+        return (my.max(0.0), 0.0);
+    }
+    if a < 0.0 {
+        // Through the origin.
+        let sxx0: f64 = pts.iter().map(|p| p.0 * p.0).sum();
+        let sxy0: f64 = pts.iter().map(|p| p.0 * p.1).sum();
+        return (
+            0.0,
+            if sxx0 > 0.0 {
+                (sxy0 / sxx0).max(0.0)
+            } else {
+                0.0
+            },
+        );
+    }
+    (a, b)
 }
 
 /// The data's own view of the soft prior's residuals at a solution

@@ -65,6 +65,22 @@ pub struct TrustOptions {
     /// estimate against a moving object, or pulls it off a motion no car makes but the data
     /// show, then says so in the sigma. Default 3.84 (the 95 % point); 0: off.
     pub prior_conflict_chi2: f64,
+    /// The reported covariance holds the soft prior at the *mean-square* spread of the true
+    /// slip rather than at the width the estimate uses (a soft manifold such as
+    /// `soft_single_track` with `odometry.soft_prior_sigma_learning`): the learnt width is
+    /// the innovations' robust (median) spread, which suits the estimate, but where the slip is
+    /// heavy-tailed (the KITTI ground truth's direction of travel on slow frames) a covariance
+    /// at that width is over-confident wherever the data barely see the direction of travel
+    /// (the estimate leans on the prior there, and the conflict check cannot fire). With the
+    /// spread `τ² = mean (d² − v_d)` over the same frames, the covariance becomes the sandwich
+    /// `Σ (I_d + Σ_r λ_r² τ_r² j_rᵀ j_r) Σ` (`λ_r` the prior's weight in the information,
+    /// `j_r` its Jacobian row, `Σ` the posterior covariance): it grows only where `τ_r² > 1/λ_r`.
+    /// The estimate is unchanged. Default off.
+    pub prior_spread_covariance: bool,
+    /// With [`TrustOptions::prior_spread_covariance`]: the spread depends on the arc length
+    /// `s` as `τ² = a + b / s²` (a sideways / vertical displacement jitter `√b`, whose angle
+    /// grows as the step shortens), fitted over the same frames. Default off.
+    pub prior_spread_arc: bool,
     /// The jackknife (a dozen extra solves) runs on a frame whose inlier share is below this
     /// factor times the best share of the recent frames (a maximum decaying by 0.5 % per
     /// frame), on a frame with a competing motion, and on the first frame; at least 1: on every
@@ -147,6 +163,8 @@ impl Default for TrustOptions {
             jackknife_grids: vec![[3, 2], [4, 2]],
             jackknife_min_ratio: 2.0,
             prior_conflict_chi2: 3.84,
+            prior_spread_covariance: false,
+            prior_spread_arc: false,
             jackknife_support_drop: 0.7,
             jackknife_steps: 0,
             jackknife_influence: true,
