@@ -367,22 +367,7 @@ macro_rules! register_model {
 /// `serde::Deserialize`.
 #[macro_export]
 macro_rules! register_metric {
-    ($ty:ty, $name:literal) => {
-        const _: () = {
-            use $crate::typetag;
-
-            #[typetag::serde(name = $name)]
-            impl $crate::MetricSpec for $ty {
-                fn estimator(
-                    &self,
-                    model: ::std::boxed::Box<dyn $crate::DynManifold>,
-                ) -> ::std::boxed::Box<dyn $crate::FrameEstimator> {
-                    $crate::estimator::erase_dyn(model, ::core::clone::Clone::clone(self))
-                }
-            }
-        };
-    };
-    ($ty:ty, $name:literal, final_stage = $final_stage:literal) => {
+    (@impl $ty:ty, $name:literal, $final_stage:expr) => {
         const _: () = {
             use $crate::typetag;
 
@@ -395,9 +380,19 @@ macro_rules! register_metric {
                     $crate::estimator::erase_dyn(model, ::core::clone::Clone::clone(self))
                 }
                 fn final_stage_metric(&self) -> ::core::option::Option<&'static str> {
-                    ::core::option::Option::Some($final_stage)
+                    $final_stage
                 }
             }
         };
+    };
+    ($ty:ty, $name:literal) => {
+        $crate::register_metric!(@impl $ty, $name, ::core::option::Option::None);
+    };
+    ($ty:ty, $name:literal, final_stage = $final_stage:literal) => {
+        $crate::register_metric!(
+            @impl $ty,
+            $name,
+            ::core::option::Option::Some($final_stage)
+        );
     };
 }
