@@ -426,6 +426,20 @@ impl Odometry {
         kj.transpose() * kj
     }
 
+    /// The prior's unit `s` and the soft prior's residuals `q̂` with their Jacobian over the
+    /// free parameters at the solution; `None` without a prior unit or a soft prior.
+    fn soft_prior_terms(
+        &self,
+        sol: &FrameSolution,
+    ) -> Option<(f64, Vec<f64>, nalgebra::DMatrix<f64>)> {
+        let s = self.motion_prior.scale;
+        if !(s.is_finite() && s > 0.0) {
+            return None;
+        }
+        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
+        (!q.is_empty()).then_some((s, q, jq))
+    }
+
     /// The data's own view of the soft prior's residuals at the solution
     /// ([`Odometry::soft_prior_sigma`] has the notation): the residuals `q̂`, the centre `c`
     /// (zeros where the motion prior has none of their length) and whether it was the motion
@@ -433,14 +447,7 @@ impl Odometry {
     /// causes, `q_d = q̂ + J_q b` and the data's covariance of `q`, `J_q Σ_d J_qᵀ`. `None` for a
     /// model without a soft prior, without a prior unit, or without a calibrated covariance.
     fn soft_data_view(&self, sol: &FrameSolution) -> Option<SoftDataView> {
-        let s = self.motion_prior.scale;
-        if !(s.is_finite() && s > 0.0) {
-            return None;
-        }
-        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
-        if q.is_empty() {
-            return None;
-        }
+        let (s, q, jq) = self.soft_prior_terms(sol)?;
         let centred = self.motion_prior.soft_center.len() == q.len();
         let c = if centred {
             self.motion_prior.soft_center.clone()
@@ -561,14 +568,7 @@ impl Odometry {
         {
             return None;
         }
-        let s = self.motion_prior.scale;
-        if !(s.is_finite() && s > 0.0) {
-            return None;
-        }
-        let (q, jq) = self.soft_jacobian(&sol.params, &sol.free);
-        if q.is_empty() {
-            return None;
-        }
+        let (s, _, jq) = self.soft_prior_terms(sol)?;
         let mut inp = self.covariance_inputs(sol);
         inp.normal -= self.soft_information(&jq) * (s * s);
         trust::calibrated_covariance(&inp)
