@@ -76,6 +76,11 @@ pub struct FinalFitOptions {
     /// Passes of noise estimate, support and refit, each from the previous pass's solution
     /// (default 1).
     pub passes: usize,
+    /// The support's cheirality test ([`cheiral`]): a match whose point lies behind either
+    /// camera by more than this many `σ̂` of parallax (its displacement along the epipolar
+    /// line points away from the epipole) is left out of the support, whatever its residual.
+    /// 0: no test.
+    pub cheirality_sigmas: f64,
     /// The residual metric of the stage, by its registered type tag (e.g. `"angle_plane_ml"`,
     /// [`momo_core::register_metric!`]); none (the default): the metric the first stage's
     /// metric names for a final stage ([`MetricSpec::final_stage_metric`]: `angle_plane` names
@@ -108,6 +113,7 @@ impl Default for FinalFitOptions {
             max_scale_ratio: 5.0,
             first_stage_covariance: true,
             passes: 1,
+            cheirality_sigmas: 0.0,
             metric: None,
         }
     }
@@ -170,6 +176,12 @@ impl FinalFitOptions {
         if self.passes == 0 {
             return Err("odometry.final_fit.passes must be at least 1".into());
         }
+        if !(self.cheirality_sigmas.is_finite() && self.cheirality_sigmas >= 0.0) {
+            return Err(format!(
+                "odometry.final_fit.cheirality_sigmas must be a number >= 0, found {}",
+                self.cheirality_sigmas
+            ));
+        }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
             return Err(format!(
                 "odometry.final_fit.cauchy_sigmas must be a number >= 0, found {}",
@@ -213,6 +225,41 @@ pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Opti
         cut = opts.inlier_sigmas * s;
     }
     sigma
+}
+
+/// Whether a match's point lies in front of both cameras, within `tolerance` (radians of
+/// parallax), under the camera motion `c` (camera at k in camera at k-1: `X₀ = R X₁ + t`).
+///
+/// With `g = R f₁`, a point `λ₀ f₀ = t + λ₁ g` has `λ₀ (f₀ · u) = t · u` for `u` the unit vector
+/// orthogonal to `g` in the plane of `g` and `t`, towards `t`, and `λ₁ (g · u') = −t · u'` for `u'`
+/// orthogonal to `f₀` towards `t`; `t · u, t · u' ≥ 0`, so both depths are positive iff
+/// `f₀ · u > 0` and `g · u' < 0`: seen from frame k-1 the point lies between its frame-k ray and
+/// the epipole. Both are the parallax (the angle between `f₀` and `g`, projected on the
+/// epipolar plane) with a sign; noise of `σ` per ray moves them by about `√2 σ`, so the test
+/// is `f₀ · u > −tolerance` and `−g · u' > −tolerance`. A point at the epipole, or no
+/// translation, passes (no parallax to test).
+pub fn cheiral(
+    c: &momo_core::Pose<f64>,
+    f0: &nalgebra::Vector3<f64>,
+    f1: &nalgebra::Vector3<f64>,
+    tolerance: f64,
+) -> bool {
+    let t = c.translation;
+    let tn = t.norm();
+    if !(tn > 1e-12) {
+        return true;
+    }
+    let t = t / tn;
+    let g = c.rotation * f1;
+    let toward = |from: &nalgebra::Vector3<f64>| {
+        let u = t - from * t.dot(from);
+        let n = u.norm();
+        (n > 1e-12).then(|| u / n)
+    };
+    let (Some(u), Some(u1)) = (toward(&g), toward(f0)) else {
+        return true;
+    };
+    f0.dot(&u) > -tolerance && -g.dot(&u1) > -tolerance
 }
 
 /// What the final stage needs besides the matches and the first stage's solution.
@@ -303,15 +350,23 @@ fn refit_once(
     let all: Vec<f64> = norms.iter().flatten().copied().collect();
     let sigma = estimate_sigma(&all, scale, opts)?;
     let cut = opts.inlier_sigmas * sigma;
+    let motion = ctx.estimator.motion(from);
+    let tolerance = opts.cheirality_sigmas * sigma;
     let core = FrameObservations {
         per_camera: obs
             .per_camera
             .iter()
             .zip(&norms)
-            .map(|(m, n)| {
+            .zip(ctx.rig.cameras())
+            .map(|((m, n), cam)| {
+                let c = momo_core::camera_motion(&motion, &cam.t_vehicle_camera);
                 m.iter()
                     .zip(n)
-                    .filter(|(_, r)| **r < cut)
+                    .filter(|(o, r)| {
+                        **r < cut
+                            && (opts.cheirality_sigmas <= 0.0
+                                || cheiral(&c, &o.f0, &o.f1, tolerance))
+                    })
                     .map(|(o, _)| *o)
                     .collect()
             })
@@ -441,6 +496,54 @@ mod tests {
         );
     }
 
+    /// `cheiral`: points in front of both cameras pass (also far ones, with noise within the
+    /// tolerance); a point behind camera k-1 or behind camera k, with an exact epipolar
+    /// residual of zero, fails; without translation everything passes.
+    #[test]
+    fn the_cheirality_test_tells_points_behind_a_camera() {
+        use momo_core::Pose;
+        use nalgebra::{Rotation3, Vector3};
+        let r = *Rotation3::from_euler_angles(0.002, -0.001, 0.03).matrix();
+        let c = Pose::new(r, Vector3::new(0.05, -0.02, 1.0));
+        let rt = r.transpose();
+        let (mut behind, mut tested) = (0, 0);
+        for i in 0..200 {
+            let a = i as f64 * 0.61803;
+            let dir = Vector3::new(0.6 * a.sin(), 0.3 * (1.7 * a).cos(), 1.0).normalize();
+            let depth = 3.0 + 2.0 * (i % 40) as f64;
+            // In front: X₀ = λ₀ f₀, X₁ = Rᵀ (X₀ − t).
+            let x0 = dir * depth;
+            let f1 = (rt * (x0 - c.translation)).normalize();
+            assert!(cheiral(&c, &dir, &f1, 0.0), "point {i} in front");
+            // Behind camera k-1: the same ray, negative depth.
+            let f1b = (rt * (-x0 - c.translation)).normalize();
+            // Behind camera k: the frame-k ray reversed.
+            let f1c = -f1;
+            // (Rays within 0.1 rad of the epipole have too little parallax at 80 m.)
+            if dir.angle(&c.translation) < 0.1 {
+                continue;
+            }
+            tested += 2;
+            for f in [f1b, f1c] {
+                // Both lie on the epipolar plane of (f₀, t): a residual-only test keeps them.
+                let plane = c.translation.cross(&(r * f));
+                assert!(dir.dot(&plane).abs() < 1e-9 * plane.norm().max(1.0));
+                if !cheiral(&c, &dir, &f, 1e-3) {
+                    behind += 1;
+                }
+            }
+        }
+        assert!(tested > 300, "{tested}");
+        assert_eq!(behind, tested, "every point behind a camera is found");
+        // A point at infinity with noise: passes within the tolerance.
+        let dir = Vector3::new(0.2, -0.1, 1.0).normalize();
+        let f1 = (rt * dir + Vector3::new(-2e-4, 1e-4, 0.0)).normalize();
+        assert!(cheiral(&c, &dir, &f1, 1e-3));
+        // No translation: nothing to test.
+        let still = Pose::new(r, Vector3::zeros());
+        assert!(cheiral(&still, &dir, &(-dir), 0.0));
+    }
+
     /// `Φ⁻¹((1 + p) / 2)` by bisection on a numerically integrated Gaussian density.
     fn half_normal_quantile(p: f64) -> f64 {
         let cdf = |x: f64| {
@@ -482,6 +585,11 @@ mod tests {
         assert!(bad.validate().unwrap_err().contains("passes"));
         let o: FinalFitOptions = toml::from_str("prior_min_scales = 0.0\npasses = 2").unwrap();
         assert_eq!((o.prior_min_scales, o.passes), (0.0, 2));
+        let bad = FinalFitOptions {
+            cheirality_sigmas: -1.0,
+            ..FinalFitOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("cheirality_sigmas"));
         let o: FinalFitOptions = toml::from_str("cauchy_sigmas = 0.0").unwrap();
         assert_eq!(o.cauchy_sigmas, 0.0);
         assert!(toml::from_str::<FinalFitOptions>("cauchy = 1.0").is_err());
