@@ -31,7 +31,8 @@ fn run(cheirality_sigmas: f64) -> Vec<(f64, f64)> {
             .flatten()
             .filter(|l| **l == MatchLabel::Inlier)
             .count();
-        let err = so3_log(&(sim.vehicle_motions[k].rotation.transpose() * r.motion.rotation)).norm();
+        let err =
+            so3_log(&(sim.vehicle_motions[k].rotation.transpose() * r.motion.rotation)).norm();
         out.push((r.diagnostics.inliers as f64 - inliers as f64, err));
     }
     out
@@ -51,10 +52,16 @@ fn the_cheirality_test_leaves_the_mismatches_behind_a_camera_out_of_the_support(
     // Without the test about 5 mismatches per frame sit in the support (and about 1 true
     // inlier is out): half of them put their point behind a camera.
     assert!(x_off > 2.5, "support excess without the test: {x_off}");
-    assert!(x_on < 0.6 * x_off, "support excess {x_on} with the test, {x_off} without");
+    assert!(
+        x_on < 0.6 * x_off,
+        "support excess {x_on} with the test, {x_off} without"
+    );
     let (e_off, e_on) = (
         median(off.iter().map(|x| x.1).collect()),
         median(on.iter().map(|x| x.1).collect()),
     );
-    assert!(e_on < 0.95 * e_off, "median rotation error {e_on} with, {e_off} without");
+    assert!(
+        e_on < 0.95 * e_off,
+        "median rotation error {e_on} with, {e_off} without"
+    );
 }
