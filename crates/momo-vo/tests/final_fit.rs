@@ -12,13 +12,13 @@ fn run(cheirality_sigmas: f64) -> Vec<(f64, f64)> {
     let mut cfg = SimConfig::outliers();
     cfg.frames = 61;
     cfg.seed = 23;
-    let sim = simulate(&cfg).unwrap();
+    let sim = simulate(&cfg).expect("the outliers scenario simulates");
     let seq = &sim.sequence;
     let text = format!(
         "[odometry.final_fit]\nfirst_stage_covariance = false\ncheirality_sigmas = {cheirality_sigmas}\n"
     );
-    let config = Config::from_toml_str(&text, "ff.toml").unwrap();
-    let mut vo = Odometry::new(seq.rig.clone(), config).unwrap();
+    let config = Config::from_toml_str(&text, "ff.toml").expect("a valid configuration");
+    let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
     let mut out = Vec::new();
     for k in 1..seq.num_frames() {
         let arc = seq
