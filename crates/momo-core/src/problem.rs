@@ -162,14 +162,16 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             return &[];
         }
         self.constants.get_or_init(|| {
-            let mut c = vec![0.0; m * self.num_matches()];
-            let mut chunks = c.chunks_exact_mut(m);
+            // Filled match by match through a small buffer (no zeroed allocation of the whole).
+            let mut c = Vec::with_capacity(m * self.num_matches());
+            let mut one = vec![0.0; m];
             for (j, cam) in self.rig.cameras().iter().enumerate() {
                 let Some(obs) = self.obs.per_camera.get(j) else {
                     continue;
                 };
-                for (o, out) in obs.iter().zip(&mut chunks) {
-                    self.metric.match_constants(&cam.model, o, out);
+                for o in obs {
+                    self.metric.match_constants(&cam.model, o, &mut one);
+                    c.extend_from_slice(&one);
                 }
             }
             c
