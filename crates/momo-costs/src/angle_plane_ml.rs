@@ -220,7 +220,10 @@ impl ResidualMetric for AnglePlaneMl {
         let (s1, s0) = if constants.len() == Self::MATCH_CONSTANTS {
             load(constants)
         } else {
-            (bearing_covariance(camera, f1), bearing_covariance(camera, f0))
+            (
+                bearing_covariance(camera, f1),
+                bearing_covariance(camera, f0),
+            )
         };
         let var = quad(&s1, &g1) + quad(&s0, &g0);
         let floor = 1e-6 * s_ref * s_ref;
