@@ -56,6 +56,32 @@ pub trait ResidualMetric: Clone + Debug + Send + Sync + 'static {
     /// Writes the `RESIDUALS` residuals of one match into `out[..RESIDUALS]`.
     fn residuals<T: Scalar>(&self, prepared: &Self::Prepared<T>, obs: &Observation, out: &mut [T]);
 
+    /// Number of per-match constants: quantities of one match on its camera that do not
+    /// depend on the motion (e.g. `momo_costs::AnglePlaneMl`'s bearing covariances). 0, the
+    /// default: none. With `> 0`, `Problem` computes them once per problem
+    /// ([`match_constants`](Self::match_constants), at its first evaluation) and evaluates the
+    /// residuals by [`residuals_with`](Self::residuals_with) and the kernel with them, instead
+    /// of recomputing them in every evaluation.
+    const MATCH_CONSTANTS: usize = 0;
+
+    /// Writes the per-match constants of `obs` on `camera` into `out[..MATCH_CONSTANTS]`.
+    fn match_constants(&self, _camera: &Camera, _obs: &Observation, _out: &mut [f64]) {}
+
+    /// [`residuals`](Self::residuals) given the match's constants
+    /// (`constants.len() == MATCH_CONSTANTS`, from [`match_constants`](Self::match_constants)):
+    /// must give the same residuals bit for bit (the cache is exact; `Problem::with_automatic`
+    /// evaluates [`residuals`](Self::residuals) and is the oracle). The default ignores them.
+    #[inline(always)]
+    fn residuals_with<T: Scalar>(
+        &self,
+        prepared: &Self::Prepared<T>,
+        obs: &Observation,
+        _constants: &[f64],
+        out: &mut [T],
+    ) {
+        self.residuals(prepared, obs, out);
+    }
+
     /// Number of per-camera inputs `q` of the fused kernel (`0..=`[`MAX_KERNEL_INPUTS`]); 0,
     /// the default, means no fused kernel: Jacobians by automatic differentiation of
     /// [`residuals`](Self::residuals).
@@ -67,13 +93,16 @@ pub trait ResidualMetric: Clone + Debug + Send + Sync + 'static {
 
     /// The fused kernel of one match, in plain `f64`: the `RESIDUALS` residuals into
     /// `r[..RESIDUALS]` and their derivatives with respect to the inputs `q`
-    /// (`q.len() == KERNEL_INPUTS`) into `dr_dq[i][..KERNEL_INPUTS]` for residual `i`. Only
-    /// called when [`KERNEL_INPUTS`](Self::KERNEL_INPUTS) `> 0`.
+    /// (`q.len() == KERNEL_INPUTS`) into `dr_dq[i][..KERNEL_INPUTS]` for residual `i`;
+    /// `constants` are the match's [`match_constants`](Self::match_constants) (empty when
+    /// [`MATCH_CONSTANTS`](Self::MATCH_CONSTANTS) is 0). Only called when
+    /// [`KERNEL_INPUTS`](Self::KERNEL_INPUTS) `> 0`.
     fn kernel(
         &self,
         _camera: &Camera,
         _q: &[f64],
         _obs: &Observation,
+        _constants: &[f64],
         _r: &mut [f64],
         _dr_dq: &mut [[f64; MAX_KERNEL_INPUTS]],
     ) {
@@ -145,6 +174,7 @@ impl ResidualMetric for RotationOnly {
         _camera: &Camera,
         q: &[f64],
         obs: &Observation,
+        _constants: &[f64],
         out: &mut [f64],
         dr_dq: &mut [[f64; MAX_KERNEL_INPUTS]],
     ) {

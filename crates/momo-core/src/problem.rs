@@ -12,7 +12,7 @@ use crate::scalar::Scalar;
 use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use num_dual::DualSVec64;
-use std::cell::RefCell;
+use std::cell::{OnceCell, RefCell};
 use wide::f64x4;
 
 /// The robust least-squares problem of one frame pair (the paper's Eq. for several cameras):
@@ -60,6 +60,9 @@ pub struct Problem<'a, R: ResidualMetric> {
     /// whose cost was evaluated (by [`LeastSquares::cost`] or a linearisation), and that point:
     /// the inlier count after a solve reads them instead of evaluating the residuals again.
     last_norms: RefCell<(ParamVec, Vec<f64>)>,
+    /// The metric's per-match constants ([`ResidualMetric::MATCH_CONSTANTS`] per match, camera
+    /// order), computed at the first evaluation that needs them; never with `automatic`.
+    constants: OnceCell<Vec<f64>>,
 }
 
 /// Matches per step of the one-residual fused linearisation
@@ -132,6 +135,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             prior_scale: loss.scale(),
             automatic: false,
             last_norms: RefCell::new((ParamVec::repeat(f64::NAN), Vec::new())),
+            constants: OnceCell::new(),
         })
     }
 
@@ -146,6 +150,54 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
     /// Whether linearisations use the metric's fused kernel.
     pub fn uses_kernel(&self) -> bool {
         R::KERNEL_INPUTS > 0 && !self.automatic
+    }
+
+    /// The metric's per-match constants of every match (camera order,
+    /// [`ResidualMetric::MATCH_CONSTANTS`] each), computed once per problem; empty for a
+    /// metric without any and with [`with_automatic`](Self::with_automatic) (the oracle
+    /// recomputes them in [`ResidualMetric::residuals`]).
+    fn match_constants(&self) -> &[f64] {
+        let m = R::MATCH_CONSTANTS;
+        if m == 0 || self.automatic {
+            return &[];
+        }
+        self.constants.get_or_init(|| {
+            // Filled match by match through a small buffer (no zeroed allocation of the whole).
+            let mut c = Vec::with_capacity(m * self.num_matches());
+            let mut one = vec![0.0; m];
+            for (j, cam) in self.rig.cameras().iter().enumerate() {
+                let Some(obs) = self.obs.per_camera.get(j) else {
+                    continue;
+                };
+                for o in obs {
+                    self.metric.match_constants(&cam.model, o, &mut one);
+                    c.extend_from_slice(&one);
+                }
+            }
+            c
+        })
+    }
+
+    /// The residuals of match `k` (camera order) into `out`: by
+    /// [`ResidualMetric::residuals_with`] from its cached constants `constants`
+    /// ([`match_constants`](Self::match_constants)) if there are any, else by
+    /// [`ResidualMetric::residuals`].
+    #[inline(always)]
+    fn match_residuals<T: Scalar>(
+        &self,
+        prep: &R::Prepared<T>,
+        o: &crate::rig::Observation,
+        constants: &[f64],
+        k: usize,
+        out: &mut [T],
+    ) {
+        let m = R::MATCH_CONSTANTS;
+        if m > 0 && !constants.is_empty() {
+            self.metric
+                .residuals_with(prep, o, &constants[k * m..(k + 1) * m], out);
+        } else {
+            self.metric.residuals(prep, o, out);
+        }
     }
 
     /// Adds a prior on the change of motion (ignored if it does not constrain anything; its
@@ -381,6 +433,8 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
     fn for_each_squared_norm(&self, params: &[f64], mut f: impl FnMut(usize, f64)) {
         let m = self.model.motion_of(params);
         let mut r = [0.0; MAX_RESIDUALS];
+        let constants = self.match_constants();
+        let mut k = 0;
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
                 continue;
@@ -391,7 +445,8 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             let c = camera_motion(&m, &cam.t_vehicle_camera);
             let prep = self.metric.prepare(&cam.model, &c);
             for o in obs {
-                self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
+                self.match_residuals(&prep, o, constants, k, &mut r[..R::RESIDUALS]);
+                k += 1;
                 f(j, r[..R::RESIDUALS].iter().map(|v| v * v).sum::<f64>());
             }
         }
@@ -447,6 +502,8 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         let p = self.seeded::<N>(x);
         let m = self.model.motion_of(&p[..np]);
         let mut r = [DualSVec64::<N>::from_re(0.0); MAX_RESIDUALS];
+        let constants = self.match_constants();
+        let mut k = 0;
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
                 continue;
@@ -457,7 +514,8 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             let c = camera_motion(&m, &cam.t_vehicle_camera);
             let prep = self.metric.prepare(&cam.model, &c);
             for o in obs {
-                self.metric.residuals(&prep, o, &mut r[..R::RESIDUALS]);
+                self.match_residuals(&prep, o, constants, k, &mut r[..R::RESIDUALS]);
+                k += 1;
                 f(&r[..R::RESIDUALS]);
             }
         }
@@ -598,6 +656,9 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         let mut r = [0.0; MAX_RESIDUALS];
         let mut dr_dq = [[0.0; MAX_KERNEL_INPUTS]; MAX_RESIDUALS];
         let mut jac = [[0.0; N]; MAX_RESIDUALS];
+        let constants = self.match_constants();
+        let n_c = R::MATCH_CONSTANTS;
+        let mut k_match = 0;
         let mut last = self.record_norms(x);
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
@@ -613,9 +674,11 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                     &cam.model,
                     &q[..k_in],
                     o,
+                    &constants[k_match * n_c..(k_match + 1) * n_c],
                     &mut r[..n_res],
                     &mut dr_dq[..n_res],
                 );
+                k_match += 1;
                 for i in 0..n_res {
                     let mut row = [0.0; N];
                     for a in 0..k_in {
@@ -671,6 +734,9 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         // Per lane: the upper triangle of J̃ᵀJ̃ (row-major, N (N + 1) / 2 entries) and J̃ᵀr̃.
         let mut h_lanes = [f64x4::ZERO; MAX_PARAMS * (MAX_PARAMS + 1) / 2];
         let mut g_lanes = [f64x4::ZERO; N];
+        let constants = self.match_constants();
+        let n_c = R::MATCH_CONSTANTS;
+        let mut k_match = 0;
         let mut last = self.record_norms(x);
         let weights_only = known_cost.is_some();
         for (j, cam) in self.rig.cameras().iter().enumerate() {
@@ -693,8 +759,15 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
                 let mut v = [0.0; LANES];
                 let mut sq = [0.0; LANES];
                 for (l, o) in chunk.iter().enumerate() {
-                    self.metric
-                        .kernel(&cam.model, &q[..k_in], o, &mut r[..1], &mut dr_dq[..1]);
+                    self.metric.kernel(
+                        &cam.model,
+                        &q[..k_in],
+                        o,
+                        &constants[k_match * n_c..(k_match + 1) * n_c],
+                        &mut r[..1],
+                        &mut dr_dq[..1],
+                    );
+                    k_match += 1;
                     for a in 0..k_in {
                         dr[a][l] = dr_dq[0][a];
                     }

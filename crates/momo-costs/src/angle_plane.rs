@@ -82,6 +82,7 @@ impl ResidualMetric for AnglePlane {
         _camera: &Camera,
         e: &[f64],
         obs: &Observation,
+        _constants: &[f64],
         r: &mut [f64],
         dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
     ) {

@@ -36,8 +36,9 @@ use serde::{Deserialize, Serialize};
 /// Fused kernel ([`ResidualMetric::kernel`]): the inputs are the nine entries of `E`
 /// (row-major), as for [`crate::AnglePlane`]; the residual in the automatic path's order of
 /// operations (the linearisation's cost is bit-identical to it), its derivatives by hand in
-/// plain `f64` (see [`AnglePlaneMl::kernel`]); the `Σᵢ` (constants of the match) are computed
-/// once per match and linearisation either way.
+/// plain `f64` (see [`AnglePlaneMl::kernel`]). The `Σᵢ` depend on the camera and the match
+/// alone: they are the metric's per-match constants ([`ResidualMetric::MATCH_CONSTANTS`]),
+/// computed once per problem (per frame and solve) and read by every evaluation.
 ///
 /// ```
 /// use momo_core::{Camera, Observation, Pose, ResidualMetric, Pinhole};
@@ -72,8 +73,11 @@ pub struct AnglePlaneMlPrepared<T: Scalar> {
 /// The covariance of the unit bearing `f` under unit isotropic pixel noise, `J Jᵀ` with `J`
 /// the bearing's Jacobian with respect to the pixel (see [`AnglePlaneMl`]).
 pub fn bearing_covariance(camera: &Camera, f: &Vector3<f64>) -> Matrix3<f64> {
-    let fl = camera.focal_length();
-    let iso = (Matrix3::identity() - f * f.transpose()) / (fl * fl);
+    // The isotropic fallback, computed only where it is used.
+    let iso = || {
+        let fl = camera.focal_length();
+        (Matrix3::identity() - f * f.transpose()) / (fl * fl)
+    };
     // Tangent basis: u ⟂ f from the axis least aligned with f, v = f × u.
     let axis = if f.x.abs() <= f.y.abs() && f.x.abs() <= f.z.abs() {
         Vector3::x()
@@ -89,21 +93,21 @@ pub fn bearing_covariance(camera: &Camera, f: &Vector3<f64>) -> Matrix3<f64> {
     for (k, d) in [u, v].iter().enumerate() {
         let (Some(p), Some(m)) = (camera.project(&(f + d * h)), camera.project(&(f - d * h)))
         else {
-            return iso;
+            return iso();
         };
         let col = (p - m) / (2.0 * h);
         a[(0, k)] = col.x;
         a[(1, k)] = col.y;
     }
     let Some(a_inv) = a.try_inverse() else {
-        return iso;
+        return iso();
     };
     let j: Matrix3x2<f64> = Matrix3x2::from_columns(&[u, v]) * a_inv;
     let cov = j * j.transpose();
     if cov.iter().all(|x| x.is_finite()) {
         cov
     } else {
-        iso
+        iso()
     }
 }
 
@@ -138,21 +142,33 @@ impl ResidualMetric for AnglePlaneMl {
         obs: &Observation,
         out: &mut [T],
     ) {
-        // Every operation in a fixed order: the fused kernel repeats it in plain f64 (as
-        // num-dual divides: times the reciprocal), so the linearisation's cost is bit-identical.
-        let e = &prep.e;
-        let n = mul_const(e, &obs.f0);
-        let d = (n.norm_squared() + T::c(NORM_EPS_SQ)).sqrt();
-        let r = dot_const(&n, &obs.f1) / d;
-        let g1 = n / d;
-        let etn = tr_mul(e, &n);
-        let g0 = (tr_mul_const(e, &obs.f1) - etn * (r / d)) / d;
         let s1 = bearing_covariance(&prep.camera, &obs.f1);
         let s0 = bearing_covariance(&prep.camera, &obs.f0);
-        let var = quad(&s1, &g1) + quad(&s0, &g0);
-        // Guard: a vanishing gradient (standstill, degenerate geometry) keeps a finite residual.
-        let floor = T::c(1e-6 * prep.s_ref * prep.s_ref);
-        out[0] = r * T::c(prep.s_ref) / (var + floor).sqrt();
+        out[0] = residual(prep, obs, &s1, &s0);
+    }
+
+    /// `Σ₁` then `Σ₀` ([`bearing_covariance`] of `f1` and `f0`), each row-major: functions of
+    /// the camera and the match alone, so `Problem` computes them once per problem instead of
+    /// in every evaluation (eight projections per match).
+    const MATCH_CONSTANTS: usize = 18;
+
+    fn match_constants(&self, camera: &Camera, obs: &Observation, out: &mut [f64]) {
+        let s1 = bearing_covariance(camera, &obs.f1);
+        let s0 = bearing_covariance(camera, &obs.f0);
+        store(&s1, &mut out[..9]);
+        store(&s0, &mut out[9..18]);
+    }
+
+    #[inline]
+    fn residuals_with<T: Scalar>(
+        &self,
+        prep: &AnglePlaneMlPrepared<T>,
+        obs: &Observation,
+        constants: &[f64],
+        out: &mut [T],
+    ) {
+        let (s1, s0) = load(constants);
+        out[0] = residual(prep, obs, &s1, &s0);
     }
 
     const KERNEL_INPUTS: usize = 9;
@@ -179,6 +195,7 @@ impl ResidualMetric for AnglePlaneMl {
         camera: &Camera,
         e: &[f64],
         obs: &Observation,
+        constants: &[f64],
         out: &mut [f64],
         dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
     ) {
@@ -200,8 +217,14 @@ impl ResidualMetric for AnglePlaneMl {
             let etf1 = e[i] * f1.x + e[3 + i] * f1.y + e[6 + i] * f1.z;
             g0[i] = (etf1 - etn * rd) * inv_d;
         }
-        let s1 = bearing_covariance(camera, f1);
-        let s0 = bearing_covariance(camera, f0);
+        let (s1, s0) = if constants.len() == Self::MATCH_CONSTANTS {
+            load(constants)
+        } else {
+            (
+                bearing_covariance(camera, f1),
+                bearing_covariance(camera, f0),
+            )
+        };
         let var = quad(&s1, &g1) + quad(&s0, &g0);
         let floor = 1e-6 * s_ref * s_ref;
         let w = (var + floor).sqrt().recip();
@@ -224,6 +247,46 @@ impl ResidualMetric for AnglePlaneMl {
             }
         }
     }
+}
+
+/// `r_ml` of one match given its bearing covariances `Σ₁` (of `f1`) and `Σ₀` (of `f0`), every
+/// operation in a fixed order: the fused kernel repeats it in plain f64 (as num-dual divides:
+/// times the reciprocal), so the linearisation's cost is bit-identical.
+#[inline(always)]
+fn residual<T: Scalar>(
+    prep: &AnglePlaneMlPrepared<T>,
+    obs: &Observation,
+    s1: &Matrix3<f64>,
+    s0: &Matrix3<f64>,
+) -> T {
+    let e = &prep.e;
+    let n = mul_const(e, &obs.f0);
+    let d = (n.norm_squared() + T::c(NORM_EPS_SQ)).sqrt();
+    let r = dot_const(&n, &obs.f1) / d;
+    let g1 = n / d;
+    let etn = tr_mul(e, &n);
+    let g0 = (tr_mul_const(e, &obs.f1) - etn * (r / d)) / d;
+    let var = quad(s1, &g1) + quad(s0, &g0);
+    // Guard: a vanishing gradient (standstill, degenerate geometry) keeps a finite residual.
+    let floor = T::c(1e-6 * prep.s_ref * prep.s_ref);
+    r * T::c(prep.s_ref) / (var + floor).sqrt()
+}
+
+/// Writes `s` row-major into `out[..9]`.
+#[inline(always)]
+fn store(s: &Matrix3<f64>, out: &mut [f64]) {
+    for a in 0..3 {
+        for b in 0..3 {
+            out[3 * a + b] = s[(a, b)];
+        }
+    }
+}
+
+/// `(Σ₁, Σ₀)` from the match constants written by `match_constants` (row-major, 9 each).
+#[inline(always)]
+fn load(c: &[f64]) -> (Matrix3<f64>, Matrix3<f64>) {
+    let m = |o: usize| Matrix3::from_fn(|a, b| c[o + 3 * a + b]);
+    (m(0), m(9))
 }
 
 /// `mᵀ v` for a matrix and a vector of scalars, in a fixed order of operations (the fused

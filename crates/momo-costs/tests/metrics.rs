@@ -347,3 +347,51 @@ momo_testing::test_metric!(macro_angle_plane, AnglePlane);
 momo_testing::test_metric!(macro_angle_plane_ml, momo_costs::AnglePlaneMl);
 momo_testing::test_metric!(macro_geo_line, FocalScaled(GeoLine), tol = 1e-5);
 momo_testing::test_metric!(macro_sampson, FocalScaled(Sampson), tol = 1e-5);
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// `AnglePlaneMl`'s per-match constants (`ResidualMetric::MATCH_CONSTANTS`: the bearing
+    /// covariances, cached once per problem) give the residuals of `residuals`, which recomputes
+    /// them, bit for bit on `f64` and on dual numbers (value and derivatives), on both canned
+    /// rigs, at random motions with outliers.
+    #[test]
+    fn angle_plane_ml_cached_constants_are_exact(
+        p in twist(),
+        seed in 0u64..1000,
+        fisheye in any::<bool>(),
+    ) {
+        use momo_costs::AnglePlaneMl;
+        let rig = if fisheye { canned::fisheye_rig() } else { canned::pinhole_rig() };
+        let m = Twist.motion(&p);
+        let obs = canned::synthetic_observations(&rig, &m, 20, 5, seed);
+        let metric = AnglePlaneMl;
+        let n_c = AnglePlaneMl::MATCH_CONSTANTS;
+        prop_assert!(n_c > 0);
+        let mut constants = vec![0.0; n_c];
+        // A dual motion: the derivatives of the twist's six parameters.
+        let pd: Vec<DualSVec64<6>> =
+            (0..6).map(|i| DualSVec64::from_re(p[i]).derivative(i)).collect();
+        let md = Twist.motion(&pd);
+        for (cam, matches) in rig.cameras().iter().zip(&obs.per_camera) {
+            let prep = metric.prepare(&cam.model, &camera_motion(&m, &cam.t_vehicle_camera));
+            let prep_d = metric.prepare(&cam.model, &camera_motion(&md, &cam.t_vehicle_camera));
+            for o in matches {
+                metric.match_constants(&cam.model, o, &mut constants);
+                let (mut a, mut b) = ([0.0], [0.0]);
+                metric.residuals(&prep, o, &mut a);
+                metric.residuals_with(&prep, o, &constants, &mut b);
+                prop_assert_eq!(a[0].to_bits(), b[0].to_bits());
+                let (mut ad, mut bd) =
+                    ([DualSVec64::<6>::from_re(0.0)], [DualSVec64::<6>::from_re(0.0)]);
+                metric.residuals(&prep_d, o, &mut ad);
+                metric.residuals_with(&prep_d, o, &constants, &mut bd);
+                prop_assert_eq!(ad[0].re.to_bits(), bd[0].re.to_bits());
+                let bits = |d: &DualSVec64<6>| -> Vec<u64> {
+                    d.eps.0.map_or(Vec::new(), |e| e.iter().map(|v| v.to_bits()).collect())
+                };
+                prop_assert_eq!(bits(&ad[0]), bits(&bd[0]));
+            }
+        }
+    }
+}

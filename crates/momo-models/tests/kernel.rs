@@ -61,6 +61,13 @@ fn compare<M: Manifold, R: ResidualMetric>(
     let (lf, la) = (fused.linearize(&x), auto.linearize(&x));
     // The kernel computes the residuals as the dual numbers' real part does.
     prop_assert_eq!(lf.cost.to_bits(), la.cost.to_bits());
+    // The cost evaluation with the metric's per-match constants cached once per problem
+    // (`ResidualMetric::MATCH_CONSTANTS`, `residuals_with`) is the one recomputing them in
+    // `residuals` (the automatic problem never caches), bit for bit; twice, so that the second
+    // evaluation reads the cache the first one filled.
+    for _ in 0..2 {
+        prop_assert_eq!(fused.cost(&x).to_bits(), auto.cost(&x).to_bits());
+    }
     if !la.cost.is_finite() {
         // Where the cost is undefined (a soft model's prior in units of a trivial loss's
         // infinite scale) both paths say so, entry by entry.
