@@ -9,9 +9,7 @@
 //! `DATA_DIR` holds `kitti_stereo_snippets/`. `KEY=VALUE` set matcher options:
 //! `matches`, `refine` (none | klt), `patch` (KLT half-width), `iterations`, `max_shift`, `fb`
 //! (forward-backward threshold, pixels; 0 = off), `converged` (KLT step that ends the iteration), `subpixel` (true | false), `uniqueness`,
-//! `prior` (none | U,V: the flow prior's margin), `rank` (sad | fb: the refined matches
-//! selected by descriptor SAD or forward-backward disagreement), `bucket_cells` (cells of the
-//! bucketing grid, 0: `matches`),
+//! `prior` (none | U,V: the flow prior's margin),
 //! `candidates`, `nms`, `threshold`, `threads` (accuracy only). Accuracy: the
 //! frame-to-frame rotation error of camera 0 against `poses.txt` (as `momo eval`), median /
 //! p95 / max / count above 1 degree, and the front end's ms per frame as `momo vo` reports it.
@@ -88,14 +86,6 @@ fn parse_options(args: &[String]) -> Result<MatchOptions, String> {
                     v.parse().map_err(|e| bad(&e))?
             }
             "threads" => o.threads = v.parse().map_err(|e| bad(&e))?,
-            "bucket_cells" => o.bucket_cells = v.parse().map_err(|e| bad(&e))?,
-            "rank" => {
-                o.klt.get_or_insert_with(Default::default).rank_by_fb = match v {
-                    "fb" => true,
-                    "sad" => false,
-                    _ => return Err(format!("rank: fb or sad, found {v}")),
-                }
-            }
             "prior" => {
                 o.prior_margin = if v == "none" {
                     None

@@ -24,7 +24,7 @@
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, Feature, FrameFeatures, MIN_SIDE};
-use crate::refine::{KltOptions, MAX_HALF, refine_match_fb};
+use crate::refine::{KltOptions, MAX_HALF, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
 
@@ -61,9 +61,6 @@ pub struct MatchOptions {
     /// matches are near, or when fewer than half of `matches_per_frame` are found, the full
     /// window is searched. `None`: always the full window.
     pub prior_margin: Option<[u32; 2]>,
-    /// Cells of the bucketing grid (the spread of the kept matches over the image); 0 (the
-    /// default): `matches_per_frame` cells. The candidates' grid is not changed.
-    pub bucket_cells: usize,
     /// The detector.
     pub detector: DetectorOptions,
 }
@@ -81,7 +78,6 @@ impl Default for MatchOptions {
             klt: Some(KltOptions::default()),
             threads: 0,
             prior_margin: Some([16, 8]),
-            bucket_cells: 0,
             detector: DetectorOptions::default(),
         }
     }
@@ -372,48 +368,33 @@ pub fn match_features_with_prior(
         Some(k) if k.fb_threshold > 0.0 => options.matches_per_frame.div_ceil(4),
         _ => 0,
     };
-    let spread = if options.bucket_cells == 0 {
-        grid
-    } else {
-        Grid::new(w, h, options.bucket_cells)
-    };
-    let chosen = bucket(matches, &spread, options.matches_per_frame + spare);
+    let chosen = bucket(matches, &grid, options.matches_per_frame + spare);
 
     // 6. KLT refinement of the chosen matches (integer pixels so far).
     match &options.klt {
         None => chosen,
         Some(klt) => {
             let (p, c) = (prev.plane(), cur.plane());
-            // Ranked by the descriptor SAD, or (`rank_by_fb`) by the forward-backward
-            // disagreement in units of 1e-6 px.
-            let refined: Vec<(u64, Match)> = chosen
+            let refined: Vec<Match> = chosen
                 .par_iter()
                 .filter_map(|m| {
-                    let ([u0, v0, u1, v1], fb) = refine_match_fb(
+                    let [u0, v0, u1, v1] = refine_match(
                         p,
                         c,
                         (m.u0 as usize, m.v0 as usize),
                         (m.u1 as usize, m.v1 as usize),
                         klt,
                     )?;
-                    let key = if klt.rank_by_fb {
-                        (fb * 1e6).round() as u64
-                    } else {
-                        u64::from(m.sad)
-                    };
-                    Some((
-                        key,
-                        Match {
-                            u0,
-                            v0,
-                            u1,
-                            v1,
-                            sad: m.sad,
-                        },
-                    ))
+                    Some(Match {
+                        u0,
+                        v0,
+                        u1,
+                        v1,
+                        sad: m.sad,
+                    })
                 })
                 .collect();
-            bucket_keyed(refined, &spread, options.matches_per_frame)
+            bucket(refined, &grid, options.matches_per_frame)
         }
     }
 }
@@ -479,38 +460,26 @@ fn strongest_per_cell(
 
 /// At most `n` matches, spread over the grid: one per cell and round, best SAD first; in the last
 /// round the cells' best matches compete by SAD.
-fn bucket(matches: Vec<Match>, grid: &Grid, n: usize) -> Vec<Match> {
+fn bucket(mut matches: Vec<Match>, grid: &Grid, n: usize) -> Vec<Match> {
     if matches.len() <= n {
         return matches;
     }
-    bucket_keyed(
-        matches.into_iter().map(|m| (u64::from(m.sad), m)).collect(),
-        grid,
-        n,
-    )
-}
-
-/// [`bucket`] by a key of each match (smaller is better; ties by position).
-fn bucket_keyed(mut matches: Vec<(u64, Match)>, grid: &Grid, n: usize) -> Vec<Match> {
-    if matches.len() <= n {
-        return matches.into_iter().map(|(_, m)| m).collect();
-    }
-    matches.sort_by_key(|(k, m)| (*k, m.v0 as u32, m.u0 as u32));
-    let mut cells: Vec<Vec<(u64, Match)>> = vec![Vec::new(); grid.len()];
-    for km in matches.into_iter().rev() {
-        cells[grid.of(km.1.u0, km.1.v0)].push(km); // reversed: best at the end, popped first
+    matches.sort_by_key(|m| (m.sad, m.v0 as u32, m.u0 as u32));
+    let mut cells: Vec<Vec<Match>> = vec![Vec::new(); grid.len()];
+    for m in matches.into_iter().rev() {
+        cells[grid.of(m.u0, m.v0)].push(m); // reversed: best at the end, popped first
     }
     let mut out = Vec::with_capacity(n);
     loop {
-        let mut round: Vec<(u64, Match)> = cells.iter_mut().filter_map(Vec::pop).collect();
+        let mut round: Vec<Match> = cells.iter_mut().filter_map(Vec::pop).collect();
         if round.is_empty() {
             break;
         }
         if out.len() + round.len() > n {
-            round.sort_by_key(|(k, _)| *k);
+            round.sort_by_key(|m| m.sad);
             round.truncate(n - out.len());
         }
-        out.extend(round.into_iter().map(|(_, m)| m));
+        out.extend(round);
         if out.len() >= n {
             break;
         }

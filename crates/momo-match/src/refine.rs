@@ -31,10 +31,6 @@ pub struct KltOptions {
     /// what is left is a few thousandths of a pixel, far below the matches' noise; 0.001 took
     /// 5.4 iterations per alignment on KITTI, 0.01 takes 4.1 with the same accuracy).
     pub converged: f64,
-    /// Select the refined matches by their forward-backward disagreement (smallest first in
-    /// each bucketing cell and round) instead of their descriptor SAD; needs
-    /// `fb_threshold > 0`. Off by default.
-    pub rank_by_fb: bool,
 }
 
 /// The largest patch half-width (the feature border leaves one pixel for the gradients).
@@ -48,7 +44,6 @@ impl Default for KltOptions {
             max_shift: 2.0,
             fb_threshold: 0.3,
             converged: 1e-2,
-            rank_by_fb: false,
         }
     }
 }
@@ -306,26 +301,13 @@ fn iterate<const R: usize>(
 pub fn refine_match(
     prev: Plane<'_>,
     cur: Plane<'_>,
-    p0: (usize, usize),
-    p1: (usize, usize),
-    options: &KltOptions,
-) -> Option<[f64; 4]> {
-    refine_match_fb(prev, cur, p0, p1, options).map(|(m, _)| m)
-}
-
-/// [`refine_match`], and the forward-backward disagreement of the two directions, pixels (0
-/// without the backward pass).
-pub fn refine_match_fb(
-    prev: Plane<'_>,
-    cur: Plane<'_>,
     (u0, v0): (usize, usize),
     (u1, v1): (usize, usize),
     options: &KltOptions,
-) -> Option<([f64; 4], f64)> {
+) -> Option<[f64; 4]> {
     let d0 = [u1 as f64 - u0 as f64, v1 as f64 - v0 as f64];
     let d = align(prev, cur, u0, v0, d0, options)?;
     let mut out = d;
-    let mut disagreement = 0.0;
     if options.fb_threshold > 0.0 {
         // Backward from the integer pixel nearest the refined position.
         let (qu, qv) = (
@@ -336,14 +318,11 @@ pub fn refine_match_fb(
         let back = align(cur, prev, qu, qv, back0, options)?;
         // Forward says cur(p0 + d) = prev(p0); backward says prev(q + back) = cur(q), that is
         // a displacement of -back from frame k-1 to k.
-        disagreement = (d[0] + back[0]).hypot(d[1] + back[1]);
+        let disagreement = (d[0] + back[0]).hypot(d[1] + back[1]);
         if disagreement > options.fb_threshold {
             return None;
         }
         out = [0.5 * (d[0] - back[0]), 0.5 * (d[1] - back[1])];
     }
-    Some((
-        [u0 as f64, v0 as f64, u0 as f64 + out[0], v0 as f64 + out[1]],
-        disagreement,
-    ))
+    Some([u0 as f64, v0 as f64, u0 as f64 + out[0], v0 as f64 + out[1]])
 }
