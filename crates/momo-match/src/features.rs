@@ -965,9 +965,10 @@ fn is_extremum<const MAX: bool>(
 /// The Sobel images and the blob and corner responses of an image, rows in parallel.
 ///
 /// Sobel: 3x3 responses stored as `128 + response / 4` clamped to a byte (border rows and
-/// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). Each is a
-/// vertical pass over 3 or 5 rows into column sums, then a horizontal pass over shifted slices
-/// of those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+/// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). A
+/// vertical pass over 5 rows into column sums (the filters' and, from its middle three rows, the
+/// Sobel images'; 3 rows next to the border), then horizontal passes over shifted slices of
+/// those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
 #[inline(never)]
 fn responses(
     px: &[u8],
@@ -984,20 +985,23 @@ fn responses(
         .enumerate()
         .with_min_len(4)
         .for_each_init(
-            || [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
-            |[s0, s1, s2], (y, ((rs, rb), rc))| {
+            || [(); 5].map(|()| vec![0i16; w]),
+            |[s0, s1, s2, s3, s4], (y, ((rs, rb), rc))| {
                 let row = |k: usize| &px[k * w..(k + 1) * w];
-                if y == 0 || y + 1 == h {
-                    rs.fill(SOBEL_FLAT);
-                } else {
-                    sobel_row(row(y - 1), row(y), row(y + 1), rs, s0, s1);
-                }
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
                     rc.fill(0);
+                    if y == 0 || y + 1 == h {
+                        rs.fill(SOBEL_FLAT);
+                    } else {
+                        sobel_row(row(y - 1), row(y), row(y + 1), rs, s0, s1);
+                    }
                 } else {
+                    // One vertical pass over the five rows for the filters and the Sobel
+                    // images (its three middle rows).
                     let rows = [row(y - 2), row(y - 1), row(y), row(y + 1), row(y + 2)];
-                    filter_row(rows, rb, rc, s0, s1, s2);
+                    filter_row(rows, rb, rc, [s0, s1, s2], [s3, s4]);
+                    sobel_horizontal(s3, s4, rs);
                 }
             },
         );
@@ -1015,7 +1019,14 @@ fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &
         vs[x] = p + 2 * q + r;
         vd[x] = r - p;
     }
-    // Horizontal: derivative of the smoothed columns, smoothing of the derivatives.
+    sobel_horizontal(vs, vd, rs);
+}
+
+/// The horizontal pass of the Sobel images: from the vertically smoothed (`vs`, [1 2 1]) and
+/// differentiated (`vd`, [-1 0 1]) columns, the derivative of the smoothed columns (du) and
+/// the smoothing of the derivatives (dv), interleaved.
+fn sobel_horizontal(vs: &[i16], vd: &[i16], rs: &mut [u16]) {
+    let w = rs.len();
     let n = w - 2;
     let (sl, sr) = (&vs[..n], &vs[2..2 + n]);
     let (dl, dc, dr) = (&vd[..n], &vd[1..1 + n], &vd[2..2 + n]);
@@ -1029,19 +1040,21 @@ fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &
     rs[w - 1] = SOBEL_FLAT;
 }
 
-/// One row of the blob and corner responses from the five rows around it; `c5`, `c3`, `d` are
-/// scratch rows.
+/// One row of the blob and corner responses from the five rows around it (`c5`, `c3`, `d`
+/// scratch rows), and the vertical pass of the Sobel images of its middle row into `[vs, vd]`
+/// (for [`sobel_horizontal`]): `vs = c3 + r2` is the [1 2 1] smoothing, `vd = r3 - r1` the
+/// [-1 0 1] derivative.
 fn filter_row(
     rows: [&[u8]; 5],
     rb: &mut [i16],
     rc: &mut [i16],
-    c5: &mut [i16],
-    c3: &mut [i16],
-    d: &mut [i16],
+    [c5, c3, d]: [&mut [i16]; 3],
+    [vs, vd]: [&mut [i16]; 2],
 ) {
     let w = rb.len();
     let [r0, r1, r2, r3, r4] = rows.map(|r| &r[..w]);
     let (c5, c3, d) = (&mut c5[..w], &mut c3[..w], &mut d[..w]);
+    let (vs, vd) = (&mut vs[..w], &mut vd[..w]);
     for x in 0..w {
         let (a, b, c, e, f) = (
             i16::from(r0[x]),
@@ -1050,9 +1063,12 @@ fn filter_row(
             i16::from(r3[x]),
             i16::from(r4[x]),
         );
-        c3[x] = b + c + e;
-        c5[x] = a + b + c + e + f;
+        let m = b + c + e;
+        c3[x] = m;
+        c5[x] = a + m + f;
         d[x] = (e + f) - (a + b);
+        vs[x] = m + c;
+        vd[x] = e - b;
     }
     let n = w - 4;
     let (p0, p1, p2, p3, p4) = (
