@@ -1024,79 +1024,20 @@ fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &
 
 /// The horizontal pass of the Sobel images: from the vertically smoothed (`vs`, [1 2 1]) and
 /// differentiated (`vd`, [-1 0 1]) columns, the derivative of the smoothed columns (du) and
-/// the smoothing of the derivatives (dv), interleaved. On x86-64 16 pixels at a time
-/// ([`sobel_horizontal_sse2`]), the rest by [`sobel_horizontal_scalar`].
+/// the smoothing of the derivatives (dv), interleaved.
 fn sobel_horizontal(vs: &[i16], vd: &[i16], rs: &mut [u16]) {
     let w = rs.len();
     let n = w - 2;
-    #[cfg(target_arch = "x86_64")]
-    let done = sobel_horizontal_sse2(&vs[..w], &vd[..w], &mut rs[1..1 + n]);
-    #[cfg(not(target_arch = "x86_64"))]
-    let done = 0;
-    sobel_horizontal_scalar(&vs[done..w], &vd[done..w], &mut rs[1 + done..1 + n]);
-    rs[0] = SOBEL_FLAT;
-    rs[w - 1] = SOBEL_FLAT;
-}
-
-/// [`sobel_horizontal`]'s pixels `1..=out.len()` (`out[x]` is pixel `x + 1`; `vs` and `vd`
-/// hold `out.len() + 2` columns from pixel 0), one at a time: `128 + response / 4` (rounded
-/// towards zero) clamped to a byte.
-fn sobel_horizontal_scalar(vs: &[i16], vd: &[i16], out: &mut [u16]) {
-    let n = out.len();
     let (sl, sr) = (&vs[..n], &vs[2..2 + n]);
     let (dl, dc, dr) = (&vd[..n], &vd[1..1 + n], &vd[2..2 + n]);
+    let out = &mut rs[1..1 + n];
     for x in 0..n {
         let du = (128 + (sr[x] - sl[x]) / 4).clamp(0, 255) as u16;
         let dv = (128 + (dl[x] + 2 * dc[x] + dr[x]) / 4).clamp(0, 255) as u16;
         out[x] = du | dv << 8;
     }
-}
-
-/// [`sobel_horizontal_scalar`] 16 pixels at a time with SSE2 (`safe_arch`): the division by 4
-/// towards zero as a shift after adding 3 to negative values, the clamp to a byte by the
-/// saturating pack (`packuswb`) and the interleave by two byte unpacks. Returns the number of
-/// pixels written (a multiple of 16; the caller does the rest).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn sobel_horizontal_sse2(vs: &[i16], vd: &[i16], out: &mut [u16]) -> usize {
-    use safe_arch::{
-        add_i16_m128i, m128i, pack_i16_to_u8_m128i, set_splat_i16_m128i, shr_imm_i16_m128i,
-        shr_imm_u16_m128i, sub_i16_m128i, unpack_high_i8_m128i, unpack_low_i8_m128i,
-    };
-    let n = out
-        .len()
-        .min(vs.len().saturating_sub(2))
-        .min(vd.len().saturating_sub(2));
-    let load = |s: &[i16], x: usize| -> m128i {
-        let a: [i16; 8] = s[x..x + 8].try_into().unwrap_or([0; 8]);
-        m128i::from(a)
-    };
-    // `v / 4` rounded towards zero: `(v + 3) >> 2` for negative `v`.
-    let quarter = |v: m128i| {
-        let bias = shr_imm_u16_m128i::<14>(shr_imm_i16_m128i::<15>(v));
-        shr_imm_i16_m128i::<2>(add_i16_m128i(v, bias))
-    };
-    let c128 = set_splat_i16_m128i(128);
-    let du = |x: usize| add_i16_m128i(c128, quarter(sub_i16_m128i(load(vs, x + 2), load(vs, x))));
-    let dv = |x: usize| {
-        let c = load(vd, x + 1);
-        let sum = add_i16_m128i(
-            add_i16_m128i(load(vd, x), load(vd, x + 2)),
-            add_i16_m128i(c, c),
-        );
-        add_i16_m128i(c128, quarter(sum))
-    };
-    let mut x = 0;
-    while x + 16 <= n {
-        let u = pack_i16_to_u8_m128i(du(x), du(x + 8));
-        let v = pack_i16_to_u8_m128i(dv(x), dv(x + 8));
-        let lo: [u16; 8] = unpack_low_i8_m128i(u, v).into();
-        let hi: [u16; 8] = unpack_high_i8_m128i(u, v).into();
-        out[x..x + 8].copy_from_slice(&lo);
-        out[x + 8..x + 16].copy_from_slice(&hi);
-        x += 16;
-    }
-    x
+    rs[0] = SOBEL_FLAT;
+    rs[w - 1] = SOBEL_FLAT;
 }
 
 /// One row of the blob and corner responses from the five rows around it (`c5`, `c3`, `d`
@@ -1355,43 +1296,6 @@ mod tests {
                     assert_eq!(key(&a), key(&b), "seed {seed} n {n} tau {tau}");
                     assert!(key(&a).iter().any(|e| e.1 != 0), "seed {seed} n {n}: none");
                 }
-            }
-        }
-    }
-
-    /// The horizontal Sobel pass (16 pixels at a time on x86-64, then one at a time) equals the
-    /// scalar loop over whole rows, for the vertical sums' full ranges (`vs` in 0..=1020, `vd`
-    /// in -255..=255, extremes included) and widths around the multiples of 16.
-    #[test]
-    fn sobel_horizontal_equals_the_scalar_loop() {
-        let mut state = 0x853c_49e6_748f_ea9bu64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
-        for w in [3usize, 17, 18, 19, 33, 34, 50, 97, 1241] {
-            for _ in 0..20 {
-                let vs: Vec<i16> = (0..w)
-                    .map(|_| match next() % 4 {
-                        0 => 0,
-                        1 => 1020,
-                        _ => (next() % 1021) as i16,
-                    })
-                    .collect();
-                let vd: Vec<i16> = (0..w)
-                    .map(|_| match next() % 4 {
-                        0 => -255,
-                        1 => 255,
-                        _ => (next() % 511) as i16 - 255,
-                    })
-                    .collect();
-                let mut fast = vec![0u16; w];
-                sobel_horizontal(&vs, &vd, &mut fast);
-                let mut slow = vec![SOBEL_FLAT; w];
-                sobel_horizontal_scalar(&vs, &vd, &mut slow[1..w - 1]);
-                assert_eq!(fast, slow, "width {w}");
             }
         }
     }
