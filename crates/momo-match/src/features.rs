@@ -448,8 +448,87 @@ impl FrameFeatures {
     fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
-        let extrema = self.block_extrema(n, tau);
+        let extrema = if n < PACKED_ROWS {
+            self.block_extrema_packed(n, tau)
+        } else {
+            self.block_extrema(n, tau)
+        };
         self.check_and_describe(n, &extrema);
+    }
+
+    /// Pass 1 of the suppression as [`block_extrema`](Self::block_extrema), for blocks of at
+    /// most [`PACKED_ROWS`] rows (`n < 8`): the column-wise extremes are taken of packed keys
+    /// ([`pack_max`], [`pack_min`]: the response times 8 plus the row within the block, ordered
+    /// so that of equal responses the earliest row wins), so that one vectorised extreme per
+    /// column gives both the extreme and its first row, and a block's first pixel is the first
+    /// column holding its best key (no search down the columns). The responses fit: |blob| <=
+    /// 16 * 255 and |corner| <= 8 * 255, so `8 |r| + 7 <= 32647`.
+    #[inline(never)]
+    fn block_extrema_packed<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
+        let (w, h) = (self.width, self.height);
+        let step = n + 1;
+        let (blob, corner) = (&self.blob, &self.corner);
+        let inner = w - 2 * BORDER;
+        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
+        let lanes = &LaneOffsets::new(n);
+        block_rows
+            .par_iter()
+            .map_init(
+                || [(); CLASSES].map(|()| vec![0i16; inner]),
+                |cols, &v0| {
+                    let v1 = (v0 + step).min(h - BORDER);
+                    let [bmax, bmin, cmax, cmin] = cols;
+                    let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
+                    let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
+                    let row = |img: &'a [i16], v: usize| -> &'a [i16] {
+                        let s = v * w + BORDER;
+                        &img[s..s + inner]
+                    };
+                    {
+                        let (rb, rc) = (row(blob, v0), row(corner, v0));
+                        for x in 0..inner {
+                            bmax[x] = pack_max(rb[x], 0);
+                            bmin[x] = pack_min(rb[x], 0);
+                            cmax[x] = pack_max(rc[x], 0);
+                            cmin[x] = pack_min(rc[x], 0);
+                        }
+                    }
+                    for v in v0 + 1..v1 {
+                        let r = (v - v0) as i16;
+                        let (rb, rc) = (row(blob, v), row(corner, v));
+                        for x in 0..inner {
+                            bmax[x] = bmax[x].max(pack_max(rb[x], r));
+                            bmin[x] = bmin[x].min(pack_min(rb[x], r));
+                            cmax[x] = cmax[x].max(pack_max(rc[x], r));
+                            cmin[x] = cmin[x].min(pack_min(rc[x], r));
+                        }
+                    }
+                    let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
+                    (0..inner.div_ceil(step))
+                        .map(|blk| {
+                            let k0 = blk * step;
+                            let k1 = (k0 + step).min(inner);
+                            let mut out = [Extremum::NONE; CLASSES];
+                            for (class, col) in columns.iter().enumerate() {
+                                let e = if class % 2 == 0 {
+                                    packed_block::<true>(col, k0, k1, n, lanes, tau)
+                                } else {
+                                    packed_block::<false>(col, k0, k1, n, lanes, tau)
+                                };
+                                if let Some((val, k, r)) = e {
+                                    out[class] = Extremum {
+                                        val,
+                                        u: (BORDER + k) as u16,
+                                        v: (v0 + r) as u16,
+                                    };
+                                }
+                            }
+                            out
+                        })
+                        .collect()
+                },
+            )
+            .collect()
     }
 
     /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
@@ -621,6 +700,63 @@ impl Extremum {
     fn is_none(&self) -> bool {
         self.u == 0
     }
+}
+
+/// Rows of a block whose row index fits the packed keys of
+/// [`FrameFeatures::block_extrema_packed`] (3 bits).
+const PACKED_ROWS: usize = 8;
+
+/// The packed key of a response `x` in row `r` (< [`PACKED_ROWS`]) of its block, for maxima:
+/// `8 x + 7 - r` (the larger response, then the earlier row, has the larger key).
+#[inline(always)]
+fn pack_max(x: i16, r: i16) -> i16 {
+    (x << 3) + (7 - r)
+}
+
+/// The packed key for minima: `8 x + r` (the smaller response, then the earlier row, has the
+/// smaller key).
+#[inline(always)]
+fn pack_min(x: i16, r: i16) -> i16 {
+    (x << 3) + r
+}
+
+/// One block and class of [`FrameFeatures::block_extrema_packed`]: the block's columns
+/// `k0..k1` of the block row's packed column extremes `col` (column `k` is pixel column
+/// `BORDER + k`). `Some((response, column k, row within the block))` of the first pixel holding
+/// the block's extreme if it is strong (`|response| >= tau`) and no column extreme of the block
+/// row within its window is strictly better ([`beaten_in_block_row`] on the keys: a key beyond
+/// `8 val + 7` (maxima) or below `8 val` (minima) is a strictly better response).
+#[inline(always)]
+fn packed_block<const MAX: bool>(
+    col: &[i16],
+    k0: usize,
+    k1: usize,
+    n: usize,
+    lanes: &LaneOffsets,
+    tau: i16,
+) -> Option<(i16, usize, usize)> {
+    let part = &col[k0..k1];
+    // The first column holding the best key (strict comparison keeps the earlier column).
+    let (mut best, mut at) = (part[0], 0);
+    for (i, &x) in part.iter().enumerate().skip(1) {
+        if better::<MAX>(x, best) {
+            best = x;
+            at = i;
+        }
+    }
+    let val = best >> 3;
+    let strong = if MAX { val >= tau } else { val <= -tau };
+    if !strong {
+        return None;
+    }
+    let low = best & 7;
+    let r = if MAX { 7 - low } else { low } as usize;
+    let k = k0 + at;
+    let (threshold, m) = if MAX { (best | 7, 0) } else { (best & !7, 1) };
+    if beaten_in_block_row::<MAX>(col, k.wrapping_sub(n), &lanes.block_row[m], threshold) {
+        return None;
+    }
+    Some((val, k, r))
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
@@ -829,9 +965,10 @@ fn is_extremum<const MAX: bool>(
 /// The Sobel images and the blob and corner responses of an image, rows in parallel.
 ///
 /// Sobel: 3x3 responses stored as `128 + response / 4` clamped to a byte (border rows and
-/// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). Each is a
-/// vertical pass over 3 or 5 rows into column sums, then a horizontal pass over shifted slices
-/// of those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+/// columns: 128). Blob and corner: the 5x5 masks (zero within 2 pixels of the border). A
+/// vertical pass over 5 rows into column sums (the filters' and, from its middle three rows, the
+/// Sobel images'; 3 rows next to the border), then horizontal passes over shifted slices of
+/// those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
 #[inline(never)]
 fn responses(
     px: &[u8],
@@ -848,20 +985,23 @@ fn responses(
         .enumerate()
         .with_min_len(4)
         .for_each_init(
-            || [vec![0i16; w], vec![0i16; w], vec![0i16; w]],
-            |[s0, s1, s2], (y, ((rs, rb), rc))| {
+            || [(); 5].map(|()| vec![0i16; w]),
+            |[s0, s1, s2, s3, s4], (y, ((rs, rb), rc))| {
                 let row = |k: usize| &px[k * w..(k + 1) * w];
-                if y == 0 || y + 1 == h {
-                    rs.fill(SOBEL_FLAT);
-                } else {
-                    sobel_row(row(y - 1), row(y), row(y + 1), rs, s0, s1);
-                }
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
                     rc.fill(0);
+                    if y == 0 || y + 1 == h {
+                        rs.fill(SOBEL_FLAT);
+                    } else {
+                        sobel_row(row(y - 1), row(y), row(y + 1), rs, s0, s1);
+                    }
                 } else {
+                    // One vertical pass over the five rows for the filters and the Sobel
+                    // images (its three middle rows).
                     let rows = [row(y - 2), row(y - 1), row(y), row(y + 1), row(y + 2)];
-                    filter_row(rows, rb, rc, s0, s1, s2);
+                    filter_row(rows, rb, rc, [s0, s1, s2], [s3, s4]);
+                    sobel_horizontal(s3, s4, rs);
                 }
             },
         );
@@ -879,7 +1019,14 @@ fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &
         vs[x] = p + 2 * q + r;
         vd[x] = r - p;
     }
-    // Horizontal: derivative of the smoothed columns, smoothing of the derivatives.
+    sobel_horizontal(vs, vd, rs);
+}
+
+/// The horizontal pass of the Sobel images: from the vertically smoothed (`vs`, [1 2 1]) and
+/// differentiated (`vd`, [-1 0 1]) columns, the derivative of the smoothed columns (du) and
+/// the smoothing of the derivatives (dv), interleaved.
+fn sobel_horizontal(vs: &[i16], vd: &[i16], rs: &mut [u16]) {
+    let w = rs.len();
     let n = w - 2;
     let (sl, sr) = (&vs[..n], &vs[2..2 + n]);
     let (dl, dc, dr) = (&vd[..n], &vd[1..1 + n], &vd[2..2 + n]);
@@ -893,19 +1040,21 @@ fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &
     rs[w - 1] = SOBEL_FLAT;
 }
 
-/// One row of the blob and corner responses from the five rows around it; `c5`, `c3`, `d` are
-/// scratch rows.
+/// One row of the blob and corner responses from the five rows around it (`c5`, `c3`, `d`
+/// scratch rows), and the vertical pass of the Sobel images of its middle row into `[vs, vd]`
+/// (for [`sobel_horizontal`]): `vs = c3 + r2` is the [1 2 1] smoothing, `vd = r3 - r1` the
+/// [-1 0 1] derivative.
 fn filter_row(
     rows: [&[u8]; 5],
     rb: &mut [i16],
     rc: &mut [i16],
-    c5: &mut [i16],
-    c3: &mut [i16],
-    d: &mut [i16],
+    [c5, c3, d]: [&mut [i16]; 3],
+    [vs, vd]: [&mut [i16]; 2],
 ) {
     let w = rb.len();
     let [r0, r1, r2, r3, r4] = rows.map(|r| &r[..w]);
     let (c5, c3, d) = (&mut c5[..w], &mut c3[..w], &mut d[..w]);
+    let (vs, vd) = (&mut vs[..w], &mut vd[..w]);
     for x in 0..w {
         let (a, b, c, e, f) = (
             i16::from(r0[x]),
@@ -914,9 +1063,12 @@ fn filter_row(
             i16::from(r3[x]),
             i16::from(r4[x]),
         );
-        c3[x] = b + c + e;
-        c5[x] = a + b + c + e + f;
+        let m = b + c + e;
+        c3[x] = m;
+        c5[x] = a + m + f;
         d[x] = (e + f) - (a + b);
+        vs[x] = m + c;
+        vd[x] = e - b;
     }
     let n = w - 4;
     let (p0, p1, p2, p3, p4) = (
@@ -1090,6 +1242,60 @@ mod tests {
                 found.sort_unstable();
                 assert!(!expected.is_empty(), "seed {seed} class {class}: none");
                 assert_eq!(found, expected, "seed {seed} n {n} class {class}");
+            }
+        }
+    }
+
+    /// The packed pass 1 finds the same block extrema as the column search, on textured
+    /// images with ties (flat areas, quantised values) and the extreme responses of both
+    /// filters, for every radius it handles.
+    #[test]
+    fn packed_pass_one_equals_the_column_search() {
+        for seed in 1u64..=4 {
+            let (w, h) = (131usize, 77usize);
+            let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+            let mut img = GrayImage::new(w as u32, h as u32);
+            for (i, p) in img.pixels_mut().enumerate() {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let (x, y) = (i % w, i / w);
+                p.0[0] = match (x / 12 + y / 9) % 4 {
+                    0 => 90,
+                    // A checkerboard of 0 and 255: the largest |corner| and |blob| responses.
+                    1 => {
+                        if (x + y) % 2 == 0 {
+                            255
+                        } else {
+                            0
+                        }
+                    }
+                    2 => ((state >> 33) % 2 * 255) as u8,
+                    _ => ((state >> 33) % 8 * 32) as u8,
+                };
+            }
+            for n in 1..PACKED_ROWS {
+                let mut f = FrameFeatures::default();
+                f.extract(
+                    &img,
+                    &DetectorOptions {
+                        nms_radius: n,
+                        threshold: 50,
+                    },
+                );
+                for tau in [1i16, 50, 600] {
+                    let a = f.block_extrema(n, tau);
+                    let b = f.block_extrema_packed(n, tau);
+                    let key = |x: &Vec<Vec<[Extremum; CLASSES]>>| -> Vec<(i16, u16, u16)> {
+                        x.iter()
+                            .flatten()
+                            .flatten()
+                            .map(|e| (e.val, e.u, e.v))
+                            .collect()
+                    };
+                    assert_eq!(key(&a), key(&b), "seed {seed} n {n} tau {tau}");
+                    assert!(key(&a).iter().any(|e| e.1 != 0), "seed {seed} n {n}: none");
+                }
             }
         }
     }
