@@ -117,6 +117,11 @@ pub struct SeparateOptions {
     /// (matches just outside A's support, wherever the noise is largest) is a minority in
     /// every cell.
     pub coherence: f64,
+    /// A second motion competes only if A keeps at least `min_fraction` of the matches as its
+    /// own too (in A's support, outside the second motion's): two motions exclude each other's
+    /// matches, while a motion fitted to A's noise tail is A perturbed and explains nearly all
+    /// of A's support.
+    pub mutual: bool,
     /// With [`SeparateOptions::final_fit`], a frame where two motions competed still gets the
     /// separation's own final stage (on the chosen support, without the motion prior); only
     /// the other frames get `[odometry.final_fit]`.
@@ -154,6 +159,7 @@ impl Default for SeparateOptions {
             distinct_sigmas: 0.0,
             final_fit: false,
             coherence: 0.0,
+            mutual: false,
             final_own_when_competing: false,
             memory_radius: 0.0,
             memory_exclude: false,
@@ -498,8 +504,9 @@ pub fn separate(
     let min_n = ((opts.min_fraction * n as f64).ceil() as usize).max(12);
     // The spatial coherence of an alternative's own matches (`coherence`).
     let coherent = |sup: &[Vec<bool>], a: &[Vec<bool>]| -> bool {
-        opts.coherence <= 0.0
-            || cell_share(ctx.rig, obs, &and(sup, &not(a)), opts.grid) >= opts.coherence
+        (opts.coherence <= 0.0
+            || cell_share(ctx.rig, obs, &and(sup, &not(a)), opts.grid) >= opts.coherence)
+            && (!opts.mutual || count(&and(a, &not(sup))) >= min_n)
     };
     let sup_a: Vec<Vec<bool>> = angles_a
         .iter()
