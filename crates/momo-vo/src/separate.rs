@@ -926,15 +926,22 @@ mod tests {
     }
 
     /// A static fisheye rig (0.5 px at f = 330 px: the fixed 0.003 rad support threshold is
-    /// about the noise at the image edges) is not flagged competing when the threshold is in
-    /// units of the frame's noise and a second motion must have its own matches, far from A;
-    /// the moving-traffic family still is.
+    /// about the noise at the image edges) is flagged competing by the fixed threshold alone
+    /// (the false competition of docs/RESULTS.md §9), not when a second motion must have its
+    /// own matches far from A in units of the frame's noise (`distinct_sigmas`) or spatially
+    /// coherent ones (`coherence`). On the moving-traffic family the default flags many
+    /// frames; the two tests flag fewer (what they cost there is in docs/RESULTS.md §9,
+    /// ninth session).
     #[test]
     fn a_static_fisheye_rig_frame_is_not_flagged_competing() {
         use momo_sim::{SimConfig, simulate};
-        let noise = SeparateOptions {
+        let distinct = SeparateOptions {
             threshold_sigmas: 3.0,
             distinct_sigmas: 4.0,
+            ..SeparateOptions::default()
+        };
+        let coherent = SeparateOptions {
+            coherence: 0.35,
             ..SeparateOptions::default()
         };
         let fixed = SeparateOptions::default();
@@ -945,10 +952,15 @@ mod tests {
         })
         .expect("simulation");
         let (c_fixed, n) = competing_frames(&rig, &fixed);
-        let (c_noise, n2) = competing_frames(&rig, &noise);
-        eprintln!("fisheye rig: competing frames fixed {c_fixed}/{n}, in noise units {c_noise}/{n2}");
+        let (c_distinct, n2) = competing_frames(&rig, &distinct);
+        let (c_coherent, _) = competing_frames(&rig, &coherent);
+        eprintln!(
+            "fisheye rig: competing frames fixed {c_fixed}/{n}, distinct {c_distinct}, coherent {c_coherent}"
+        );
         assert!(n >= 35 && n2 == n);
-        assert_eq!(c_noise, 0, "a static rig is one motion");
+        assert!(c_fixed > 0, "the fixed threshold's false competition");
+        assert_eq!(c_distinct, 0, "a static rig is one motion");
+        assert_eq!(c_coherent, 0, "a static rig is one motion");
         let traffic = simulate(&SimConfig {
             frames: 40,
             seed: 1,
@@ -956,8 +968,12 @@ mod tests {
         })
         .expect("simulation");
         let (t_fixed, m) = competing_frames(&traffic, &fixed);
-        let (t_noise, _) = competing_frames(&traffic, &noise);
-        eprintln!("moving traffic: competing frames fixed {t_fixed}/{m}, in noise units {t_noise}/{m}");
-        assert!(2 * t_noise >= t_fixed && t_noise >= m / 4, "{t_noise} of {m}");
+        let (t_distinct, _) = competing_frames(&traffic, &distinct);
+        let (t_coherent, _) = competing_frames(&traffic, &coherent);
+        eprintln!(
+            "moving traffic: competing frames fixed {t_fixed}/{m}, distinct {t_distinct}, coherent {t_coherent}"
+        );
+        assert!(t_fixed >= m / 4, "{t_fixed} of {m}");
+        assert!(t_distinct <= t_fixed && t_coherent <= t_fixed);
     }
 }
