@@ -182,7 +182,12 @@ impl MatchMemory {
                 .per_camera
                 .iter()
                 .zip(is_static)
-                .map(|(m, s)| m.iter().zip(s).map(|(o, s)| (o.px1.x, o.px1.y, *s)).collect())
+                .map(|(m, s)| {
+                    m.iter()
+                        .zip(s)
+                        .map(|(o, s)| (o.px1.x, o.px1.y, *s))
+                        .collect()
+                })
                 .collect(),
         }
     }
@@ -232,8 +237,7 @@ impl MatchMemory {
                                     {
                                         let p = prev[i];
                                         let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
-                                        if d <= radius * radius
-                                            && best.is_none_or(|(bd, _)| d < bd)
+                                        if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd)
                                         {
                                             best = Some((d, p.2));
                                         }
@@ -928,7 +932,11 @@ mod tests {
         assert_eq!(labels[0], vec![Some(false)]);
         // Nothing remembered, or another rig: no labels.
         assert!(MatchMemory::default().labels(&current, 20.0).is_none());
-        assert!(memory.labels(&obs(vec![vec![at(1.0, 1.0)]]), 20.0).is_none());
+        assert!(
+            memory
+                .labels(&obs(vec![vec![at(1.0, 1.0)]]), 20.0)
+                .is_none()
+        );
         let mut tracker = HypothesisTracker {
             memory,
             ..Default::default()

@@ -31,8 +31,8 @@
 //!    horizon is no farther than the road.
 
 use crate::hypotheses::{
-    HypothesesOptions, Hypothesis, HypothesisTracker, MatchMemory, UnderRoad, ground_mask,
-    score, under_road_mask,
+    HypothesesOptions, Hypothesis, HypothesisTracker, MatchMemory, UnderRoad, ground_mask, score,
+    under_road_mask,
 };
 use momo_core::{
     FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
