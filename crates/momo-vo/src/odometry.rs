@@ -912,7 +912,7 @@ impl Odometry {
                     fixed: &fixed,
                     motion_prior: Some(&self.motion_prior),
                 };
-                let (sol, o, support) = crate::separate::separate(
+                let (sol, o, next) = crate::separate::separate(
                     &ctx,
                     opts,
                     obs,
@@ -921,7 +921,7 @@ impl Odometry {
                     &mut self.hypotheses,
                     arc_length,
                 );
-                next_stage = support;
+                next_stage = next;
                 (Some(sol), o.competing)
             }
             (r, _) => (r, false),
