@@ -105,9 +105,10 @@ pub struct OdometryOptions {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub separate: Option<crate::separate::SeparateOptions>,
     /// The final efficient stage after each moving frame's solve ([`crate::final_fit`]: the
-    /// noise estimated from the residuals, a refit on the matches within a few sigmas); off by
-    /// default (its covariance is over-confident, see [`crate::final_fit::FinalFitOptions`]). Not applied when `separate` is set (it has
-    /// its own final stage).
+    /// noise estimated from the residuals, a refit on the matches within a few sigmas); on by
+    /// default. Where `separate` is set it runs only with `separate.final_fit` (on the chosen
+    /// motion's support in a frame where two motions competed); otherwise the separation's
+    /// own final stage replaces it.
     pub final_fit: crate::final_fit::FinalFitOptions,
     /// Centre a soft manifold's prior (`soft_single_track`'s side slip and climb) on its
     /// running mean over this many recent moving frames, so that a constant offset (a camera

@@ -157,6 +157,100 @@ pub struct Hypothesis<'a> {
 pub struct HypothesisTracker {
     /// Accumulated evidence that the alternative motion beats the continued one.
     evidence: f64,
+    /// The previous frame pair's labelled matches (`odometry.separate.memory_radius`).
+    pub memory: MatchMemory,
+}
+
+/// Per-match memory across frames by image position (issue 14): the second-image pixels
+/// (image k) of the previous frame pair's matches, per camera, each labelled static (in the
+/// chosen motion's support) or other. The current pair's first-image pixels are in the same
+/// image k, so a current match takes the label of its nearest previous match in the same camera
+/// ([`MatchMemory::labels`]). On real data a track shares the feature; on the simulator's
+/// (matches drawn anew per frame pair) the objects are spatially coherent, so the nearest
+/// neighbour in the image usually belongs to the same object or to the static world.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MatchMemory {
+    /// Per camera: (column, row) of the previous pair's second-image pixel, and static.
+    per_camera: Vec<Vec<(f64, f64, bool)>>,
+}
+
+impl MatchMemory {
+    /// The memory of a frame pair's matches labelled by `is_static` (per camera, per match).
+    pub fn record(obs: &FrameObservations, is_static: &[Vec<bool>]) -> Self {
+        Self {
+            per_camera: obs
+                .per_camera
+                .iter()
+                .zip(is_static)
+                .map(|(m, s)| {
+                    m.iter()
+                        .zip(s)
+                        .map(|(o, s)| (o.px1.x, o.px1.y, *s))
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+
+    /// Whether nothing is remembered.
+    pub fn is_empty(&self) -> bool {
+        self.per_camera.iter().all(Vec::is_empty)
+    }
+
+    /// The label (`Some(true)`: static) of each match of `obs` (per camera, per match): that of
+    /// the nearest remembered match of the same camera to its first-image pixel, if one lies
+    /// within `radius` pixels; `None` elsewhere. `None` overall if nothing is remembered or the
+    /// camera count differs.
+    pub fn labels(&self, obs: &FrameObservations, radius: f64) -> Option<Vec<Vec<Option<bool>>>> {
+        if self.is_empty()
+            || self.per_camera.len() != obs.per_camera.len()
+            || !(radius.is_finite() && radius > 0.0)
+        {
+            return None;
+        }
+        let key = |x: f64, y: f64| ((x / radius).floor() as i64, (y / radius).floor() as i64);
+        Some(
+            self.per_camera
+                .iter()
+                .zip(&obs.per_camera)
+                .map(|(prev, cur)| {
+                    // Buckets of `radius` pixels: the nearest neighbour within `radius` lies
+                    // in the 3 x 3 buckets around a point's own.
+                    let mut buckets: std::collections::HashMap<(i64, i64), Vec<usize>> =
+                        std::collections::HashMap::new();
+                    for (i, p) in prev.iter().enumerate() {
+                        if p.0.is_finite() && p.1.is_finite() {
+                            buckets.entry(key(p.0, p.1)).or_default().push(i);
+                        }
+                    }
+                    cur.iter()
+                        .map(|o| {
+                            let (x, y) = (o.px0.x, o.px0.y);
+                            if !(x.is_finite() && y.is_finite()) {
+                                return None;
+                            }
+                            let (kx, ky) = key(x, y);
+                            let mut best: Option<(f64, bool)> = None;
+                            for dx in -1..=1 {
+                                for dy in -1..=1 {
+                                    for &i in buckets.get(&(kx + dx, ky + dy)).into_iter().flatten()
+                                    {
+                                        let p = prev[i];
+                                        let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
+                                        if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd)
+                                        {
+                                            best = Some((d, p.2));
+                                        }
+                                    }
+                                }
+                            }
+                            best.map(|(_, s)| s)
+                        })
+                        .collect()
+                })
+                .collect(),
+        )
+    }
 }
 
 /// The parallax support of a motion (see the module doc): the matches of `support` whose
@@ -437,9 +531,10 @@ impl HypothesisTracker {
         self.evidence *= opts.decay;
     }
 
-    /// Forgets the evidence (a reset of the driver).
+    /// Forgets the evidence and the match memory (a reset of the driver).
     pub fn reset(&mut self) {
         self.evidence = 0.0;
+        self.memory = MatchMemory::default();
     }
 
     /// Chooses between the continued motion `a` and the alternative `b` of a frame with arc
@@ -789,5 +884,64 @@ mod tests {
             ..HypothesesOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("spread_grid"));
+    }
+
+    /// The memory's labels transfer to the nearest previous second-image pixel of the same
+    /// camera, within the radius only.
+    #[test]
+    fn memory_labels_transfer_by_nearest_image_position() {
+        let at = |x: f64, y: f64| Observation {
+            f0: Vector3::z(),
+            f1: Vector3::z(),
+            px0: Vector2::new(x, y),
+            px1: Vector2::new(x + 3.0, y),
+        };
+        let obs = |cams: Vec<Vec<Observation>>| FrameObservations {
+            per_camera: cams,
+            cross_camera: Vec::new(),
+        };
+        // Previous pair: camera 0 has a static match whose second-image pixel is (103, 100)
+        // and an object match at (503, 100); camera 1 one object match at (103, 100).
+        let previous = obs(vec![
+            vec![at(100.0, 100.0), at(500.0, 100.0)],
+            vec![at(100.0, 100.0)],
+        ]);
+        let memory = MatchMemory::record(&previous, &[vec![true, false], vec![false]]);
+        assert!(!memory.is_empty());
+        // Current pair: first-image pixels near each, one far from all.
+        let current = obs(vec![
+            vec![at(108.0, 95.0), at(495.0, 104.0), at(300.0, 100.0)],
+            vec![at(110.0, 100.0)],
+        ]);
+        let labels = memory.labels(&current, 20.0).expect("labels");
+        assert_eq!(labels[0], vec![Some(true), Some(false), None]);
+        // The same pixel in camera 1 takes camera 1's label, not camera 0's.
+        assert_eq!(labels[1], vec![Some(false)]);
+        // Within a smaller radius the second match is too far (8.9 px) from its neighbour,
+        // the first (7.1 px) is not.
+        let labels = memory.labels(&current, 8.0).expect("labels");
+        assert_eq!(labels[0], vec![Some(true), None, None]);
+        // Of two neighbours, the nearer one decides.
+        let two = MatchMemory::record(
+            &obs(vec![vec![at(100.0, 100.0), at(110.0, 100.0)], vec![]]),
+            &[vec![true, false], vec![]],
+        );
+        let labels = two
+            .labels(&obs(vec![vec![at(110.0, 101.0)], vec![]]), 20.0)
+            .expect("labels");
+        assert_eq!(labels[0], vec![Some(false)]);
+        // Nothing remembered, or another rig: no labels.
+        assert!(MatchMemory::default().labels(&current, 20.0).is_none());
+        assert!(
+            memory
+                .labels(&obs(vec![vec![at(1.0, 1.0)]]), 20.0)
+                .is_none()
+        );
+        let mut tracker = HypothesisTracker {
+            memory,
+            ..Default::default()
+        };
+        tracker.reset();
+        assert!(tracker.memory.is_empty(), "a reset forgets the memory");
     }
 }

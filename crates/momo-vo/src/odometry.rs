@@ -897,6 +897,9 @@ impl Odometry {
             }
         };
         // Motion separation (issue 14, crate::separate; off by default).
+        // What follows the separation (`separate.final_fit`: the final stage on all matches
+        // or on the chosen motion's support).
+        let mut next_stage = crate::separate::NextStage::FinalFit;
         let (result, competing) = match (result, &self.config.odometry.separate) {
             (Some(sol), Some(opts)) if !standstill => {
                 let mut starts = vec![init.clone()];
@@ -909,7 +912,7 @@ impl Odometry {
                     fixed: &fixed,
                     motion_prior: Some(&self.motion_prior),
                 };
-                let (sol, o) = crate::separate::separate(
+                let (sol, o, next) = crate::separate::separate(
                     &ctx,
                     opts,
                     obs,
@@ -918,6 +921,7 @@ impl Odometry {
                     &mut self.hypotheses,
                     arc_length,
                 );
+                next_stage = next;
                 (Some(sol), o.competing)
             }
             (r, _) => (r, false),
@@ -970,9 +974,15 @@ impl Odometry {
                     }
                 }
                 self.first_stage = None;
-                if !standstill && self.config.odometry.separate.is_none() {
+                if !standstill && next_stage != crate::separate::NextStage::Done {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
-                    sol = self.final_fit(obs, sol, &fixed, diag.scale);
+                    sol = match &next_stage {
+                        crate::separate::NextStage::FinalFitOn(mask) => {
+                            let chosen = crate::separate::subset(obs, mask);
+                            self.final_fit(&chosen, sol, &fixed, diag.scale)
+                        }
+                        _ => self.final_fit(obs, sol, &fixed, diag.scale),
+                    };
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
                 // The jackknife (a dozen solves) only where the support dropped against the

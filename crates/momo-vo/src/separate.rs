@@ -31,7 +31,7 @@
 //!    horizon is no farther than the road.
 
 use crate::hypotheses::{
-    HypothesesOptions, Hypothesis, HypothesisTracker, UnderRoad, ground_mask, score,
+    HypothesesOptions, Hypothesis, HypothesisTracker, MatchMemory, UnderRoad, ground_mask, score,
     under_road_mask,
 };
 use momo_core::{
@@ -94,6 +94,47 @@ pub struct SeparateOptions {
     /// The road's slope margin (radians) of the under-the-road test: the road may descend
     /// away from the vehicle by this much.
     pub under_road_slope: f64,
+    /// The support threshold in units of the frame's noise `σ̂` instead of the fixed
+    /// [`SeparateOptions::threshold`] (0: the fixed one). `σ̂ = 1.4826 · median` of the
+    /// epipolar angles under A, trimmed as the final stage trims its residuals
+    /// ([`crate::final_fit::estimate_sigma`]): a fixed angle is below the noise of some rigs
+    /// (0.003 rad is 1 px at f = 330 px), and the noise tail of a static scene then looks like a
+    /// second motion.
+    pub threshold_sigmas: f64,
+    /// A second motion competes only if at least `min_fraction` of the matches are its *own*:
+    /// in its support and at least this many `σ̂` from A (epipolar angle under A; 0: counted
+    /// over all matches, the support of B may then be A's noise tail).
+    pub distinct_sigmas: f64,
+    /// The final stage is the default's efficient stage (`[odometry.final_fit]`, its metric,
+    /// noise estimate and motion prior) instead of the separation's own: in a frame where two
+    /// motions competed it refits the chosen motion on the chosen support only; elsewhere it
+    /// runs as without the separation (the separation's own final stage is then skipped).
+    pub final_fit: bool,
+    /// A second motion competes only if its own matches (in its support, outside A's) are
+    /// spatially coherent: they hold at least this share of all the matches in the image cells
+    /// ([`SeparateOptions::grid`]) they occupy (0: no such test). An object, or the static
+    /// world around a locked-in object, fills its cells; the noise tail of a static scene
+    /// (matches just outside A's support, wherever the noise is largest) is a minority in
+    /// every cell.
+    pub coherence: f64,
+    /// A second motion competes only if A keeps at least `min_fraction` of the matches as its
+    /// own too (in A's support, outside the second motion's): two motions exclude each other's
+    /// matches, while a motion fitted to A's noise tail is A perturbed and explains nearly all
+    /// of A's support.
+    pub mutual: bool,
+    /// With [`SeparateOptions::final_fit`], a frame where two motions competed still gets the
+    /// separation's own final stage (on the chosen support, without the motion prior); only
+    /// the other frames get `[odometry.final_fit]`.
+    pub final_own_when_competing: bool,
+    /// Per-match memory across frames by image position ([`crate::hypotheses::MatchMemory`]):
+    /// the previous frame pair's second-image matches are labelled static (in the chosen
+    /// motion's support) or other; the current pair's first-image matches take the label of
+    /// their nearest previous match in the same camera within this many pixels (0: off). A
+    /// motion fitted to the remembered-static matches is one more alternative to A.
+    pub memory_radius: f64,
+    /// With the memory, the final stage of a competing frame leaves out the remembered-other
+    /// matches (not applied if fewer than half of the support remain).
+    pub memory_exclude: bool,
 }
 
 impl Default for SeparateOptions {
@@ -114,6 +155,14 @@ impl Default for SeparateOptions {
             under_road: 0.0,
             under_road_noise: 0.0014,
             under_road_slope: 0.02,
+            threshold_sigmas: 0.0,
+            distinct_sigmas: 0.0,
+            final_fit: false,
+            coherence: 0.0,
+            mutual: false,
+            final_own_when_competing: false,
+            memory_radius: 0.0,
+            memory_exclude: false,
         }
     }
 }
@@ -148,6 +197,20 @@ impl SeparateOptions {
         }
         if !(self.under_road_slope.is_finite() && self.under_road_slope.abs() < 1.0) {
             return Err("odometry.separate.under_road_slope must be in (-1, 1)".into());
+        }
+        if !(0.0..=1.0).contains(&self.coherence) {
+            return Err("odometry.separate.coherence must be in [0, 1]".into());
+        }
+        for (name, v) in [
+            ("threshold_sigmas", self.threshold_sigmas),
+            ("distinct_sigmas", self.distinct_sigmas),
+            ("memory_radius", self.memory_radius),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!(
+                    "odometry.separate.{name} must be a non-negative number"
+                ));
+            }
         }
         if let Some(h) = &self.hypotheses {
             h.validate()?;
@@ -236,6 +299,17 @@ pub(crate) fn angle_at_least(threshold: f64) -> impl Fn(Option<(f64, f64)>) -> b
     }
 }
 
+/// What follows the separation in the odometry ([`SeparateOptions::final_fit`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum NextStage {
+    /// Nothing: the separation's own final stage ran (or none is configured).
+    Done,
+    /// `[odometry.final_fit]` on all matches, as without the separation.
+    FinalFit,
+    /// `[odometry.final_fit]` on these matches only (the chosen motion's support).
+    FinalFitOn(Vec<Vec<bool>>),
+}
+
 /// A candidate motion and its support (per camera, per match).
 type Candidate = (FrameSolution, Vec<Vec<bool>>);
 
@@ -278,6 +352,38 @@ pub(crate) fn cells(
         total += seen.iter().filter(|s| **s).count();
     }
     total
+}
+
+/// The share the matches of `mask` hold among all the matches of the image cells (frame k-1
+/// pixels, `grid` per camera) they occupy, pooled over those cells; 0 if `mask` is empty.
+pub fn cell_share(
+    rig: &Rig,
+    obs: &FrameObservations,
+    mask: &[Vec<bool>],
+    grid: (usize, usize),
+) -> f64 {
+    use momo_core::CameraModel;
+    let (mut own, mut all) = (0usize, 0usize);
+    for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
+        let (w, h) = cam.model.size();
+        let mut cells = vec![(0usize, 0usize); grid.0 * grid.1];
+        for (o, k) in m.iter().zip(k) {
+            let cx = ((o.px0.x / w.max(1.0)) * grid.0 as f64).clamp(0.0, grid.0 as f64 - 1.0);
+            let cy = ((o.px0.y / h.max(1.0)) * grid.1 as f64).clamp(0.0, grid.1 as f64 - 1.0);
+            let c = &mut cells[cy as usize * grid.0 + cx as usize];
+            c.0 += usize::from(*k);
+            c.1 += 1;
+        }
+        for (o, a) in cells.into_iter().filter(|c| c.0 > 0) {
+            own += o;
+            all += a;
+        }
+    }
+    if all == 0 {
+        0.0
+    } else {
+        own as f64 / all as f64
+    }
 }
 
 /// Squared distance (sigma units, the learnt sigmas if any: `MotionPrior::soft_inv_scale`) of a
@@ -347,9 +453,12 @@ impl SolveContext<'_> {
 }
 
 /// The separation stage (see the module doc): returns the frame's solution (A, or the second
-/// motion, after the final stage) and what happened. `starts` are the second motion's starts;
-/// `tracker` keeps the multi-frame evidence of [`SeparateOptions::hypotheses`] and
-/// `arc_length` is the frame's odometry arc length if known.
+/// motion, after the final stage), what happened, and what is to follow: with
+/// [`SeparateOptions::final_fit`], the default's final stage on all matches or on the chosen
+/// support (the separation's own final stage is then skipped). `starts` are the second
+/// motion's starts; `tracker` keeps the multi-frame evidence of
+/// [`SeparateOptions::hypotheses`] and the match memory, and `arc_length` is the frame's
+/// odometry arc length if known.
 pub fn separate(
     ctx: &SolveContext<'_>,
     opts: &SeparateOptions,
@@ -358,18 +467,56 @@ pub fn separate(
     starts: &[Vec<f64>],
     tracker: &mut HypothesisTracker,
     arc_length: Option<f64>,
-) -> (FrameSolution, SeparationOutcome) {
+) -> (FrameSolution, SeparationOutcome, NextStage) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
+    let angles_a = epipolar_angles(ctx.rig, &ctx.estimator.motion(&first.params), obs);
+    // The frame's noise (`threshold_sigmas`, `distinct_sigmas`).
+    let sigma = (opts.threshold_sigmas > 0.0 || opts.distinct_sigmas > 0.0)
+        .then(|| noise_sigma(&angles_a, ctx.loss.scale()))
+        .flatten();
+    let threshold = match sigma {
+        Some(s) if opts.threshold_sigmas > 0.0 => opts.threshold_sigmas * s,
+        _ => opts.threshold,
+    };
     let support = |params: &[f64]| -> Vec<Vec<bool>> {
         epipolar_angles(ctx.rig, &ctx.estimator.motion(params), obs)
             .into_iter()
-            .map(|a| a.into_iter().map(|x| x < opts.threshold).collect())
+            .map(|a| a.into_iter().map(|x| x < threshold).collect())
             .collect()
     };
+    // The matches an alternative may count as its own: far from A (`distinct_sigmas`) or all.
+    let own: Option<Vec<Vec<bool>>> = match sigma {
+        Some(s) if opts.distinct_sigmas > 0.0 => Some(
+            angles_a
+                .iter()
+                .map(|a| a.iter().map(|x| *x >= opts.distinct_sigmas * s).collect())
+                .collect(),
+        ),
+        _ => None,
+    };
+    let own_count = |mask: &[Vec<bool>]| -> usize {
+        match &own {
+            Some(o) => count(&and(mask, o)),
+            None => count(mask),
+        }
+    };
     let min_n = ((opts.min_fraction * n as f64).ceil() as usize).max(12);
-    let sup_a = support(&first.params);
+    // The spatial coherence of an alternative's own matches (`coherence`).
+    let coherent = |sup: &[Vec<bool>], a: &[Vec<bool>]| -> bool {
+        (opts.coherence <= 0.0
+            || cell_share(ctx.rig, obs, &and(sup, &not(a)), opts.grid) >= opts.coherence)
+            && (!opts.mutual || count(&and(a, &not(sup))) >= min_n)
+    };
+    let sup_a: Vec<Vec<bool>> = angles_a
+        .iter()
+        .map(|a| a.iter().map(|x| *x < threshold).collect())
+        .collect();
     let mut chosen = (first, sup_a);
+    // The memory's labels of this frame's matches (`memory_radius`).
+    let labels = (opts.memory_radius > 0.0)
+        .then(|| tracker.memory.labels(obs, opts.memory_radius))
+        .flatten();
     // The alternatives to A: B, fitted to the matches outside A's support, and (with
     // `hypotheses` and odometry) C, the previous frame's motion (the first start) re-solved on
     // the matches it puts on the road: the continued track of the static world.
@@ -393,11 +540,18 @@ pub fn separate(
         }
         if let Some(b) = best {
             let sup_b = support(&b.params);
-            if count(&sup_b) >= min_n {
+            if own_count(&sup_b) >= min_n && coherent(&sup_b, &chosen.1) {
                 alternatives.push((b, sup_b));
             }
         }
     }
+    // A distinct motion: it explains a third of `min_n` matches A does not (of its own ones),
+    // spatially coherent ones.
+    let distinct = |sup: &[Vec<bool>], a: &[Vec<bool>]| -> bool {
+        own_count(&and(sup, &not(a))) >= (min_n / 3).max(12)
+            && count(sup) >= min_n
+            && coherent(sup, a)
+    };
     if opts.second_motion
         && let Some(h) = &opts.hypotheses
         && arc_length.is_some()
@@ -409,14 +563,25 @@ pub fn separate(
             && let Some(c) = ctx.solve(&subset(obs, &road), previous, ctx.loss, false)
         {
             let sup_c = support(&c.params);
-            // A distinct motion: it explains a third of `min_n` matches A does not.
-            let new: usize = sup_c
-                .iter()
-                .zip(&chosen.1)
-                .map(|(c, a)| c.iter().zip(a).filter(|(c, a)| **c && !**a).count())
-                .sum();
-            if new >= (min_n / 3).max(12) && count(&sup_c) >= min_n {
+            if distinct(&sup_c, &chosen.1) {
                 alternatives.push((c, sup_c));
+            }
+        }
+    }
+    // M: the previous frame's motion re-solved on the remembered-static matches, where the
+    // memory remembers another motion among A's support.
+    if opts.second_motion
+        && let Some(labels) = &labels
+        && let Some(previous) = starts.first()
+    {
+        let (stat, other) = (label_mask(labels, true), label_mask(labels, false));
+        if count(&stat) >= min_n
+            && count(&and(&other, &chosen.1)) >= (min_n / 3).max(12)
+            && let Some(m) = ctx.solve(&subset(obs, &stat), previous, ctx.loss, false)
+        {
+            let sup_m = support(&m.params);
+            if distinct(&sup_m, &chosen.1) {
+                alternatives.push((m, sup_m));
             }
         }
     }
@@ -487,20 +652,41 @@ pub fn separate(
     {
         tracker.idle(h);
     }
+    if opts.memory_radius > 0.0 {
+        tracker.memory = MatchMemory::record(obs, &chosen.1);
+    }
     let (mut sol, mut mask) = chosen;
+    // The remembered-other matches (`memory_exclude`).
+    let forgotten = |mask: Vec<Vec<bool>>| -> Vec<Vec<bool>> {
+        let Some(labels) = labels.as_ref().filter(|_| opts.memory_exclude) else {
+            return mask;
+        };
+        let kept = and(&mask, &not(&label_mask(labels, false)));
+        if 2 * count(&kept) >= count(&mask) {
+            kept
+        } else {
+            mask
+        }
+    };
+    if opts.final_fit && !(opts.final_own_when_competing && outcome.competing) {
+        // The default's final stage runs after this: on the chosen support where two motions
+        // competed, as without the separation elsewhere.
+        let next = if outcome.competing {
+            NextStage::FinalFitOn(forgotten(mask))
+        } else {
+            NextStage::FinalFit
+        };
+        return (sol, outcome, next);
+    }
     if !opts.final_stage || (opts.final_competing_only && !outcome.competing) {
-        return (sol, outcome);
+        return (sol, outcome, NextStage::Done);
     }
     // Leaves out the rejected motion's support (`final_exclusive`).
     let exclusive = |mask: Vec<Vec<bool>>| -> Vec<Vec<bool>> {
         let Some(other) = other.as_ref().filter(|_| opts.final_exclusive) else {
             return mask;
         };
-        let only: Vec<Vec<bool>> = mask
-            .iter()
-            .zip(other)
-            .map(|(m, o)| m.iter().zip(o).map(|(m, o)| *m && !*o).collect())
-            .collect();
+        let only = and(&mask, &not(other));
         if 2 * count(&only) >= count(&mask) {
             only
         } else {
@@ -520,11 +706,7 @@ pub fn separate(
             slope: opts.under_road_slope,
         };
         let flagged = under_road_mask(ctx.rig, &ctx.estimator.motion(params), obs, &mask, &test);
-        let kept: Vec<Vec<bool>> = mask
-            .iter()
-            .zip(&flagged)
-            .map(|(m, f)| m.iter().zip(f).map(|(m, f)| *m && !*f).collect())
-            .collect();
+        let kept = and(&mask, &not(&flagged));
         if 2 * count(&kept) >= count(&mask) {
             kept
         } else {
@@ -542,6 +724,9 @@ pub fn separate(
         }
         mask = exclusive(mask);
         mask = road(mask, &sol.params);
+        if outcome.competing {
+            mask = forgotten(mask);
+        }
         if count(&mask) < 8 {
             break;
         }
@@ -550,7 +735,42 @@ pub fn separate(
             None => break,
         }
     }
-    (sol, outcome)
+    (sol, outcome, NextStage::Done)
+}
+
+/// The frame's noise `σ̂` from the epipolar angles under A, trimmed as the final stage trims
+/// its residuals ([`crate::final_fit::estimate_sigma`], its default options, in units of the
+/// first stage's loss scale `scale`; a non-finite scale, e.g. plain least squares, starts
+/// from 0.003 rad).
+pub fn noise_sigma(angles: &[Vec<f64>], scale: f64) -> Option<f64> {
+    let scale = if scale.is_finite() && scale > 0.0 {
+        scale
+    } else {
+        0.003
+    };
+    let all: Vec<f64> = angles.iter().flatten().copied().collect();
+    crate::final_fit::estimate_sigma(&all, scale, &crate::final_fit::FinalFitOptions::default())
+}
+
+/// Element-wise `a && b` of two masks.
+fn and(a: &[Vec<bool>], b: &[Vec<bool>]) -> Vec<Vec<bool>> {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.iter().zip(b).map(|(a, b)| *a && *b).collect())
+        .collect()
+}
+
+/// Element-wise `!a` of a mask.
+fn not(a: &[Vec<bool>]) -> Vec<Vec<bool>> {
+    a.iter().map(|m| m.iter().map(|k| !k).collect()).collect()
+}
+
+/// The matches the memory labels `label` (static: `true`).
+fn label_mask(labels: &[Vec<Option<bool>>], label: bool) -> Vec<Vec<bool>> {
+    labels
+        .iter()
+        .map(|m| m.iter().map(|l| *l == Some(label)).collect())
+        .collect()
 }
 
 #[cfg(test)]
@@ -670,5 +890,92 @@ mod tests {
                 assert_eq!(mask, want, "threshold {t}");
             }
         }
+    }
+
+    /// Frames of a simulated scenario where the separation finds competing motions, with
+    /// `opts`; each frame's A is the default model's solve from straight ahead at the true
+    /// arc length.
+    fn competing_frames(sim: &momo_sim::Simulation, opts: &SeparateOptions) -> (usize, usize) {
+        let config = crate::Config::default();
+        let estimator = config.model.build(config.metric.as_ref()).expect("model");
+        let rig = &sim.sequence.rig;
+        let arc_index = estimator.arc_length_index().expect("arc length");
+        let mut fixed = vec![false; estimator.param_names().len()];
+        fixed[arc_index] = true;
+        let ctx = SolveContext {
+            rig,
+            estimator: estimator.as_ref(),
+            loss: config.loss.as_ref(),
+            solver: config.solver.as_ref(),
+            fixed: &fixed,
+            motion_prior: None,
+        };
+        let (mut competing, mut frames) = (0, 0);
+        let mut tracker = HypothesisTracker::default();
+        for (k, obs) in sim.sequence.frames.iter().enumerate().skip(1) {
+            let arc = sim.true_arc_lengths[k];
+            let start = estimator.initial_params(arc);
+            let Some(first) = ctx.solve(obs, &start, ctx.loss, false) else {
+                continue;
+            };
+            let (_, o, _) = separate(&ctx, opts, obs, first, &[start], &mut tracker, Some(arc));
+            frames += 1;
+            competing += usize::from(o.competing);
+        }
+        (competing, frames)
+    }
+
+    /// A static fisheye rig (0.5 px at f = 330 px: the fixed 0.003 rad support threshold is
+    /// about the noise at the image edges) is flagged competing by the fixed threshold alone
+    /// (the false competition of docs/RESULTS.md §9), not when a second motion must have its
+    /// own matches far from A in units of the frame's noise (`distinct_sigmas`) or spatially
+    /// coherent ones (`coherence`). Measured (A solved without prior from straight ahead):
+    /// the fixed threshold flags 39 of 39 rig frames, the two tests none. On the first 40
+    /// frames of the built-in moving-traffic drive the fixed threshold flags 36 of 39, the two
+    /// tests none either: they cost the family its separation (docs/RESULTS.md §9, ninth
+    /// session), so they stay off.
+    #[test]
+    fn a_static_fisheye_rig_frame_is_not_flagged_competing() {
+        use momo_sim::{SimConfig, simulate};
+        let distinct = SeparateOptions {
+            threshold_sigmas: 3.0,
+            distinct_sigmas: 4.0,
+            ..SeparateOptions::default()
+        };
+        let coherent = SeparateOptions {
+            coherence: 0.35,
+            ..SeparateOptions::default()
+        };
+        let fixed = SeparateOptions::default();
+        let rig = simulate(&SimConfig {
+            frames: 40,
+            seed: 1,
+            ..SimConfig::fisheye_surround()
+        })
+        .expect("simulation");
+        let (c_fixed, n) = competing_frames(&rig, &fixed);
+        let (c_distinct, n2) = competing_frames(&rig, &distinct);
+        let (c_coherent, _) = competing_frames(&rig, &coherent);
+        eprintln!(
+            "fisheye rig: competing frames fixed {c_fixed}/{n}, distinct {c_distinct}, coherent {c_coherent}"
+        );
+        assert!(n >= 35 && n2 == n);
+        assert!(c_fixed > 0, "the fixed threshold's false competition");
+        assert_eq!(c_distinct, 0, "a static rig is one motion");
+        assert_eq!(c_coherent, 0, "a static rig is one motion");
+        let traffic = simulate(&SimConfig {
+            frames: 40,
+            seed: 1,
+            ..SimConfig::moving_traffic()
+        })
+        .expect("simulation");
+        let (t_fixed, m) = competing_frames(&traffic, &fixed);
+        let (t_distinct, _) = competing_frames(&traffic, &distinct);
+        let (t_coherent, _) = competing_frames(&traffic, &coherent);
+        eprintln!(
+            "moving traffic: competing frames fixed {t_fixed}/{m}, distinct {t_distinct}, coherent {t_coherent}"
+        );
+        assert!(t_fixed >= m / 4, "{t_fixed} of {m}");
+        assert!(t_distinct <= t_fixed && t_coherent <= t_fixed);
     }
 }
