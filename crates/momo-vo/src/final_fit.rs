@@ -86,9 +86,10 @@ pub struct FinalFitOptions {
     /// The support's cheirality test ([`cheiral`]): a match whose point lies behind either
     /// camera by more than this many `σ̂` of parallax (its displacement along the epipolar
     /// line points away from the epipole) is left out of the support, whatever its residual.
-    /// 0: no test. Default 3 (the support's own cut): on 30 % mismatches it lowers the error /
-    /// Cramér-Rao bound from 1.18 to about 0.98 on the built-in drive and from 1.11-1.50 to
-    /// about 1.0-1.3 along the KITTI trajectories; clean data and real KITTI 00 hardly change
+    /// 0: no test. Default 3 (the support's own cut): on 30 % mismatches it lowers the median
+    /// error / Cramér-Rao bound from 1.18 to 0.96 on the built-in drive (seeds 1-8, per seed
+    /// 0.85-1.00) and from 1.11-1.50 to 0.87-1.30 along the eleven KITTI trajectories (seed 1;
+    /// 1.12-1.26 on 00, 02, 08 with seeds 2-3); clean data and real KITTI 00 hardly change
     /// (docs/RESULTS.md §9, ninth session).
     pub cheirality_sigmas: f64,
     /// The residual metric of the stage, by its registered type tag (e.g. `"angle_plane_ml"`,
