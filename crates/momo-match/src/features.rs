@@ -469,13 +469,21 @@ impl FrameFeatures {
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
         let inner = w - 2 * BORDER;
+        // The column keys are padded with `PAD` values that never win (so that the sliding
+        // extremes need no bounds), the scratch rows hold the doubling levels.
+        let total = inner + PAD;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
-        let lanes = &LaneOffsets::new(n);
+        let blocks = inner.div_ceil(step);
         block_rows
             .par_iter()
             .map_init(
-                || [(); CLASSES].map(|()| vec![0i16; inner]),
-                |cols, &v0| {
+                || {
+                    let cols: [Vec<i16>; CLASSES] = std::array::from_fn(|class| {
+                        vec![if class % 2 == 0 { i16::MIN } else { i16::MAX }; total]
+                    });
+                    (cols, SlidingScratch::new(total))
+                },
+                |(cols, scratch), &v0| {
                     let v1 = (v0 + step).min(h - BORDER);
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
@@ -503,29 +511,16 @@ impl FrameFeatures {
                             cmin[x] = cmin[x].min(pack_min(rc[x], r));
                         }
                     }
-                    let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
-                    (0..inner.div_ceil(step))
-                        .map(|blk| {
-                            let k0 = blk * step;
-                            let k1 = (k0 + step).min(inner);
-                            let mut out = [Extremum::NONE; CLASSES];
-                            for (class, col) in columns.iter().enumerate() {
-                                let e = if class % 2 == 0 {
-                                    packed_block::<true>(col, k0, k1, n, lanes, tau)
-                                } else {
-                                    packed_block::<false>(col, k0, k1, n, lanes, tau)
-                                };
-                                if let Some((val, k, r)) = e {
-                                    out[class] = Extremum {
-                                        val,
-                                        u: (BORDER + k) as u16,
-                                        v: (v0 + r) as u16,
-                                    };
-                                }
-                            }
-                            out
-                        })
-                        .collect()
+                    let mut out = vec![[Extremum::NONE; CLASSES]; blocks];
+                    for (class, col) in cols.iter().enumerate() {
+                        let col = &col[..total];
+                        if class % 2 == 0 {
+                            packed_blocks::<true>(col, inner, n, tau, scratch, class, v0, &mut out);
+                        } else {
+                            packed_blocks::<false>(col, inner, n, tau, scratch, class, v0, &mut out);
+                        }
+                    }
+                    out
                 },
             )
             .collect()
@@ -720,43 +715,113 @@ fn pack_min(x: i16, r: i16) -> i16 {
     (x << 3) + r
 }
 
-/// One block and class of [`FrameFeatures::block_extrema_packed`]: the block's columns
-/// `k0..k1` of the block row's packed column extremes `col` (column `k` is pixel column
-/// `BORDER + k`). `Some((response, column k, row within the block))` of the first pixel holding
-/// the block's extreme if it is strong (`|response| >= tau`) and no column extreme of the block
-/// row within its window is strictly better ([`beaten_in_block_row`] on the keys: a key beyond
-/// `8 val + 7` (maxima) or below `8 val` (minima) is a strictly better response).
-#[inline(always)]
-fn packed_block<const MAX: bool>(
-    col: &[i16],
-    k0: usize,
-    k1: usize,
-    n: usize,
-    lanes: &LaneOffsets,
-    tau: i16,
-) -> Option<(i16, usize, usize)> {
-    let part = &col[k0..k1];
-    // The first column holding the best key (strict comparison keeps the earlier column).
-    let (mut best, mut at) = (part[0], 0);
-    for (i, &x) in part.iter().enumerate().skip(1) {
-        if better::<MAX>(x, best) {
-            best = x;
-            at = i;
+/// Values past the end of pass 1's column keys (never the extreme).
+const PAD: usize = 16;
+
+/// The doubling levels of [`sliding_extremes`]: `m[i][j]` the extreme of `col[j..j + 2^(i+1)]`.
+struct SlidingScratch {
+    m: [Vec<i16>; 3],
+    /// The block extremes (`len = n + 1`) and the window extremes (`len = 2n + 1`) at each column.
+    blocks: Vec<i16>,
+    window: Vec<i16>,
+}
+
+impl SlidingScratch {
+    fn new(total: usize) -> Self {
+        Self {
+            m: [(); 3].map(|()| vec![0; total]),
+            blocks: vec![0; total],
+            window: vec![0; total],
         }
     }
-    let val = best >> 3;
-    let strong = if MAX { val >= tau } else { val <= -tau };
-    if !strong {
-        return None;
+}
+
+/// `dst[j] = extreme(src[j], src[j + shift])` (a vectorised loop).
+#[inline(always)]
+fn pairwise<const MAX: bool>(src: &[i16], shift: usize, dst: &mut [i16]) {
+    let len = dst.len();
+    let (a, b) = (&src[..len], &src[shift..shift + len]);
+    for j in 0..len {
+        dst[j] = extreme::<MAX>(a[j], b[j]);
     }
-    let low = best & 7;
-    let r = if MAX { 7 - low } else { low } as usize;
-    let k = k0 + at;
-    let (threshold, m) = if MAX { (best | 7, 0) } else { (best & !7, 1) };
-    if beaten_in_block_row::<MAX>(col, k.wrapping_sub(n), &lanes.block_row[m], threshold) {
-        return None;
+}
+
+/// `out[j]` = the extreme of `col[j..j + len]` for `j < out.len()` (`len` in 1..=16) from the
+/// doubling levels `m` of `col` (`m[i][j]`: the extreme of `col[j..j + 2^(i+1)]`): the two
+/// overlapping power-of-two windows that cover `len`.
+#[inline(always)]
+fn sliding_extremes<const MAX: bool>(col: &[i16], m: &[Vec<i16>; 3], len: usize, out: &mut [i16]) {
+    let (level, p): (&[i16], usize) = match len {
+        1 => (col, 1),
+        2..=3 => (&m[0], 2),
+        4..=7 => (&m[1], 4),
+        _ => (&m[2], 8),
+    };
+    pairwise::<MAX>(level, len - p, out);
+}
+
+/// One class of a block row of [`FrameFeatures::block_extrema_packed`]: `col[..inner]` the
+/// block row's packed column extremes (column `k` is pixel column `BORDER + k`), padded to
+/// `inner + PAD` with values that never win. Per block of `n + 1` columns, the first pixel
+/// holding the block's extreme if it is strong (`|response| >= tau`) and no column extreme of
+/// the block row within its window (columns `k - n..=k + n`, where those and the 16 lanes from
+/// `k - n` lie inside) is strictly better (a key beyond `8 val + 7` for maxima, below `8 val` for
+/// minima: a strictly better response), written to `out[block][class]`. The block and window
+/// extremes of every column come from sliding extremes by doubling (vectorised loops), so
+/// that a block costs a few scalar steps.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn packed_blocks<const MAX: bool>(
+    col: &[i16],
+    inner: usize,
+    n: usize,
+    tau: i16,
+    s: &mut SlidingScratch,
+    class: usize,
+    v0: usize,
+    out: &mut [[Extremum; CLASSES]],
+) {
+    let step = n + 1;
+    let total = col.len();
+    pairwise::<MAX>(col, 1, &mut s.m[0][..total - 1]);
+    {
+        let [m2, m4, m8] = &mut s.m;
+        pairwise::<MAX>(&m2[..total - 1], 2, &mut m4[..total - 3]);
+        if 2 * n + 1 >= 8 {
+            pairwise::<MAX>(&m4[..total - 3], 4, &mut m8[..total - 7]);
+        }
     }
-    Some((val, k, r))
+    sliding_extremes::<MAX>(col, &s.m, step, &mut s.blocks[..inner]);
+    let span = 2 * n + 1;
+    let windows = (inner + 1).saturating_sub(span);
+    sliding_extremes::<MAX>(col, &s.m, span, &mut s.window[..windows]);
+    let (blocks, window) = (&s.blocks[..inner], &s.window[..windows]);
+    for (blk, o) in out.iter_mut().enumerate() {
+        let k0 = blk * step;
+        let best = blocks[k0];
+        let val = best >> 3;
+        let strong = if MAX { val >= tau } else { val <= -tau };
+        if !strong {
+            continue;
+        }
+        // The first column holding the best key.
+        let k1 = (k0 + step).min(inner);
+        let at = col[k0..k1].iter().position(|&x| x == best).unwrap_or(0);
+        let k = k0 + at;
+        let threshold = if MAX { best | 7 } else { best & !7 };
+        let beaten =
+            k >= n && k - n + LANES <= inner && better::<MAX>(window[k - n], threshold);
+        if beaten {
+            continue;
+        }
+        let low = best & 7;
+        let r = if MAX { 7 - low } else { low } as usize;
+        o[class] = Extremum {
+            val,
+            u: (BORDER + k) as u16,
+            v: (v0 + r) as u16,
+        };
+    }
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
