@@ -153,50 +153,73 @@ fn lanes(row: &[f32; 4 * VECS], k: usize) -> f32x4 {
     f32x4::from([row[k], row[k + 1], row[k + 2], row[k + 3]])
 }
 
+/// Four lanes of bytes `b[k..k + 4]` as `f32` (a vector load and conversion).
+#[inline(always)]
+fn byte_lanes(b: &[u8; 4 * VECS], k: usize) -> f32x4 {
+    f32x4::from([
+        f32::from(b[k]),
+        f32::from(b[k + 1]),
+        f32::from(b[k + 2]),
+        f32::from(b[k + 3]),
+    ])
+}
+
+/// `side` bytes from `px[start..]`, zero past them (so that the lanes past the patch side are
+/// zero).
+#[inline(always)]
+fn padded(px: &[u8], start: usize, side: usize) -> [u8; 4 * VECS] {
+    let mut b = [0u8; 4 * VECS];
+    b[..side].copy_from_slice(&px[start..start + side]);
+    b
+}
+
 /// The template of [`align`] for the half-width `R`: the patch of `from` around `(u, v)`, its
-/// central-difference gradients, and the sums `[Σ gx², Σ gx gy, Σ gy², Σ gx, Σ gy, 0]`. The
-/// differences and sums are taken in integers (twice the gradients), so the sums are exact; the
-/// gradients are multiples of 1/2, exact in `f32`.
+/// central-difference gradients, and the sums `[Σ gx², Σ gx gy, Σ gy², Σ gx, Σ gy, 0]`, four
+/// columns at a time. The differences are twice the gradients (integers below 256 in
+/// magnitude) and their sums are taken in `f32`, which is exact (every partial sum is an
+/// integer below `(2 MAX_HALF + 1)² 255² < 2^24`); the gradients are multiples of 1/2, exact in
+/// `f32`.
 fn template<const R: usize>(
     from: Plane<'_>,
     (u, v): (usize, usize),
     tpl: &mut Template<'_>,
 ) -> [f64; 6] {
     let side = 2 * R + 1;
+    let nv = side.div_ceil(4);
     let w = from.width;
-    let (mut sxx, mut sxy, mut syy, mut sx, mut sy) = (0i32, 0i32, 0i32, 0i32, 0i32);
+    let z = f32x4::ZERO;
+    let (mut sxx, mut sxy, mut syy, mut sx, mut sy) = (z, z, z, z, z);
+    let half = f32x4::splat(0.5);
     for j in 0..side {
         let y = v - R + j;
-        let row = &from.px[y * w + u - R - 1..y * w + u + R + 2];
-        let up = &from.px[(y - 1) * w + u - R..(y - 1) * w + u + R + 1];
-        let down = &from.px[(y + 1) * w + u - R..(y + 1) * w + u + R + 1];
-        let mut t = [0f32; 4 * VECS];
-        let mut gx = [0f32; 4 * VECS];
-        let mut gy = [0f32; 4 * VECS];
-        for i in 0..side {
-            let a = i32::from(row[i + 2]) - i32::from(row[i]);
-            let b = i32::from(down[i]) - i32::from(up[i]);
-            t[i] = f32::from(row[i + 1]);
-            gx[i] = 0.5 * a as f32;
-            gy[i] = 0.5 * b as f32;
+        // Columns u - R - 1 + i (left), u - R + i (centre, and the rows above and below),
+        // u - R + 1 + i (right) for i < side.
+        let s = y * w + u - R;
+        let left = padded(from.px, s - 1, side);
+        let centre = padded(from.px, s, side);
+        let right = padded(from.px, s + 1, side);
+        let up = padded(from.px, s - w, side);
+        let down = padded(from.px, s + w, side);
+        for k in 0..nv {
+            let i = 4 * k;
+            let a = byte_lanes(&right, i) - byte_lanes(&left, i);
+            let b = byte_lanes(&down, i) - byte_lanes(&up, i);
+            tpl.t[j][k] = byte_lanes(&centre, i);
+            tpl.gx[j][k] = half * a;
+            tpl.gy[j][k] = half * b;
             sxx += a * a;
             sxy += a * b;
             syy += b * b;
             sx += a;
             sy += b;
         }
-        for k in 0..side.div_ceil(4) {
-            tpl.t[j][k] = lanes(&t, 4 * k);
-            tpl.gx[j][k] = lanes(&gx, 4 * k);
-            tpl.gy[j][k] = lanes(&gy, 4 * k);
-        }
     }
     [
-        0.25 * f64::from(sxx),
-        0.25 * f64::from(sxy),
-        0.25 * f64::from(syy),
-        0.5 * f64::from(sx),
-        0.5 * f64::from(sy),
+        0.25 * f64::from(sxx.reduce_add()),
+        0.25 * f64::from(sxy.reduce_add()),
+        0.25 * f64::from(syy.reduce_add()),
+        0.5 * f64::from(sx.reduce_add()),
+        0.5 * f64::from(sy.reduce_add()),
         0.0,
     ]
 }
