@@ -830,11 +830,15 @@ const SOBEL_FLAT: u16 = 128 | 128 << 8;
 /// The descriptor at `(u, v)` from the interleaved Sobel images (`du | dv << 8`).
 #[inline]
 fn descriptor(sobel: &[u16], w: usize, u: usize, v: usize) -> Descriptor {
+    // Gathered first, then split into the du and dv halves (two vectorised byte packs).
+    let s: [u16; 16] = std::array::from_fn(|k| {
+        let (dx, dy) = PATTERN[k];
+        sobel[((v as i32 + dy) as usize) * w + (u as i32 + dx) as usize]
+    });
     let mut d = [0u8; 32];
-    for (k, (dx, dy)) in PATTERN.iter().enumerate() {
-        let s = sobel[((v as i32 + dy) as usize) * w + (u as i32 + dx) as usize];
-        d[k] = (s & 0xff) as u8;
-        d[16 + k] = (s >> 8) as u8;
+    for k in 0..16 {
+        d[k] = (s[k] & 0xff) as u8;
+        d[16 + k] = (s[k] >> 8) as u8;
     }
     d
 }
@@ -1108,7 +1112,9 @@ fn sobel_horizontal(vs: &[i16], vd: &[i16], rs: &mut [u16]) {
 /// One row of the blob and corner responses from the five rows around it (`c5`, `c3`, `d`
 /// scratch rows), and the vertical pass of the Sobel images of its middle row into `[vs, vd]`
 /// (for [`sobel_horizontal`]): `vs = c3 + r2` is the [1 2 1] smoothing, `vd = r3 - r1` the
-/// [-1 0 1] derivative.
+/// [-1 0 1] derivative. Not inlined, so that the five rows stay five pointers (inlined, the
+/// compiler may recompute them from one another inside the loop).
+#[inline(never)]
 fn filter_row(
     rows: [&[u8]; 5],
     rb: &mut [i16],
