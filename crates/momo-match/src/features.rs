@@ -464,7 +464,7 @@ impl FrameFeatures {
     /// column holding its best key (no search down the columns). The responses fit: |blob| <=
     /// 16 * 255 and |corner| <= 8 * 255, so `8 |r| + 7 <= 32647`.
     #[inline(never)]
-    fn block_extrema_packed<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
+    fn block_extrema_packed<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
@@ -481,7 +481,9 @@ impl FrameFeatures {
                     let cols: [Vec<i16>; CLASSES] = std::array::from_fn(|class| {
                         vec![if class % 2 == 0 { i16::MIN } else { i16::MAX }; total]
                     });
-                    (cols, SlidingScratch::new(total))
+                    let scratch: [SlidingScratch; CLASSES] =
+                        std::array::from_fn(|_| SlidingScratch::new(total));
+                    (cols, scratch)
                 },
                 |(cols, scratch), &v0| {
                     let v1 = (v0 + step).min(h - BORDER);
@@ -511,14 +513,40 @@ impl FrameFeatures {
                             cmin[x] = cmin[x].min(pack_min(rc[x], r));
                         }
                     }
-                    let mut out = vec![[Extremum::NONE; CLASSES]; blocks];
-                    for (class, col) in cols.iter().enumerate() {
-                        let col = &col[..total];
+                    // The block and window extremes of each class, then the candidates block by
+                    // block.
+                    for (class, (col, sc)) in cols.iter().zip(scratch.iter_mut()).enumerate() {
                         if class % 2 == 0 {
-                            packed_blocks::<true>(col, inner, n, tau, scratch, class, v0, &mut out);
+                            sliding_block_extremes::<true>(&col[..total], inner, n, sc);
                         } else {
-                            packed_blocks::<false>(col, inner, n, tau, scratch, class, v0, &mut out);
+                            sliding_block_extremes::<false>(&col[..total], inner, n, sc);
                         }
+                    }
+                    let mut out = Vec::with_capacity(blocks * CLASSES);
+                    let span = 2 * n + 1;
+                    let windows = (inner + 1).saturating_sub(span);
+                    let class_of = |class: usize| {
+                        let col = &cols[class][..inner];
+                        let sc = &scratch[class];
+                        (col, &sc.blocks[..inner], &sc.window[..windows])
+                    };
+                    let [p0, p1, p2, p3] = std::array::from_fn(class_of);
+                    let mut push = |class: u8, e: Option<(i16, usize, usize)>| {
+                        if let Some((val, k, r)) = e {
+                            out.push(Extremum {
+                                val,
+                                u: (BORDER + k) as u16,
+                                v: (v0 + r) as u16,
+                                class,
+                            });
+                        }
+                    };
+                    for blk in 0..blocks {
+                        let k0 = blk * step;
+                        push(0, packed_candidate::<true>(p0.0, p0.1, p0.2, k0, n, tau));
+                        push(1, packed_candidate::<false>(p1.0, p1.1, p1.2, k0, n, tau));
+                        push(2, packed_candidate::<true>(p2.0, p2.1, p2.2, k0, n, tau));
+                        push(3, packed_candidate::<false>(p3.0, p3.1, p3.2, k0, n, tau));
                     }
                     out
                 },
@@ -529,7 +557,7 @@ impl FrameFeatures {
     /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
     /// class (the first pixel holding it).
     #[inline(never)]
-    fn block_extrema<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<[Extremum; CLASSES]>> {
+    fn block_extrema<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
@@ -562,11 +590,11 @@ impl FrameFeatures {
                         }
                     }
                     let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
-                    (0..inner.div_ceil(step))
-                        .map(|blk| {
+                    let mut out = Vec::new();
+                    for blk in 0..inner.div_ceil(step) {
+                        {
                             let u0 = BORDER + blk * step;
                             let u1 = (u0 + step).min(w - BORDER);
-                            let mut out = [Extremum::NONE; CLASSES];
                             for (class, col) in columns.iter().enumerate() {
                                 let part = &col[u0 - BORDER..u1 - BORDER];
                                 let (val, strong) = if class % 2 == 0 {
@@ -604,16 +632,17 @@ impl FrameFeatures {
                                     beaten_in_block_row::<false>(col, k0, &lanes.block_row[1], val)
                                 };
                                 if !beaten {
-                                    out[class] = Extremum {
+                                    out.push(Extremum {
                                         val,
                                         u: first.1 as u16,
                                         v: first.0 as u16,
-                                    };
+                                        class: class as u8,
+                                    });
                                 }
                             }
-                            out
-                        })
-                        .collect()
+                        }
+                    }
+                    out
                 },
             )
             .collect()
@@ -622,7 +651,7 @@ impl FrameFeatures {
     /// Pass 2 of the suppression: the window check of every strong block extremum; survivors
     /// are refined to sub-pixel and described, in the order of a serial scan.
     #[inline(never)]
-    fn check_and_describe(&mut self, n: usize, extrema: &[Vec<[Extremum; CLASSES]>]) {
+    fn check_and_describe(&mut self, n: usize, extrema: &[Vec<Extremum>]) {
         let (w, h) = (self.width, self.height);
         let lanes = &LaneOffsets::new(n);
         let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
@@ -631,14 +660,14 @@ impl FrameFeatures {
             .into_par_iter()
             .map(|by| {
                 // Sized for every candidate of the class in this block row (no regrowth).
-                let mut out: [Vec<Feature>; CLASSES] = std::array::from_fn(|class| {
-                    Vec::with_capacity(extrema[by].iter().filter(|b| !b[class].is_none()).count())
-                });
-                for block in &extrema[by] {
-                    for (class, e) in block.iter().enumerate() {
-                        if e.is_none() {
-                            continue;
-                        }
+                let mut counts = [0usize; CLASSES];
+                for e in &extrema[by] {
+                    counts[usize::from(e.class) % CLASSES] += 1;
+                }
+                let mut out: [Vec<Feature>; CLASSES] = counts.map(Vec::with_capacity);
+                {
+                    for e in &extrema[by] {
+                        let class = usize::from(e.class) % CLASSES;
                         let maximum = class % 2 == 0;
                         let (u, v) = (usize::from(e.u), usize::from(e.v));
                         let img = img_of(class);
@@ -680,21 +709,14 @@ impl FrameFeatures {
     }
 }
 
-/// The strong extremum of one block and class (`u == 0`: none; features are inside the
-/// border).
-#[derive(Clone, Copy, Debug)]
+/// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
+/// row of blocks in the order of a serial scan: blocks, then classes).
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Extremum {
     val: i16,
     u: u16,
     v: u16,
-}
-
-impl Extremum {
-    const NONE: Self = Self { val: 0, u: 0, v: 0 };
-
-    fn is_none(&self) -> bool {
-        self.u == 0
-    }
+    class: u8,
 }
 
 /// Rows of a block whose row index fits the packed keys of
@@ -760,28 +782,19 @@ fn sliding_extremes<const MAX: bool>(col: &[i16], m: &[Vec<i16>; 3], len: usize,
     pairwise::<MAX>(level, len - p, out);
 }
 
-/// One class of a block row of [`FrameFeatures::block_extrema_packed`]: `col[..inner]` the
-/// block row's packed column extremes (column `k` is pixel column `BORDER + k`), padded to
-/// `inner + PAD` with values that never win. Per block of `n + 1` columns, the first pixel
-/// holding the block's extreme if it is strong (`|response| >= tau`) and no column extreme of
-/// the block row within its window (columns `k - n..=k + n`, where those and the 16 lanes from
-/// `k - n` lie inside) is strictly better (a key beyond `8 val + 7` for maxima, below `8 val` for
-/// minima: a strictly better response), written to `out[block][class]`. The block and window
-/// extremes of every column come from sliding extremes by doubling (vectorised loops), so
-/// that a block costs a few scalar steps.
-#[allow(clippy::too_many_arguments)]
+/// The sliding extremes of one class of a block row of
+/// [`FrameFeatures::block_extrema_packed`]: `col[..inner]` the block row's packed column
+/// extremes (column `k` is pixel column `BORDER + k`), padded to `inner + PAD` with values that
+/// never win; `s.blocks[k]` the extreme of the `n + 1` columns from `k` (a block's when `k` is
+/// a block's first column), `s.window[k]` that of the `2n + 1` columns from `k` (a window's
+/// centred on `k + n`), by doubling (vectorised loops).
 #[inline(always)]
-fn packed_blocks<const MAX: bool>(
+fn sliding_block_extremes<const MAX: bool>(
     col: &[i16],
     inner: usize,
     n: usize,
-    tau: i16,
     s: &mut SlidingScratch,
-    class: usize,
-    v0: usize,
-    out: &mut [[Extremum; CLASSES]],
 ) {
-    let step = n + 1;
     let total = col.len();
     pairwise::<MAX>(col, 1, &mut s.m[0][..total - 1]);
     {
@@ -791,37 +804,46 @@ fn packed_blocks<const MAX: bool>(
             pairwise::<MAX>(&m4[..total - 3], 4, &mut m8[..total - 7]);
         }
     }
-    sliding_extremes::<MAX>(col, &s.m, step, &mut s.blocks[..inner]);
+    sliding_extremes::<MAX>(col, &s.m, n + 1, &mut s.blocks[..inner]);
     let span = 2 * n + 1;
     let windows = (inner + 1).saturating_sub(span);
     sliding_extremes::<MAX>(col, &s.m, span, &mut s.window[..windows]);
-    let (blocks, window) = (&s.blocks[..inner], &s.window[..windows]);
-    for (blk, o) in out.iter_mut().enumerate() {
-        let k0 = blk * step;
-        let best = blocks[k0];
-        let val = best >> 3;
-        let strong = if MAX { val >= tau } else { val <= -tau };
-        if !strong {
-            continue;
-        }
-        // The first column holding the best key.
-        let k1 = (k0 + step).min(inner);
-        let at = col[k0..k1].iter().position(|&x| x == best).unwrap_or(0);
-        let k = k0 + at;
-        let threshold = if MAX { best | 7 } else { best & !7 };
-        let beaten =
-            k >= n && k - n + LANES <= inner && better::<MAX>(window[k - n], threshold);
-        if beaten {
-            continue;
-        }
-        let low = best & 7;
-        let r = if MAX { 7 - low } else { low } as usize;
-        o[class] = Extremum {
-            val,
-            u: (BORDER + k) as u16,
-            v: (v0 + r) as u16,
-        };
+}
+
+/// The candidate of the block starting at column `k0` of one class
+/// ([`FrameFeatures::block_extrema_packed`]; `col`, `blocks`, `window` as
+/// [`sliding_block_extremes`] leaves them): `Some((response, column k, row within the block))`
+/// of the first pixel holding the block's extreme if it is strong (`|response| >= tau`) and no
+/// column extreme of the block row within its window (columns `k - n..=k + n`, where those and
+/// the 16 lanes from `k - n` lie inside) is strictly better (a key beyond `8 val + 7` for
+/// maxima, below `8 val` for minima: a strictly better response).
+#[inline(always)]
+fn packed_candidate<const MAX: bool>(
+    col: &[i16],
+    blocks: &[i16],
+    window: &[i16],
+    k0: usize,
+    n: usize,
+    tau: i16,
+) -> Option<(i16, usize, usize)> {
+    let inner = col.len();
+    let best = blocks[k0];
+    let val = best >> 3;
+    let strong = if MAX { val >= tau } else { val <= -tau };
+    if !strong {
+        return None;
     }
+    // The first column holding the best key.
+    let k1 = (k0 + n + 1).min(inner);
+    let at = col[k0..k1].iter().position(|&x| x == best).unwrap_or(0);
+    let k = k0 + at;
+    let threshold = if MAX { best | 7 } else { best & !7 };
+    if k >= n && k - n + LANES <= inner && better::<MAX>(window[k - n], threshold) {
+        return None;
+    }
+    let low = best & 7;
+    let r = if MAX { 7 - low } else { low } as usize;
+    Some((val, k, r))
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
@@ -1357,15 +1379,14 @@ mod tests {
                 for tau in [1i16, 50, 600] {
                     let a = f.block_extrema(n, tau);
                     let b = f.block_extrema_packed(n, tau);
-                    let key = |x: &Vec<Vec<[Extremum; CLASSES]>>| -> Vec<(i16, u16, u16)> {
+                    let key = |x: &Vec<Vec<Extremum>>| -> Vec<(u8, i16, u16, u16)> {
                         x.iter()
                             .flatten()
-                            .flatten()
-                            .map(|e| (e.val, e.u, e.v))
+                            .map(|e| (e.class, e.val, e.u, e.v))
                             .collect()
                     };
                     assert_eq!(key(&a), key(&b), "seed {seed} n {n} tau {tau}");
-                    assert!(key(&a).iter().any(|e| e.1 != 0), "seed {seed} n {n}: none");
+                    assert!(!key(&a).is_empty(), "seed {seed} n {n}: none");
                 }
             }
         }
