@@ -531,13 +531,15 @@ impl FrameFeatures {
                         (col, &sc.blocks[..inner], &sc.window[..windows])
                     };
                     let [p0, p1, p2, p3] = std::array::from_fn(class_of);
-                    let mut push = |class: u8, e: Option<(i16, usize, usize)>| {
-                        if let Some((val, k, r)) = e {
+                    let mut push = |class: u8, e: Option<(i16, usize, usize, bool)>| {
+                        if let Some((val, k, r, checked)) = e {
+                            let v = v0 + r;
                             out.push(Extremum {
                                 val,
                                 u: (BORDER + k) as u16,
-                                v: (v0 + r) as u16,
+                                v: v as u16,
                                 class,
+                                cleared: if checked { (v1 - 1 - v) as u8 } else { 0 },
                             });
                         }
                     };
@@ -637,6 +639,7 @@ impl FrameFeatures {
                                         u: first.1 as u16,
                                         v: first.0 as u16,
                                         class: class as u8,
+                                        cleared: 0,
                                     });
                                 }
                             }
@@ -676,8 +679,8 @@ impl FrameFeatures {
                         let fits =
                             lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
                         let keep = match (fits, maximum) {
-                            (true, true) => window_check::<true>(img, w, u, v, n, lanes, e.val),
-                            (true, false) => window_check::<false>(img, w, u, v, n, lanes, e.val),
+                            (true, true) => window_check::<true>(img, w, *e, n, lanes),
+                            (true, false) => window_check::<false>(img, w, *e, n, lanes),
                             (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
                             (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
                         };
@@ -717,6 +720,9 @@ struct Extremum {
     u: u16,
     v: u16,
     class: u8,
+    /// Rows below `v` that pass 1 has cleared: the rest of the candidate's block row, where its
+    /// necessary condition ran ([`packed_candidate`]), else 0.
+    cleared: u8,
 }
 
 /// Rows of a block whose row index fits the packed keys of
@@ -816,7 +822,8 @@ fn sliding_block_extremes<const MAX: bool>(
 /// of the first pixel holding the block's extreme if it is strong (`|response| >= tau`) and no
 /// column extreme of the block row within its window (columns `k - n..=k + n`, where those and
 /// the 16 lanes from `k - n` lie inside) is strictly better (a key beyond `8 val + 7` for
-/// maxima, below `8 val` for minima: a strictly better response).
+/// maxima, below `8 val` for minima: a strictly better response); the last field says whether
+/// that check ran (then no pixel of the block row in the window is strictly better).
 #[inline(always)]
 fn packed_candidate<const MAX: bool>(
     col: &[i16],
@@ -825,7 +832,7 @@ fn packed_candidate<const MAX: bool>(
     k0: usize,
     n: usize,
     tau: i16,
-) -> Option<(i16, usize, usize)> {
+) -> Option<(i16, usize, usize, bool)> {
     let inner = col.len();
     let best = blocks[k0];
     let val = best >> 3;
@@ -838,12 +845,13 @@ fn packed_candidate<const MAX: bool>(
     let at = col[k0..k1].iter().position(|&x| x == best).unwrap_or(0);
     let k = k0 + at;
     let threshold = if MAX { best | 7 } else { best & !7 };
-    if k >= n && k - n + LANES <= inner && better::<MAX>(window[k - n], threshold) {
+    let checked = k >= n && k - n + LANES <= inner;
+    if checked && better::<MAX>(window[k - n], threshold) {
         return None;
     }
     let low = best & 7;
     let r = if MAX { 7 - low } else { low } as usize;
-    Some((val, k, r))
+    Some((val, k, r, checked))
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
@@ -972,17 +980,17 @@ fn beaten_in_block_row<const MAX: bool>(
 /// column `u - n` fit in the image: the rows above `v` reduced to their column-wise extremes,
 /// likewise the rows below, then per lane one comparison of each ([`LaneOffsets`]): above, a
 /// pixel at least as good beats `val`, below one strictly better; in row `v` those left of `u`
-/// when at least as good, those right of it when better.
+/// when at least as good, those right of it when better. The rows below start after the
+/// `e.cleared` rows that pass 1 has cleared (no pixel strictly better there).
 #[inline(always)]
 fn window_check<const MAX: bool>(
     img: &[i16],
     w: usize,
-    u: usize,
-    v: usize,
+    e: Extremum,
     n: usize,
     lanes: &LaneOffsets,
-    val: i16,
 ) -> bool {
+    let (u, v, val) = (usize::from(e.u), usize::from(e.v), e.val);
     let start = u - n;
     let row = |y: usize| -> [i16; LANES] {
         let s = &img[y * w + start..y * w + start + LANES];
@@ -999,7 +1007,7 @@ fn window_check<const MAX: bool>(
         acc
     };
     let above = reduce(v - n..v);
-    let below = reduce(v + 1..v + n + 1);
+    let below = reduce((v + 1 + usize::from(e.cleared)).min(v + n + 1)..v + n + 1);
     let centre = row(v);
     let m = usize::from(!MAX);
     !(any_better::<MAX>(&above, &lanes.above[m], val)
