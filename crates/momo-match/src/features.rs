@@ -594,54 +594,50 @@ impl FrameFeatures {
                     let columns: [&[i16]; CLASSES] = [bmax, bmin, cmax, cmin];
                     let mut out = Vec::new();
                     for blk in 0..inner.div_ceil(step) {
-                        {
-                            let u0 = BORDER + blk * step;
-                            let u1 = (u0 + step).min(w - BORDER);
-                            for (class, col) in columns.iter().enumerate() {
-                                let part = &col[u0 - BORDER..u1 - BORDER];
-                                let (val, strong) = if class % 2 == 0 {
-                                    let m = part.iter().copied().fold(i16::MIN, i16::max);
-                                    (m, m >= tau)
-                                } else {
-                                    let m = part.iter().copied().fold(i16::MAX, i16::min);
-                                    (m, m <= -tau)
-                                };
-                                if !strong {
-                                    continue;
+                        let u0 = BORDER + blk * step;
+                        let u1 = (u0 + step).min(w - BORDER);
+                        for (class, col) in columns.iter().enumerate() {
+                            let part = &col[u0 - BORDER..u1 - BORDER];
+                            let (val, strong) = if class % 2 == 0 {
+                                let m = part.iter().copied().fold(i16::MIN, i16::max);
+                                (m, m >= tau)
+                            } else {
+                                let m = part.iter().copied().fold(i16::MAX, i16::min);
+                                (m, m <= -tau)
+                            };
+                            if !strong {
+                                continue;
+                            }
+                            // The first pixel of the block holding the extremum (row-major):
+                            // the first row of each column whose extreme it is, the smallest.
+                            let img = responses[class];
+                            let mut first = (usize::MAX, 0);
+                            for (k, _) in part.iter().enumerate().filter(|(_, c)| **c == val) {
+                                let u = u0 + k;
+                                let rows = v0..v1.min(first.0);
+                                if let Some(v) = rows.into_iter().find(|&v| img[v * w + u] == val) {
+                                    first = (v, u);
                                 }
-                                // The first pixel of the block holding the extremum (row-major):
-                                // the first row of each column whose extreme it is, the smallest.
-                                let img = responses[class];
-                                let mut first = (usize::MAX, 0);
-                                for (k, _) in part.iter().enumerate().filter(|(_, c)| **c == val) {
-                                    let u = u0 + k;
-                                    let rows = v0..v1.min(first.0);
-                                    if let Some(v) =
-                                        rows.into_iter().find(|&v| img[v * w + u] == val)
-                                    {
-                                        first = (v, u);
-                                    }
-                                }
-                                if first.0 == usize::MAX {
-                                    continue;
-                                }
-                                // Within the candidate's window, the block row's columns
-                                // `u - n..=u + n`: a column extreme strictly better rejects it.
-                                let k0 = (first.1 - BORDER).wrapping_sub(n);
-                                let beaten = if class % 2 == 0 {
-                                    beaten_in_block_row::<true>(col, k0, &lanes.block_row[0], val)
-                                } else {
-                                    beaten_in_block_row::<false>(col, k0, &lanes.block_row[1], val)
-                                };
-                                if !beaten {
-                                    out.push(Extremum {
-                                        val,
-                                        u: first.1 as u16,
-                                        v: first.0 as u16,
-                                        class: class as u8,
-                                        cleared: 0,
-                                    });
-                                }
+                            }
+                            if first.0 == usize::MAX {
+                                continue;
+                            }
+                            // Within the candidate's window, the block row's columns
+                            // `u - n..=u + n`: a column extreme strictly better rejects it.
+                            let k0 = (first.1 - BORDER).wrapping_sub(n);
+                            let beaten = if class % 2 == 0 {
+                                beaten_in_block_row::<true>(col, k0, &lanes.block_row[0], val)
+                            } else {
+                                beaten_in_block_row::<false>(col, k0, &lanes.block_row[1], val)
+                            };
+                            if !beaten {
+                                out.push(Extremum {
+                                    val,
+                                    u: first.1 as u16,
+                                    v: first.0 as u16,
+                                    class: class as u8,
+                                    cleared: 0,
+                                });
                             }
                         }
                     }
@@ -668,38 +664,35 @@ impl FrameFeatures {
                     counts[usize::from(e.class) % CLASSES] += 1;
                 }
                 let mut out: [Vec<Feature>; CLASSES] = counts.map(Vec::with_capacity);
-                {
-                    for e in &extrema[by] {
-                        let class = usize::from(e.class) % CLASSES;
-                        let maximum = class % 2 == 0;
-                        let (u, v) = (usize::from(e.u), usize::from(e.v));
-                        let img = img_of(class);
-                        // The 16-column check where the window fits it, else the whole
-                        // window is scanned.
-                        let fits =
-                            lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
-                        let keep = match (fits, maximum) {
-                            (true, true) => window_check::<true>(img, w, *e, n, lanes),
-                            (true, false) => window_check::<false>(img, w, *e, n, lanes),
-                            (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
-                            (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
-                        };
-                        if !keep {
-                            continue;
-                        }
-                        let r = |x: usize, y: usize| f64::from(img[y * w + x]);
-                        let c = r(u, v);
-                        let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
-                        let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
-                        out[class].push(Feature {
-                            u: e.u,
-                            v: e.v,
-                            x: x as f32,
-                            y: y as f32,
-                            response: e.val,
-                            desc: descriptor(sobel, w, u, v),
-                        });
+                for e in &extrema[by] {
+                    let class = usize::from(e.class) % CLASSES;
+                    let maximum = class % 2 == 0;
+                    let (u, v) = (usize::from(e.u), usize::from(e.v));
+                    let img = img_of(class);
+                    // The 16-column check where the window fits it, else the whole
+                    // window is scanned.
+                    let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
+                    let keep = match (fits, maximum) {
+                        (true, true) => window_check::<true>(img, w, *e, n, lanes),
+                        (true, false) => window_check::<false>(img, w, *e, n, lanes),
+                        (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
+                        (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
+                    };
+                    if !keep {
+                        continue;
                     }
+                    let r = |x: usize, y: usize| f64::from(img[y * w + x]);
+                    let c = r(u, v);
+                    let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
+                    let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
+                    out[class].push(Feature {
+                        u: e.u,
+                        v: e.v,
+                        x: x as f32,
+                        y: y as f32,
+                        response: e.val,
+                        desc: descriptor(sobel, w, u, v),
+                    });
                 }
                 out
             })
