@@ -234,7 +234,9 @@ pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Opti
     let mut sigma = None;
     for _ in 0..3 {
         let inside = &sorted[..sorted.partition_point(|r| *r < cut)];
-        let m = *inside.get(inside.len() / 2).filter(|_| !inside.is_empty())?;
+        let m = *inside
+            .get(inside.len() / 2)
+            .filter(|_| !inside.is_empty())?;
         let s = (MAD_TO_SIGMA * m).clamp(lo, hi);
         sigma = Some(s);
         cut = opts.inlier_sigmas * s;
@@ -305,7 +307,9 @@ pub fn refit(
 ) -> FrameSolution {
     // The stage metric's per-match constants of every match, computed once for every pass:
     // the residual norms on all matches and each refit on its support read them.
-    let constants = ctx.estimator.match_constants(&ctx.request(obs, &first.params));
+    let constants = ctx
+        .estimator
+        .match_constants(&ctx.request(obs, &first.params));
     let mut best: Option<FrameSolution> = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
@@ -529,7 +533,7 @@ mod tests {
                         0 => f64::NAN,
                         1 => f64::INFINITY,
                         2 => 0.0,
-                        3 => 0.001, // ties at the scale
+                        3 => 0.001,        // ties at the scale
                         4 | 5 => 0.05 + u, // far outliers
                         _ => 0.002 * u * (1.0 + (case % 7) as f64),
                     }

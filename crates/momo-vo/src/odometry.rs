@@ -1051,8 +1051,8 @@ impl Odometry {
                     &mut diag,
                 );
                 if !standstill && !self.soft_inv_scale.is_empty() {
-                    soft_sample = self
-                        .soft_innovation(self.first_stage.as_ref().unwrap_or(&sol), &soft_view);
+                    soft_sample =
+                        self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol), &soft_view);
                 }
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {
