@@ -26,6 +26,15 @@ pub enum CoreError {
         /// What was given.
         got: usize,
     },
+    /// Per-match constants given for a problem ([`crate::Problem::with_match_constants`]) whose
+    /// length is not the metric's count per match times the matches.
+    #[error("expected {expected} per-match constants, got {got}")]
+    MatchConstantCount {
+        /// The metric's count per match times the matches.
+        expected: usize,
+        /// What was given.
+        got: usize,
+    },
     /// The metric cannot handle a camera model of the rig (e.g. a pixel metric on a fisheye).
     #[error("metric `{metric}` does not support camera {camera} ({reason})")]
     UnsupportedCamera {

@@ -130,6 +130,44 @@ pub trait FrameEstimator: Send + Sync + Debug {
     ) -> Result<Vec<Vec<f64>>, CoreError> {
         Ok(Vec::new())
     }
+    /// The number of per-match constants of the metric
+    /// ([`ResidualMetric::MATCH_CONSTANTS`]); 0 (the default): none.
+    fn match_constant_count(&self) -> usize {
+        0
+    }
+    /// The metric's per-match constants of every match of `request.observations` (camera
+    /// order, [`match_constant_count`](Self::match_constant_count) each;
+    /// [`crate::problem::compute_match_constants`]): computed once by a caller that evaluates
+    /// the same matches, or a subset of them, several times (the final stage: the residual
+    /// norms on all matches, then the refit on its support), and handed to
+    /// [`solve_with_constants`](Self::solve_with_constants) and
+    /// [`residual_norms_with_constants`](Self::residual_norms_with_constants). Empty (the
+    /// default) for a metric without any.
+    fn match_constants(&self, _request: &SolveRequest<'_>) -> Vec<f64> {
+        Vec::new()
+    }
+    /// [`solve`](Self::solve) with the metric's per-match constants of
+    /// `request.observations` given ([`match_constants`](Self::match_constants), or the
+    /// constants of the matches a subset kept, in order): bit for bit the same solution, without
+    /// computing them again. Empty `constants`: as `solve`; constants of the wrong length are
+    /// an error. (A rotation-only solve uses another metric and ignores them.)
+    fn solve_with_constants(
+        &self,
+        request: &SolveRequest<'_>,
+        _constants: &[f64],
+    ) -> Result<FrameSolution, CoreError> {
+        self.solve(request)
+    }
+    /// [`residual_norms`](Self::residual_norms) with the metric's per-match constants given
+    /// (as in [`solve_with_constants`](Self::solve_with_constants)).
+    fn residual_norms_with_constants(
+        &self,
+        request: &SolveRequest<'_>,
+        params: &[f64],
+        _constants: &[f64],
+    ) -> Result<Vec<Vec<f64>>, CoreError> {
+        self.residual_norms(request, params)
+    }
 }
 
 /// The estimator of a model with a metric: the model erased, the metric's per-match loop
@@ -180,6 +218,7 @@ fn run<R: ResidualMetric>(
     metric: &R,
     req: &SolveRequest<'_>,
     fixed: &[bool],
+    constants: &[f64],
 ) -> Result<FrameSolution, CoreError> {
     let problem = Problem::new(
         model,
@@ -190,7 +229,8 @@ fn run<R: ResidualMetric>(
         req.initial,
     )?
     .with_fixed(fixed)
-    .with_motion_prior(req.motion_prior);
+    .with_motion_prior(req.motion_prior)
+    .with_match_constants(constants)?;
     let report = req.solver.solve(&problem, &problem.free_params());
     let params = problem.full_params(&report.x);
     let (inliers, inlier_mask) = count_inliers(&problem, req.rig, req.loss.scale(), &report.x);
@@ -229,8 +269,24 @@ impl<R: ResidualMetric> FrameEstimator for Erased<R> {
     }
 
     fn solve(&self, req: &SolveRequest<'_>) -> Result<FrameSolution, CoreError> {
+        self.solve_with_constants(req, &[])
+    }
+
+    fn match_constant_count(&self) -> usize {
+        R::MATCH_CONSTANTS
+    }
+
+    fn match_constants(&self, req: &SolveRequest<'_>) -> Vec<f64> {
+        crate::problem::compute_match_constants(&self.metric, req.rig, req.observations)
+    }
+
+    fn solve_with_constants(
+        &self,
+        req: &SolveRequest<'_>,
+        constants: &[f64],
+    ) -> Result<FrameSolution, CoreError> {
         if !req.rotation_only {
-            return run(self.model.as_ref(), &self.metric, req, req.fixed);
+            return run(self.model.as_ref(), &self.metric, req, req.fixed, constants);
         }
         // Hold every parameter that does not move the rotation at the start.
         let np = self.model.params().len();
@@ -241,7 +297,7 @@ impl<R: ResidualMetric> FrameEstimator for Erased<R> {
                 *f |= !moves;
             }
         }
-        run(self.model.as_ref(), &RotationOnly, req, &fixed)
+        run(self.model.as_ref(), &RotationOnly, req, &fixed, &[])
     }
 
     fn cost(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<f64, CoreError> {
@@ -277,7 +333,16 @@ impl<R: ResidualMetric> FrameEstimator for Erased<R> {
         req: &SolveRequest<'_>,
         params: &[f64],
     ) -> Result<Vec<Vec<f64>>, CoreError> {
-        let problem = self.problem(req, params)?;
+        self.residual_norms_with_constants(req, params, &[])
+    }
+
+    fn residual_norms_with_constants(
+        &self,
+        req: &SolveRequest<'_>,
+        params: &[f64],
+        constants: &[f64],
+    ) -> Result<Vec<Vec<f64>>, CoreError> {
+        let problem = self.problem(req, params)?.with_match_constants(constants)?;
         let mut out = vec![Vec::new(); req.rig.len()];
         problem.for_each_residual_norm(params, |j, n| out[j].push(n));
         Ok(out)

@@ -63,6 +63,37 @@ pub struct Problem<'a, R: ResidualMetric> {
     /// The metric's per-match constants ([`ResidualMetric::MATCH_CONSTANTS`] per match, camera
     /// order), computed at the first evaluation that needs them; never with `automatic`.
     constants: OnceCell<Vec<f64>>,
+    /// The same, given by the caller ([`Problem::with_match_constants`]): read instead of
+    /// `constants`.
+    given_constants: Option<&'a [f64]>,
+}
+
+/// The metric's per-match constants ([`ResidualMetric::MATCH_CONSTANTS`] each) of every match
+/// of `obs` on the cameras of `rig`, in camera order (what a [`Problem`] computes at its first
+/// evaluation, or is given by [`Problem::with_match_constants`]); empty for a metric without any.
+pub fn compute_match_constants<R: ResidualMetric>(
+    metric: &R,
+    rig: &Rig,
+    obs: &FrameObservations,
+) -> Vec<f64> {
+    let m = R::MATCH_CONSTANTS;
+    if m == 0 {
+        return Vec::new();
+    }
+    let n: usize = obs.per_camera.iter().take(rig.len()).map(Vec::len).sum();
+    // Filled match by match through a small buffer (no zeroed allocation of the whole).
+    let mut c = Vec::with_capacity(m * n);
+    let mut one = vec![0.0; m];
+    for (j, cam) in rig.cameras().iter().enumerate() {
+        let Some(obs) = obs.per_camera.get(j) else {
+            continue;
+        };
+        for o in obs {
+            metric.match_constants(&cam.model, o, &mut one);
+            c.extend_from_slice(&one);
+        }
+    }
+    c
 }
 
 /// Matches per step of the one-residual fused linearisation
@@ -136,7 +167,31 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             automatic: false,
             last_norms: RefCell::new((ParamVec::repeat(f64::NAN), Vec::new())),
             constants: OnceCell::new(),
+            given_constants: None,
         })
+    }
+
+    /// With the metric's per-match constants of every match given (camera order,
+    /// [`ResidualMetric::MATCH_CONSTANTS`] each, as [`compute_match_constants`] computes them):
+    /// the problem reads them instead of computing its own, so that several problems on the
+    /// same matches, or on a subset of them (the subset's constants, in order), share one
+    /// computation. An empty slice changes nothing (the problem computes them); a slice of
+    /// another length is an error. The constants are exact, so a problem given them evaluates
+    /// bit for bit as one that computes them ([`with_automatic`](Self::with_automatic) ignores
+    /// them, as it ignores its own cache).
+    pub fn with_match_constants(mut self, constants: &'a [f64]) -> Result<Self, CoreError> {
+        if constants.is_empty() {
+            return Ok(self);
+        }
+        let expected = R::MATCH_CONSTANTS * self.num_matches();
+        if constants.len() != expected {
+            return Err(CoreError::MatchConstantCount {
+                expected,
+                got: constants.len(),
+            });
+        }
+        self.given_constants = Some(constants);
+        Ok(self)
     }
 
     /// With `true`, linearises by automatic differentiation of
@@ -161,21 +216,11 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         if m == 0 || self.automatic {
             return &[];
         }
-        self.constants.get_or_init(|| {
-            // Filled match by match through a small buffer (no zeroed allocation of the whole).
-            let mut c = Vec::with_capacity(m * self.num_matches());
-            let mut one = vec![0.0; m];
-            for (j, cam) in self.rig.cameras().iter().enumerate() {
-                let Some(obs) = self.obs.per_camera.get(j) else {
-                    continue;
-                };
-                for o in obs {
-                    self.metric.match_constants(&cam.model, o, &mut one);
-                    c.extend_from_slice(&one);
-                }
-            }
-            c
-        })
+        if let Some(c) = self.given_constants {
+            return c;
+        }
+        self.constants
+            .get_or_init(|| compute_match_constants(self.metric, self.rig, self.obs))
     }
 
     /// The residuals of match `k` (camera order) into `out`: by

@@ -209,6 +209,7 @@ impl FinalFitOptions {
 }
 
 /// The median of `v` (reordered in place); `None` if empty.
+#[cfg(test)]
 fn median(v: &mut [f64]) -> Option<f64> {
     if v.is_empty() {
         return None;
@@ -220,18 +221,23 @@ fn median(v: &mut [f64]) -> Option<f64> {
 
 /// The noise `σ̂` of the residual norms `norms` (step 1 of the module doc) for a first-stage
 /// loss scale `scale`; `None` if no residual lies within `start_scales · scale`.
+///
+/// The finite norms are sorted once; each of the three trimmed sets is then a prefix of them
+/// (`r < cut`), whose median (the element of rank `len / 2`, as [`median`] selects it) is read
+/// off directly: the same `σ̂` as selecting each set's median anew, for one sort.
 pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Option<f64> {
     let lo = opts.min_scale_ratio * scale;
     let hi = opts.max_scale_ratio * scale;
     let mut cut = opts.start_scales * scale;
+    let mut sorted: Vec<f64> = norms.iter().copied().filter(|r| r.is_finite()).collect();
+    sorted.sort_unstable_by(f64::total_cmp);
     let mut sigma = None;
     for _ in 0..3 {
-        let mut inside: Vec<f64> = norms
-            .iter()
-            .copied()
-            .filter(|r| r.is_finite() && *r < cut)
-            .collect();
-        let s = (MAD_TO_SIGMA * median(&mut inside)?).clamp(lo, hi);
+        let inside = &sorted[..sorted.partition_point(|r| *r < cut)];
+        let m = *inside
+            .get(inside.len() / 2)
+            .filter(|_| !inside.is_empty())?;
+        let s = (MAD_TO_SIGMA * m).clamp(lo, hi);
         sigma = Some(s);
         cut = opts.inlier_sigmas * s;
     }
@@ -299,10 +305,15 @@ pub fn refit(
     obs: &FrameObservations,
     first: FrameSolution,
 ) -> FrameSolution {
+    // The stage metric's per-match constants of every match, computed once for every pass:
+    // the residual norms on all matches and each refit on its support read them.
+    let constants = ctx
+        .estimator
+        .match_constants(&ctx.request(obs, &first.params));
     let mut best: Option<FrameSolution> = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
-        match refit_once(ctx, opts, obs, from) {
+        match refit_once(ctx, opts, obs, &constants, from) {
             Some((mut fin, support)) => {
                 fin.report.iterations += best
                     .as_ref()
@@ -327,29 +338,42 @@ pub fn refit(
     fin
 }
 
+impl<'a> FinalFitContext<'a> {
+    /// The request of the first stage's loss and prior on `obs`, from `from`.
+    fn request<'b>(&'b self, obs: &'b FrameObservations, from: &'b [f64]) -> SolveRequest<'b> {
+        SolveRequest {
+            rig: self.rig,
+            observations: obs,
+            loss: self.loss,
+            solver: self.solver,
+            initial: from,
+            fixed: self.fixed,
+            rotation_only: false,
+            motion_prior: Some(self.motion_prior),
+        }
+    }
+}
+
 /// One pass of the stage from the parameters `from`: the refit solution and its support size
-/// per camera, or `None` (noise not estimable, support too small, refit failed).
+/// per camera, or `None` (noise not estimable, support too small, refit failed). `constants`:
+/// the stage metric's per-match constants of `obs` ([`FrameEstimator::match_constants`]; empty:
+/// each problem computes its own).
 fn refit_once(
     ctx: &FinalFitContext<'_>,
     opts: &FinalFitOptions,
     obs: &FrameObservations,
+    constants: &[f64],
     from: &[f64],
 ) -> Option<(FrameSolution, Vec<usize>)> {
     let scale = ctx.loss.scale();
     if !(scale.is_finite() && scale > 0.0) {
         return None;
     }
-    let req = SolveRequest {
-        rig: ctx.rig,
-        observations: obs,
-        loss: ctx.loss,
-        solver: ctx.solver,
-        initial: from,
-        fixed: ctx.fixed,
-        rotation_only: false,
-        motion_prior: Some(ctx.motion_prior),
-    };
-    let norms = ctx.estimator.residual_norms(&req, from).ok()?;
+    let req = ctx.request(obs, from);
+    let norms = ctx
+        .estimator
+        .residual_norms_with_constants(&req, from, constants)
+        .ok()?;
     if norms.len() != obs.per_camera.len()
         || norms
             .iter()
@@ -363,23 +387,33 @@ fn refit_once(
     let cut = opts.inlier_sigmas * sigma;
     let motion = ctx.estimator.motion(from);
     let tolerance = opts.cheirality_sigmas * sigma;
+    // The support's per-match constants: those of the matches it keeps, in order (the norms
+    // cover the rig's cameras in camera order, as the constants do).
+    let m = ctx.estimator.match_constant_count();
+    let share = m > 0 && constants.len() == m * norms.iter().map(Vec::len).sum::<usize>();
+    let mut core_constants = Vec::with_capacity(if share { constants.len() } else { 0 });
+    let mut k = 0;
     let core = FrameObservations {
         per_camera: obs
             .per_camera
             .iter()
             .zip(&norms)
             .zip(ctx.rig.cameras())
-            .map(|((m, n), cam)| {
+            .map(|((ms, n), cam)| {
                 let c = momo_core::camera_motion(&motion, &cam.t_vehicle_camera);
-                m.iter()
-                    .zip(n)
-                    .filter(|(o, r)| {
-                        **r < cut
-                            && (opts.cheirality_sigmas <= 0.0
-                                || cheiral(&c, &o.f0, &o.f1, tolerance))
-                    })
-                    .map(|(o, _)| *o)
-                    .collect()
+                let mut kept = Vec::with_capacity(ms.len());
+                for (o, r) in ms.iter().zip(n) {
+                    if *r < cut
+                        && (opts.cheirality_sigmas <= 0.0 || cheiral(&c, &o.f0, &o.f1, tolerance))
+                    {
+                        kept.push(*o);
+                        if share {
+                            core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
+                        }
+                    }
+                    k += 1;
+                }
+                kept
             })
             .collect(),
         cross_camera: obs.cross_camera.clone(),
@@ -415,7 +449,7 @@ fn refit_once(
         motion_prior: Some(&prior),
         ..req
     };
-    match ctx.estimator.solve(&req) {
+    match ctx.estimator.solve_with_constants(&req, &core_constants) {
         Ok(fin)
             if fin.report.termination != Termination::NumericalFailure
                 && fin.params.iter().all(|p| p.is_finite())
@@ -454,6 +488,66 @@ mod tests {
             estimate_sigma(&[1.0; 5], 0.001, &FinalFitOptions::default()),
             None
         );
+    }
+
+    /// `estimate_sigma` by one sort against the three selections it replaces (each trimmed
+    /// set filtered and its median selected anew): the same `σ̂` bit for bit on random norms
+    /// with ties, zeros, outliers, NaN and infinities, and the same `None`.
+    #[test]
+    fn sigma_from_one_sort_matches_three_selections() {
+        fn by_selection(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Option<f64> {
+            let lo = opts.min_scale_ratio * scale;
+            let hi = opts.max_scale_ratio * scale;
+            let mut cut = opts.start_scales * scale;
+            let mut sigma = None;
+            for _ in 0..3 {
+                let mut inside: Vec<f64> = norms
+                    .iter()
+                    .copied()
+                    .filter(|r| r.is_finite() && *r < cut)
+                    .collect();
+                let s = (MAD_TO_SIGMA * median(&mut inside)?).clamp(lo, hi);
+                sigma = Some(s);
+                cut = opts.inlier_sigmas * s;
+            }
+            sigma
+        }
+        let mut x: u64 = 12345;
+        let mut next = || {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let opts = FinalFitOptions::default();
+        let (mut some, mut none) = (0, 0);
+        for case in 0..2000 {
+            let n = (next() * 400.0) as usize;
+            let norms: Vec<f64> = (0..n)
+                .map(|_| {
+                    let u = next();
+                    if case % 50 == 0 {
+                        return 0.05 + u; // nothing within the first cut
+                    }
+                    match (next() * 20.0) as usize {
+                        0 => f64::NAN,
+                        1 => f64::INFINITY,
+                        2 => 0.0,
+                        3 => 0.001,        // ties at the scale
+                        4 | 5 => 0.05 + u, // far outliers
+                        _ => 0.002 * u * (1.0 + (case % 7) as f64),
+                    }
+                })
+                .collect();
+            let scale = [0.001, 0.0005, 0.004][case % 3];
+            let (a, b) = (
+                estimate_sigma(&norms, scale, &opts),
+                by_selection(&norms, scale, &opts),
+            );
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "case {case}");
+            if a.is_some() { some += 1 } else { none += 1 }
+        }
+        assert!(some > 1500 && none >= 40, "{some} {none}");
     }
 
     /// `metric = "angle_plane_ml"` runs the final stage with that metric: the odometry builds
@@ -553,6 +647,114 @@ mod tests {
         // No translation: nothing to test.
         let still = Pose::new(r, Vector3::zeros());
         assert!(cheiral(&still, &dir, &(-dir), 0.0));
+    }
+
+    /// Canned matches of a random motion with deterministic bearing noise (about 1e-3 rad) and
+    /// the canned outliers: the estimator of the default final stage (`angle_plane_ml`, se3),
+    /// the rig, the matches and a start near the truth.
+    fn noisy_case(
+        fisheye: bool,
+        seed: u64,
+        w: [f64; 3],
+    ) -> (
+        Box<dyn FrameEstimator>,
+        momo_core::Rig,
+        FrameObservations,
+        Vec<f64>,
+    ) {
+        use momo_core::Manifold;
+        let truth = [w[0], w[1], 0.02 + w[2], 0.01, 0.0, 1.0];
+        let rig = if fisheye {
+            momo_testing::canned::fisheye_rig()
+        } else {
+            momo_testing::canned::pinhole_rig()
+        };
+        let mut obs = momo_testing::canned::synthetic_observations(
+            &rig,
+            &momo_models::Se3.motion(&truth),
+            40,
+            8,
+            seed,
+        );
+        let mut k = seed as f64;
+        for o in obs.per_camera.iter_mut().flatten() {
+            k += 1.0;
+            let n = nalgebra::Vector3::new((k * 0.7).sin(), (k * 1.3).cos(), (k * 2.1).sin());
+            o.f1 = (o.f1 + n * 1e-3).normalize();
+        }
+        let est = momo_core::erase(momo_models::Se3, momo_costs::AnglePlaneMl);
+        let from: Vec<f64> = truth
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 2e-4 * ((i as f64 + k).sin()))
+            .collect();
+        (est, rig, obs, from)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(16))]
+        /// The stage metric's per-match constants computed once and shared (the residual norms
+        /// on all matches, then the refit on the support: `refit_once` with `constants`) give
+        /// the solution of the path where each problem computes its own (`refit_once` with
+        /// none, the stage before this was shared) bit for bit: parameters, costs, normal
+        /// matrix, iterations, inliers and support, on both canned rigs. And the estimator's
+        /// `*_with_constants` methods against its plain ones on a subset of the matches, with
+        /// constants of the wrong length an error.
+        #[test]
+        fn shared_match_constants_are_bit_identical(
+            seed in 0u64..10_000,
+            fisheye in proptest::bool::ANY,
+            w in proptest::array::uniform3(-0.01..0.01f64),
+        ) {
+            let (est, rig, obs, from) = noisy_case(fisheye, seed, w);
+            let loss = momo_costs::Cauchy::new(0.001);
+            let solver = momo_solvers::LevenbergMarquardt::default();
+            let fixed = [false, false, false, false, false, true];
+            let prior = MotionPrior::default();
+            let ctx = FinalFitContext {
+                rig: &rig,
+                estimator: est.as_ref(),
+                loss: &loss,
+                solver: &solver,
+                fixed: &fixed,
+                motion_prior: &prior,
+            };
+            let req = ctx.request(&obs, &from);
+            let constants = est.match_constants(&req);
+            proptest::prop_assert_eq!(constants.len(), 18 * obs.len());
+            proptest::prop_assert_eq!(est.match_constant_count(), 18);
+            let opts = FinalFitOptions::default();
+            let shared = refit_once(&ctx, &opts, &obs, &constants, &from);
+            let own = refit_once(&ctx, &opts, &obs, &[], &from);
+            proptest::prop_assert!(shared.is_some());
+            proptest::prop_assert_eq!(format!("{shared:?}"), format!("{own:?}"));
+            // The estimator's methods: norms, and a solve on every match but each third.
+            let norms = est.residual_norms(&req, &from).unwrap();
+            let with = est.residual_norms_with_constants(&req, &from, &constants).unwrap();
+            proptest::prop_assert_eq!(format!("{norms:?}"), format!("{with:?}"));
+            let mut sub = FrameObservations::new(rig.len());
+            let mut sub_constants = Vec::new();
+            let mut k = 0;
+            for (j, matches) in obs.per_camera.iter().enumerate() {
+                for o in matches {
+                    if k % 3 != 0 {
+                        sub.per_camera[j].push(*o);
+                        sub_constants.extend_from_slice(&constants[18 * k..18 * (k + 1)]);
+                    }
+                    k += 1;
+                }
+            }
+            let sub_req = SolveRequest { observations: &sub, ..req };
+            let plain = est.solve(&sub_req).unwrap();
+            let given = est.solve_with_constants(&sub_req, &sub_constants).unwrap();
+            proptest::prop_assert_eq!(format!("{plain:?}"), format!("{given:?}"));
+            let short = est.solve_with_constants(&sub_req, &sub_constants[1..]);
+            proptest::prop_assert!(
+                matches!(short, Err(momo_core::CoreError::MatchConstantCount { .. })),
+                "{:?}",
+                short
+            );
+        }
     }
 
     /// `Φ⁻¹((1 + p) / 2)` by bisection on a numerically integrated Gaussian density.

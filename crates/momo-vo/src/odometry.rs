@@ -478,9 +478,13 @@ impl Odometry {
     }
 
     /// This frame's soft-prior innovations `(d_i², v_i)` ([`Odometry::soft_prior_sigma`]), if
-    /// the data determine every residual.
-    fn soft_innovation(&self, sol: &FrameSolution) -> Option<Vec<(f64, f64)>> {
-        let view = self.soft_data_view(sol).filter(|v| v.centred)?;
+    /// the data determine every residual. `view`: the frame's data view of `sol`, computed
+    /// here if no one has yet ([`SoftView`]).
+    fn soft_innovation(&self, sol: &FrameSolution, view: &SoftView) -> Option<Vec<(f64, f64)>> {
+        let view = view
+            .get_or_init(|| self.soft_data_view(sol))
+            .as_ref()
+            .filter(|v| v.centred)?;
         let out: Vec<(f64, f64)> = (0..view.c.len())
             .map(|r| ((view.q_d[r] - view.c[r]).powi(2), view.v[(r, r)]))
             .collect();
@@ -498,16 +502,32 @@ impl Odometry {
     /// Where the final stage replaced the first stage's solution (`first_stage`), the view is
     /// the first stage's and the shift is that of the final estimate from the data's own
     /// estimate `p̂₁ + b₁`: `b = b₁ + p̂₁ − p̂`.
-    fn prior_conflict_shift(&self, sol: &FrameSolution) -> Option<nalgebra::DVector<f64>> {
+    ///
+    /// `shared`: the frame's data view of `first_stage` (else of `sol`), computed here if no one
+    /// has yet ([`SoftView`]); used where the view is of that solution.
+    fn prior_conflict_shift(
+        &self,
+        sol: &FrameSolution,
+        shared: Option<&SoftView>,
+    ) -> Option<nalgebra::DVector<f64>> {
         let limit = self.config.trust.prior_conflict_chi2;
         if !(limit > 0.0) {
             return None;
         }
         let first = self.first_stage.as_ref().filter(|f| f.free == sol.free);
-        let mut view = self.soft_data_view(first.unwrap_or(sol))?;
+        let at = first.unwrap_or(sol);
+        let own;
+        let view = match shared.filter(|_| first.is_some() || self.first_stage.is_none()) {
+            Some(cell) => cell.get_or_init(|| self.soft_data_view(at)).as_ref()?,
+            None => {
+                own = self.soft_data_view(at)?;
+                &own
+            }
+        };
+        let mut shift = view.shift.clone();
         if let Some(f) = first {
-            for (j, &i) in sol.free.iter().enumerate().take(view.shift.len()) {
-                view.shift[j] += f.params[i] - sol.params[i];
+            for (j, &i) in sol.free.iter().enumerate().take(shift.len()) {
+                shift[j] += f.params[i] - sol.params[i];
             }
         }
         let k = |r: usize| self.soft_inv_scale.get(r).copied().unwrap_or(1.0);
@@ -516,7 +536,7 @@ impl Odometry {
             let z = (view.q_d[r] - view.c[r]).powi(2) / (sigma * sigma + view.v[(r, r)].max(0.0));
             z.is_finite() && z > limit
         });
-        (conflict && view.shift.iter().all(|v| v.is_finite())).then_some(view.shift)
+        (conflict && shift.iter().all(|v| v.is_finite())).then_some(shift)
     }
 
     /// The mean-square spread `τ_r²(s)` of each soft-prior residual around its centre at arc
@@ -888,7 +908,15 @@ impl Odometry {
                         diag.status = FrameStatus::Degenerate;
                         diag.constraint = Constraint::Degenerate;
                         diag.reason = Some(reason);
-                        self.fill_diagnostics(obs, &sol, false, (false, false), None, &mut diag);
+                        self.fill_diagnostics(
+                            obs,
+                            &sol,
+                            false,
+                            (false, false),
+                            None,
+                            None,
+                            &mut diag,
+                        );
                         None
                     }
                     None => Some(sol),
@@ -1010,16 +1038,21 @@ impl Odometry {
                     clustered = self.clustering.observe(t, stat);
                     jackknife |= clustered;
                 }
+                // The soft prior's data view of the first stage's solution (else of `sol`): the
+                // conflict check of the covariance and the innovation below share it.
+                let soft_view = SoftView::new();
                 self.fill_diagnostics(
                     obs,
                     &sol,
                     !standstill,
                     (jackknife, clustered),
                     outside,
+                    Some(&soft_view),
                     &mut diag,
                 );
                 if !standstill && !self.soft_inv_scale.is_empty() {
-                    soft_sample = self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol));
+                    soft_sample =
+                        self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol), &soft_view);
                 }
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {
@@ -1467,6 +1500,7 @@ impl Odometry {
         sol: &FrameSolution,
         jackknife: bool,
         clustered: bool,
+        soft_view: Option<&SoftView>,
     ) -> Option<nalgebra::DMatrix<f64>> {
         let mut cov = match self.unlearnt_prior_covariance(sol) {
             Some(c) => c,
@@ -1474,7 +1508,7 @@ impl Odometry {
         };
         // Where the data contradict the soft prior, its pull on the estimate is an error the
         // posterior covariance does not hold: add it (`trust.prior_conflict_chi2`).
-        if let Some(b) = self.prior_conflict_shift(sol)
+        if let Some(b) = self.prior_conflict_shift(sol, soft_view)
             && b.len() == cov.nrows()
         {
             cov += &b * b.transpose();
@@ -1800,6 +1834,8 @@ impl Odometry {
     /// (`moving`) a competing motion widens it ([`trust::mixture_covariance`]), and the
     /// leave-one-cell-out jackknife does where `jackknife` (the support dropped, see
     /// [`trust::TrustOptions::jackknife_support_drop`]) or a competing motion was found.
+    /// `soft_view`: the frame's shared soft-prior data view ([`SoftView`]), if any.
+    #[allow(clippy::too_many_arguments)]
     fn fill_diagnostics(
         &self,
         obs: &FrameObservations,
@@ -1807,6 +1843,7 @@ impl Odometry {
         moving: bool,
         jackknife: (bool, bool),
         outside: Option<Vec<Vec<bool>>>,
+        soft_view: Option<&SoftView>,
         diag: &mut FrameDiagnostics,
     ) {
         diag.initial_cost = sol.report.initial_cost;
@@ -1823,7 +1860,7 @@ impl Odometry {
         };
         diag.jackknife = moving && (jackknife.0 || competing.is_some());
         let mut reported =
-            self.reported_covariance(obs, sol, diag.jackknife, moving && jackknife.1);
+            self.reported_covariance(obs, sol, diag.jackknife, moving && jackknife.1, soft_view);
         if let Some((b, w)) = &competing {
             let mut all = sol.params.clone();
             for (&i, v) in sol.free.iter().zip(b) {
@@ -1940,6 +1977,11 @@ fn nonnegative_line_fit(pts: &[(f64, f64)]) -> (f64, f64) {
     }
     (a, b)
 }
+
+/// A frame's soft-prior data view of its first stage's solution (else of its solution),
+/// computed once by whichever of the prior-conflict check and the innovation asks first
+/// (`None` inside: not defined there).
+type SoftView = std::cell::OnceCell<Option<SoftDataView>>;
 
 /// The data's own view of the soft prior's residuals at a solution
 /// ([`Odometry::soft_data_view`]).
