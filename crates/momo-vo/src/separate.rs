@@ -193,7 +193,7 @@ impl SeparateOptions {
     /// file has no such section; since 2026-11-28): the multi-frame choice by the spread of
     /// the ground support (`hypotheses.spread_grid = [16, 8]`), the robust loss, the default's
     /// final efficient stage (`final_fit`), the match memory at 20 px with its exclusion, and
-    /// competition over time (`persistence = 0.25`): a frame whose second motion does not
+    /// competition over time (`persistence = 0.4`): a frame whose second motion does not
     /// persist in the memory is solved exactly as without the separation. A config file's
     /// `[odometry.separate]` section replaces it as a whole (fields it omits take
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -204,7 +204,7 @@ impl SeparateOptions {
             final_fit: true,
             memory_radius: 20.0,
             memory_exclude: true,
-            persistence: 0.25,
+            persistence: 0.4,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 ..HypothesesOptions::default()
