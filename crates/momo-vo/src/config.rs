@@ -101,8 +101,11 @@ pub struct OdometryOptions {
     /// together, their errors run on from frame to frame, and a prior centred on the previous
     /// frame carries them on (simulated KITTI 07 and 08 drives, docs/RESULTS.md). 0: always.
     pub prior_min_arc_length: f64,
-    /// Motion separation after each frame's solve ([`crate::separate`]); none by default.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Motion separation after each frame's solve ([`crate::separate`]); by default
+    /// [`SeparateOptions::competition_over_time`](crate::separate::SeparateOptions::competition_over_time)
+    /// (since 2026-11-28; `enabled = false` turns it off). A config file's
+    /// `[odometry.separate]` section replaces it as a whole.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub separate: Option<crate::separate::SeparateOptions>,
     /// The final efficient stage after each moving frame's solve ([`crate::final_fit`]: the
     /// noise estimated from the residuals, a refit on the matches within a few sigmas); on by
@@ -164,7 +167,7 @@ impl Default for OdometryOptions {
             rotation_change_sigma: 0.002,
             prior_min_inlier_ratio: 0.85,
             prior_min_arc_length: 0.0,
-            separate: None,
+            separate: Some(crate::separate::SeparateOptions::competition_over_time()),
             final_fit: crate::final_fit::FinalFitOptions::default(),
             soft_prior_centring_frames: 100,
             soft_prior_sigma_learning: true,
@@ -435,6 +438,16 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # then a refit on the matches within inlier_sigmas sigmas with Cauchy at cauchy_sigmas\n\
          # sigmas (0: least squares) and the priors in units of sigma (prior_in_sigma);\n\
          # metric = \"angle_plane_ml\": refit with that registered metric (default: the first's).",
+    ),
+    (
+        "odometry.separate",
+        "# Motion separation (issue 14): a second motion fitted to the matches outside the\n\
+         # first's support (threshold, radians) competes only where the match memory\n\
+         # (memory_radius, pixels) follows its split from the previous frame pair\n\
+         # (persistence, 0 to 1: an object persists, a static scene's noise tail does not);\n\
+         # the choice by the ground support's spread (hypotheses), the final stage on the chosen\n\
+         # support without the remembered-other matches (final_fit, memory_exclude).\n\
+         # enabled = false: off. This section replaces the default one as a whole.",
     ),
     (
         "odometry.motion_prior_sigmas",

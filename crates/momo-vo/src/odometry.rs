@@ -924,11 +924,14 @@ impl Odometry {
                 other => other,
             }
         };
-        // Motion separation (issue 14, crate::separate; off by default).
+        // Motion separation (issue 14, crate::separate; competition over time by default).
         // What follows the separation (`separate.final_fit`: the final stage on all matches
         // or on the chosen motion's support).
         let mut next_stage = crate::separate::NextStage::FinalFit;
-        let (result, competing) = match (result, &self.config.odometry.separate) {
+        let (result, competing) = match (
+            result,
+            self.config.odometry.separate.as_ref().filter(|s| s.enabled),
+        ) {
             (Some(sol), Some(opts)) if !standstill => {
                 let mut starts = vec![init.clone()];
                 starts.extend(self.restart_points(&init));
@@ -1012,6 +1015,24 @@ impl Odometry {
                         _ => self.final_fit(obs, sol, &fixed, diag.scale),
                     };
                     self.first_stage = first.filter(|f| f.params != sol.params);
+                }
+                // The match memory of the frame's final motion (`separate.memory_final`).
+                if !standstill
+                    && let Some(opts) = self.config.odometry.separate.as_ref()
+                    && opts.enabled
+                    && opts.memory_final
+                    && opts.memory_radius > 0.0
+                {
+                    let support: Vec<Vec<bool>> = crate::separate::epipolar_at_least(
+                        &self.rig,
+                        &self.estimator.motion(&sol.params),
+                        obs,
+                        opts.threshold,
+                    )
+                    .into_iter()
+                    .map(|m| m.into_iter().map(|outside| !outside).collect())
+                    .collect();
+                    self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
                 }
                 // The jackknife (a dozen solves) only where the support dropped against the
                 // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
