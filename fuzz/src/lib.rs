@@ -669,7 +669,7 @@ fn fix_png_crcs(data: &mut [u8]) {
 }
 
 /// The replay of every target over its seeds and a generated mutation corpus, without libFuzzer
-/// (`cargo test --manifest-path fuzz/Cargo.toml --no-default-features --lib`).
+/// (`cargo test -p momo-fuzz --lib`, part of `cargo test --workspace`).
 #[cfg(test)]
 #[path = "../tests/corpus.rs"]
 mod corpus;

@@ -2,7 +2,7 @@
 //! (`momo_fuzz::mutate`, deterministic): the fuzz targets' promises, checked without libFuzzer.
 //! `MOMO_FUZZ_MUTATIONS` sets the mutations per target (default 300; the figures in
 //! docs/GUARANTEES.md section 6 were run with more), `MOMO_FUZZ_SEED` the generator's seed.
-//! Run: `cargo test --release --manifest-path fuzz/Cargo.toml --no-default-features --lib -- --nocapture`.
+//! Run: `cargo test --release -p momo-fuzz --lib -- --nocapture` (also part of `cargo test --workspace`).
 
 use std::path::Path;
 
