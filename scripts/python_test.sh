@@ -1,7 +1,6 @@
 #!/usr/bin/env bash
-# The Python bindings (crates/momo-py): builds the package with maturin (the `test` profile, as
-# the `momo` binary it is compared with, so both reuse the libraries `cargo test` built) into a
-# venv under target/, then runs its pytest suite
+# The Python bindings (crates/momo-py): builds the package with maturin (dev profile, as the
+# debug `momo` binary it is compared with) into a venv under target/, then runs its pytest suite
 # (python/tests: equality with `momo run`/`momo simulate`/`momo eval`, every exception path,
 # Config round trips). Exits non-zero on any failure, and when no test ran (pytest's exit 5).
 #
@@ -18,13 +17,12 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 "$venv/bin/python" -m pip install -q --disable-pip-version-check "maturin>=1.7,<2" "numpy>=1.21" "pytest>=7"
 
-# The CLI the tests compare with (same profile and target dir as the extension; the `test`
-# profile writes to target/debug).
-cargo build --quiet --profile test --bin momo
+# The CLI the tests compare with (same profile and target dir as the extension).
+cargo build --quiet --bin momo
 
 # Build the wheel (abi3) and install it: no build products land in the source tree.
 rm -rf "$root/target/wheels/python-test"
-PATH="$venv/bin:$PATH" VIRTUAL_ENV="$venv" maturin build --quiet --profile test \
+PATH="$venv/bin:$PATH" VIRTUAL_ENV="$venv" maturin build --quiet \
     --manifest-path crates/momo-py/Cargo.toml --interpreter "$venv/bin/python" \
     --out "$root/target/wheels/python-test"
 "$venv/bin/python" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps \
