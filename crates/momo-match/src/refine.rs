@@ -324,6 +324,18 @@ fn iterate<const R: usize>(
 pub fn refine_match(
     prev: Plane<'_>,
     cur: Plane<'_>,
+    p0: (usize, usize),
+    p1: (usize, usize),
+    options: &KltOptions,
+) -> Option<[f64; 4]> {
+    crate::simd::refine_match(prev, cur, p0, p1, options)
+}
+
+/// [`refine_match`]'s body, compiled for AVX2 and the baseline ([`crate::simd::refine_match`]).
+#[inline(always)]
+pub(crate) fn refine_match_body(
+    prev: Plane<'_>,
+    cur: Plane<'_>,
     (u0, v0): (usize, usize),
     (u1, v1): (usize, usize),
     options: &KltOptions,
