@@ -173,7 +173,7 @@ impl ClassFeatures {
 
     /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
     /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false.
-    #[inline]
+    #[inline(always)]
     fn scan(
         &self,
         desc: &Descriptor,
@@ -240,7 +240,7 @@ impl ClassFeatures {
     /// The feature with the smallest SAD to `desc` inside the window `|u - cu| <= ru`,
     /// `|v - cv| <= rv`: `(index, sad, second smallest sad)` (`u32::MAX` if it is alone). Of
     /// equal SADs the first in the index's order wins.
-    #[inline]
+    #[inline(always)]
     pub fn best_in_window(
         &self,
         desc: &Descriptor,
@@ -271,7 +271,7 @@ impl ClassFeatures {
     /// True if feature `index`, at SAD `sad` from `desc` and inside the window, is what
     /// [`best_in_window`](Self::best_in_window) would return for `desc` and this window (the
     /// circular check). Stops at the first feature that beats it.
-    #[inline]
+    #[inline(always)]
     pub fn is_best_in_window(
         &self,
         desc: &Descriptor,

@@ -24,7 +24,7 @@
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, Feature, FrameFeatures, MIN_SIDE};
-use crate::refine::{KltOptions, MAX_HALF};
+use crate::refine::{KltOptions, MAX_HALF, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
 
@@ -344,7 +344,7 @@ pub fn match_features_with_prior(
             let refined: Vec<Match> = chosen
                 .par_iter()
                 .filter_map(|m| {
-                    let [u0, v0, u1, v1] = crate::simd::refine_match(
+                    let [u0, v0, u1, v1] = refine_match(
                         p,
                         c,
                         (m.u0 as usize, m.v0 as usize),

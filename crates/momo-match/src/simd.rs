@@ -162,12 +162,13 @@ kernels! {
         rv: i32,
     ) -> Option<Match> = matcher::match_candidate;
 
-    /// [`refine::refine_match`], dispatched.
-    fn refine_match(
-        prev: Plane<'_>,
-        cur: Plane<'_>,
-        p0: (usize, usize),
-        p1: (usize, usize),
+    /// [`refine::align`], dispatched.
+    fn align(
+        from: Plane<'_>,
+        to: Plane<'_>,
+        u: usize,
+        v: usize,
+        d0: [f64; 2],
         options: &KltOptions,
-    ) -> Option<[f64; 4]> = refine::refine_match_body;
+    ) -> Option<[f64; 2]> = refine::align_body;
 }
