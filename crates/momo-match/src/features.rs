@@ -173,7 +173,7 @@ impl ClassFeatures {
 
     /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
     /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false.
-    #[inline(always)]
+    #[inline]
     fn scan(
         &self,
         desc: &Descriptor,
@@ -240,7 +240,6 @@ impl ClassFeatures {
     /// The feature with the smallest SAD to `desc` inside the window `|u - cu| <= ru`,
     /// `|v - cv| <= rv`: `(index, sad, second smallest sad)` (`u32::MAX` if it is alone). Of
     /// equal SADs the first in the index's order wins.
-    #[inline(always)]
     pub fn best_in_window(
         &self,
         desc: &Descriptor,
@@ -271,7 +270,6 @@ impl ClassFeatures {
     /// True if feature `index`, at SAD `sad` from `desc` and inside the window, is what
     /// [`best_in_window`](Self::best_in_window) would return for `desc` and this window (the
     /// circular check). Stops at the first feature that beats it.
-    #[inline(always)]
     pub fn is_best_in_window(
         &self,
         desc: &Descriptor,
@@ -466,15 +464,16 @@ impl FrameFeatures {
     /// column holding its best key (no search down the columns). The responses fit: |blob| <=
     /// 16 * 255 and |corner| <= 8 * 255, so `8 |r| + 7 <= 32647`.
     #[inline(never)]
-    fn block_extrema_packed(&self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
+    fn block_extrema_packed<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
-        let (blob, corner) = (&self.blob[..], &self.corner[..]);
+        let (blob, corner) = (&self.blob, &self.corner);
         let inner = w - 2 * BORDER;
         // The column keys are padded with `PAD` values that never win (so that the sliding
         // extremes need no bounds), the scratch rows hold the doubling levels.
         let total = inner + PAD;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
+        let blocks = inner.div_ceil(step);
         block_rows
             .par_iter()
             .map_init(
@@ -487,7 +486,71 @@ impl FrameFeatures {
                     (cols, scratch)
                 },
                 |(cols, scratch), &v0| {
-                    crate::simd::pass_one_row(blob, corner, w, h, v0, n, tau, cols, scratch)
+                    let v1 = (v0 + step).min(h - BORDER);
+                    let [bmax, bmin, cmax, cmin] = cols;
+                    let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
+                    let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
+                    let row = |img: &'a [i16], v: usize| -> &'a [i16] {
+                        let s = v * w + BORDER;
+                        &img[s..s + inner]
+                    };
+                    {
+                        let (rb, rc) = (row(blob, v0), row(corner, v0));
+                        for x in 0..inner {
+                            bmax[x] = pack_max(rb[x], 0);
+                            bmin[x] = pack_min(rb[x], 0);
+                            cmax[x] = pack_max(rc[x], 0);
+                            cmin[x] = pack_min(rc[x], 0);
+                        }
+                    }
+                    for v in v0 + 1..v1 {
+                        let r = (v - v0) as i16;
+                        let (rb, rc) = (row(blob, v), row(corner, v));
+                        for x in 0..inner {
+                            bmax[x] = bmax[x].max(pack_max(rb[x], r));
+                            bmin[x] = bmin[x].min(pack_min(rb[x], r));
+                            cmax[x] = cmax[x].max(pack_max(rc[x], r));
+                            cmin[x] = cmin[x].min(pack_min(rc[x], r));
+                        }
+                    }
+                    // The block and window extremes of each class, then the candidates block by
+                    // block.
+                    for (class, (col, sc)) in cols.iter().zip(scratch.iter_mut()).enumerate() {
+                        if class % 2 == 0 {
+                            sliding_block_extremes::<true>(&col[..total], inner, n, sc);
+                        } else {
+                            sliding_block_extremes::<false>(&col[..total], inner, n, sc);
+                        }
+                    }
+                    let mut out = Vec::with_capacity(blocks * CLASSES);
+                    let span = 2 * n + 1;
+                    let windows = (inner + 1).saturating_sub(span);
+                    let class_of = |class: usize| {
+                        let col = &cols[class][..inner];
+                        let sc = &scratch[class];
+                        (col, &sc.blocks[..inner], &sc.window[..windows])
+                    };
+                    let [p0, p1, p2, p3] = std::array::from_fn(class_of);
+                    let mut push = |class: u8, e: Option<(i16, usize, usize, bool)>| {
+                        if let Some((val, k, r, checked)) = e {
+                            let v = v0 + r;
+                            out.push(Extremum {
+                                val,
+                                u: (BORDER + k) as u16,
+                                v: v as u16,
+                                class,
+                                cleared: if checked { (v1 - 1 - v) as u8 } else { 0 },
+                            });
+                        }
+                    };
+                    for blk in 0..blocks {
+                        let k0 = blk * step;
+                        push(0, packed_candidate::<true>(p0.0, p0.1, p0.2, k0, n, tau));
+                        push(1, packed_candidate::<false>(p1.0, p1.1, p1.2, k0, n, tau));
+                        push(2, packed_candidate::<true>(p2.0, p2.1, p2.2, k0, n, tau));
+                        push(3, packed_candidate::<false>(p3.0, p3.1, p3.2, k0, n, tau));
+                    }
+                    out
                 },
             )
             .collect()
@@ -590,10 +653,49 @@ impl FrameFeatures {
     fn check_and_describe(&mut self, n: usize, extrema: &[Vec<Extremum>]) {
         let (w, h) = (self.width, self.height);
         let lanes = &LaneOffsets::new(n);
-        let (blob, corner, sobel) = (&self.blob[..], &self.corner[..], &self.sobel[..]);
+        let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
+        let img_of = |class: usize| if class < 2 { blob } else { corner };
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
-            .map(|by| crate::simd::pass_two_row(&extrema[by], blob, corner, sobel, w, h, n, lanes))
+            .map(|by| {
+                // Sized for every candidate of the class in this block row (no regrowth).
+                let mut counts = [0usize; CLASSES];
+                for e in &extrema[by] {
+                    counts[usize::from(e.class) % CLASSES] += 1;
+                }
+                let mut out: [Vec<Feature>; CLASSES] = counts.map(Vec::with_capacity);
+                for e in &extrema[by] {
+                    let class = usize::from(e.class) % CLASSES;
+                    let maximum = class % 2 == 0;
+                    let (u, v) = (usize::from(e.u), usize::from(e.v));
+                    let img = img_of(class);
+                    // The 16-column check where the window fits it, else the whole
+                    // window is scanned.
+                    let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
+                    let keep = match (fits, maximum) {
+                        (true, true) => window_check::<true>(img, w, *e, n, lanes),
+                        (true, false) => window_check::<false>(img, w, *e, n, lanes),
+                        (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
+                        (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
+                    };
+                    if !keep {
+                        continue;
+                    }
+                    let r = |x: usize, y: usize| f64::from(img[y * w + x]);
+                    let c = r(u, v);
+                    let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
+                    let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
+                    out[class].push(Feature {
+                        u: e.u,
+                        v: e.v,
+                        x: x as f32,
+                        y: y as f32,
+                        response: e.val,
+                        desc: descriptor(sobel, w, u, v),
+                    });
+                }
+                out
+            })
             .collect();
         for row in found {
             for (class, points) in row.into_iter().enumerate() {
@@ -603,151 +705,10 @@ impl FrameFeatures {
     }
 }
 
-/// Pass 1 of the suppression ([`FrameFeatures::block_extrema_packed`]) for the row of blocks
-/// from image row `v0`: its candidates in the order of a serial scan. `cols` and `scratch` are
-/// the column keys and the doubling levels (reused between block rows). Compiled for AVX2 and
-/// the baseline ([`crate::simd::pass_one_row`]).
-#[inline(always)]
-pub(crate) fn pass_one_row<'a>(
-    blob: &'a [i16],
-    corner: &'a [i16],
-    w: usize,
-    h: usize,
-    v0: usize,
-    n: usize,
-    tau: i16,
-    cols: &mut [Vec<i16>; CLASSES],
-    scratch: &mut [SlidingScratch; CLASSES],
-) -> Vec<Extremum> {
-    let step = n + 1;
-    let inner = w - 2 * BORDER;
-    let total = inner + PAD;
-    let blocks = inner.div_ceil(step);
-    let v1 = (v0 + step).min(h - BORDER);
-    let [bmax, bmin, cmax, cmin] = cols;
-    let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
-    let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
-    let row = |img: &'a [i16], v: usize| -> &'a [i16] {
-        let s = v * w + BORDER;
-        &img[s..s + inner]
-    };
-    {
-        let (rb, rc) = (row(blob, v0), row(corner, v0));
-        for x in 0..inner {
-            bmax[x] = pack_max(rb[x], 0);
-            bmin[x] = pack_min(rb[x], 0);
-            cmax[x] = pack_max(rc[x], 0);
-            cmin[x] = pack_min(rc[x], 0);
-        }
-    }
-    for v in v0 + 1..v1 {
-        let r = (v - v0) as i16;
-        let (rb, rc) = (row(blob, v), row(corner, v));
-        for x in 0..inner {
-            bmax[x] = bmax[x].max(pack_max(rb[x], r));
-            bmin[x] = bmin[x].min(pack_min(rb[x], r));
-            cmax[x] = cmax[x].max(pack_max(rc[x], r));
-            cmin[x] = cmin[x].min(pack_min(rc[x], r));
-        }
-    }
-    // The block and window extremes of each class, then the candidates block by
-    // block.
-    for (class, (col, sc)) in cols.iter().zip(scratch.iter_mut()).enumerate() {
-        if class % 2 == 0 {
-            sliding_block_extremes::<true>(&col[..total], inner, n, sc);
-        } else {
-            sliding_block_extremes::<false>(&col[..total], inner, n, sc);
-        }
-    }
-    let mut out = Vec::with_capacity(blocks * CLASSES);
-    let span = 2 * n + 1;
-    let windows = (inner + 1).saturating_sub(span);
-    let class_of = |class: usize| {
-        let col = &cols[class][..inner];
-        let sc = &scratch[class];
-        (col, &sc.blocks[..inner], &sc.window[..windows])
-    };
-    let [p0, p1, p2, p3] = std::array::from_fn(class_of);
-    let mut push = |class: u8, e: Option<(i16, usize, usize, bool)>| {
-        if let Some((val, k, r, checked)) = e {
-            let v = v0 + r;
-            out.push(Extremum {
-                val,
-                u: (BORDER + k) as u16,
-                v: v as u16,
-                class,
-                cleared: if checked { (v1 - 1 - v) as u8 } else { 0 },
-            });
-        }
-    };
-    for blk in 0..blocks {
-        let k0 = blk * step;
-        push(0, packed_candidate::<true>(p0.0, p0.1, p0.2, k0, n, tau));
-        push(1, packed_candidate::<false>(p1.0, p1.1, p1.2, k0, n, tau));
-        push(2, packed_candidate::<true>(p2.0, p2.1, p2.2, k0, n, tau));
-        push(3, packed_candidate::<false>(p3.0, p3.1, p3.2, k0, n, tau));
-    }
-    out
-}
-
-/// Pass 2 of the suppression ([`FrameFeatures::check_and_describe`]) for the candidates `row`
-/// of one row of blocks: the survivors per class, described and refined to sub-pixel. Compiled
-/// for AVX2 and the baseline ([`crate::simd::pass_two_row`]).
-#[inline(always)]
-pub(crate) fn pass_two_row(
-    row: &[Extremum],
-    blob: &[i16],
-    corner: &[i16],
-    sobel: &[u16],
-    w: usize,
-    h: usize,
-    n: usize,
-    lanes: &LaneOffsets,
-) -> [Vec<Feature>; CLASSES] {
-    let img_of = |class: usize| if class < 2 { blob } else { corner };
-    // Sized for every candidate of the class in this block row (no regrowth).
-    let mut counts = [0usize; CLASSES];
-    for e in row {
-        counts[usize::from(e.class) % CLASSES] += 1;
-    }
-    let mut out: [Vec<Feature>; CLASSES] = counts.map(Vec::with_capacity);
-    for e in row {
-        let class = usize::from(e.class) % CLASSES;
-        let maximum = class % 2 == 0;
-        let (u, v) = (usize::from(e.u), usize::from(e.v));
-        let img = img_of(class);
-        // The 16-column check where the window fits it, else the whole
-        // window is scanned.
-        let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
-        let keep = match (fits, maximum) {
-            (true, true) => window_check::<true>(img, w, *e, n, lanes),
-            (true, false) => window_check::<false>(img, w, *e, n, lanes),
-            (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
-            (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
-        };
-        if !keep {
-            continue;
-        }
-        let r = |x: usize, y: usize| f64::from(img[y * w + x]);
-        let c = r(u, v);
-        let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
-        let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
-        out[class].push(Feature {
-            u: e.u,
-            v: e.v,
-            x: x as f32,
-            y: y as f32,
-            response: e.val,
-            desc: descriptor(sobel, w, u, v),
-        });
-    }
-    out
-}
-
 /// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
 /// row of blocks in the order of a serial scan: blocks, then classes).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Extremum {
+struct Extremum {
     val: i16,
     u: u16,
     v: u16,
@@ -779,7 +740,7 @@ fn pack_min(x: i16, r: i16) -> i16 {
 const PAD: usize = 16;
 
 /// The doubling levels of [`sliding_extremes`]: `m[i][j]` the extreme of `col[j..j + 2^(i+1)]`.
-pub(crate) struct SlidingScratch {
+struct SlidingScratch {
     m: [Vec<i16>; 3],
     /// The block extremes (`len = n + 1`) and the window extremes (`len = 2n + 1`) at each column.
     blocks: Vec<i16>,
@@ -926,7 +887,7 @@ const LANES: usize = 16;
 /// candidates' signs (strong maxima are at least 1, strong minima at most -1): the offsets -1 /
 /// +1 never saturate, and `i16::MAX` / `i16::MIN` always do.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LaneOffsets {
+struct LaneOffsets {
     /// The window fits in [`LANES`] columns.
     fits: bool,
     /// Rows above the candidate (at least as good beats).
@@ -1131,7 +1092,8 @@ fn responses(
                     // One vertical pass over the five rows for the filters and the Sobel
                     // images (its three middle rows).
                     let rows = [row(y - 2), row(y - 1), row(y), row(y + 1), row(y + 2)];
-                    crate::simd::filter_row(rows, rb, rc, [s0, s1, s2], [s3, s4], rs);
+                    filter_row(rows, rb, rc, [s0, s1, s2], [s3, s4]);
+                    sobel_horizontal(s3, s4, rs);
                 }
             },
         );
@@ -1155,7 +1117,6 @@ fn sobel_row(a: &[u8], b: &[u8], c: &[u8], rs: &mut [u16], vs: &mut [i16], vd: &
 /// The horizontal pass of the Sobel images: from the vertically smoothed (`vs`, [1 2 1]) and
 /// differentiated (`vd`, [-1 0 1]) columns, the derivative of the smoothed columns (du) and
 /// the smoothing of the derivatives (dv), interleaved.
-#[inline(always)]
 fn sobel_horizontal(vs: &[i16], vd: &[i16], rs: &mut [u16]) {
     let w = rs.len();
     let n = w - 2;
@@ -1175,17 +1136,14 @@ fn sobel_horizontal(vs: &[i16], vd: &[i16], rs: &mut [u16]) {
 /// scratch rows), and the vertical pass of the Sobel images of its middle row into `[vs, vd]`
 /// (for [`sobel_horizontal`]): `vs = c3 + r2` is the [1 2 1] smoothing, `vd = r3 - r1` the
 /// [-1 0 1] derivative. Not inlined, so that the five rows stay five pointers (inlined, the
-/// compiler may recompute them from one another inside the loop); then the row of the Sobel
-/// images (`rs`, [`sobel_horizontal`]). Compiled for AVX2 and the baseline
-/// ([`crate::simd::filter_row`]).
-#[inline(always)]
-pub(crate) fn filter_row(
+/// compiler may recompute them from one another inside the loop).
+#[inline(never)]
+fn filter_row(
     rows: [&[u8]; 5],
     rb: &mut [i16],
     rc: &mut [i16],
     [c5, c3, d]: [&mut [i16]; 3],
     [vs, vd]: [&mut [i16]; 2],
-    rs: &mut [u16],
 ) {
     let w = rb.len();
     let [r0, r1, r2, r3, r4] = rows.map(|r| &r[..w]);
@@ -1228,7 +1186,6 @@ pub(crate) fn filter_row(
     rc[..2].fill(0);
     rb[w - 2..].fill(0);
     rc[w - 2..].fill(0);
-    sobel_horizontal(vs, vd, rs);
 }
 
 #[cfg(test)]

@@ -64,7 +64,6 @@ pub mod kitti;
 pub mod matcher;
 pub mod pipeline;
 pub mod refine;
-pub mod simd;
 pub mod stereo;
 pub mod synthetic;
 

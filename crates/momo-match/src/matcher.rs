@@ -323,7 +323,41 @@ pub fn match_features_with_prior(
     let matches: Vec<Match> = candidates
         .par_iter()
         .filter_map(|&(class, i)| {
-            crate::simd::match_candidate(prev, cur, options, prior, class, i, ru, rv)
+            let f = &prev.classes[class].points[i];
+            let (u0, v0) = (i32::from(f.u), i32::from(f.v));
+            let [ou, ov, wu, wv] = prior
+                .and_then(|p| p.window(f.u, f.v))
+                .unwrap_or([0, 0, ru, rv]);
+            let (j, s, second) =
+                cur.classes[class].best_in_window(&f.desc, u0 + ou, v0 + ov, wu, wv)?;
+            if s > options.max_sad || f64::from(s) > options.uniqueness * f64::from(second) {
+                return None;
+            }
+            let g = &cur.classes[class].points[j];
+            let (u1, v1) = (i32::from(g.u), i32::from(g.v));
+            // The circular check: `f` must be the best match of `g` in frame k-1 (in the
+            // mirrored window, so `f` lies inside it; the scan stops at the first feature that
+            // beats `f`).
+            if !prev.classes[class].is_best_in_window(&g.desc, u1 - ou, v1 - ov, wu, wv, i, s) {
+                return None;
+            }
+            Some(if options.subpixel && options.klt.is_none() {
+                Match {
+                    u0: f64::from(f.x),
+                    v0: f64::from(f.y),
+                    u1: f64::from(g.x),
+                    v1: f64::from(g.y),
+                    sad: s,
+                }
+            } else {
+                Match {
+                    u0: f64::from(u0),
+                    v0: f64::from(v0),
+                    u1: f64::from(u1),
+                    v1: f64::from(v1),
+                    sad: s,
+                }
+            })
         })
         .collect();
 
@@ -363,56 +397,6 @@ pub fn match_features_with_prior(
             bucket(refined, &grid, options.matches_per_frame)
         }
     }
-}
-
-/// Steps 2-3 of [`match_features_with_prior`] for the candidate `i` of class `class` of
-/// `prev`: its best match in `cur`'s window, if unique enough and circular. Compiled for AVX2
-/// and the baseline ([`crate::simd::match_candidate`]).
-#[inline(always)]
-pub(crate) fn match_candidate(
-    prev: &FrameFeatures,
-    cur: &FrameFeatures,
-    options: &MatchOptions,
-    prior: Option<&FlowPrior>,
-    class: usize,
-    i: usize,
-    ru: i32,
-    rv: i32,
-) -> Option<Match> {
-    let f = &prev.classes[class].points[i];
-    let (u0, v0) = (i32::from(f.u), i32::from(f.v));
-    let [ou, ov, wu, wv] = prior
-        .and_then(|p| p.window(f.u, f.v))
-        .unwrap_or([0, 0, ru, rv]);
-    let (j, s, second) = cur.classes[class].best_in_window(&f.desc, u0 + ou, v0 + ov, wu, wv)?;
-    if s > options.max_sad || f64::from(s) > options.uniqueness * f64::from(second) {
-        return None;
-    }
-    let g = &cur.classes[class].points[j];
-    let (u1, v1) = (i32::from(g.u), i32::from(g.v));
-    // The circular check: `f` must be the best match of `g` in frame k-1 (in the
-    // mirrored window, so `f` lies inside it; the scan stops at the first feature that
-    // beats `f`).
-    if !prev.classes[class].is_best_in_window(&g.desc, u1 - ou, v1 - ov, wu, wv, i, s) {
-        return None;
-    }
-    Some(if options.subpixel && options.klt.is_none() {
-        Match {
-            u0: f64::from(f.x),
-            v0: f64::from(f.y),
-            u1: f64::from(g.x),
-            v1: f64::from(g.y),
-            sad: s,
-        }
-    } else {
-        Match {
-            u0: f64::from(u0),
-            v0: f64::from(v0),
-            u1: f64::from(u1),
-            v1: f64::from(v1),
-            sad: s,
-        }
-    })
 }
 
 /// The `per_cell` strongest features of each grid cell and class, `(class, index)`, in the

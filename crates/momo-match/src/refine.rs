@@ -86,19 +86,6 @@ pub fn align(
     d0: [f64; 2],
     options: &KltOptions,
 ) -> Option<[f64; 2]> {
-    crate::simd::align(from, to, u, v, d0, options)
-}
-
-/// [`align`]'s body, compiled for AVX2 and the baseline ([`crate::simd::align`]).
-#[inline(always)]
-pub(crate) fn align_body(
-    from: Plane<'_>,
-    to: Plane<'_>,
-    u: usize,
-    v: usize,
-    d0: [f64; 2],
-    options: &KltOptions,
-) -> Option<[f64; 2]> {
     let r = options.half.clamp(1, MAX_HALF);
     if u < r + 1 || v < r + 1 || u + r + 1 >= from.width || v + r + 1 >= from.height {
         return None;
@@ -113,16 +100,16 @@ pub(crate) fn align_body(
         gx: &mut gx,
         gy: &mut gy,
     };
-    let at = (u, v);
-    let mut h = match r {
-        1 => template::<1>(from, at, &mut tpl),
-        2 => template::<2>(from, at, &mut tpl),
-        3 => template::<3>(from, at, &mut tpl),
-        4 => template::<4>(from, at, &mut tpl),
-        5 => template::<5>(from, at, &mut tpl),
-        6 => template::<6>(from, at, &mut tpl),
-        _ => template::<MAX_HALF>(from, at, &mut tpl),
+    let setup = match r {
+        1 => template::<1>,
+        2 => template::<2>,
+        3 => template::<3>,
+        4 => template::<4>,
+        5 => template::<5>,
+        6 => template::<6>,
+        _ => template::<MAX_HALF>,
     };
+    let mut h = setup(from, (u, v), &mut tpl);
     let n = (2 * r + 1) * (2 * r + 1);
     h[5] = n as f64;
     let m = nalgebra::Matrix3::new(h[0], h[1], h[3], h[1], h[2], h[4], h[3], h[4], h[5]);
@@ -139,16 +126,25 @@ pub(crate) fn align_body(
     let iterations = options.iterations.max(1);
     // The iterations with the patch side known at compile time (the loops unroll); `r` is in
     // 1..=MAX_HALF.
-    let (shift, conv) = (options.max_shift, options.converged);
-    match r {
-        1 => iterate::<1>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-        2 => iterate::<2>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-        3 => iterate::<3>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-        4 => iterate::<4>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-        5 => iterate::<5>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-        6 => iterate::<6>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-        _ => iterate::<MAX_HALF>(to, at, d0, &tpl, &inv, iterations, shift, conv),
-    }
+    let run = match r {
+        1 => iterate::<1>,
+        2 => iterate::<2>,
+        3 => iterate::<3>,
+        4 => iterate::<4>,
+        5 => iterate::<5>,
+        6 => iterate::<6>,
+        _ => iterate::<MAX_HALF>,
+    };
+    run(
+        to,
+        (u, v),
+        d0,
+        &tpl,
+        &inv,
+        iterations,
+        options.max_shift,
+        options.converged,
+    )
 }
 
 /// Four lanes from `row[k..k + 4]`, zero where `k + lane >= side`.
@@ -183,7 +179,6 @@ fn padded(px: &[u8], start: usize, side: usize) -> [u8; 4 * VECS] {
 /// magnitude) and their sums are taken in `f32`, which is exact (every partial sum is an
 /// integer below `(2 MAX_HALF + 1)² 255² < 2^24`); the gradients are multiples of 1/2, exact in
 /// `f32`.
-#[inline(always)]
 fn template<const R: usize>(
     from: Plane<'_>,
     (u, v): (usize, usize),
@@ -234,7 +229,6 @@ fn template<const R: usize>(
 /// compared with the template, four columns at a time. The pixels of `to` under the patch are
 /// converted once per integer position (the iterations usually stay within one pixel).
 #[allow(clippy::too_many_arguments)]
-#[inline(always)]
 fn iterate<const R: usize>(
     to: Plane<'_>,
     (u, v): (usize, usize),
@@ -330,11 +324,10 @@ fn iterate<const R: usize>(
 pub fn refine_match(
     prev: Plane<'_>,
     cur: Plane<'_>,
-    p0: (usize, usize),
-    p1: (usize, usize),
+    (u0, v0): (usize, usize),
+    (u1, v1): (usize, usize),
     options: &KltOptions,
 ) -> Option<[f64; 4]> {
-    let ((u0, v0), (u1, v1)) = (p0, p1);
     let d0 = [u1 as f64 - u0 as f64, v1 as f64 - v0 as f64];
     let d = align(prev, cur, u0, v0, d0, options)?;
     let mut out = d;
