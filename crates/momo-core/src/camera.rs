@@ -775,13 +775,54 @@ mod tests {
 
     fn every_model() -> Vec<Camera> {
         vec![
-            Camera::Pinhole(Pinhole { fx: 718.856, fy: 712.0, cx: 607.19, cy: 185.22, width: 1241.0, height: 376.0 }),
+            Camera::Pinhole(Pinhole {
+                fx: 718.856,
+                fy: 712.0,
+                cx: 607.19,
+                cy: 185.22,
+                width: 1241.0,
+                height: 376.0,
+            }),
             Camera::KannalaBrandt(fisheye()),
             Camera::Radtan(radtan()),
-            Camera::DoubleSphere(DoubleSphere { fx: 350.0, fy: 352.0, cx: 640.0, cy: 400.0, xi: -0.2, alpha: 0.59, width: 1280.0, height: 800.0 }),
-            Camera::DoubleSphere(DoubleSphere { fx: 350.0, fy: 352.0, cx: 640.0, cy: 400.0, xi: 0.3, alpha: 0.4, width: 1280.0, height: 800.0 }),
-            Camera::Unified(Unified { fx: 500.0, fy: 498.0, cx: 640.0, cy: 400.0, xi: 0.8, width: 1280.0, height: 800.0 }),
-            Camera::Unified(Unified { fx: 500.0, fy: 498.0, cx: 640.0, cy: 400.0, xi: 1.6, width: 1280.0, height: 800.0 }),
+            Camera::DoubleSphere(DoubleSphere {
+                fx: 350.0,
+                fy: 352.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: -0.2,
+                alpha: 0.59,
+                width: 1280.0,
+                height: 800.0,
+            }),
+            Camera::DoubleSphere(DoubleSphere {
+                fx: 350.0,
+                fy: 352.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: 0.3,
+                alpha: 0.4,
+                width: 1280.0,
+                height: 800.0,
+            }),
+            Camera::Unified(Unified {
+                fx: 500.0,
+                fy: 498.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: 0.8,
+                width: 1280.0,
+                height: 800.0,
+            }),
+            Camera::Unified(Unified {
+                fx: 500.0,
+                fy: 498.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: 1.6,
+                width: 1280.0,
+                height: 800.0,
+            }),
         ]
     }
 
@@ -811,7 +852,9 @@ mod tests {
     fn projection_jacobian_of_the_fisheye_axis_is_none() {
         let c = fisheye();
         assert!(c.project_jacobian(&Vector3::new(0.0, 0.0, 1.0)).is_none());
-        let j = c.project_jacobian(&Vector3::new(1e-9, 0.0, 1.0)).expect("off the axis");
+        let j = c
+            .project_jacobian(&Vector3::new(1e-9, 0.0, 1.0))
+            .expect("off the axis");
         assert!((j[(0, 0)] - c.fx).abs() < 1e-6 * c.fx && (j[(1, 1)] - c.fy).abs() < 1e-6 * c.fy);
     }
 
