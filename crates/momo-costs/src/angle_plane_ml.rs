@@ -183,7 +183,7 @@ impl ResidualMetric for AnglePlaneMl {
 
     /// `Σ₁` then `Σ₀` ([`bearing_covariance`] of `f1` and `f0`), each row-major: functions of
     /// the camera and the match alone, so `Problem` computes them once per problem instead of
-    /// in every evaluation (eight projections per match).
+    /// in every evaluation (two projection Jacobians per match).
     const MATCH_CONSTANTS: usize = 18;
 
     fn match_constants(&self, camera: &Camera, obs: &Observation, out: &mut [f64]) {
