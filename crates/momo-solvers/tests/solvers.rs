@@ -499,12 +499,13 @@ fn one_linearisation_then_the_last_step_on_its_cost() {
         let one = LevenbergMarquardt::default()
             .with_max_linearizations(1)
             .solve(&p, &x0);
+        let (linearizations, costs) = (p.linearizations.get(), p.costs.get());
         check_invariants(&p, &x0, &one, 50);
         assert!(one.final_cost <= one.initial_cost);
         if one.iterations == 1 {
             one_step_runs += 1;
-            assert_eq!(p.linearizations.get(), 1, "{one:?}");
-            assert_eq!(p.costs.get(), 1, "{one:?}");
+            assert_eq!(linearizations, 1, "{one:?}");
+            assert_eq!(costs, 1, "{one:?}");
             assert_eq!(one.termination, Termination::CostConverged);
             assert!(one.final_cost < one.initial_cost);
         }
