@@ -816,6 +816,9 @@ mod tests {
         assert!(bad.validate().unwrap_err().contains("cheirality_sigmas"));
         let o: FinalFitOptions = toml::from_str("cauchy_sigmas = 0.0").unwrap();
         assert_eq!(o.cauchy_sigmas, 0.0);
+        assert!(!FinalFitOptions::default().one_step);
+        let o: FinalFitOptions = toml::from_str("one_step = true").unwrap();
+        assert!(o.one_step && o.validate().is_ok());
         assert!(toml::from_str::<FinalFitOptions>("cauchy = 1.0").is_err());
         // The stage's own metric, by registered name.
         let o: FinalFitOptions = toml::from_str("metric = \"angle_plane_ml\"").unwrap();
