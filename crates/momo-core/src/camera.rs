@@ -6,7 +6,7 @@
 //! Unprojection returns a *unit bearing vector* in the camera frame (x right, y down,
 //! z forward). Pixels follow OpenCV: the centre of the top-left pixel is (0, 0).
 
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// What every central camera model offers.
@@ -18,6 +18,14 @@ pub trait CameraModel {
     fn unproject(&self, px: &Vector2<f64>) -> Option<Vector3<f64>>;
     /// Image size `(width, height)` in pixels.
     fn size(&self) -> (f64, f64);
+    /// The projection's Jacobian `∂π/∂p` (2×3, rows `u`, `v`) at a point `p` in camera
+    /// coordinates, in closed form; `None` where [`project`](Self::project) is undefined at `p`
+    /// or the model has no closed form there (e.g. on a fisheye's optical axis), and for models
+    /// that do not provide it (the default). Callers then differentiate `project` numerically.
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        let _ = p;
+        None
+    }
     /// Whether a pixel lies inside the image, extended by `margin` pixels on every side.
     fn contains(&self, px: &Vector2<f64>, margin: f64) -> bool {
         let (w, h) = self.size();
@@ -77,6 +85,23 @@ impl CameraModel for Pinhole {
     fn unproject(&self, px: &Vector2<f64>) -> Option<Vector3<f64>> {
         let v = Vector3::new((px.x - self.cx) / self.fx, (px.y - self.cy) / self.fy, 1.0);
         v.try_normalize(0.0)
+    }
+
+    /// `[[fx/Z, 0, −fx X/Z²], [0, fy/Z, −fy Y/Z²]]` for `Z > 0`.
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        if !(p.z > 0.0) {
+            return None;
+        }
+        let iz = 1.0 / p.z;
+        let (x, y) = (p.x * iz, p.y * iz);
+        Some(Matrix2x3::new(
+            self.fx * iz,
+            0.0,
+            -self.fx * x * iz,
+            0.0,
+            self.fy * iz,
+            -self.fy * y * iz,
+        ))
     }
 
     fn size(&self) -> (f64, f64) {
@@ -164,6 +189,31 @@ impl CameraModel for KannalaBrandt {
         }
         let s = theta.sin();
         Some(Vector3::new(s * mx / r, s * my / r, theta.cos()))
+    }
+
+    /// With `ρ = ‖(X, Y)‖`, `‖p‖² = ρ² + Z²`, `s = d(θ)/ρ`, `k = d'(θ) Z / (ρ² ‖p‖²) − d(θ)/ρ³`
+    /// (`∂s/∂X = k X`, `∂s/∂Y = k Y`, `∂s/∂Z = −d'(θ)/‖p‖²`): `∂u/∂p = fx (s eₓ + X ∇s)`,
+    /// `∂v/∂p = fy (s e_y + Y ∇s)`. `None` on the optical axis (`ρ = 0`).
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        let rho = p.x.hypot(p.y);
+        if !(rho > 0.0) {
+            return None;
+        }
+        let theta = rho.atan2(p.z);
+        let (d, dd) = self.distort(theta);
+        let r2 = rho * rho + p.z * p.z;
+        let s = d / rho;
+        let k = dd * p.z / (rho * rho * r2) - s / (rho * rho);
+        let sz = -dd / r2;
+        let j = Matrix2x3::new(
+            self.fx * (s + p.x * p.x * k),
+            self.fx * p.x * p.y * k,
+            self.fx * p.x * sz,
+            self.fy * p.x * p.y * k,
+            self.fy * (s + p.y * p.y * k),
+            self.fy * p.y * sz,
+        );
+        j.iter().all(|v| v.is_finite()).then_some(j)
     }
 
     fn size(&self) -> (f64, f64) {
@@ -333,6 +383,23 @@ impl CameraModel for Radtan {
         Vector3::new(m.x, m.y, 1.0).try_normalize(0.0)
     }
 
+    /// `diag(fx, fy) · ∂(x_d, y_d)/∂(x, y) · [[1/Z, 0, −x/Z], [0, 1/Z, −y/Z]]` in the valid
+    /// region (`x = X/Z`, `y = Y/Z`).
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        if !(p.z > 0.0) {
+            return None;
+        }
+        let (x, y) = (p.x / p.z, p.y / p.z);
+        if !self.valid_normalized(x, y) {
+            return None;
+        }
+        let (_, jd) = self.distort(x, y);
+        let iz = 1.0 / p.z;
+        let dn = Matrix2x3::new(iz, 0.0, -x * iz, 0.0, iz, -y * iz);
+        let j = Matrix2::new(self.fx, 0.0, 0.0, self.fy) * jd * dn;
+        j.iter().all(|v| v.is_finite()).then_some(j)
+    }
+
     fn size(&self) -> (f64, f64) {
         (self.width, self.height)
     }
@@ -438,6 +505,26 @@ impl CameraModel for DoubleSphere {
         (self.valid_point(&b) && b.iter().all(|v| v.is_finite())).then_some(b)
     }
 
+    /// With `∇zs = ξ p/d1 + e_z`, `∇d2 = (X eₓ + Y e_y + zs ∇zs)/d2` and
+    /// `∇den = α ∇d2 + (1 − α) ∇zs`: `∂u/∂p = fx (eₓ − X ∇den/den)/den`,
+    /// `∂v/∂p = fy (e_y − Y ∇den/den)/den`, in the valid region.
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        if !self.valid_point(p) {
+            return None;
+        }
+        let d1 = p.norm();
+        let zs = self.xi * d1 + p.z;
+        let d2 = p.x.hypot(p.y).hypot(zs);
+        let den = self.alpha * d2 + (1.0 - self.alpha) * zs;
+        if !(den > 0.0 && d2 > 0.0) {
+            return None;
+        }
+        let dzs = p * (self.xi / d1) + Vector3::z();
+        let dd2 = (Vector3::new(p.x, p.y, 0.0) + dzs * zs) / d2;
+        let dden = dd2 * self.alpha + dzs * (1.0 - self.alpha);
+        Some(projective_jacobian(self.fx, self.fy, p, den, &dden))
+    }
+
     fn size(&self) -> (f64, f64) {
         (self.width, self.height)
     }
@@ -515,9 +602,44 @@ impl CameraModel for Unified {
         (self.valid_point(&b) && b.iter().all(|v| v.is_finite())).then_some(b)
     }
 
+    /// With `∇den = ξ p/‖p‖ + e_z`: `∂u/∂p = fx (eₓ − X ∇den/den)/den`,
+    /// `∂v/∂p = fy (e_y − Y ∇den/den)/den`, in the valid region.
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        if !self.valid_point(p) {
+            return None;
+        }
+        let d = p.norm();
+        let den = p.z + self.xi * d;
+        if !(den > 0.0) {
+            return None;
+        }
+        let dden = p * (self.xi / d) + Vector3::z();
+        Some(projective_jacobian(self.fx, self.fy, p, den, &dden))
+    }
+
     fn size(&self) -> (f64, f64) {
         (self.width, self.height)
     }
+}
+
+/// `∂/∂p (fx X/den, fy Y/den)` for a denominator `den(p)` with gradient `dden`.
+fn projective_jacobian(
+    fx: f64,
+    fy: f64,
+    p: &Vector3<f64>,
+    den: f64,
+    dden: &Vector3<f64>,
+) -> Matrix2x3<f64> {
+    let inv = 1.0 / den;
+    let (x, y) = (p.x * inv, p.y * inv);
+    Matrix2x3::new(
+        fx * (1.0 - x * dden.x) * inv,
+        -fx * x * dden.y * inv,
+        -fx * x * dden.z * inv,
+        -fy * y * dden.x * inv,
+        fy * (1.0 - y * dden.y) * inv,
+        -fy * y * dden.z * inv,
+    )
 }
 
 /// A camera of a rig: one of the models of `FORMAT.md`, tagged by `"type"` in `rig.json`.
@@ -576,6 +698,15 @@ impl CameraModel for Camera {
             Camera::Unified(c) => c.unproject(px),
         }
     }
+    fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        match self {
+            Camera::Pinhole(c) => c.project_jacobian(p),
+            Camera::KannalaBrandt(c) => c.project_jacobian(p),
+            Camera::Radtan(c) => c.project_jacobian(p),
+            Camera::DoubleSphere(c) => c.project_jacobian(p),
+            Camera::Unified(c) => c.project_jacobian(p),
+        }
+    }
     fn size(&self) -> (f64, f64) {
         match self {
             Camera::Pinhole(c) => c.size(),
@@ -626,6 +757,105 @@ mod tests {
             let b = c.unproject(&px).expect("invertible");
             prop_assert!((b - p.normalize()).amax() < 1e-9, "theta {theta}: {b} vs {}", p.normalize());
         }
+    }
+
+    /// `∂π/∂p` by central differences (step `h` relative to `‖p‖`).
+    fn numeric_jacobian(c: &Camera, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
+        let h = 1e-6 * p.norm();
+        let mut j = Matrix2x3::zeros();
+        for k in 0..3 {
+            let mut d = Vector3::zeros();
+            d[k] = h;
+            let col = (c.project(&(p + d))? - c.project(&(p - d))?) / (2.0 * h);
+            j[(0, k)] = col.x;
+            j[(1, k)] = col.y;
+        }
+        Some(j)
+    }
+
+    fn every_model() -> Vec<Camera> {
+        vec![
+            Camera::Pinhole(Pinhole {
+                fx: 718.856,
+                fy: 712.0,
+                cx: 607.19,
+                cy: 185.22,
+                width: 1241.0,
+                height: 376.0,
+            }),
+            Camera::KannalaBrandt(fisheye()),
+            Camera::Radtan(radtan()),
+            Camera::DoubleSphere(DoubleSphere {
+                fx: 350.0,
+                fy: 352.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: -0.2,
+                alpha: 0.59,
+                width: 1280.0,
+                height: 800.0,
+            }),
+            Camera::DoubleSphere(DoubleSphere {
+                fx: 350.0,
+                fy: 352.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: 0.3,
+                alpha: 0.4,
+                width: 1280.0,
+                height: 800.0,
+            }),
+            Camera::Unified(Unified {
+                fx: 500.0,
+                fy: 498.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: 0.8,
+                width: 1280.0,
+                height: 800.0,
+            }),
+            Camera::Unified(Unified {
+                fx: 500.0,
+                fy: 498.0,
+                cx: 640.0,
+                cy: 400.0,
+                xi: 1.6,
+                width: 1280.0,
+                height: 800.0,
+            }),
+        ]
+    }
+
+    proptest! {
+        /// The closed-form projection Jacobian of every model against central differences of
+        /// `project` wherever both exist (relative 1e-6 of the Jacobian's size: the differences'
+        /// own error is about 1e-10 · ‖p‖ / h); where `project` is undefined, so is the Jacobian.
+        #[test]
+        fn projection_jacobian_matches_central_differences(theta in 0.0..3.0f64, phi in -std::f64::consts::PI..std::f64::consts::PI, depth in 0.2..40.0f64) {
+            let p = unit(theta, phi) * depth;
+            for c in every_model() {
+                let analytic = c.project_jacobian(&p);
+                if c.project(&p).is_none() {
+                    prop_assert!(analytic.is_none(), "{c:?} at {p}");
+                    continue;
+                }
+                let (Some(a), Some(n)) = (analytic, numeric_jacobian(&c, &p)) else {
+                    continue;
+                };
+                let size = n.amax().max(1e-300);
+                prop_assert!((a - n).amax() <= 1e-6 * size, "{c:?} at {p}: {a} vs {n}");
+            }
+        }
+    }
+
+    #[test]
+    fn projection_jacobian_of_the_fisheye_axis_is_none() {
+        let c = fisheye();
+        assert!(c.project_jacobian(&Vector3::new(0.0, 0.0, 1.0)).is_none());
+        let j = c
+            .project_jacobian(&Vector3::new(1e-9, 0.0, 1.0))
+            .expect("off the axis");
+        assert!((j[(0, 0)] - c.fx).abs() < 1e-6 * c.fx && (j[(1, 1)] - c.fy).abs() < 1e-6 * c.fy);
     }
 
     #[test]

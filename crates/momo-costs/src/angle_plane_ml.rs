@@ -29,9 +29,9 @@ use serde::{Deserialize, Serialize};
 /// camera's true pixel-to-ray Jacobian instead of an isotropic angular error.
 ///
 /// `Jᵢ` is `U (∂π/∂x · U)⁻¹` with `U` an orthonormal basis of the tangent plane at the bearing
-/// and `∂π/∂x` the projection's Jacobian by central differences (projection is closed-form for
-/// every model); where that fails (a pixel outside the model's domain) the isotropic
-/// `(I − f fᵀ) / fₚₓ²` is used.
+/// and `∂π/∂x` the projection's Jacobian in closed form ([`CameraModel::project_jacobian`];
+/// by central differences where a model gives none); where that fails (a pixel outside the
+/// model's domain) the isotropic `(I − f fᵀ) / fₚₓ²` is used.
 ///
 /// Fused kernel ([`ResidualMetric::kernel`]): the inputs are the nine entries of `E`
 /// (row-major), as for [`crate::AnglePlane`]; the residual in the automatic path's order of
@@ -71,14 +71,47 @@ pub struct AnglePlaneMlPrepared<T: Scalar> {
 }
 
 /// The covariance of the unit bearing `f` under unit isotropic pixel noise, `J Jᵀ` with `J`
-/// the bearing's Jacobian with respect to the pixel (see [`AnglePlaneMl`]).
+/// the bearing's Jacobian with respect to the pixel (see [`AnglePlaneMl`]): `J = U A⁻¹`,
+/// `A = (∂π/∂p) U` from the camera model's closed-form projection Jacobian
+/// ([`CameraModel::project_jacobian`]); where the model gives none (a fisheye's optical axis),
+/// by central differences of `project` ([`bearing_covariance_by_differences`]).
 pub fn bearing_covariance(camera: &Camera, f: &Vector3<f64>) -> Matrix3<f64> {
-    // The isotropic fallback, computed only where it is used.
-    let iso = || {
-        let fl = camera.focal_length();
-        (Matrix3::identity() - f * f.transpose()) / (fl * fl)
+    let Some(dpi) = camera.project_jacobian(f) else {
+        return bearing_covariance_by_differences(camera, f);
     };
-    // Tangent basis: u ⟂ f from the axis least aligned with f, v = f × u.
+    let (u, v) = tangent_basis(f);
+    let (cu, cv) = (dpi * u, dpi * v);
+    let a = Matrix2::new(cu.x, cv.x, cu.y, cv.y);
+    covariance_from(camera, f, &u, &v, &a)
+}
+
+/// [`bearing_covariance`] with `∂π/∂p U` by central differences of `project` (step 1e-6 along
+/// the tangent basis): the path of every model before the closed-form Jacobians, kept as the
+/// fallback and as the tests' reference.
+pub fn bearing_covariance_by_differences(camera: &Camera, f: &Vector3<f64>) -> Matrix3<f64> {
+    let (u, v) = tangent_basis(f);
+    let h = 1e-6;
+    let mut a = Matrix2::zeros();
+    for (k, d) in [u, v].iter().enumerate() {
+        let (Some(p), Some(m)) = (camera.project(&(f + d * h)), camera.project(&(f - d * h)))
+        else {
+            return isotropic(camera, f);
+        };
+        let col = (p - m) / (2.0 * h);
+        a[(0, k)] = col.x;
+        a[(1, k)] = col.y;
+    }
+    covariance_from(camera, f, &u, &v, &a)
+}
+
+/// The isotropic fallback `(I − f fᵀ) / fₚₓ²`.
+fn isotropic(camera: &Camera, f: &Vector3<f64>) -> Matrix3<f64> {
+    let fl = camera.focal_length();
+    (Matrix3::identity() - f * f.transpose()) / (fl * fl)
+}
+
+/// Tangent basis: `u ⟂ f` from the axis least aligned with `f`, `v = f × u`.
+fn tangent_basis(f: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let axis = if f.x.abs() <= f.y.abs() && f.x.abs() <= f.z.abs() {
         Vector3::x()
     } else if f.y.abs() <= f.z.abs() {
@@ -88,26 +121,27 @@ pub fn bearing_covariance(camera: &Camera, f: &Vector3<f64>) -> Matrix3<f64> {
     };
     let u = f.cross(&axis).normalize();
     let v = f.cross(&u);
-    let h = 1e-6;
-    let mut a = Matrix2::zeros();
-    for (k, d) in [u, v].iter().enumerate() {
-        let (Some(p), Some(m)) = (camera.project(&(f + d * h)), camera.project(&(f - d * h)))
-        else {
-            return iso();
-        };
-        let col = (p - m) / (2.0 * h);
-        a[(0, k)] = col.x;
-        a[(1, k)] = col.y;
-    }
+    (u, v)
+}
+
+/// `J Jᵀ`, `J = [u v] A⁻¹`; the isotropic fallback where `A` is singular or the result is not
+/// finite.
+fn covariance_from(
+    camera: &Camera,
+    f: &Vector3<f64>,
+    u: &Vector3<f64>,
+    v: &Vector3<f64>,
+    a: &Matrix2<f64>,
+) -> Matrix3<f64> {
     let Some(a_inv) = a.try_inverse() else {
-        return iso();
+        return isotropic(camera, f);
     };
-    let j: Matrix3x2<f64> = Matrix3x2::from_columns(&[u, v]) * a_inv;
+    let j: Matrix3x2<f64> = Matrix3x2::from_columns(&[*u, *v]) * a_inv;
     let cov = j * j.transpose();
     if cov.iter().all(|x| x.is_finite()) {
         cov
     } else {
-        iso()
+        isotropic(camera, f)
     }
 }
 
@@ -149,7 +183,7 @@ impl ResidualMetric for AnglePlaneMl {
 
     /// `Σ₁` then `Σ₀` ([`bearing_covariance`] of `f1` and `f0`), each row-major: functions of
     /// the camera and the match alone, so `Problem` computes them once per problem instead of
-    /// in every evaluation (eight projections per match).
+    /// in every evaluation (two projection Jacobians per match).
     const MATCH_CONSTANTS: usize = 18;
 
     fn match_constants(&self, camera: &Camera, obs: &Observation, out: &mut [f64]) {

@@ -60,7 +60,9 @@ mod loss;
 mod sampson;
 
 pub use angle_plane::AnglePlane;
-pub use angle_plane_ml::{AnglePlaneMl, AnglePlaneMlPrepared, bearing_covariance};
+pub use angle_plane_ml::{
+    AnglePlaneMl, AnglePlaneMlPrepared, bearing_covariance, bearing_covariance_by_differences,
+};
 pub use geo_line::{GeoLine, fundamental};
 pub use loss::{Cauchy, Huber, Tukey};
 pub use momo_core::TrivialLoss as Trivial;

@@ -75,6 +75,15 @@ pub struct LevenbergMarquardt {
     /// `1` (the default) never lengthens a step: every pose bit-identical to before. Only
     /// problems that can scale a step ([`LmProblem::scale_step`]) use it.
     pub max_step_extrapolation: f64,
+    /// Most linearisations in a solve before its last step (`0`, the default: no limit).
+    /// Once a solve has linearised this many points (the start included), the next trial is
+    /// taken as the last one on one [`LeastSquares::cost`], as with
+    /// [`skip_last_linearization`](Self::skip_last_linearization) (where the problem allows it,
+    /// [`LmProblem::can_finish_with_cost`]): accepted if it decreases the cost
+    /// ([`Termination::CostConverged`]), else the solve goes on with linearised trials. `1`
+    /// makes a solve from a good start one damped Gauss-Newton step (the final efficient stage's
+    /// `one_step`). The report's normal matrix is then the start's.
+    pub max_linearizations: usize,
 }
 
 impl Default for LevenbergMarquardt {
@@ -95,6 +104,7 @@ impl Default for LevenbergMarquardt {
             max_lambda: 1e16,
             skip_last_linearization: true,
             max_step_extrapolation: 1.0,
+            max_linearizations: 0,
         }
     }
 }
@@ -111,6 +121,7 @@ with_setters!(LevenbergMarquardt {
     with_max_lambda => max_lambda: f64,
     with_skip_last_linearization => skip_last_linearization: bool,
     with_max_step_extrapolation => max_step_extrapolation: f64,
+    with_max_linearizations => max_linearizations: usize,
 });
 
 /// A least-squares problem as Levenberg-Marquardt sees it, for problems whose normal equations
@@ -273,6 +284,9 @@ impl LevenbergMarquardt {
         // The next trial is the last one: its point is not linearised.
         let mut last_step = false;
         let finish = self.skip_last_linearization && problem.can_finish_with_cost();
+        // Linearised points so far (the start's included; `max_linearizations`).
+        let mut linearizations = 1;
+        let capped = self.max_linearizations > 0 && problem.can_finish_with_cost();
         // The factor on the next trial step (`max_step_extrapolation`); 1: none.
         let mut extrapolate = 1.0;
         let max_t = if self.max_step_extrapolation.is_finite() {
@@ -306,6 +320,9 @@ impl LevenbergMarquardt {
                     last_relative = Some(relative);
                 } else {
                     last_relative = None;
+                }
+                if capped && linearizations >= self.max_linearizations {
+                    last_step = true;
                 }
             }
             if iterations >= self.max_iterations {
@@ -346,6 +363,7 @@ impl LevenbergMarquardt {
                 // gain ratio), so the trial point is linearised right away: one pass over the
                 // matches gives its cost and, when it is accepted, the next normal equations.
                 let new = problem.linearize(&trial);
+                linearizations += 1;
                 let c = problem.lin_cost(&new);
                 let old_cost = problem.lin_cost(&lin);
                 let predicted =

@@ -472,3 +472,43 @@ fn step_extrapolation_saves_linearisations() {
         "{extrapolated_total} linearisations with the extrapolation, {plain_total} without"
     );
 }
+
+/// `max_linearizations` (the final stage's `one_step`, issue 19): with 1, a solve linearises
+/// only its start and takes one step on one cost evaluation where that step decreases the cost
+/// (one iteration, `CostConverged`), else it falls back to linearised trials; 0 (the default)
+/// changes nothing, bit for bit.
+#[test]
+fn one_linearisation_then_the_last_step_on_its_cost() {
+    let p = Fit::cauchy(OutlierLine::new(), 0.05);
+    let mut one_step_runs = 0;
+    for x0 in [
+        pv(&[0.0, 0.0]),
+        pv(&[2.0, 0.0]),
+        pv(&[1.0, 0.6]),
+        pv(&[-1.0, 1.5]),
+    ] {
+        p.reset_counts();
+        let plain = LevenbergMarquardt::default().solve(&p, &x0);
+        p.reset_counts();
+        let zero = LevenbergMarquardt::default()
+            .with_max_linearizations(0)
+            .solve(&p, &x0);
+        assert_eq!(plain.x, zero.x);
+        assert_eq!(plain.iterations, zero.iterations);
+        p.reset_counts();
+        let one = LevenbergMarquardt::default()
+            .with_max_linearizations(1)
+            .solve(&p, &x0);
+        let (linearizations, costs) = (p.linearizations.get(), p.costs.get());
+        check_invariants(&p, &x0, &one, 50);
+        assert!(one.final_cost <= one.initial_cost);
+        if one.iterations == 1 {
+            one_step_runs += 1;
+            assert_eq!(linearizations, 1, "{one:?}");
+            assert_eq!(costs, 1, "{one:?}");
+            assert_eq!(one.termination, Termination::CostConverged);
+            assert!(one.final_cost < one.initial_cost);
+        }
+    }
+    assert!(one_step_runs > 0, "no solve ended after one step");
+}

@@ -102,6 +102,14 @@ pub struct FinalFitOptions {
     /// after `angle_plane` (both radians).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub metric: Option<String>,
+    /// The refit as a one-step estimator: one damped Gauss-Newton step from the first stage's
+    /// solution (Levenberg-Marquardt with its default options and `max_linearizations = 1`:
+    /// the start's linearisation and the step's cost; a step that does not decrease the cost
+    /// falls back to linearised trials), instead of iterating the refit to convergence with
+    /// the configured solver. Saves one linearisation of the stage's metric per frame; the
+    /// poses move by the omitted steps. Default false (docs/RESULTS.md, "Speed", eleventh
+    /// session).
+    pub one_step: bool,
 }
 
 impl Default for FinalFitOptions {
@@ -126,6 +134,7 @@ impl Default for FinalFitOptions {
             passes: 1,
             cheirality_sigmas: 3.0,
             metric: None,
+            one_step: false,
         }
     }
 }
@@ -443,10 +452,12 @@ fn refit_once(
     } else {
         scale
     };
+    let one_step = momo_solvers::LevenbergMarquardt::default().with_max_linearizations(1);
     let req = SolveRequest {
         observations: &core,
         loss,
         motion_prior: Some(&prior),
+        solver: if opts.one_step { &one_step } else { ctx.solver },
         ..req
     };
     match ctx.estimator.solve_with_constants(&req, &core_constants) {
@@ -805,6 +816,9 @@ mod tests {
         assert!(bad.validate().unwrap_err().contains("cheirality_sigmas"));
         let o: FinalFitOptions = toml::from_str("cauchy_sigmas = 0.0").unwrap();
         assert_eq!(o.cauchy_sigmas, 0.0);
+        assert!(!FinalFitOptions::default().one_step);
+        let o: FinalFitOptions = toml::from_str("one_step = true").unwrap();
+        assert!(o.one_step && o.validate().is_ok());
         assert!(toml::from_str::<FinalFitOptions>("cauchy = 1.0").is_err());
         // The stage's own metric, by registered name.
         let o: FinalFitOptions = toml::from_str("metric = \"angle_plane_ml\"").unwrap();
