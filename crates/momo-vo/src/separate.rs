@@ -41,9 +41,15 @@ use momo_core::{
 use momo_core::{Rig, Termination};
 use serde::{Deserialize, Serialize};
 
-/// Options of the motion separation (`[odometry.separate]` in the TOML config).
+/// Options of the motion separation (`[odometry.separate]` in the TOML config). A config
+/// section deserializes over [`SeparateOptions::competition_over_time`] (the default
+/// configuration's separation): the fields it omits keep that separation's values, not
+/// [`SeparateOptions::default`]'s.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(
+    default = "SeparateOptions::competition_over_time",
+    deny_unknown_fields
+)]
 pub struct SeparateOptions {
     /// Run the separation (false: the frame's solve and `[odometry.final_fit]` alone, as
     /// before 2026-11-28).
@@ -195,9 +201,9 @@ impl SeparateOptions {
     /// final efficient stage (`final_fit`), the match memory at 20 px with its exclusion, and
     /// competition over time (`persistence = 0.4`): a frame whose second motion does not
     /// persist in the memory is solved exactly as without the separation. A config file's
-    /// `[odometry.separate]` section replaces it as a whole (fields it omits take
-    /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
-    /// (tenth session, sep25).
+    /// `[odometry.separate]` section starts from it: the fields it omits keep these values
+    /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
+    /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
     pub fn competition_over_time() -> Self {
         Self {
             final_robust: true,
@@ -211,6 +217,11 @@ impl SeparateOptions {
             }),
             ..Self::default()
         }
+    }
+
+    /// The multi-frame choice's options where it is on ([`HypothesesOptions::enabled`]).
+    pub fn hypotheses(&self) -> Option<&HypothesesOptions> {
+        self.hypotheses.as_ref().filter(|h| h.enabled)
     }
 
     /// Checks the options; the message names the first bad one.
@@ -606,7 +617,7 @@ pub fn separate(
             && coherent(sup, a)
     };
     if opts.second_motion
-        && let Some(h) = &opts.hypotheses
+        && let Some(h) = opts.hypotheses()
         && arc_length.is_some()
         && let Some(previous) = starts.first()
     {
@@ -657,7 +668,7 @@ pub fn separate(
     };
     // The support of the motion not chosen (for `final_exclusive`).
     let mut other: Option<Vec<Vec<bool>>> = None;
-    if let Some(h) = &opts.hypotheses
+    if let Some(h) = opts.hypotheses()
         && !alternatives.is_empty()
     {
         // The alternative with the most ground (or parallax) support against A, over frames.
@@ -711,7 +722,7 @@ pub fn separate(
         }
     }
     if !outcome.competing
-        && let Some(h) = &opts.hypotheses
+        && let Some(h) = opts.hypotheses()
     {
         tracker.idle(h);
     }
@@ -757,7 +768,7 @@ pub fn separate(
         }
     };
     // Leaves out the matches under the road (`under_road`).
-    let ground_z = opts.hypotheses.as_ref().map_or(0.0, |h| h.ground_z);
+    let ground_z = opts.hypotheses().map_or(0.0, |h| h.ground_z);
     let road = |mask: Vec<Vec<bool>>, params: &[f64]| -> Vec<Vec<bool>> {
         if !(opts.under_road > 0.0 && arc_length.is_some()) {
             return mask;
