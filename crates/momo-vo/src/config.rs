@@ -446,7 +446,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "# Motion separation (issue 14): a second motion fitted to the matches outside the\n\
          # first's support (threshold, radians) competes only where the match memory\n\
          # (memory_radius, pixels) follows its split from the previous frame pair\n\
-         # (persistence, 0 to 1: an object persists, a static scene's noise tail does not);\n\
+         # (persistence, 0 to 1: an object persists, a static scene's noise tail does not;\n\
+         # own_persistence where the second motion's own matches hold own_share of the frame);\n\
          # the choice by the ground support's spread (hypotheses), the final stage on the chosen\n\
          # support without the remembered-other matches (final_fit, memory_exclude).\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\

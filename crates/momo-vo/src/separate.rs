@@ -159,10 +159,11 @@ pub struct SeparateOptions {
     /// outside its support frame after frame, which [`SeparateOptions::persistence`] would take
     /// for an object; the final motion explains them.
     pub memory_final: bool,
-    /// With [`SeparateOptions::persistence`]: an alternative whose split the memory does not
+    /// With [`SeparateOptions::persistence`] (no effect where that is 0): an alternative whose split the memory does not
     /// follow that far still competes if its *own* matches (in its support, outside A's) hold
     /// at least this share of all the frame's matches and its persistence is at least
-    /// [`SeparateOptions::own_persistence`] (0: off; off by default). A motion fitted to a
+    /// [`SeparateOptions::own_persistence`] (0: off; 0.1 in
+    /// [`SeparateOptions::competition_over_time`], the default configuration's). A motion fitted to a
     /// static scene's noise tail explains only a part of the matches outside A's support (at
     /// most 7-8 % of the matches on the fisheye rig and with 30 % mismatches along KITTI 00),
     /// an object holding 30-70 % of the matches often more. Not everywhere: with 30 %
@@ -216,8 +217,10 @@ impl SeparateOptions {
     /// file has no such section; since 2026-11-28): the multi-frame choice by the spread of
     /// the ground support (`hypotheses.spread_grid = [16, 8]`), the robust loss, the default's
     /// final efficient stage (`final_fit`), the match memory at 20 px with its exclusion, and
-    /// competition over time (`persistence = 0.4`): a frame whose second motion does not
-    /// persist in the memory is solved exactly as without the separation. A config file's
+    /// competition over time (`persistence = 0.4`, or 0.2 where the alternative's own matches
+    /// hold at least a tenth of the frame's: `own_share = 0.1`, `own_persistence = 0.2`, since
+    /// the eleventh session): a frame whose second motion does not persist in the memory is
+    /// solved exactly as without the separation. A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -228,6 +231,8 @@ impl SeparateOptions {
             memory_radius: 20.0,
             memory_exclude: true,
             persistence: 0.4,
+            own_share: 0.1,
+            own_persistence: 0.2,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 ..HypothesesOptions::default()
@@ -290,9 +295,6 @@ impl SeparateOptions {
         }
         if !(0.0..=1.0).contains(&self.own_share) {
             return Err("odometry.separate.own_share must be in [0, 1]".into());
-        }
-        if self.own_share > 0.0 && self.persistence <= 0.0 {
-            return Err("odometry.separate.own_share needs persistence > 0".into());
         }
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
@@ -1229,14 +1231,6 @@ mod tests {
             own_share: 0.1,
             ..persistent.clone()
         };
-        assert!(
-            SeparateOptions {
-                persistence: 0.0,
-                ..own.clone()
-            }
-            .validate()
-            .is_err()
-        );
         let rig = simulate(&SimConfig {
             frames: 40,
             seed: 1,
