@@ -984,7 +984,8 @@ mod partial_tests {
         );
         let bare = Config::from_toml_str(
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
-             memory_exclude = false\npersistence = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
+             memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
+             own_persistence = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )
         .expect("the bare separation");
