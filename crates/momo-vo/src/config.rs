@@ -104,7 +104,9 @@ pub struct OdometryOptions {
     /// Motion separation after each frame's solve ([`crate::separate`]); by default
     /// [`SeparateOptions::competition_over_time`](crate::separate::SeparateOptions::competition_over_time)
     /// (since 2026-11-28; `enabled = false` turns it off). A config file's
-    /// `[odometry.separate]` section replaces it as a whole.
+    /// `[odometry.separate]` section starts from it: the fields the section omits keep its
+    /// values (a `[odometry.separate.hypotheses]` section replaces its multi-frame choice as a
+    /// whole; `hypotheses.enabled = false` turns that choice off).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub separate: Option<crate::separate::SeparateOptions>,
     /// The final efficient stage after each moving frame's solve ([`crate::final_fit`]: the
@@ -444,10 +446,12 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
         "# Motion separation (issue 14): a second motion fitted to the matches outside the\n\
          # first's support (threshold, radians) competes only where the match memory\n\
          # (memory_radius, pixels) follows its split from the previous frame pair\n\
-         # (persistence, 0 to 1: an object persists, a static scene's noise tail does not);\n\
+         # (persistence, 0 to 1: an object persists, a static scene's noise tail does not;\n\
+         # own_persistence where the second motion's own matches hold own_share of the frame);\n\
          # the choice by the ground support's spread (hypotheses), the final stage on the chosen\n\
          # support without the remembered-other matches (final_fit, memory_exclude).\n\
-         # enabled = false: off. This section replaces the default one as a whole.",
+         # enabled = false: off. Fields this section omits keep the default's values; a\n\
+         # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
     (
         "odometry.motion_prior_sigmas",
@@ -955,5 +959,40 @@ mod partial_tests {
             .expect("partial JSON");
         assert_eq!(json(&e)["metric"]["type"], "sampson");
         assert_eq!(json(&e)["model"], d["model"]);
+    }
+
+    #[test]
+    fn a_partial_separate_section_keeps_competition_over_time() {
+        use crate::separate::SeparateOptions;
+        let c = Config::from_toml_str("[odometry.separate]\nthreshold = 0.002\n", "s.toml")
+            .expect("a partial separate section");
+        let s = c.odometry.separate.expect("the section is read");
+        let expected = SeparateOptions {
+            threshold: 0.002,
+            ..SeparateOptions::competition_over_time()
+        };
+        assert_eq!(s, expected);
+        assert_eq!(s.persistence, 0.4);
+        assert!(s.final_fit && s.memory_exclude && s.memory_radius == 20.0);
+        assert!(
+            s.hypotheses()
+                .is_some_and(|h| h.spread_grid == Some((16, 8)))
+        );
+        // Unknown keys are still refused, and the bare separation is reachable field by field.
+        assert!(
+            Config::from_toml_str("[odometry.separate]\npersistance = 0.4\n", "u.toml").is_err()
+        );
+        let bare = Config::from_toml_str(
+            "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
+             memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
+             own_persistence = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
+            "b.toml",
+        )
+        .expect("the bare separation");
+        let bare = bare.odometry.separate.expect("the section is read");
+        assert!(bare.hypotheses().is_none());
+        let mut plain = bare.clone();
+        plain.hypotheses = None;
+        assert_eq!(plain, SeparateOptions::default());
     }
 }

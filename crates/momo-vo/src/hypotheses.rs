@@ -54,6 +54,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct HypothesesOptions {
+    /// Use the multi-frame choice (false: as if `[odometry.separate.hypotheses]` were absent;
+    /// the way a TOML section turns off the default separation's choice).
+    pub enabled: bool,
     /// Least derotated parallax angle (radians) of a match counted in a motion's parallax
     /// support (0.004 ≈ 2.9 px at f = 718 px, about 2 sigma of the derotated angle at 1 px).
     pub parallax: f64,
@@ -88,6 +91,7 @@ pub struct HypothesesOptions {
 impl Default for HypothesesOptions {
     fn default() -> Self {
         Self {
+            enabled: true,
             parallax: 0.004,
             min_arc_length: 0.1,
             min_matches: 10,
