@@ -12,7 +12,7 @@ use momo_testing::canned;
 use momo_vo::{Config, EstimatorKind, FrameStatus, Odometry, Reason, ScaleSource};
 use nalgebra::{Vector2, Vector3};
 
-mod support;
+use crate::support;
 use support::*;
 
 fn assert_finite_orthonormal(m: &Pose<f64>) {

@@ -1,0 +1,9 @@
+//! The integration tests of `momo-models`, one test binary (each module was its own binary before
+//! 2026-11-28: one binary links once, which is most of CI's test build time).
+
+mod jacobians;
+mod kernel;
+mod motion;
+mod register;
+mod soft;
+mod specs;
