@@ -1,10 +1,10 @@
-//! The integration tests of `momo`, one test binary (each module was its own binary before
-//! 2026-11-28: one binary links once, which is most of CI's test build time).
+//! The integration tests of `momo`, in one test binary (each module was its own
+//! binary before 2026-11-28; one binary compiles and links the dependencies' code once).
 
-mod common;
 mod bound_cli;
 mod cameras;
 mod cli;
+mod common;
 mod doc_links;
 mod images;
 mod kitti;

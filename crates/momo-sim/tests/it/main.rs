@@ -1,5 +1,5 @@
-//! The integration tests of `momo-sim`, one test binary (each module was its own binary before
-//! 2026-11-28: one binary links once, which is most of CI's test build time).
+//! The integration tests of `momo-sim`, in one test binary (each module was its own
+//! binary before 2026-11-28; one binary compiles and links the dependencies' code once).
 
 mod bound;
 mod scenarios;

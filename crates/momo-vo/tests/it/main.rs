@@ -1,7 +1,6 @@
-//! The integration tests of `momo-vo`, one test binary (each module was its own binary before
-//! 2026-11-28: one binary links once, which is most of CI's test build time).
+//! The integration tests of `momo-vo`, in one test binary (each module was its own
+//! binary before 2026-11-28; one binary compiles and links the dependencies' code once).
 
-mod support;
 mod calibrate;
 mod degenerate;
 mod final_fit;
@@ -11,5 +10,6 @@ mod hypotheses;
 mod priors;
 mod soft_sigma;
 mod stereo_scale;
+mod support;
 mod trust;
 mod trust_speed;
