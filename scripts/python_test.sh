@@ -18,7 +18,10 @@ fi
 "$venv/bin/python" -m pip install -q --disable-pip-version-check "maturin>=1.7,<2" "numpy>=1.21" "pytest>=7"
 
 # The CLI the tests compare with (same profile and target dir as the extension).
-cargo build --quiet --bin momo
+# The CLI the tests compare against, from the same build as `cargo test --workspace` (same
+# features, so this is a no-op after it; `cargo build --bin momo` alone would resolve other
+# dependency features and compile them again).
+cargo test --workspace --no-run --quiet
 
 # Build the wheel (abi3) and install it: no build products land in the source tree.
 rm -rf "$root/target/wheels/python-test"

@@ -91,7 +91,7 @@ fn rig_of(cameras: Vec<(Camera, Vector3<f64>, Matrix3<f64>)>) -> Rig {
 }
 
 /// The rig the `matches_csv` target reads with: camera 0 [`kitti_pinhole`], camera 1
-/// [`wide_fisheye`], camera 2 [`tiny_pinhole`]. `crates/momo-io/tests/regressions.rs` replays
+/// [`wide_fisheye`], camera 2 [`tiny_pinhole`]. `crates/momo-io/tests/it/regressions.rs` replays
 /// crashers with the same rig.
 pub fn matches_rig() -> Rig {
     let z = Vector3::zeros();

@@ -10,7 +10,7 @@
 //! - [`ate`] and [`rpe`] (module [`trajectory`]): the absolute trajectory error after SE(3) or
 //!   Sim(3) alignment (Umeyama) and the relative pose error at a delta in frames or metres,
 //!   with the definitions of evo's `evo_ape` and `evo_rpe` (equal to 1e-6 on the fixtures of
-//!   `tests/evo.rs`); [`Report`] gathers all of them for `momo eval`.
+//!   `tests/it/evo.rs`); [`Report`] gathers all of them for `momo eval`.
 //!
 //! ```
 //! use momo_core::Pose;

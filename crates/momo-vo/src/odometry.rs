@@ -206,7 +206,7 @@ pub struct Odometry {
     /// whose normal matrix and prior weighting it inverts; the refit weighs the priors in units
     /// of its own noise estimate, so its parameters with the first stage's normal matrix would
     /// understate the data's disagreement with the prior (learnt side slip 1.9 instead of 3.3
-    /// in `tests/soft_sigma.rs`).
+    /// in `tests/it/soft_sigma.rs`).
     first_stage: Option<FrameSolution>,
     /// The metric's residual is an angle (radians): `angle_plane`.
     metric_is_angular: bool,

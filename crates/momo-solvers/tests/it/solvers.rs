@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use momo_core::{LeastSquares, MAX_PARAMS, ParamVec, Solver, SolverReport, Termination};

@@ -8,7 +8,7 @@ use momo_testing::canned;
 use momo_vo::{Config, Constraint, FrameStatus, Odometry, Reason, RunOptions, run_sequence};
 use nalgebra::{Vector2, Vector3};
 
-mod support;
+use crate::support;
 use support::*;
 
 /// The default estimator, warmed up on `frames` ordinary frames of `warm` (each estimated).

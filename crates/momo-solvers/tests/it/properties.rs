@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use momo_core::{LeastSquares, MAX_PARAMS, NormalMatrix, ParamVec, Termination};

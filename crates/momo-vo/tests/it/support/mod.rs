@@ -1,6 +1,6 @@
 //! Test data shared by `hostile.rs` and `trust.rs`: a deterministic random source, matches
 //! of a rig under a motion, simple drives and rotation errors.
-#![allow(dead_code)] // each test file uses its own part
+#![allow(dead_code)] // each test module uses its own part
 
 use momo_core::{
     Camera, CameraModel, FrameObservations, Observation, Pose, Rig, camera_motion, so3_log,

@@ -1,7 +1,7 @@
 //! `momo simulate` writes bound.csv (FORMAT.md version 2) and `momo eval` reports the bound and
 //! the efficiency; a malformed bound.csv is an input error naming file and line.
 
-mod common;
+use crate::common;
 
 use common::{assert_exit, momo, out};
 

@@ -74,7 +74,7 @@ fn subpixel_refinement_recovers_a_fractional_shift() {
         e.sort_by(f64::total_cmp);
         e[e.len() / 2]
     };
-    // Without the KLT refinement (tests/refine.rs), which replaces both.
+    // Without the KLT refinement (tests/it/refine.rs), which replaces both.
     let parabola = MatchOptions {
         klt: None,
         ..MatchOptions::default()

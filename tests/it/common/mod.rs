@@ -1,6 +1,6 @@
 //! Process-level test scaffolding shared by the integration tests that run the `momo` binary
-//! (`mod common;`): spawn it, collect its output, assert its exit code and message.
-// Each test file is its own crate and uses a part of this module.
+//! (`use crate::common;`): spawn it, collect its output, assert its exit code and message.
+// Not every part is used by every build of the tests.
 #![allow(dead_code)]
 
 use std::process::{Command, Output};

@@ -146,7 +146,7 @@ fn a_tukey_refinement_removes_the_outliers_pull() {
 /// KITTI 01 does) is found at once, not pulled towards straight ahead. On clean synthetic
 /// matches the robust prior alone lets the data win; on KITTI 01's real matches a prior centred
 /// on the neutral start settled the first frame 60 deg sideways and the drive never recovered
-/// (median 1.17 deg): `tests/images.rs::kitti_images_match_run_and_vo` is the test that fails
+/// (median 1.17 deg): `tests/it/images.rs::kitti_images_match_run_and_vo` is the test that fails
 /// without the rule "no previous moving estimate, no prior".
 #[test]
 fn the_rotation_prior_does_not_hold_the_first_frame_straight() {

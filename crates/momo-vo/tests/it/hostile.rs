@@ -12,7 +12,7 @@ use momo_testing::canned;
 use momo_vo::{Config, EstimatorKind, FrameStatus, Odometry, Reason, ScaleSource};
 use nalgebra::{Vector2, Vector3};
 
-mod support;
+use crate::support;
 use support::*;
 
 fn assert_finite_orthonormal(m: &Pose<f64>) {
@@ -537,7 +537,7 @@ fn a_rig_with_every_camera_in_the_motion_centre_says_scale_is_unobservable() {
 /// seen), but the rotation stays within 0.3 degrees (measured worst: 0.11). With 1 px of noise
 /// on this narrow rig the worst frame reaches 0.69 degrees (at 0.16 m per frame, heading 1.06
 /// rad): a known weakness of slow frames, bounded here by the restarts. The real-trajectory
-/// case (KITTI 00's stop at frames 545-552) is `tests/kitti.rs`.
+/// case (KITTI 00's stop at frames 545-552) is `tests/it/kitti.rs`.
 #[test]
 fn moving_off_after_a_standstill_keeps_the_rotation() {
     let rig = canned::pinhole_rig();

@@ -2,7 +2,7 @@
 //! left half-written or behind on any error or signal, unwritable standard streams end cleanly,
 //! and oversized inputs are refused early. Every test runs the built binary.
 
-mod common;
+use crate::common;
 
 use common::{assert_exit, momo, momo_limited, out, stderr};
 use momo::sim::{SimConfig, simulate};

@@ -10,7 +10,7 @@ use momo_testing::canned;
 use momo_vo::{Config, FrameStatus, Odometry, ScaleSource};
 use nalgebra::{Vector2, Vector3};
 
-mod support;
+use crate::support;
 use support::*;
 
 /// KITTI-like stereo: the forward-looking camera 1 m ahead, 1.65 m up, and a second one 0.54 m

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::{defaults, pv, tight};
 use momo_core::nalgebra::{Vector2, Vector3};

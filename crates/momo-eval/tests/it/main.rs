@@ -1,0 +1,5 @@
+//! The integration tests of `momo-eval`, in one test binary (each module was its own
+//! binary before 2026-11-28; one binary compiles and links the dependencies' code once).
+
+mod evo;
+mod kitti_devkit;
