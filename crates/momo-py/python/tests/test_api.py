@@ -114,7 +114,9 @@ def test_simulate_along_trajectory(sim):
 def test_gil_released_during_run(tmp_path):
     """While `run` estimates in one thread, another Python thread keeps running."""
     d = tmp_path / "seq"
-    momo.simulate("clean_pinhole", frames=40, seed=1, matches=150).write(d)
+    # Long enough that the call takes well over 0.05 s in the test build (opt-level 1: 40 frames
+    # took 0.037 s), so that the ticker's count means something.
+    momo.simulate("clean_pinhole", frames=300, seed=1, matches=150).write(d)
     ticks = 0
     done = threading.Event()
 
