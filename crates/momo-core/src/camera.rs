@@ -87,21 +87,9 @@ impl CameraModel for Pinhole {
         v.try_normalize(0.0)
     }
 
-    /// `[[fx/Z, 0, −fx X/Z²], [0, fy/Z, −fy Y/Z²]]` for `Z > 0`.
+    /// `[[fx/Z, 0, −fx X/Z²], [0, fy/Z, −fy Y/Z²]]` for `Z > 0` (denominator `Z`).
     fn project_jacobian(&self, p: &Vector3<f64>) -> Option<Matrix2x3<f64>> {
-        if !(p.z > 0.0) {
-            return None;
-        }
-        let iz = 1.0 / p.z;
-        let (x, y) = (p.x * iz, p.y * iz);
-        Some(Matrix2x3::new(
-            self.fx * iz,
-            0.0,
-            -self.fx * x * iz,
-            0.0,
-            self.fy * iz,
-            -self.fy * y * iz,
-        ))
+        (p.z > 0.0).then(|| projective_jacobian(self.fx, self.fy, p, p.z, &Vector3::z()))
     }
 
     fn size(&self) -> (f64, f64) {
@@ -394,8 +382,8 @@ impl CameraModel for Radtan {
             return None;
         }
         let (_, jd) = self.distort(x, y);
-        let iz = 1.0 / p.z;
-        let dn = Matrix2x3::new(iz, 0.0, -x * iz, 0.0, iz, -y * iz);
+        // ∂(x, y)/∂p: the pinhole's with unit focal lengths.
+        let dn = projective_jacobian(1.0, 1.0, p, p.z, &Vector3::z());
         let j = Matrix2::new(self.fx, 0.0, 0.0, self.fy) * jd * dn;
         j.iter().all(|v| v.is_finite()).then_some(j)
     }
@@ -842,6 +830,14 @@ mod tests {
                 let (Some(a), Some(n)) = (analytic, numeric_jacobian(&c, &p)) else {
                     continue;
                 };
+                // Compared where a match can be: the pixel within the image extended by its own
+                // size. Beyond, near a model's singular denominator (a unified camera's
+                // `Z + ξ‖p‖ → 0`), the pixel runs to infinity and the differences' reference
+                // itself fails (seen: 3e10 px per unit against the closed form's exact value).
+                let (w, h) = c.size();
+                if !c.project(&p).is_some_and(|px| c.contains(&px, w.max(h))) {
+                    continue;
+                }
                 let size = n.amax().max(1e-300);
                 prop_assert!((a - n).amax() <= 1e-6 * size, "{c:?} at {p}: {a} vs {n}");
             }

@@ -452,12 +452,18 @@ fn refit_once(
     } else {
         scale
     };
-    let one_step = momo_solvers::LevenbergMarquardt::default().with_max_linearizations(1);
+    let one_step;
+    let solver: &dyn Solver = if opts.one_step {
+        one_step = momo_solvers::LevenbergMarquardt::default().with_max_linearizations(1);
+        &one_step
+    } else {
+        ctx.solver
+    };
     let req = SolveRequest {
         observations: &core,
         loss,
         motion_prior: Some(&prior),
-        solver: if opts.one_step { &one_step } else { ctx.solver },
+        solver,
         ..req
     };
     match ctx.estimator.solve_with_constants(&req, &core_constants) {
