@@ -403,8 +403,7 @@ impl FrameFeatures {
         self.sobel.resize(w * h, SOBEL_FLAT);
         self.blob.resize(w * h, 0);
         self.corner.resize(w * h, 0);
-        responses(px, w, h, &mut self.sobel, &mut self.blob, &mut self.corner);
-        self.non_maximum_suppression(options);
+        self.filter_and_suppress(px, options, STRIP_ROWS);
         self.classes
             .par_iter_mut()
             .for_each(|c| c.build_index(w, h));
@@ -445,15 +444,56 @@ impl FrameFeatures {
     /// necessary condition, [`beaten_in_block_row`]); (2) per remaining candidate, the exact
     /// window check, 16 columns at a time ([`window_check`]); survivors are described and
     /// refined. The feature order is that of a serial scan (block rows, then blocks).
-    fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
+    ///
+    /// The filters and both passes run strip by strip (`strip_rows` rows of whole block rows at a
+    /// time, at least one; [`STRIP_ROWS`] by default): the filters fill the strip's rows (and the rows its windows and descriptors reach
+    /// below it), then pass 1 and pass 2 read them while they are still in the cache (the
+    /// response images of a whole frame, 2.8 MB with the Sobel images, are not). The results
+    /// do not depend on the strips: each block row's candidates depend only on the responses.
+    fn filter_and_suppress(&mut self, px: &[u8], options: &DetectorOptions, strip_rows: usize) {
+        let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
-        let extrema = if n < PACKED_ROWS {
-            self.block_extrema_packed(n, tau)
-        } else {
-            self.block_extrema(n, tau)
-        };
-        self.check_and_describe(n, &extrema);
+        let step = n + 1;
+        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
+        let per_strip = (strip_rows / step).max(1);
+        // Rows `..filtered` hold their responses.
+        let mut filtered = 0;
+        for strip in block_rows.chunks(per_strip) {
+            let last = strip.last().copied().unwrap_or(BORDER);
+            let end = (last + step).min(h - BORDER);
+            // The windows reach `n` rows below the strip's last row, the descriptors 5.
+            let target = (end + n.max(DESCRIPTOR_REACH)).min(h);
+            if target > filtered {
+                responses(
+                    px,
+                    w,
+                    h,
+                    filtered..target,
+                    &mut self.sobel,
+                    &mut self.blob,
+                    &mut self.corner,
+                );
+                filtered = target;
+            }
+            let extrema = if n < PACKED_ROWS {
+                self.block_extrema_packed(strip, n, tau)
+            } else {
+                self.block_extrema(strip, n, tau)
+            };
+            self.check_and_describe(n, &extrema);
+        }
+        if filtered < h {
+            responses(
+                px,
+                w,
+                h,
+                filtered..h,
+                &mut self.sobel,
+                &mut self.blob,
+                &mut self.corner,
+            );
+        }
     }
 
     /// Pass 1 of the suppression as [`block_extrema`](Self::block_extrema), for blocks of at
@@ -464,7 +504,12 @@ impl FrameFeatures {
     /// column holding its best key (no search down the columns). The responses fit: |blob| <=
     /// 16 * 255 and |corner| <= 8 * 255, so `8 |r| + 7 <= 32647`.
     #[inline(never)]
-    fn block_extrema_packed<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
+    fn block_extrema_packed<'a>(
+        &'a self,
+        block_rows: &[usize],
+        n: usize,
+        tau: i16,
+    ) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
@@ -472,7 +517,6 @@ impl FrameFeatures {
         // The column keys are padded with `PAD` values that never win (so that the sliding
         // extremes need no bounds), the scratch rows hold the doubling levels.
         let total = inner + PAD;
-        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
         let blocks = inner.div_ceil(step);
         block_rows
             .par_iter()
@@ -559,12 +603,11 @@ impl FrameFeatures {
     /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
     /// class (the first pixel holding it).
     #[inline(never)]
-    fn block_extrema<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
+    fn block_extrema<'a>(&'a self, block_rows: &[usize], n: usize, tau: i16) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
         let inner = w - 2 * BORDER;
-        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
         let responses = [blob, blob, corner, corner];
         let lanes = &LaneOffsets::new(n);
         block_rows
@@ -738,6 +781,14 @@ fn pack_min(x: i16, r: i16) -> i16 {
 
 /// Values past the end of pass 1's column keys (never the extreme).
 const PAD: usize = 16;
+
+/// Rows per strip of [`FrameFeatures::filter_and_suppress`] (whole block rows, at least one):
+/// a strip's responses and Sobel rows (6 bytes a pixel: about 220 KB for 30 rows of a KITTI
+/// image, 1241 pixels wide) stay in the L2 cache between the filters and the two passes.
+const STRIP_ROWS: usize = 24;
+
+/// Rows a descriptor reaches above and below its pixel ([`PATTERN`]).
+const DESCRIPTOR_REACH: usize = 5;
 
 /// The doubling levels of [`sliding_extremes`]: `m[i][j]` the extreme of `col[j..j + 2^(i+1)]`.
 struct SlidingScratch {
@@ -1066,19 +1117,22 @@ fn responses(
     px: &[u8],
     w: usize,
     h: usize,
+    rows: std::ops::Range<usize>,
     sobel: &mut [u16],
     blob: &mut [i16],
     corner: &mut [i16],
 ) {
-    sobel
+    let part = rows.start * w..rows.end * w;
+    sobel[part.clone()]
         .par_chunks_mut(w)
-        .zip(blob.par_chunks_mut(w))
-        .zip(corner.par_chunks_mut(w))
+        .zip(blob[part.clone()].par_chunks_mut(w))
+        .zip(corner[part].par_chunks_mut(w))
         .enumerate()
         .with_min_len(4)
         .for_each_init(
             || [(); 5].map(|()| vec![0i16; w]),
-            |[s0, s1, s2, s3, s4], (y, ((rs, rb), rc))| {
+            |[s0, s1, s2, s3, s4], (i, ((rs, rb), rc))| {
+                let y = rows.start + i;
                 let row = |k: usize| &px[k * w..(k + 1) * w];
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
@@ -1207,7 +1261,7 @@ mod tests {
         let mut blob = vec![0i16; w * h];
         let mut corner = vec![0i16; w * h];
         let mut sobel = vec![0u16; w * h];
-        responses(&px, w, h, &mut sobel, &mut blob, &mut corner);
+        responses(&px, w, h, 0..h, &mut sobel, &mut blob, &mut corner);
         let du: Vec<u8> = sobel.iter().map(|s| (s & 0xff) as u8).collect();
         let dv: Vec<u8> = sobel.iter().map(|s| (s >> 8) as u8).collect();
         let at = |x: usize, y: usize| i32::from(px[y * w + x]);
@@ -1340,6 +1394,56 @@ mod tests {
         }
     }
 
+    /// Filtering and suppressing strip by strip gives the same features, Sobel images and
+    /// responses whatever the strip: one block row at a time, the default, and the whole image
+    /// at once (radii 1 to 8, so both pass-1 paths and the descriptors' 5-row reach).
+    #[test]
+    fn strips_do_not_change_the_features() {
+        let (w, h) = (97usize, 83usize);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let px: Vec<u8> = (0..w * h)
+            .map(|i| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let (x, y) = (i % w, i / w);
+                if (x / 7 + y / 5) % 3 == 0 {
+                    120
+                } else {
+                    (state >> 56) as u8
+                }
+            })
+            .collect();
+        for n in [1usize, 2, 3, 5, 7, 8] {
+            let options = DetectorOptions {
+                nms_radius: n,
+                threshold: 30,
+            };
+            let run = |strip_rows: usize| {
+                let mut f = FrameFeatures {
+                    width: w,
+                    height: h,
+                    sobel: vec![0; w * h],
+                    blob: vec![0; w * h],
+                    corner: vec![0; w * h],
+                    ..FrameFeatures::default()
+                };
+                f.filter_and_suppress(&px, &options, strip_rows);
+                f
+            };
+            let whole = run(usize::MAX / 2);
+            assert!(whole.len() > 20, "n {n}: {} features", whole.len());
+            for strip_rows in [1, STRIP_ROWS] {
+                let f = run(strip_rows);
+                for (a, b) in f.classes.iter().zip(&whole.classes) {
+                    assert_eq!(a.points, b.points, "n {n} strip {strip_rows}");
+                }
+                assert!(f.sobel == whole.sobel, "n {n} strip {strip_rows}");
+                assert!(f.blob == whole.blob && f.corner == whole.corner);
+            }
+        }
+    }
+
     /// The packed pass 1 finds the same block extrema as the column search, on textured
     /// images with ties (flat areas, quantised values) and the extreme responses of both
     /// filters, for every radius it handles.
@@ -1378,8 +1482,9 @@ mod tests {
                     },
                 );
                 for tau in [1i16, 50, 600] {
-                    let a = f.block_extrema(n, tau);
-                    let b = f.block_extrema_packed(n, tau);
+                    let rows: Vec<usize> = (BORDER..f.height - BORDER).step_by(n + 1).collect();
+                    let a = f.block_extrema(&rows, n, tau);
+                    let b = f.block_extrema_packed(&rows, n, tau);
                     let key = |x: &Vec<Vec<Extremum>>| -> Vec<(u8, i16, u16, u16)> {
                         x.iter()
                             .flatten()
