@@ -527,9 +527,9 @@ impl FrameFeatures {
                     });
                     let scratch: [SlidingScratch; CLASSES] =
                         std::array::from_fn(|_| SlidingScratch::new(total));
-                    (cols, scratch)
+                    (cols, scratch, Vec::new())
                 },
-                |(cols, scratch), &v0| {
+                |(cols, scratch, out), &v0| {
                     let v1 = (v0 + step).min(h - BORDER);
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
@@ -566,35 +566,51 @@ impl FrameFeatures {
                             sliding_block_extremes::<false>(&col[..total], inner, n, sc);
                         }
                     }
-                    let mut out = Vec::with_capacity(blocks * CLASSES);
                     let span = 2 * n + 1;
                     let windows = (inner + 1).saturating_sub(span);
                     let class_of = |class: usize| {
-                        let col = &cols[class][..inner];
+                        let col = &cols[class][..total];
                         let sc = &scratch[class];
                         (col, &sc.blocks[..inner], &sc.window[..windows])
                     };
                     let [p0, p1, p2, p3] = std::array::from_fn(class_of);
-                    let mut push = |class: u8, e: Option<(i16, usize, usize, bool)>| {
-                        if let Some((val, k, r, checked)) = e {
-                            let v = v0 + r;
-                            out.push(Extremum {
+                    // Every slot is written, the count advanced only for candidates (no
+                    // unpredictable branch per block and class).
+                    out.resize(blocks * CLASSES, Extremum::default());
+                    let mut len = 0;
+                    let mut put = |class: u8, (val, k, r, checked, keep): Candidate| {
+                        let v = v0 + r;
+                        if let Some(slot) = out.get_mut(len) {
+                            *slot = Extremum {
                                 val,
                                 u: (BORDER + k) as u16,
                                 v: v as u16,
                                 class,
-                                cleared: if checked { (v1 - 1 - v) as u8 } else { 0 },
-                            });
+                                cleared: ((v1 - 1).saturating_sub(v) * usize::from(checked)) as u8,
+                            };
                         }
+                        len += usize::from(keep);
                     };
                     for blk in 0..blocks {
                         let k0 = blk * step;
-                        push(0, packed_candidate::<true>(p0.0, p0.1, p0.2, k0, n, tau));
-                        push(1, packed_candidate::<false>(p1.0, p1.1, p1.2, k0, n, tau));
-                        push(2, packed_candidate::<true>(p2.0, p2.1, p2.2, k0, n, tau));
-                        push(3, packed_candidate::<false>(p3.0, p3.1, p3.2, k0, n, tau));
+                        put(
+                            0,
+                            packed_candidate::<true>(p0.0, p0.1, p0.2, inner, k0, n, tau),
+                        );
+                        put(
+                            1,
+                            packed_candidate::<false>(p1.0, p1.1, p1.2, inner, k0, n, tau),
+                        );
+                        put(
+                            2,
+                            packed_candidate::<true>(p2.0, p2.1, p2.2, inner, k0, n, tau),
+                        );
+                        put(
+                            3,
+                            packed_candidate::<false>(p3.0, p3.1, p3.2, inner, k0, n, tau),
+                        );
                     }
-                    out
+                    out[..len].to_vec()
                 },
             )
             .collect()
@@ -750,7 +766,7 @@ impl FrameFeatures {
 
 /// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
 /// row of blocks in the order of a serial scan: blocks, then classes).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Extremum {
     val: i16,
     u: u16,
@@ -860,42 +876,50 @@ fn sliding_block_extremes<const MAX: bool>(
     sliding_extremes::<MAX>(col, &s.m, span, &mut s.window[..windows]);
 }
 
+/// A block's candidate from [`packed_candidate`]: response, column, row within the block,
+/// whether pass 1's block-row check ran, and whether it is a candidate.
+type Candidate = (i16, usize, usize, bool, bool);
+
 /// The candidate of the block starting at column `k0` of one class
-/// ([`FrameFeatures::block_extrema_packed`]; `col`, `blocks`, `window` as
-/// [`sliding_block_extremes`] leaves them): `Some((response, column k, row within the block))`
-/// of the first pixel holding the block's extreme if it is strong (`|response| >= tau`) and no
-/// column extreme of the block row within its window (columns `k - n..=k + n`, where those and
-/// the 16 lanes from `k - n` lie inside) is strictly better (a key beyond `8 val + 7` for
-/// maxima, below `8 val` for minima: a strictly better response); the last field says whether
-/// that check ran (then no pixel of the block row in the window is strictly better).
+/// ([`FrameFeatures::block_extrema_packed`]; `col` the padded column keys, `blocks`, `window`
+/// as [`sliding_block_extremes`] leaves them, `inner` the columns without padding): the
+/// response, column `k` and row within the block of the first pixel holding the block's
+/// extreme, and whether it is a candidate: strong (`|response| >= tau`) and no column extreme
+/// of the block row within its window (columns `k - n..=k + n`, where those and the 16 lanes
+/// from `k - n` lie inside) strictly better (a key beyond `8 val + 7` for maxima, below `8 val`
+/// for minima: a strictly better response); the fourth field says whether that check ran (then
+/// no pixel of the block row in the window is strictly better). Without branches on the data
+/// (whether a block has a candidate is close to a coin toss): every column of the block is
+/// compared (the padding never equals a block's extreme), the conditions are combined as
+/// booleans.
 #[inline(always)]
 fn packed_candidate<const MAX: bool>(
     col: &[i16],
     blocks: &[i16],
     window: &[i16],
+    inner: usize,
     k0: usize,
     n: usize,
     tau: i16,
-) -> Option<(i16, usize, usize, bool)> {
-    let inner = col.len();
+) -> Candidate {
     let best = blocks[k0];
     let val = best >> 3;
     let strong = if MAX { val >= tau } else { val <= -tau };
-    if !strong {
-        return None;
+    // The first column holding the best key (0 if none, which a strong block cannot be).
+    let mut at = 0;
+    for j in (0..=n).rev() {
+        if col.get(k0 + j) == Some(&best) {
+            at = j;
+        }
     }
-    // The first column holding the best key.
-    let k1 = (k0 + n + 1).min(inner);
-    let at = col[k0..k1].iter().position(|&x| x == best).unwrap_or(0);
     let k = k0 + at;
     let threshold = if MAX { best | 7 } else { best & !7 };
     let checked = k >= n && k - n + LANES <= inner;
-    if checked && better::<MAX>(window[k - n], threshold) {
-        return None;
-    }
+    let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
+    let beaten = checked & better::<MAX>(lane, threshold);
     let low = best & 7;
     let r = if MAX { 7 - low } else { low } as usize;
-    Some((val, k, r, checked))
+    (val, k, r, checked, strong & !beaten)
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
