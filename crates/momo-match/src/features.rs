@@ -522,14 +522,23 @@ impl FrameFeatures {
             .par_iter()
             .map_init(
                 || {
-                    let cols: [Vec<i16>; CLASSES] = std::array::from_fn(|class| {
-                        vec![if class % 2 == 0 { i16::MIN } else { i16::MAX }; total]
-                    });
-                    let scratch: [SlidingScratch; CLASSES] =
-                        std::array::from_fn(|_| SlidingScratch::new(total));
-                    (cols, scratch, Vec::new())
+                    let mut s = Reused::take(&PASS_ONE_SCRATCH);
+                    for (class, col) in s.cols.iter_mut().enumerate() {
+                        let pad = if class % 2 == 0 { i16::MIN } else { i16::MAX };
+                        col.resize(total, pad);
+                        col[inner..].fill(pad);
+                    }
+                    for sc in &mut s.sliding {
+                        sc.resize(total);
+                    }
+                    s
                 },
-                |(cols, scratch, out), &v0| {
+                |s, &v0| {
+                    let PassOneScratch {
+                        cols,
+                        sliding: scratch,
+                        out,
+                    } = &mut **s;
                     let v1 = (v0 + step).min(h - BORDER);
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
@@ -806,7 +815,63 @@ const STRIP_ROWS: usize = 24;
 /// Rows a descriptor reaches above and below its pixel ([`PATTERN`]).
 const DESCRIPTOR_REACH: usize = 5;
 
+/// Scratch buffers taken from a pool of this thread's and given back when dropped, so that
+/// the parallel loops' per-task buffers are allocated once per thread, not once per strip.
+struct Reused<T: Default + 'static> {
+    item: T,
+    pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<T>>>,
+}
+
+impl<T: Default + 'static> Reused<T> {
+    fn take(pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<T>>>) -> Self {
+        let item = pool
+            .try_with(|p| p.borrow_mut().pop())
+            .ok()
+            .flatten()
+            .unwrap_or_default();
+        Self { item, pool }
+    }
+}
+
+impl<T: Default + 'static> std::ops::Deref for Reused<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.item
+    }
+}
+
+impl<T: Default + 'static> std::ops::DerefMut for Reused<T> {
+    fn deref_mut(&mut self) -> &mut T {
+        &mut self.item
+    }
+}
+
+impl<T: Default + 'static> Drop for Reused<T> {
+    fn drop(&mut self) {
+        let item = std::mem::take(&mut self.item);
+        // During the thread's teardown the pool may be gone: then the buffers are freed.
+        let _ = self.pool.try_with(|p| p.borrow_mut().push(item));
+    }
+}
+
+/// Pass 1's buffers per task: the four classes' padded column keys, their sliding extremes,
+/// the block row's candidate slots.
+#[derive(Default)]
+struct PassOneScratch {
+    cols: [Vec<i16>; CLASSES],
+    sliding: [SlidingScratch; CLASSES],
+    out: Vec<Extremum>,
+}
+
+thread_local! {
+    static PASS_ONE_SCRATCH: std::cell::RefCell<Vec<PassOneScratch>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+    static FILTER_SCRATCH: std::cell::RefCell<Vec<[Vec<i16>; 5]>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// The doubling levels of [`sliding_extremes`]: `m[i][j]` the extreme of `col[j..j + 2^(i+1)]`.
+#[derive(Default)]
 struct SlidingScratch {
     m: [Vec<i16>; 3],
     /// The block extremes (`len = n + 1`) and the window extremes (`len = 2n + 1`) at each column.
@@ -815,11 +880,16 @@ struct SlidingScratch {
 }
 
 impl SlidingScratch {
-    fn new(total: usize) -> Self {
-        Self {
-            m: [(); 3].map(|()| vec![0; total]),
-            blocks: vec![0; total],
-            window: vec![0; total],
+    /// At least `total` values in each row (every value is written before it is read).
+    fn resize(&mut self, total: usize) {
+        for row in self
+            .m
+            .iter_mut()
+            .chain([&mut self.blocks, &mut self.window])
+        {
+            if row.len() < total {
+                row.resize(total, 0);
+            }
         }
     }
 }
@@ -1154,8 +1224,15 @@ fn responses(
         .enumerate()
         .with_min_len(4)
         .for_each_init(
-            || [(); 5].map(|()| vec![0i16; w]),
-            |[s0, s1, s2, s3, s4], (i, ((rs, rb), rc))| {
+            || {
+                let mut s = Reused::take(&FILTER_SCRATCH);
+                for row in s.iter_mut() {
+                    row.resize(w, 0);
+                }
+                s
+            },
+            |s, (i, ((rs, rb), rc))| {
+                let [s0, s1, s2, s3, s4] = &mut **s;
                 let y = rows.start + i;
                 let row = |k: usize| &px[k * w..(k + 1) * w];
                 if y < 2 || y + 2 >= h {
