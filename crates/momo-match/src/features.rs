@@ -960,8 +960,8 @@ type Candidate = (i16, usize, usize, bool, bool);
 /// for minima: a strictly better response); the fourth field says whether that check ran (then
 /// no pixel of the block row in the window is strictly better). Without branches on the data
 /// (whether a block has a candidate is close to a coin toss): every column of the block is
-/// compared (the padding never equals a block's extreme), the conditions are combined as
-/// booleans.
+/// compared at once (the padding never equals a block's extreme), the conditions are combined
+/// as booleans.
 #[inline(always)]
 fn packed_candidate<const MAX: bool>(
     col: &[i16],
@@ -975,14 +975,19 @@ fn packed_candidate<const MAX: bool>(
     let best = blocks[k0];
     let val = best >> 3;
     let strong = if MAX { val >= tau } else { val <= -tau };
-    // The first column holding the best key (0 if none, which a strong block cannot be).
-    let mut at = 0;
-    for j in (0..=n).rev() {
-        if col.get(k0 + j) == Some(&best) {
-            at = j;
-        }
+    // The first column holding the best key (0 if none, which a strong block cannot be): a
+    // mask of the 8 columns from `k0` (inside the padding: `k0 < inner`, `n < 8`), cut to the
+    // block's `n + 1`.
+    let lanes: [i16; 8] = col
+        .get(k0..k0 + 8)
+        .and_then(|x| x.try_into().ok())
+        .unwrap_or([best; 8]);
+    let mut mask = 0u32;
+    for (j, &x) in lanes.iter().enumerate() {
+        mask |= u32::from(x == best) << j;
     }
-    let k = k0 + at;
+    mask &= (1u32 << (n + 1)) - 1;
+    let k = k0 + (mask.trailing_zeros() % 32) as usize;
     let threshold = if MAX { best | 7 } else { best & !7 };
     let checked = k >= n && k - n + LANES <= inner;
     let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
