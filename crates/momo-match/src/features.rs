@@ -172,7 +172,9 @@ impl ClassFeatures {
     }
 
     /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
-    /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false.
+    /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false; features of the
+    /// window's edge cells that lie outside it may be visited with `sad = u32::MAX` (no real
+    /// SAD: at most 32 * 255), which a visitor must treat as no candidate.
     #[inline]
     fn scan(
         &self,
@@ -220,8 +222,12 @@ impl ClassFeatures {
                 let pos = &self.pos[a..b];
                 let descs = &self.descs[a..b];
                 if check_u || check_v {
+                    // A feature outside the window is visited with the SAD `u32::MAX`, which
+                    // no visitor takes for a match (real SADs are at most 32 * 255): no
+                    // branch on the position, which is close to a coin toss near the edges.
                     for (k, (p, d)) in pos.iter().zip(descs).enumerate() {
-                        if win.contains(*p) && !visit(a + k, query.sad(d)) {
+                        let outside = u32::from(!win.contains(*p)).wrapping_neg();
+                        if !visit(a + k, query.sad(d) | outside) {
                             return false;
                         }
                     }
@@ -255,13 +261,13 @@ impl ClassFeatures {
         let mut best_slot = usize::MAX;
         let mut second = u32::MAX;
         self.scan(desc, Window { cu, cv, ru, rv }, |slot, s| {
+            // Without branches: `second` is the smaller of itself and the larger of `best`
+            // and `s` (the old best if `s` beats it, else `s` if it beats `second`).
+            second = second.min(best.max(s));
             if s < best {
-                second = best;
-                best = s;
                 best_slot = slot;
-            } else if s < second {
-                second = s;
             }
+            best = best.min(s);
             true
         });
         (best_slot != usize::MAX).then(|| (self.order[best_slot] as usize, best, second))
