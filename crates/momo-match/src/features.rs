@@ -15,7 +15,8 @@
 //! ```
 //!
 //! The filters are evaluated with running box sums (blob = -box5 + 2 box3 + 7 centre; corner =
-//! differences of 2x2 boxes), row-parallel with rayon.
+//! differences of 2x2 boxes), row-parallel with rayon, strip by strip together with the
+//! suppression (so that the responses are read back from the cache).
 
 use image::GrayImage;
 use rayon::prelude::*;
@@ -451,11 +452,12 @@ impl FrameFeatures {
     /// window check, 16 columns at a time ([`window_check`]); survivors are described and
     /// refined. The feature order is that of a serial scan (block rows, then blocks).
     ///
-    /// The filters and both passes run strip by strip (`strip_rows` rows of whole block rows at a
-    /// time, at least one; [`STRIP_ROWS`] by default): the filters fill the strip's rows (and the rows its windows and descriptors reach
-    /// below it), then pass 1 and pass 2 read them while they are still in the cache (the
-    /// response images of a whole frame, 2.8 MB with the Sobel images, are not). The results
-    /// do not depend on the strips: each block row's candidates depend only on the responses.
+    /// The filters and both passes run strip by strip (`strip_rows` rows of whole block rows at
+    /// a time, at least one block row; [`STRIP_ROWS`] by default): the filters fill the strip's
+    /// rows (and the rows its windows and descriptors reach below it), then pass 1 and pass 2
+    /// read them while they are still in the cache (the response images of a whole frame, 2.8
+    /// MB with the Sobel images, are not). The results do not depend on the strips: each block
+    /// row's candidates depend only on the responses.
     fn filter_and_suppress(&mut self, px: &[u8], options: &DetectorOptions, strip_rows: usize) {
         let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
