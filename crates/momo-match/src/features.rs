@@ -381,8 +381,13 @@ pub struct FrameFeatures {
     sobel: Vec<u16>,
     /// The image's pixels (row-major), kept for the KLT refinement.
     pixels: Vec<u8>,
+    /// The blob and corner responses of the rows in use (a ring of [`ring`](Self::ring) rows:
+    /// row `y` at `(y & (ring - 1)) * width`), filled strip by strip
+    /// ([`filter_and_suppress`](Self::filter_and_suppress)).
     blob: Vec<i16>,
     corner: Vec<i16>,
+    /// Rows of the response ring, a power of two.
+    ring: usize,
     /// The features per class: blob max, blob min, corner max, corner min.
     pub classes: [ClassFeatures; CLASSES],
 }
@@ -408,8 +413,6 @@ impl FrameFeatures {
         self.pixels.clear();
         self.pixels.extend_from_slice(&px[..w * h]);
         self.sobel.resize(w * h, SOBEL_FLAT);
-        self.blob.resize(w * h, 0);
-        self.corner.resize(w * h, 0);
         self.filter_and_suppress(px, options, STRIP_ROWS);
         self.classes
             .par_iter_mut()
@@ -465,19 +468,29 @@ impl FrameFeatures {
         let step = n + 1;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
         let per_strip = (strip_rows / step).max(1);
+        // The ring holds the rows a strip reads: from `n` above its first block row to what its
+        // windows and descriptors reach below its end, and the first strip's filters from row 0.
+        let reach = n.max(DESCRIPTOR_REACH);
+        let ring = (BORDER + per_strip * step + 2 * reach + 1)
+            .min(h)
+            .next_power_of_two();
+        self.ring = ring;
+        self.blob.resize(ring * w, 0);
+        self.corner.resize(ring * w, 0);
         // Rows `..filtered` hold their responses.
         let mut filtered = 0;
         for strip in block_rows.chunks(per_strip) {
             let last = strip.last().copied().unwrap_or(BORDER);
             let end = (last + step).min(h - BORDER);
             // The windows reach `n` rows below the strip's last row, the descriptors 5.
-            let target = (end + n.max(DESCRIPTOR_REACH)).min(h);
+            let target = (end + reach).min(h);
             if target > filtered {
                 responses(
                     px,
                     w,
                     h,
                     filtered..target,
+                    ring,
                     &mut self.sobel,
                     &mut self.blob,
                     &mut self.corner,
@@ -497,6 +510,7 @@ impl FrameFeatures {
                 w,
                 h,
                 filtered..h,
+                ring,
                 &mut self.sobel,
                 &mut self.blob,
                 &mut self.corner,
@@ -521,6 +535,7 @@ impl FrameFeatures {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
+        let mask = self.ring - 1;
         let inner = w - 2 * BORDER;
         // The column keys are padded with `PAD` values that never win (so that the sliding
         // extremes need no bounds), the scratch rows hold the doubling levels.
@@ -552,7 +567,7 @@ impl FrameFeatures {
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
                     let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
                     let row = |img: &'a [i16], v: usize| -> &'a [i16] {
-                        let s = v * w + BORDER;
+                        let s = (v & mask) * w + BORDER;
                         &img[s..s + inner]
                     };
                     {
@@ -640,6 +655,7 @@ impl FrameFeatures {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
+        let mask = self.ring - 1;
         let inner = w - 2 * BORDER;
         let responses = [blob, blob, corner, corner];
         let lanes = &LaneOffsets::new(n);
@@ -652,8 +668,10 @@ impl FrameFeatures {
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
                     let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
-                    let row =
-                        |img: &'a [i16], v: usize| &img[v * w + BORDER..v * w + BORDER + inner];
+                    let row = |img: &'a [i16], v: usize| {
+                        let s = (v & mask) * w + BORDER;
+                        &img[s..s + inner]
+                    };
                     bmax.copy_from_slice(row(blob, v0));
                     bmin.copy_from_slice(row(blob, v0));
                     cmax.copy_from_slice(row(corner, v0));
@@ -691,7 +709,9 @@ impl FrameFeatures {
                             for (k, _) in part.iter().enumerate().filter(|(_, c)| **c == val) {
                                 let u = u0 + k;
                                 let rows = v0..v1.min(first.0);
-                                if let Some(v) = rows.into_iter().find(|&v| img[v * w + u] == val) {
+                                if let Some(v) =
+                                    rows.into_iter().find(|&v| img[(v & mask) * w + u] == val)
+                                {
                                     first = (v, u);
                                 }
                             }
@@ -731,6 +751,7 @@ impl FrameFeatures {
         let lanes = &LaneOffsets::new(n);
         let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
         let img_of = |class: usize| if class < 2 { blob } else { corner };
+        let mask = self.ring - 1;
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
@@ -749,15 +770,15 @@ impl FrameFeatures {
                     // window is scanned.
                     let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
                     let keep = match (fits, maximum) {
-                        (true, true) => window_check::<true>(img, w, *e, n, lanes),
-                        (true, false) => window_check::<false>(img, w, *e, n, lanes),
-                        (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
-                        (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
+                        (true, true) => window_check::<true>(img, w, mask, *e, n, lanes),
+                        (true, false) => window_check::<false>(img, w, mask, *e, n, lanes),
+                        (false, true) => is_extremum::<true>(img, w, h, mask, u, v, n, e.val),
+                        (false, false) => is_extremum::<false>(img, w, h, mask, u, v, n, e.val),
                     };
                     if !keep {
                         continue;
                     }
-                    let r = |x: usize, y: usize| f64::from(img[y * w + x]);
+                    let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
                     let c = r(u, v);
                     let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
                     let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
@@ -816,9 +837,10 @@ fn pack_min(x: i16, r: i16) -> i16 {
 const PAD: usize = 16;
 
 /// Rows per strip of [`FrameFeatures::filter_and_suppress`] (whole block rows, at least one):
-/// a strip's responses and Sobel rows (6 bytes a pixel: about 220 KB for 30 rows of a KITTI
-/// image, 1241 pixels wide) stay in the L2 cache between the filters and the two passes.
-const STRIP_ROWS: usize = 24;
+/// the ring of response rows (32 rows for the default radius 5: 160 KB for a KITTI image, 1241
+/// pixels wide) and the strip's Sobel rows stay in the L2 cache between the filters and the two
+/// passes.
+const STRIP_ROWS: usize = 12;
 
 /// Rows a descriptor reaches above and below its pixel ([`PATTERN`]).
 const DESCRIPTOR_REACH: usize = 5;
@@ -1132,11 +1154,13 @@ fn beaten_in_block_row<const MAX: bool>(
 /// likewise the rows below, then per lane one comparison of each ([`LaneOffsets`]): above, a
 /// pixel at least as good beats `val`, below one strictly better; in row `v` those left of `u`
 /// when at least as good, those right of it when better. The rows below start after the
-/// `e.cleared` rows that pass 1 has cleared (no pixel strictly better there).
+/// `e.cleared` rows that pass 1 has cleared (no pixel strictly better there). Row `y` of `img`
+/// is at `(y & mask) * w` (a ring of rows, [`FrameFeatures::filter_and_suppress`]).
 #[inline(always)]
 fn window_check<const MAX: bool>(
     img: &[i16],
     w: usize,
+    mask: usize,
     e: Extremum,
     n: usize,
     lanes: &LaneOffsets,
@@ -1144,7 +1168,8 @@ fn window_check<const MAX: bool>(
     let (u, v, val) = (usize::from(e.u), usize::from(e.v), e.val);
     let start = u - n;
     let row = |y: usize| -> [i16; LANES] {
-        let s = &img[y * w + start..y * w + start + LANES];
+        let at = (y & mask) * w + start;
+        let s = &img[at..at + LANES];
         s.try_into().unwrap_or([val; LANES])
     };
     let reduce = |ys: std::ops::Range<usize>| {
@@ -1169,11 +1194,14 @@ fn window_check<const MAX: bool>(
 /// True if `val` at `(u, v)` is the strict maximum (`MAX`, else minimum) of `img` over the
 /// `(2n+1)^2` window, ties broken towards the smaller index (row-major): a pixel before
 /// `(u, v)` beats it when equal, a pixel after only when strictly better. Each row segment is
-/// reduced to its extreme without branches, then compared.
+/// reduced to its extreme without branches, then compared. Row `y` of `img` is at
+/// `(y & mask) * w`.
+#[allow(clippy::too_many_arguments)]
 fn is_extremum<const MAX: bool>(
     img: &[i16],
     w: usize,
     h: usize,
+    mask: usize,
     u: usize,
     v: usize,
     n: usize,
@@ -1195,7 +1223,7 @@ fn is_extremum<const MAX: bool>(
             m < val || (earlier && m == val)
         }
     };
-    let row = |y: usize| &img[y * w + x0..y * w + x1];
+    let row = |y: usize| &img[(y & mask) * w + x0..(y & mask) * w + x1];
     let centre = row(v);
     let k = u - x0;
     if beaten(extreme(&centre[..k]), true) || beaten(extreme(&centre[k + 1..]), false) {
@@ -1219,8 +1247,41 @@ fn is_extremum<const MAX: bool>(
 /// vertical pass over 5 rows into column sums (the filters' and, from its middle three rows, the
 /// Sobel images'; 3 rows next to the border), then horizontal passes over shifted slices of
 /// those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+///
+/// Only `rows` are computed. The Sobel images are whole (row `y` at `y * w`); the blob and
+/// corner responses are a ring of `ring` rows (a power of two, at least `rows.len()`; row `y` at
+/// `(y & (ring - 1)) * w`).
 #[inline(never)]
 fn responses(
+    px: &[u8],
+    w: usize,
+    h: usize,
+    rows: std::ops::Range<usize>,
+    ring: usize,
+    sobel: &mut [u16],
+    blob: &mut [i16],
+    corner: &mut [i16],
+) {
+    // The rows in pieces that do not wrap around the ring.
+    let mut a = rows.start;
+    while a < rows.end {
+        let b = rows.end.min((a / ring + 1) * ring);
+        let r = (a % ring) * w..(a % ring + b - a) * w;
+        responses_unwrapped(
+            px,
+            w,
+            h,
+            a..b,
+            &mut sobel[a * w..b * w],
+            &mut blob[r.clone()],
+            &mut corner[r],
+        );
+        a = b;
+    }
+}
+
+/// [`responses`] of `rows`, into `sobel`, `blob` and `corner` holding just those rows.
+fn responses_unwrapped(
     px: &[u8],
     w: usize,
     h: usize,
@@ -1229,11 +1290,10 @@ fn responses(
     blob: &mut [i16],
     corner: &mut [i16],
 ) {
-    let part = rows.start * w..rows.end * w;
-    sobel[part.clone()]
+    sobel
         .par_chunks_mut(w)
-        .zip(blob[part.clone()].par_chunks_mut(w))
-        .zip(corner[part].par_chunks_mut(w))
+        .zip(blob.par_chunks_mut(w))
+        .zip(corner.par_chunks_mut(w))
         .enumerate()
         .with_min_len(4)
         .for_each_init(
@@ -1372,10 +1432,12 @@ mod tests {
                 _ => ((i * 37 + i * i * 11) % 251) as u8,
             })
             .collect();
-        let mut blob = vec![0i16; w * h];
-        let mut corner = vec![0i16; w * h];
+        // A ring of at least `h` rows holds the whole image (row `y` at `y * w`).
+        let ring = h.next_power_of_two();
+        let mut blob = vec![0i16; ring * w];
+        let mut corner = vec![0i16; ring * w];
         let mut sobel = vec![0u16; w * h];
-        responses(&px, w, h, 0..h, &mut sobel, &mut blob, &mut corner);
+        responses(&px, w, h, 0..h, ring, &mut sobel, &mut blob, &mut corner);
         let du: Vec<u8> = sobel.iter().map(|s| (s & 0xff) as u8).collect();
         let dv: Vec<u8> = sobel.iter().map(|s| (s >> 8) as u8).collect();
         let at = |x: usize, y: usize| i32::from(px[y * w + x]);
@@ -1464,11 +1526,14 @@ mod tests {
             };
             let mut f = FrameFeatures::default();
             f.extract(&img, &options);
+            // The ring wraps for the small radii (for 7 and 8 it holds the 61 rows).
+            assert!(n > 5 || f.ring < h, "n {n}: ring of {} rows", f.ring);
+            let (blob, corner) = whole_responses(&img);
             let step = n + 1;
             // The block grid's extent (pixels past the last whole block row are not searched).
             let rows_end = BORDER + (h - 2 * BORDER).div_ceil(step) * step;
             for class in 0..CLASSES {
-                let resp = if class < 2 { &f.blob } else { &f.corner };
+                let resp = if class < 2 { &blob } else { &corner };
                 let maximum = class % 2 == 0;
                 let mut expected = Vec::new();
                 for v in BORDER..(h - BORDER).min(rows_end) {
@@ -1508,9 +1573,29 @@ mod tests {
         }
     }
 
-    /// Filtering and suppressing strip by strip gives the same features, Sobel images and
-    /// responses whatever the strip: one block row at a time, the default, and the whole image
-    /// at once (radii 1 to 8, so both pass-1 paths and the descriptors' 5-row reach).
+    /// Filtering and suppressing strip by strip gives the same features and Sobel images
+    /// whatever the strip (and so the ring of response rows): one block row at a time, the
+    /// default, and the whole image at once (radii 1 to 8, so both pass-1 paths and the
+    /// descriptors' 5-row reach).
+    /// The blob and corner responses of the whole image (row `y` at `y * w`).
+    fn whole_responses(img: &GrayImage) -> (Vec<i16>, Vec<i16>) {
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let ring = h.next_power_of_two();
+        let (mut blob, mut corner) = (vec![0i16; ring * w], vec![0i16; ring * w]);
+        let mut sobel = vec![0u16; w * h];
+        responses(
+            img.as_raw(),
+            w,
+            h,
+            0..h,
+            ring,
+            &mut sobel,
+            &mut blob,
+            &mut corner,
+        );
+        (blob, corner)
+    }
+
     #[test]
     fn strips_do_not_change_the_features() {
         let (w, h) = (97usize, 83usize);
@@ -1538,8 +1623,6 @@ mod tests {
                     width: w,
                     height: h,
                     sobel: vec![0; w * h],
-                    blob: vec![0; w * h],
-                    corner: vec![0; w * h],
                     ..FrameFeatures::default()
                 };
                 f.filter_and_suppress(&px, &options, strip_rows);
@@ -1553,7 +1636,6 @@ mod tests {
                     assert_eq!(a.points, b.points, "n {n} strip {strip_rows}");
                 }
                 assert!(f.sobel == whole.sobel, "n {n} strip {strip_rows}");
-                assert!(f.blob == whole.blob && f.corner == whole.corner);
             }
         }
     }
@@ -1595,6 +1677,9 @@ mod tests {
                         threshold: 50,
                     },
                 );
+                // Pass 1 over every block row reads the whole image's responses.
+                (f.blob, f.corner) = whole_responses(&img);
+                f.ring = h.next_power_of_two();
                 for tau in [1i16, 50, 600] {
                     let rows: Vec<usize> = (BORDER..f.height - BORDER).step_by(n + 1).collect();
                     let a = f.block_extrema(&rows, n, tau);
