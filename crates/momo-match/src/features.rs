@@ -15,7 +15,8 @@
 //! ```
 //!
 //! The filters are evaluated with running box sums (blob = -box5 + 2 box3 + 7 centre; corner =
-//! differences of 2x2 boxes), row-parallel with rayon.
+//! differences of 2x2 boxes), row-parallel with rayon, strip by strip together with the
+//! suppression (so that the responses are read back from the cache).
 
 use image::GrayImage;
 use rayon::prelude::*;
@@ -172,7 +173,9 @@ impl ClassFeatures {
     }
 
     /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
-    /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false.
+    /// `|v - cv| <= rv`, in increasing slot order, until `visit` returns false; features of the
+    /// window's edge cells that lie outside it may be visited with `sad = u32::MAX` (no real
+    /// SAD: at most 32 * 255), which a visitor must treat as no candidate.
     #[inline]
     fn scan(
         &self,
@@ -220,8 +223,12 @@ impl ClassFeatures {
                 let pos = &self.pos[a..b];
                 let descs = &self.descs[a..b];
                 if check_u || check_v {
+                    // A feature outside the window is visited with the SAD `u32::MAX`, which
+                    // no visitor takes for a match (real SADs are at most 32 * 255): no
+                    // branch on the position, which is close to a coin toss near the edges.
                     for (k, (p, d)) in pos.iter().zip(descs).enumerate() {
-                        if win.contains(*p) && !visit(a + k, query.sad(d)) {
+                        let outside = u32::from(!win.contains(*p)).wrapping_neg();
+                        if !visit(a + k, query.sad(d) | outside) {
                             return false;
                         }
                     }
@@ -255,13 +262,13 @@ impl ClassFeatures {
         let mut best_slot = usize::MAX;
         let mut second = u32::MAX;
         self.scan(desc, Window { cu, cv, ru, rv }, |slot, s| {
+            // Without branches: `second` is the smaller of itself and the larger of `best`
+            // and `s` (the old best if `s` beats it, else `s` if it beats `second`).
+            second = second.min(best.max(s));
             if s < best {
-                second = best;
-                best = s;
                 best_slot = slot;
-            } else if s < second {
-                second = s;
             }
+            best = best.min(s);
             true
         });
         (best_slot != usize::MAX).then(|| (self.order[best_slot] as usize, best, second))
@@ -374,8 +381,13 @@ pub struct FrameFeatures {
     sobel: Vec<u16>,
     /// The image's pixels (row-major), kept for the KLT refinement.
     pixels: Vec<u8>,
+    /// The blob and corner responses of the rows in use (a ring of [`ring`](Self::ring) rows:
+    /// row `y` at `(y & (ring - 1)) * width`), filled strip by strip
+    /// ([`filter_and_suppress`](Self::filter_and_suppress)).
     blob: Vec<i16>,
     corner: Vec<i16>,
+    /// Rows of the response ring, a power of two.
+    ring: usize,
     /// The features per class: blob max, blob min, corner max, corner min.
     pub classes: [ClassFeatures; CLASSES],
 }
@@ -401,10 +413,7 @@ impl FrameFeatures {
         self.pixels.clear();
         self.pixels.extend_from_slice(&px[..w * h]);
         self.sobel.resize(w * h, SOBEL_FLAT);
-        self.blob.resize(w * h, 0);
-        self.corner.resize(w * h, 0);
-        responses(px, w, h, &mut self.sobel, &mut self.blob, &mut self.corner);
-        self.non_maximum_suppression(options);
+        self.filter_and_suppress(px, options, STRIP_ROWS);
         self.classes
             .par_iter_mut()
             .for_each(|c| c.build_index(w, h));
@@ -445,15 +454,68 @@ impl FrameFeatures {
     /// necessary condition, [`beaten_in_block_row`]); (2) per remaining candidate, the exact
     /// window check, 16 columns at a time ([`window_check`]); survivors are described and
     /// refined. The feature order is that of a serial scan (block rows, then blocks).
-    fn non_maximum_suppression(&mut self, options: &DetectorOptions) {
+    ///
+    /// The filters and both passes run strip by strip (`strip_rows` rows of whole block rows at
+    /// a time, at least one block row; [`STRIP_ROWS`] by default): the filters fill the strip's
+    /// rows (and the rows its windows and descriptors reach below it), then pass 1 and pass 2
+    /// read them while they are still in the cache (the response images of a whole frame, 2.8
+    /// MB with the Sobel images, are not). The results do not depend on the strips: each block
+    /// row's candidates depend only on the responses.
+    fn filter_and_suppress(&mut self, px: &[u8], options: &DetectorOptions, strip_rows: usize) {
+        let (w, h) = (self.width, self.height);
         let n = options.nms_radius.max(1);
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
-        let extrema = if n < PACKED_ROWS {
-            self.block_extrema_packed(n, tau)
-        } else {
-            self.block_extrema(n, tau)
-        };
-        self.check_and_describe(n, &extrema);
+        let step = n + 1;
+        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
+        let per_strip = (strip_rows / step).max(1);
+        // The ring holds the rows a strip reads: from `n` above its first block row to what its
+        // windows and descriptors reach below its end, and the first strip's filters from row 0.
+        let reach = n.max(DESCRIPTOR_REACH);
+        let ring = (BORDER + per_strip * step + 2 * reach + 1)
+            .min(h)
+            .next_power_of_two();
+        self.ring = ring;
+        self.blob.resize(ring * w, 0);
+        self.corner.resize(ring * w, 0);
+        // Rows `..filtered` hold their responses.
+        let mut filtered = 0;
+        for strip in block_rows.chunks(per_strip) {
+            let last = strip.last().copied().unwrap_or(BORDER);
+            let end = (last + step).min(h - BORDER);
+            // The windows reach `n` rows below the strip's last row, the descriptors 5.
+            let target = (end + reach).min(h);
+            if target > filtered {
+                responses(
+                    px,
+                    w,
+                    h,
+                    filtered..target,
+                    ring,
+                    &mut self.sobel,
+                    &mut self.blob,
+                    &mut self.corner,
+                );
+                filtered = target;
+            }
+            let extrema = if n < PACKED_ROWS {
+                self.block_extrema_packed(strip, n, tau)
+            } else {
+                self.block_extrema(strip, n, tau)
+            };
+            self.check_and_describe(n, &extrema);
+        }
+        if filtered < h {
+            responses(
+                px,
+                w,
+                h,
+                filtered..h,
+                ring,
+                &mut self.sobel,
+                &mut self.blob,
+                &mut self.corner,
+            );
+        }
     }
 
     /// Pass 1 of the suppression as [`block_extrema`](Self::block_extrema), for blocks of at
@@ -464,34 +526,48 @@ impl FrameFeatures {
     /// column holding its best key (no search down the columns). The responses fit: |blob| <=
     /// 16 * 255 and |corner| <= 8 * 255, so `8 |r| + 7 <= 32647`.
     #[inline(never)]
-    fn block_extrema_packed<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
+    fn block_extrema_packed<'a>(
+        &'a self,
+        block_rows: &[usize],
+        n: usize,
+        tau: i16,
+    ) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
+        let mask = self.ring - 1;
         let inner = w - 2 * BORDER;
         // The column keys are padded with `PAD` values that never win (so that the sliding
         // extremes need no bounds), the scratch rows hold the doubling levels.
         let total = inner + PAD;
-        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
         let blocks = inner.div_ceil(step);
         block_rows
             .par_iter()
             .map_init(
                 || {
-                    let cols: [Vec<i16>; CLASSES] = std::array::from_fn(|class| {
-                        vec![if class % 2 == 0 { i16::MIN } else { i16::MAX }; total]
-                    });
-                    let scratch: [SlidingScratch; CLASSES] =
-                        std::array::from_fn(|_| SlidingScratch::new(total));
-                    (cols, scratch)
+                    let mut s = Reused::take(&PASS_ONE_SCRATCH);
+                    for (class, col) in s.cols.iter_mut().enumerate() {
+                        let pad = if class % 2 == 0 { i16::MIN } else { i16::MAX };
+                        col.resize(total, pad);
+                        col[inner..].fill(pad);
+                    }
+                    for sc in &mut s.sliding {
+                        sc.resize(total);
+                    }
+                    s
                 },
-                |(cols, scratch), &v0| {
+                |s, &v0| {
+                    let PassOneScratch {
+                        cols,
+                        sliding: scratch,
+                        out,
+                    } = &mut **s;
                     let v1 = (v0 + step).min(h - BORDER);
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
                     let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
                     let row = |img: &'a [i16], v: usize| -> &'a [i16] {
-                        let s = v * w + BORDER;
+                        let s = (v & mask) * w + BORDER;
                         &img[s..s + inner]
                     };
                     {
@@ -522,35 +598,51 @@ impl FrameFeatures {
                             sliding_block_extremes::<false>(&col[..total], inner, n, sc);
                         }
                     }
-                    let mut out = Vec::with_capacity(blocks * CLASSES);
                     let span = 2 * n + 1;
                     let windows = (inner + 1).saturating_sub(span);
                     let class_of = |class: usize| {
-                        let col = &cols[class][..inner];
+                        let col = &cols[class][..total];
                         let sc = &scratch[class];
                         (col, &sc.blocks[..inner], &sc.window[..windows])
                     };
                     let [p0, p1, p2, p3] = std::array::from_fn(class_of);
-                    let mut push = |class: u8, e: Option<(i16, usize, usize, bool)>| {
-                        if let Some((val, k, r, checked)) = e {
-                            let v = v0 + r;
-                            out.push(Extremum {
+                    // Every slot is written, the count advanced only for candidates (no
+                    // unpredictable branch per block and class).
+                    out.resize(blocks * CLASSES, Extremum::default());
+                    let mut len = 0;
+                    let mut put = |class: u8, (val, k, r, checked, keep): Candidate| {
+                        let v = v0 + r;
+                        if let Some(slot) = out.get_mut(len) {
+                            *slot = Extremum {
                                 val,
                                 u: (BORDER + k) as u16,
                                 v: v as u16,
                                 class,
-                                cleared: if checked { (v1 - 1 - v) as u8 } else { 0 },
-                            });
+                                cleared: ((v1 - 1).saturating_sub(v) * usize::from(checked)) as u8,
+                            };
                         }
+                        len += usize::from(keep);
                     };
                     for blk in 0..blocks {
                         let k0 = blk * step;
-                        push(0, packed_candidate::<true>(p0.0, p0.1, p0.2, k0, n, tau));
-                        push(1, packed_candidate::<false>(p1.0, p1.1, p1.2, k0, n, tau));
-                        push(2, packed_candidate::<true>(p2.0, p2.1, p2.2, k0, n, tau));
-                        push(3, packed_candidate::<false>(p3.0, p3.1, p3.2, k0, n, tau));
+                        put(
+                            0,
+                            packed_candidate::<true>(p0.0, p0.1, p0.2, inner, k0, n, tau),
+                        );
+                        put(
+                            1,
+                            packed_candidate::<false>(p1.0, p1.1, p1.2, inner, k0, n, tau),
+                        );
+                        put(
+                            2,
+                            packed_candidate::<true>(p2.0, p2.1, p2.2, inner, k0, n, tau),
+                        );
+                        put(
+                            3,
+                            packed_candidate::<false>(p3.0, p3.1, p3.2, inner, k0, n, tau),
+                        );
                     }
-                    out
+                    out[..len].to_vec()
                 },
             )
             .collect()
@@ -559,12 +651,12 @@ impl FrameFeatures {
     /// Pass 1 of the suppression: per row of blocks, per block, the strong extremum of each
     /// class (the first pixel holding it).
     #[inline(never)]
-    fn block_extrema<'a>(&'a self, n: usize, tau: i16) -> Vec<Vec<Extremum>> {
+    fn block_extrema<'a>(&'a self, block_rows: &[usize], n: usize, tau: i16) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
         let (blob, corner) = (&self.blob, &self.corner);
+        let mask = self.ring - 1;
         let inner = w - 2 * BORDER;
-        let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
         let responses = [blob, blob, corner, corner];
         let lanes = &LaneOffsets::new(n);
         block_rows
@@ -576,8 +668,10 @@ impl FrameFeatures {
                     let [bmax, bmin, cmax, cmin] = cols;
                     let (bmax, bmin) = (&mut bmax[..inner], &mut bmin[..inner]);
                     let (cmax, cmin) = (&mut cmax[..inner], &mut cmin[..inner]);
-                    let row =
-                        |img: &'a [i16], v: usize| &img[v * w + BORDER..v * w + BORDER + inner];
+                    let row = |img: &'a [i16], v: usize| {
+                        let s = (v & mask) * w + BORDER;
+                        &img[s..s + inner]
+                    };
                     bmax.copy_from_slice(row(blob, v0));
                     bmin.copy_from_slice(row(blob, v0));
                     cmax.copy_from_slice(row(corner, v0));
@@ -615,7 +709,9 @@ impl FrameFeatures {
                             for (k, _) in part.iter().enumerate().filter(|(_, c)| **c == val) {
                                 let u = u0 + k;
                                 let rows = v0..v1.min(first.0);
-                                if let Some(v) = rows.into_iter().find(|&v| img[v * w + u] == val) {
+                                if let Some(v) =
+                                    rows.into_iter().find(|&v| img[(v & mask) * w + u] == val)
+                                {
                                     first = (v, u);
                                 }
                             }
@@ -655,6 +751,7 @@ impl FrameFeatures {
         let lanes = &LaneOffsets::new(n);
         let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
         let img_of = |class: usize| if class < 2 { blob } else { corner };
+        let mask = self.ring - 1;
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
@@ -673,15 +770,15 @@ impl FrameFeatures {
                     // window is scanned.
                     let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
                     let keep = match (fits, maximum) {
-                        (true, true) => window_check::<true>(img, w, *e, n, lanes),
-                        (true, false) => window_check::<false>(img, w, *e, n, lanes),
-                        (false, true) => is_extremum::<true>(img, w, h, u, v, n, e.val),
-                        (false, false) => is_extremum::<false>(img, w, h, u, v, n, e.val),
+                        (true, true) => window_check::<true>(img, w, mask, *e, n, lanes),
+                        (true, false) => window_check::<false>(img, w, mask, *e, n, lanes),
+                        (false, true) => is_extremum::<true>(img, w, h, mask, u, v, n, e.val),
+                        (false, false) => is_extremum::<false>(img, w, h, mask, u, v, n, e.val),
                     };
                     if !keep {
                         continue;
                     }
-                    let r = |x: usize, y: usize| f64::from(img[y * w + x]);
+                    let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
                     let c = r(u, v);
                     let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
                     let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
@@ -707,7 +804,7 @@ impl FrameFeatures {
 
 /// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
 /// row of blocks in the order of a serial scan: blocks, then classes).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Extremum {
     val: i16,
     u: u16,
@@ -739,7 +836,72 @@ fn pack_min(x: i16, r: i16) -> i16 {
 /// Values past the end of pass 1's column keys (never the extreme).
 const PAD: usize = 16;
 
+/// Rows per strip of [`FrameFeatures::filter_and_suppress`] (whole block rows, at least one):
+/// the ring of response rows (32 rows for the default radius 5: 160 KB for a KITTI image, 1241
+/// pixels wide) and the strip's Sobel rows stay in the L2 cache between the filters and the two
+/// passes.
+const STRIP_ROWS: usize = 12;
+
+/// Rows a descriptor reaches above and below its pixel ([`PATTERN`]).
+const DESCRIPTOR_REACH: usize = 5;
+
+/// Scratch buffers taken from a pool of this thread's and given back when dropped, so that
+/// the parallel loops' per-task buffers are allocated once per thread, not once per strip.
+struct Reused<T: Default + 'static> {
+    item: T,
+    pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<T>>>,
+}
+
+impl<T: Default + 'static> Reused<T> {
+    fn take(pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<T>>>) -> Self {
+        let item = pool
+            .try_with(|p| p.borrow_mut().pop())
+            .ok()
+            .flatten()
+            .unwrap_or_default();
+        Self { item, pool }
+    }
+}
+
+impl<T: Default + 'static> std::ops::Deref for Reused<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.item
+    }
+}
+
+impl<T: Default + 'static> std::ops::DerefMut for Reused<T> {
+    fn deref_mut(&mut self) -> &mut T {
+        &mut self.item
+    }
+}
+
+impl<T: Default + 'static> Drop for Reused<T> {
+    fn drop(&mut self) {
+        let item = std::mem::take(&mut self.item);
+        // During the thread's teardown the pool may be gone: then the buffers are freed.
+        let _ = self.pool.try_with(|p| p.borrow_mut().push(item));
+    }
+}
+
+/// Pass 1's buffers per task: the four classes' padded column keys, their sliding extremes,
+/// the block row's candidate slots.
+#[derive(Default)]
+struct PassOneScratch {
+    cols: [Vec<i16>; CLASSES],
+    sliding: [SlidingScratch; CLASSES],
+    out: Vec<Extremum>,
+}
+
+thread_local! {
+    static PASS_ONE_SCRATCH: std::cell::RefCell<Vec<PassOneScratch>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+    static FILTER_SCRATCH: std::cell::RefCell<Vec<[Vec<i16>; 5]>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// The doubling levels of [`sliding_extremes`]: `m[i][j]` the extreme of `col[j..j + 2^(i+1)]`.
+#[derive(Default)]
 struct SlidingScratch {
     m: [Vec<i16>; 3],
     /// The block extremes (`len = n + 1`) and the window extremes (`len = 2n + 1`) at each column.
@@ -748,11 +910,16 @@ struct SlidingScratch {
 }
 
 impl SlidingScratch {
-    fn new(total: usize) -> Self {
-        Self {
-            m: [(); 3].map(|()| vec![0; total]),
-            blocks: vec![0; total],
-            window: vec![0; total],
+    /// At least `total` values in each row (every value is written before it is read).
+    fn resize(&mut self, total: usize) {
+        for row in self
+            .m
+            .iter_mut()
+            .chain([&mut self.blocks, &mut self.window])
+        {
+            if row.len() < total {
+                row.resize(total, 0);
+            }
         }
     }
 }
@@ -809,42 +976,55 @@ fn sliding_block_extremes<const MAX: bool>(
     sliding_extremes::<MAX>(col, &s.m, span, &mut s.window[..windows]);
 }
 
+/// A block's candidate from [`packed_candidate`]: response, column, row within the block,
+/// whether pass 1's block-row check ran, and whether it is a candidate.
+type Candidate = (i16, usize, usize, bool, bool);
+
 /// The candidate of the block starting at column `k0` of one class
-/// ([`FrameFeatures::block_extrema_packed`]; `col`, `blocks`, `window` as
-/// [`sliding_block_extremes`] leaves them): `Some((response, column k, row within the block))`
-/// of the first pixel holding the block's extreme if it is strong (`|response| >= tau`) and no
-/// column extreme of the block row within its window (columns `k - n..=k + n`, where those and
-/// the 16 lanes from `k - n` lie inside) is strictly better (a key beyond `8 val + 7` for
-/// maxima, below `8 val` for minima: a strictly better response); the last field says whether
-/// that check ran (then no pixel of the block row in the window is strictly better).
+/// ([`FrameFeatures::block_extrema_packed`]; `col` the padded column keys, `blocks`, `window`
+/// as [`sliding_block_extremes`] leaves them, `inner` the columns without padding): the
+/// response, column `k` and row within the block of the first pixel holding the block's
+/// extreme, and whether it is a candidate: strong (`|response| >= tau`) and no column extreme
+/// of the block row within its window (columns `k - n..=k + n`, where those and the 16 lanes
+/// from `k - n` lie inside) strictly better (a key beyond `8 val + 7` for maxima, below `8 val`
+/// for minima: a strictly better response); the fourth field says whether that check ran (then
+/// no pixel of the block row in the window is strictly better). Without branches on the data
+/// (whether a block has a candidate is close to a coin toss): every column of the block is
+/// compared at once (the padding never equals a block's extreme), the conditions are combined
+/// as booleans.
 #[inline(always)]
 fn packed_candidate<const MAX: bool>(
     col: &[i16],
     blocks: &[i16],
     window: &[i16],
+    inner: usize,
     k0: usize,
     n: usize,
     tau: i16,
-) -> Option<(i16, usize, usize, bool)> {
-    let inner = col.len();
+) -> Candidate {
     let best = blocks[k0];
     let val = best >> 3;
     let strong = if MAX { val >= tau } else { val <= -tau };
-    if !strong {
-        return None;
+    // The first column holding the best key (0 if none, which a strong block cannot be): a
+    // mask of the 8 columns from `k0` (inside the padding: `k0 < inner`, `n < 8`), cut to the
+    // block's `n + 1`.
+    let lanes: [i16; 8] = col
+        .get(k0..k0 + 8)
+        .and_then(|x| x.try_into().ok())
+        .unwrap_or([best; 8]);
+    let mut mask = 0u32;
+    for (j, &x) in lanes.iter().enumerate() {
+        mask |= u32::from(x == best) << j;
     }
-    // The first column holding the best key.
-    let k1 = (k0 + n + 1).min(inner);
-    let at = col[k0..k1].iter().position(|&x| x == best).unwrap_or(0);
-    let k = k0 + at;
+    mask &= (1u32 << (n + 1)) - 1;
+    let k = k0 + (mask.trailing_zeros() % 32) as usize;
     let threshold = if MAX { best | 7 } else { best & !7 };
     let checked = k >= n && k - n + LANES <= inner;
-    if checked && better::<MAX>(window[k - n], threshold) {
-        return None;
-    }
+    let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
+    let beaten = checked & better::<MAX>(lane, threshold);
     let low = best & 7;
     let r = if MAX { 7 - low } else { low } as usize;
-    Some((val, k, r, checked))
+    (val, k, r, checked, strong & !beaten)
 }
 
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
@@ -974,11 +1154,13 @@ fn beaten_in_block_row<const MAX: bool>(
 /// likewise the rows below, then per lane one comparison of each ([`LaneOffsets`]): above, a
 /// pixel at least as good beats `val`, below one strictly better; in row `v` those left of `u`
 /// when at least as good, those right of it when better. The rows below start after the
-/// `e.cleared` rows that pass 1 has cleared (no pixel strictly better there).
+/// `e.cleared` rows that pass 1 has cleared (no pixel strictly better there). Row `y` of `img`
+/// is at `(y & mask) * w` (a ring of rows, [`FrameFeatures::filter_and_suppress`]).
 #[inline(always)]
 fn window_check<const MAX: bool>(
     img: &[i16],
     w: usize,
+    mask: usize,
     e: Extremum,
     n: usize,
     lanes: &LaneOffsets,
@@ -986,7 +1168,8 @@ fn window_check<const MAX: bool>(
     let (u, v, val) = (usize::from(e.u), usize::from(e.v), e.val);
     let start = u - n;
     let row = |y: usize| -> [i16; LANES] {
-        let s = &img[y * w + start..y * w + start + LANES];
+        let at = (y & mask) * w + start;
+        let s = &img[at..at + LANES];
         s.try_into().unwrap_or([val; LANES])
     };
     let reduce = |ys: std::ops::Range<usize>| {
@@ -1011,11 +1194,14 @@ fn window_check<const MAX: bool>(
 /// True if `val` at `(u, v)` is the strict maximum (`MAX`, else minimum) of `img` over the
 /// `(2n+1)^2` window, ties broken towards the smaller index (row-major): a pixel before
 /// `(u, v)` beats it when equal, a pixel after only when strictly better. Each row segment is
-/// reduced to its extreme without branches, then compared.
+/// reduced to its extreme without branches, then compared. Row `y` of `img` is at
+/// `(y & mask) * w`.
+#[allow(clippy::too_many_arguments)]
 fn is_extremum<const MAX: bool>(
     img: &[i16],
     w: usize,
     h: usize,
+    mask: usize,
     u: usize,
     v: usize,
     n: usize,
@@ -1037,7 +1223,7 @@ fn is_extremum<const MAX: bool>(
             m < val || (earlier && m == val)
         }
     };
-    let row = |y: usize| &img[y * w + x0..y * w + x1];
+    let row = |y: usize| &img[(y & mask) * w + x0..(y & mask) * w + x1];
     let centre = row(v);
     let k = u - x0;
     if beaten(extreme(&centre[..k]), true) || beaten(extreme(&centre[k + 1..]), false) {
@@ -1061,11 +1247,45 @@ fn is_extremum<const MAX: bool>(
 /// vertical pass over 5 rows into column sums (the filters' and, from its middle three rows, the
 /// Sobel images'; 3 rows next to the border), then horizontal passes over shifted slices of
 /// those sums, all in 16-bit integers (no overflow: |blob| <= 16 * 255, box sums <= 25 * 255).
+///
+/// Only `rows` are computed. The Sobel images are whole (row `y` at `y * w`); the blob and
+/// corner responses are a ring of `ring` rows (a power of two, at least `rows.len()`; row `y` at
+/// `(y & (ring - 1)) * w`).
 #[inline(never)]
 fn responses(
     px: &[u8],
     w: usize,
     h: usize,
+    rows: std::ops::Range<usize>,
+    ring: usize,
+    sobel: &mut [u16],
+    blob: &mut [i16],
+    corner: &mut [i16],
+) {
+    // The rows in pieces that do not wrap around the ring.
+    let mut a = rows.start;
+    while a < rows.end {
+        let b = rows.end.min((a / ring + 1) * ring);
+        let r = (a % ring) * w..(a % ring + b - a) * w;
+        responses_unwrapped(
+            px,
+            w,
+            h,
+            a..b,
+            &mut sobel[a * w..b * w],
+            &mut blob[r.clone()],
+            &mut corner[r],
+        );
+        a = b;
+    }
+}
+
+/// [`responses`] of `rows`, into `sobel`, `blob` and `corner` holding just those rows.
+fn responses_unwrapped(
+    px: &[u8],
+    w: usize,
+    h: usize,
+    rows: std::ops::Range<usize>,
     sobel: &mut [u16],
     blob: &mut [i16],
     corner: &mut [i16],
@@ -1077,8 +1297,16 @@ fn responses(
         .enumerate()
         .with_min_len(4)
         .for_each_init(
-            || [(); 5].map(|()| vec![0i16; w]),
-            |[s0, s1, s2, s3, s4], (y, ((rs, rb), rc))| {
+            || {
+                let mut s = Reused::take(&FILTER_SCRATCH);
+                for row in s.iter_mut() {
+                    row.resize(w, 0);
+                }
+                s
+            },
+            |s, (i, ((rs, rb), rc))| {
+                let [s0, s1, s2, s3, s4] = &mut **s;
+                let y = rows.start + i;
                 let row = |k: usize| &px[k * w..(k + 1) * w];
                 if y < 2 || y + 2 >= h {
                     rb.fill(0);
@@ -1204,10 +1432,12 @@ mod tests {
                 _ => ((i * 37 + i * i * 11) % 251) as u8,
             })
             .collect();
-        let mut blob = vec![0i16; w * h];
-        let mut corner = vec![0i16; w * h];
+        // A ring of at least `h` rows holds the whole image (row `y` at `y * w`).
+        let ring = h.next_power_of_two();
+        let mut blob = vec![0i16; ring * w];
+        let mut corner = vec![0i16; ring * w];
         let mut sobel = vec![0u16; w * h];
-        responses(&px, w, h, &mut sobel, &mut blob, &mut corner);
+        responses(&px, w, h, 0..h, ring, &mut sobel, &mut blob, &mut corner);
         let du: Vec<u8> = sobel.iter().map(|s| (s & 0xff) as u8).collect();
         let dv: Vec<u8> = sobel.iter().map(|s| (s >> 8) as u8).collect();
         let at = |x: usize, y: usize| i32::from(px[y * w + x]);
@@ -1296,11 +1526,14 @@ mod tests {
             };
             let mut f = FrameFeatures::default();
             f.extract(&img, &options);
+            // The ring wraps for the small radii (for 7 and 8 it holds the 61 rows).
+            assert!(n > 5 || f.ring < h, "n {n}: ring of {} rows", f.ring);
+            let (blob, corner) = whole_responses(&img);
             let step = n + 1;
             // The block grid's extent (pixels past the last whole block row are not searched).
             let rows_end = BORDER + (h - 2 * BORDER).div_ceil(step) * step;
             for class in 0..CLASSES {
-                let resp = if class < 2 { &f.blob } else { &f.corner };
+                let resp = if class < 2 { &blob } else { &corner };
                 let maximum = class % 2 == 0;
                 let mut expected = Vec::new();
                 for v in BORDER..(h - BORDER).min(rows_end) {
@@ -1336,6 +1569,73 @@ mod tests {
                 found.sort_unstable();
                 assert!(!expected.is_empty(), "seed {seed} class {class}: none");
                 assert_eq!(found, expected, "seed {seed} n {n} class {class}");
+            }
+        }
+    }
+
+    /// Filtering and suppressing strip by strip gives the same features and Sobel images
+    /// whatever the strip (and so the ring of response rows): one block row at a time, the
+    /// default, and the whole image at once (radii 1 to 8, so both pass-1 paths and the
+    /// descriptors' 5-row reach).
+    /// The blob and corner responses of the whole image (row `y` at `y * w`).
+    fn whole_responses(img: &GrayImage) -> (Vec<i16>, Vec<i16>) {
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let ring = h.next_power_of_two();
+        let (mut blob, mut corner) = (vec![0i16; ring * w], vec![0i16; ring * w]);
+        let mut sobel = vec![0u16; w * h];
+        responses(
+            img.as_raw(),
+            w,
+            h,
+            0..h,
+            ring,
+            &mut sobel,
+            &mut blob,
+            &mut corner,
+        );
+        (blob, corner)
+    }
+
+    #[test]
+    fn strips_do_not_change_the_features() {
+        let (w, h) = (97usize, 83usize);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let px: Vec<u8> = (0..w * h)
+            .map(|i| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let (x, y) = (i % w, i / w);
+                if (x / 7 + y / 5) % 3 == 0 {
+                    120
+                } else {
+                    (state >> 56) as u8
+                }
+            })
+            .collect();
+        for n in [1usize, 2, 3, 5, 7, 8] {
+            let options = DetectorOptions {
+                nms_radius: n,
+                threshold: 30,
+            };
+            let run = |strip_rows: usize| {
+                let mut f = FrameFeatures {
+                    width: w,
+                    height: h,
+                    sobel: vec![0; w * h],
+                    ..FrameFeatures::default()
+                };
+                f.filter_and_suppress(&px, &options, strip_rows);
+                f
+            };
+            let whole = run(usize::MAX / 2);
+            assert!(whole.len() > 20, "n {n}: {} features", whole.len());
+            for strip_rows in [1, STRIP_ROWS] {
+                let f = run(strip_rows);
+                for (a, b) in f.classes.iter().zip(&whole.classes) {
+                    assert_eq!(a.points, b.points, "n {n} strip {strip_rows}");
+                }
+                assert!(f.sobel == whole.sobel, "n {n} strip {strip_rows}");
             }
         }
     }
@@ -1377,9 +1677,13 @@ mod tests {
                         threshold: 50,
                     },
                 );
+                // Pass 1 over every block row reads the whole image's responses.
+                (f.blob, f.corner) = whole_responses(&img);
+                f.ring = h.next_power_of_two();
                 for tau in [1i16, 50, 600] {
-                    let a = f.block_extrema(n, tau);
-                    let b = f.block_extrema_packed(n, tau);
+                    let rows: Vec<usize> = (BORDER..f.height - BORDER).step_by(n + 1).collect();
+                    let a = f.block_extrema(&rows, n, tau);
+                    let b = f.block_extrema_packed(&rows, n, tau);
                     let key = |x: &Vec<Vec<Extremum>>| -> Vec<(u8, i16, u16, u16)> {
                         x.iter()
                             .flatten()

@@ -308,14 +308,52 @@ fn iterate<const R: usize>(
             );
         d[0] -= step[0];
         d[1] -= step[1];
-        if (d[0] - d0[0]).hypot(d[1] - d0[1]) > max_shift {
+        if hypot_exceeds(d[0] - d0[0], d[1] - d0[1], max_shift) {
             return None;
         }
-        if step[0].hypot(step[1]) < converged {
+        if hypot_below(step[0], step[1], converged) {
             break;
         }
     }
     Some(d)
+}
+
+/// Relative band around `t²` in which [`hypot_exceeds`] and [`hypot_below`] ask `hypot`: the
+/// sum of squares is within a few units in the last place (2^-52) of the true `x² + y²`, far
+/// inside this band, so that outside it the comparison of the sum with `t²` decides as
+/// `x.hypot(y)` against `t` would.
+const HYPOT_BAND: f64 = 1e-9;
+
+/// `x.hypot(y) > t`, decided from `x² + y²` unless that is within [`HYPOT_BAND`] of `t²` (or
+/// `t` is not positive, `t²` zero or subnormal, or a value not finite): the same answer without the library call in
+/// nearly every case.
+#[inline]
+fn hypot_exceeds(x: f64, y: f64, t: f64) -> bool {
+    let (q, tt) = (x * x + y * y, t * t);
+    if t > 0.0 && tt >= f64::MIN_POSITIVE && q.is_finite() && tt.is_finite() {
+        if q > tt * (1.0 + HYPOT_BAND) {
+            return true;
+        }
+        if q < tt * (1.0 - HYPOT_BAND) {
+            return false;
+        }
+    }
+    x.hypot(y) > t
+}
+
+/// `x.hypot(y) < t`, as [`hypot_exceeds`].
+#[inline]
+fn hypot_below(x: f64, y: f64, t: f64) -> bool {
+    let (q, tt) = (x * x + y * y, t * t);
+    if t > 0.0 && tt >= f64::MIN_POSITIVE && q.is_finite() && tt.is_finite() {
+        if q < tt * (1.0 - HYPOT_BAND) {
+            return true;
+        }
+        if q > tt * (1.0 + HYPOT_BAND) {
+            return false;
+        }
+    }
+    x.hypot(y) < t
 }
 
 /// Refines the match of the integer pixels `(u0, v0)` of `prev` and `(u1, v1)` of `cur`:
@@ -341,11 +379,65 @@ pub fn refine_match(
         let back = align(cur, prev, qu, qv, back0, options)?;
         // Forward says cur(p0 + d) = prev(p0); backward says prev(q + back) = cur(q), that is
         // a displacement of -back from frame k-1 to k.
-        let disagreement = (d[0] + back[0]).hypot(d[1] + back[1]);
-        if disagreement > options.fb_threshold {
+        if hypot_exceeds(d[0] + back[0], d[1] + back[1], options.fb_threshold) {
             return None;
         }
         out = [0.5 * (d[0] - back[0]), 0.5 * (d[1] - back[1])];
     }
     Some([u0 as f64, v0 as f64, u0 as f64 + out[0], v0 as f64 + out[1]])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The comparisons from the sum of squares decide as `hypot` does: on random values, on
+    /// values whose `hypot` is the threshold itself or one unit in the last place from it, and
+    /// on special values (zero, negative, subnormal, huge, infinite, NaN thresholds or inputs).
+    #[test]
+    fn hypot_comparisons_equal_the_library_call() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut cases: Vec<(f64, f64, f64)> = Vec::new();
+        for _ in 0..20_000 {
+            let (x, y) = (4.0 * next() - 2.0, 4.0 * next() - 2.0);
+            let h = x.hypot(y);
+            let t = [0.3, 0.01, 2.0, h, h.next_up(), h.next_down(), 0.5 * h][cases.len() % 7];
+            cases.push((x, y, t));
+        }
+        let special = [
+            0.0,
+            -0.0,
+            -1.0,
+            1e-310,
+            1e-160,
+            1e160,
+            1e300,
+            f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            0.3,
+        ];
+        for &x in &special {
+            for &y in &special {
+                for &t in &special {
+                    cases.push((x, y, t));
+                }
+            }
+        }
+        let mut boundary = 0;
+        for (x, y, t) in cases {
+            let h = x.hypot(y);
+            boundary += usize::from(h == t);
+            assert_eq!(hypot_exceeds(x, y, t), h > t, "{x} {y} {t}");
+            assert_eq!(hypot_below(x, y, t), h < t, "{x} {y} {t}");
+        }
+        assert!(boundary > 1000, "{boundary} cases on the threshold");
+    }
 }
