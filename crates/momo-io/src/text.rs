@@ -57,7 +57,9 @@ impl<R: BufRead> LineReader<R> {
                 break;
             }
             got_bytes = true;
-            let (take, consume, done) = match available.iter().position(|&b| b == b'\n') {
+            // `memchr`: a word-at-a-time search (the byte loop it replaces was a fifth of
+            // reading a row of `matches.csv`).
+            let (take, consume, done) = match memchr::memchr(b'\n', available) {
                 Some(i) => (i, i + 1, true),
                 None => (available.len(), available.len(), false),
             };
@@ -133,20 +135,18 @@ pub(crate) fn parse_header<const N: usize>(
 
 /// Splits a CSV row into exactly `N` trimmed fields (trimmed as [`str::trim`] does).
 ///
-/// A byte loop rather than `str::split` + `str::trim`: this is the inner loop of reading
-/// `matches.csv` (about a third of a whole `momo run` before).
+/// The commas found by `memchr` rather than `str::split` + `str::trim` or a byte loop: this is
+/// the inner loop of reading `matches.csv` (about a third of a whole `momo run` before).
 pub(crate) fn split_row<const N: usize>(line: &str) -> Result<[&str; N], IoErrorKind> {
     let mut out = [""; N];
     let mut n = 0;
     let mut start = 0;
-    for (i, &b) in line.as_bytes().iter().enumerate() {
-        if b == b',' {
-            if n < N {
-                out[n] = trim(&line[start..i]);
-            }
-            n += 1;
-            start = i + 1;
+    for i in memchr::memchr_iter(b',', line.as_bytes()) {
+        if n < N {
+            out[n] = trim(&line[start..i]);
         }
+        n += 1;
+        start = i + 1;
     }
     if n < N {
         out[n] = trim(&line[start..]);
