@@ -212,48 +212,169 @@ impl MatchMemory {
         {
             return None;
         }
-        let key = |x: f64, y: f64| ((x / radius).floor() as i64, (y / radius).floor() as i64);
+        let mut grid = CellGrid::default();
         Some(
             self.per_camera
                 .iter()
                 .zip(&obs.per_camera)
                 .map(|(prev, cur)| {
-                    // Buckets of `radius` pixels: the nearest neighbour within `radius` lies
-                    // in the 3 x 3 buckets around a point's own.
-                    let mut buckets: std::collections::HashMap<(i64, i64), Vec<usize>> =
-                        std::collections::HashMap::new();
-                    for (i, p) in prev.iter().enumerate() {
-                        if p.0.is_finite() && p.1.is_finite() {
-                            buckets.entry(key(p.0, p.1)).or_default().push(i);
-                        }
-                    }
+                    // Cells of `radius` pixels: the nearest neighbour within `radius` lies in
+                    // the 3 x 3 cells around a point's own.
+                    grid.fill(prev, radius);
                     cur.iter()
-                        .map(|o| {
-                            let (x, y) = (o.px0.x, o.px0.y);
-                            if !(x.is_finite() && y.is_finite()) {
-                                return None;
-                            }
-                            let (kx, ky) = key(x, y);
-                            let mut best: Option<(f64, bool)> = None;
-                            for dx in -1..=1 {
-                                for dy in -1..=1 {
-                                    for &i in buckets.get(&(kx + dx, ky + dy)).into_iter().flatten()
-                                    {
-                                        let p = prev[i];
-                                        let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
-                                        if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd)
-                                        {
-                                            best = Some((d, p.2));
-                                        }
-                                    }
-                                }
-                            }
-                            best.map(|(_, s)| s)
-                        })
+                        .map(|o| grid.nearest(prev, o.px0.x, o.px0.y, radius))
                         .collect()
                 })
                 .collect(),
         )
+    }
+}
+
+/// The cell of a pixel in the match memory's grid of `radius`-pixel cells (the float-to-integer
+/// cast saturates: far-off pixels share the extreme cells).
+fn cell_key(x: f64, y: f64, radius: f64) -> (i64, i64) {
+    ((x / radius).floor() as i64, (y / radius).floor() as i64)
+}
+
+/// Cells larger than this (and than [`DENSE_CELLS_PER_POINT`] per remembered match) over the
+/// remembered matches' bounding box are looked up in a sorted list instead of a dense grid.
+const DENSE_MIN_CELLS: u64 = 4096;
+/// See [`DENSE_MIN_CELLS`].
+const DENSE_CELLS_PER_POINT: u64 = 16;
+
+/// The remembered matches of one camera bucketed by cell (issue 19: a flat grid built per
+/// frame by a counting sort, in place of a hash map of cells). Within a cell the matches keep
+/// their order, and [`CellGrid::nearest`] visits the 3 x 3 cells in the same order as the hash
+/// map it replaces (column offset outer, row offset inner, wrapping like the release build's
+/// `i64` addition), so ties between equally near matches are broken the same way.
+#[derive(Default)]
+struct CellGrid {
+    /// The remembered matches' indices ordered by cell (and by index within a cell).
+    order: Vec<u32>,
+    /// Dense grid: `start[c]..start[c + 1]` is cell `c`'s range of `order`, cells numbered
+    /// column-major over the bounding box `[min.0, min.0 + cols) x [min.1, min.1 + rows)`.
+    start: Vec<u32>,
+    /// The bounding box's lowest cell.
+    min: (i64, i64),
+    /// The bounding box's columns and rows (0 when nothing is remembered).
+    cols: u64,
+    /// See `cols`.
+    rows: u64,
+    /// Sparse fallback (a bounding box too large for a dense grid): the cell of each entry of
+    /// `order`, sorted.
+    keys: Vec<(i64, i64)>,
+    /// Whether the sparse fallback holds the matches.
+    sparse: bool,
+}
+
+impl CellGrid {
+    /// Buckets the finite second-image pixels of `prev` into cells of `radius` pixels.
+    fn fill(&mut self, prev: &[(f64, f64, bool)], radius: f64) {
+        self.order.clear();
+        self.start.clear();
+        self.keys.clear();
+        self.cols = 0;
+        self.rows = 0;
+        self.sparse = false;
+        let finite = |p: &(f64, f64, bool)| p.0.is_finite() && p.1.is_finite();
+        let mut bounds: Option<((i64, i64), (i64, i64))> = None;
+        let mut n = 0u64;
+        for p in prev.iter().filter(|p| finite(p)) {
+            let k = cell_key(p.0, p.1, radius);
+            n += 1;
+            bounds = Some(match bounds {
+                None => (k, k),
+                Some((lo, hi)) => (
+                    (lo.0.min(k.0), lo.1.min(k.1)),
+                    (hi.0.max(k.0), hi.1.max(k.1)),
+                ),
+            });
+        }
+        let Some((lo, hi)) = bounds else { return };
+        // Widths in i128: the saturated extremes span the whole i64 range.
+        let cols = (i128::from(hi.0) - i128::from(lo.0) + 1) as u128;
+        let rows = (i128::from(hi.1) - i128::from(lo.1) + 1) as u128;
+        let limit = DENSE_MIN_CELLS.max(DENSE_CELLS_PER_POINT * n);
+        if prev.len() >= u32::MAX as usize || cols.saturating_mul(rows) > u128::from(limit) {
+            // Sparse: sort by cell, then index (the same order within a cell).
+            self.sparse = true;
+            let mut sorted: Vec<((i64, i64), u32)> = prev
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| finite(p))
+                .map(|(i, p)| (cell_key(p.0, p.1, radius), i as u32))
+                .collect();
+            sorted.sort_unstable();
+            self.keys.extend(sorted.iter().map(|e| e.0));
+            self.order.extend(sorted.iter().map(|e| e.1));
+            return;
+        }
+        // Dense: counting sort of the indices by cell.
+        self.min = lo;
+        self.cols = cols as u64;
+        self.rows = rows as u64;
+        let cells = (cols * rows) as usize;
+        self.start.resize(cells + 1, 0);
+        let cell = |k: (i64, i64), rows: u64| -> usize {
+            ((k.0.wrapping_sub(lo.0) as u64) * rows + (k.1.wrapping_sub(lo.1) as u64)) as usize
+        };
+        for p in prev.iter().filter(|p| finite(p)) {
+            self.start[cell(cell_key(p.0, p.1, radius), self.rows) + 1] += 1;
+        }
+        for c in 0..cells {
+            self.start[c + 1] += self.start[c];
+        }
+        self.order.resize(n as usize, 0);
+        // `start[c]` is advanced as cell `c` fills; shifted back afterwards.
+        for (i, p) in prev.iter().enumerate().filter(|(_, p)| finite(p)) {
+            let c = cell(cell_key(p.0, p.1, radius), self.rows);
+            self.order[self.start[c] as usize] = i as u32;
+            self.start[c] += 1;
+        }
+        for c in (1..=cells).rev() {
+            self.start[c] = self.start[c - 1];
+        }
+        self.start[0] = 0;
+    }
+
+    /// The remembered indices in cell `k`, in index order.
+    fn cell(&self, k: (i64, i64)) -> &[u32] {
+        if self.sparse {
+            let a = self.keys.partition_point(|e| *e < k);
+            let b = a + self.keys[a..].partition_point(|e| *e == k);
+            return &self.order[a..b];
+        }
+        let (dx, dy) = (
+            i128::from(k.0) - i128::from(self.min.0),
+            i128::from(k.1) - i128::from(self.min.1),
+        );
+        if dx < 0 || dy < 0 || dx >= i128::from(self.cols) || dy >= i128::from(self.rows) {
+            return &[];
+        }
+        let c = (dx as u64 * self.rows + dy as u64) as usize;
+        &self.order[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+
+    /// The label of the nearest remembered match (of `prev`, as filled) within `radius` pixels
+    /// of `(x, y)`; of equally near ones the first visited.
+    fn nearest(&self, prev: &[(f64, f64, bool)], x: f64, y: f64, radius: f64) -> Option<bool> {
+        if !(x.is_finite() && y.is_finite()) {
+            return None;
+        }
+        let (kx, ky) = cell_key(x, y, radius);
+        let mut best: Option<(f64, bool)> = None;
+        for dx in -1..=1_i64 {
+            for dy in -1..=1_i64 {
+                for &i in self.cell((kx.wrapping_add(dx), ky.wrapping_add(dy))) {
+                    let p = prev[i as usize];
+                    let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
+                    if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd) {
+                        best = Some((d, p.2));
+                    }
+                }
+            }
+        }
+        best.map(|(_, s)| s)
     }
 }
 
@@ -888,6 +1009,131 @@ mod tests {
             ..HypothesesOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("spread_grid"));
+    }
+
+    /// The match memory's labels as computed before issue 19's flat grid: a SipHash map of
+    /// `radius`-pixel cells rebuilt per camera (the reference of
+    /// `memory_labels_match_the_hash_map_reference`; `wrapping_add` is the release build's
+    /// addition, which the test build checks for overflow).
+    fn labels_by_hash_map(
+        memory: &MatchMemory,
+        obs: &FrameObservations,
+        radius: f64,
+    ) -> Option<Vec<Vec<Option<bool>>>> {
+        if memory.is_empty()
+            || memory.per_camera.len() != obs.per_camera.len()
+            || !(radius.is_finite() && radius > 0.0)
+        {
+            return None;
+        }
+        let key = |x: f64, y: f64| ((x / radius).floor() as i64, (y / radius).floor() as i64);
+        Some(
+            memory
+                .per_camera
+                .iter()
+                .zip(&obs.per_camera)
+                .map(|(prev, cur)| {
+                    let mut buckets: std::collections::HashMap<(i64, i64), Vec<usize>> =
+                        std::collections::HashMap::new();
+                    for (i, p) in prev.iter().enumerate() {
+                        if p.0.is_finite() && p.1.is_finite() {
+                            buckets.entry(key(p.0, p.1)).or_default().push(i);
+                        }
+                    }
+                    cur.iter()
+                        .map(|o| {
+                            let (x, y) = (o.px0.x, o.px0.y);
+                            if !(x.is_finite() && y.is_finite()) {
+                                return None;
+                            }
+                            let (kx, ky) = key(x, y);
+                            let mut best: Option<(f64, bool)> = None;
+                            for dx in -1..=1_i64 {
+                                for dy in -1..=1_i64 {
+                                    let cell = (kx.wrapping_add(dx), ky.wrapping_add(dy));
+                                    for &i in buckets.get(&cell).into_iter().flatten() {
+                                        let p = prev[i];
+                                        let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
+                                        if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd)
+                                        {
+                                            best = Some((d, p.2));
+                                        }
+                                    }
+                                }
+                            }
+                            best.map(|(_, s)| s)
+                        })
+                        .collect()
+                })
+                .collect(),
+        )
+    }
+
+    /// A pixel coordinate for the memory's property test: mostly inside a KITTI-sized image,
+    /// often on a lattice of quarter pixels (exact ties between neighbours, points on cell
+    /// borders), sometimes far off (the sparse fallback), saturating or not finite.
+    fn pixel() -> impl proptest::strategy::Strategy<Value = f64> {
+        use proptest::prelude::*;
+        prop_oneof![
+            6 => -50.0..1300.0f64,
+            6 => (-200..5200_i32).prop_map(|q| f64::from(q) / 4.0),
+            1 => prop_oneof![Just(1e6), Just(-3.5e7), Just(4e12)],
+            1 => prop_oneof![
+                Just(1e300),
+                Just(-1e300),
+                Just(f64::MAX),
+                Just(f64::NAN),
+                Just(f64::INFINITY),
+                Just(f64::NEG_INFINITY)
+            ],
+        ]
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+
+        /// The flat grid's labels are the hash map's, match for match: the same nearest
+        /// neighbour, ties broken the same way, on dense and sparse grids (far-off pixels), empty
+        /// cameras, and any radius.
+        #[test]
+        fn memory_labels_match_the_hash_map_reference(
+            prev in proptest::collection::vec(
+                proptest::collection::vec((pixel(), pixel(), proptest::bool::ANY), 0..60), 1..4),
+            cur in proptest::collection::vec((pixel(), pixel()), 0..60),
+            radius in proptest::prop_oneof![
+                4 => 0.5..40.0f64,
+                1 => proptest::prelude::Just(20.0),
+                1 => proptest::prelude::Just(1e-300),
+                1 => proptest::prelude::Just(1e200),
+            ],
+        ) {
+            let at = |x: f64, y: f64| Observation {
+                f0: Vector3::z(),
+                f1: Vector3::z(),
+                px0: Vector2::new(x, y),
+                px1: Vector2::new(x, y),
+            };
+            let cams = prev.len();
+            let previous = FrameObservations {
+                per_camera: prev
+                    .iter()
+                    .map(|c| c.iter().map(|p| at(p.0, p.1)).collect())
+                    .collect(),
+                cross_camera: Vec::new(),
+            };
+            let statics: Vec<Vec<bool>> =
+                prev.iter().map(|c| c.iter().map(|p| p.2).collect()).collect();
+            let memory = MatchMemory::record(&previous, &statics);
+            // The current pair: the same points in every camera, and the previous pixels
+            // themselves (exact hits) in camera 0.
+            let mut per_camera: Vec<Vec<Observation>> =
+                vec![cur.iter().map(|p| at(p.0, p.1)).collect(); cams];
+            per_camera[0].extend(prev[0].iter().map(|p| at(p.0, p.1)));
+            let current = FrameObservations { per_camera, cross_camera: Vec::new() };
+            let flat = memory.labels(&current, radius);
+            let reference = labels_by_hash_map(&memory, &current, radius);
+            proptest::prop_assert_eq!(flat, reference);
+        }
     }
 
     /// The memory's labels transfer to the nearest previous second-image pixel of the same
