@@ -186,6 +186,12 @@ pub struct SeparateOptions {
     pub cell_cap: f64,
     /// The grid (columns, rows) per camera image of [`SeparateOptions::cell_cap`].
     pub cell_cap_grid: (usize, usize),
+    /// With [`SeparateOptions::cell_cap`], the frame's first motion A is also re-solved on the
+    /// capped matches (from A, the frame's loss and motion prior) before the separation
+    /// computes its supports and the match memory: the objects near the focus of expansion
+    /// then bias neither the support nor the labels. A keeps its inlier mask, cost and normal
+    /// matrix (they index and describe all matches).
+    pub cell_cap_first: bool,
 }
 
 impl Default for SeparateOptions {
@@ -221,6 +227,7 @@ impl Default for SeparateOptions {
             own_persistence: 0.0,
             cell_cap: 0.0,
             cell_cap_grid: (16, 8),
+            cell_cap_first: false,
         }
     }
 }
@@ -587,6 +594,26 @@ pub fn separate(
 ) -> (FrameSolution, SeparationOutcome, NextStage) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
+    // A re-solved on the capped matches (`cell_cap_first`).
+    let first = if opts.cell_cap > 0.0 && opts.cell_cap_first {
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let capped = cell_capped(ctx.rig, obs, &all, opts.cell_cap_grid, opts.cell_cap);
+        match (count(&capped) < n && count(&capped) >= 12)
+            .then(|| ctx.solve(&subset(obs, &capped), &first.params, ctx.loss, true))
+            .flatten()
+        {
+            Some(mut a) => {
+                a.inlier_mask = first.inlier_mask;
+                a.inliers_per_camera = first.inliers_per_camera;
+                a.report.normal_matrix = first.report.normal_matrix;
+                a.report.final_cost = first.report.final_cost;
+                a
+            }
+            None => first,
+        }
+    } else {
+        first
+    };
     let angles_a = epipolar_angles(ctx.rig, &ctx.estimator.motion(&first.params), obs);
     // The frame's noise (`threshold_sigmas`, `distinct_sigmas`).
     let sigma = (opts.threshold_sigmas > 0.0 || opts.distinct_sigmas > 0.0)
