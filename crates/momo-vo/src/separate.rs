@@ -182,7 +182,9 @@ pub struct SeparateOptions {
     /// of the camera's occupied cells, at least [`CELL_CAP_MIN`] ([`cell_capped`]). A compact
     /// object near the focus of expansion fits the static motion's epipolar geometry like
     /// far points and, holding half the matches, biases the rotation; a spread-out static
-    /// scene has few cells far above its median.
+    /// scene has few cells far above its median. 2 in
+    /// [`SeparateOptions::competition_over_time`] (the default configuration's) since the
+    /// twelfth session; 0 in [`SeparateOptions::default`].
     pub cell_cap: f64,
     /// The grid (columns, rows) per camera image of [`SeparateOptions::cell_cap`].
     pub cell_cap_grid: (usize, usize),
@@ -247,7 +249,10 @@ impl SeparateOptions {
     /// competition over time (`persistence = 0.4`, or 0.2 where the alternative's own matches
     /// hold at least a tenth of the frame's: `own_share = 0.1`, `own_persistence = 0.2`, since
     /// the eleventh session): a frame whose second motion does not persist in the memory is
-    /// solved exactly as without the separation. A config file's
+    /// solved exactly as without the separation. Since the twelfth session the matches are
+    /// balanced over image regions where they cluster (`cell_cap = 2`, `cell_cap_first`,
+    /// gated by `cell_cap_min_share = 0.2`): a frame whose matches are spread out is solved as
+    /// before. A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -260,6 +265,8 @@ impl SeparateOptions {
             persistence: 0.4,
             own_share: 0.1,
             own_persistence: 0.2,
+            cell_cap: 2.0,
+            cell_cap_first: true,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 ..HypothesesOptions::default()
