@@ -1128,8 +1128,12 @@ mod tests {
         let grid = (16, 8);
         let (cw, ch) = (w / 16.0, h / 8.0);
         let at = |x: f64, y: f64| {
-            Observation::new(cam, Vector2::new(x, y), Vector2::new(x + 1.0, y - 0.5))
-                .expect("the pixel unprojects")
+            Observation::new(
+                &cam.model,
+                Vector2::new(x, y),
+                Vector2::new(x + 1.0, y - 0.5),
+            )
+            .expect("the pixel unprojects")
         };
         // One match at the centre of every cell (the median count is 1), then 40 more in
         // cell (7, 4): a compact object near the image centre.
