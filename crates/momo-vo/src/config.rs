@@ -449,7 +449,10 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # (persistence, 0 to 1: an object persists, a static scene's noise tail does not;\n\
          # own_persistence where the second motion's own matches hold own_share of the frame);\n\
          # the choice by the ground support's spread (hypotheses), the final stage on the chosen\n\
-         # support without the remembered-other matches (final_fit, memory_exclude).\n\
+         # support without the remembered-other matches (final_fit, memory_exclude);\n\
+         # cell_cap: at most max(2, ceil(cell_cap x median)) matches per image cell\n\
+         # (cell_cap_grid per camera) in the final stage and, with cell_cap_first, in a\n\
+         # re-solve of the first motion, where that leaves out cell_cap_min_share of them.\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
@@ -985,7 +988,8 @@ mod partial_tests {
         let bare = Config::from_toml_str(
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
-             own_persistence = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
+             own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
+             [odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )
         .expect("the bare separation");

@@ -175,6 +175,31 @@ pub struct SeparateOptions {
     /// [`SeparateOptions::persistence`]; 0: none, and then such an alternative competes even
     /// without a memory).
     pub own_persistence: f64,
+    /// Image-region balance of the final stage (0: off; needs [`SeparateOptions::final_fit`]):
+    /// the matches handed to `[odometry.final_fit]` (all of them, or the chosen support where
+    /// two motions competed) keep at most `ceil(cell_cap · m)` matches per image cell
+    /// ([`SeparateOptions::cell_cap_grid`] per camera, frame k-1 pixels), `m` the median count
+    /// of the camera's occupied cells, at least [`CELL_CAP_MIN`] ([`cell_capped`]). A compact
+    /// object near the focus of expansion fits the static motion's epipolar geometry like
+    /// far points and, holding half the matches, biases the rotation; a spread-out static
+    /// scene has few cells far above its median. 2 in
+    /// [`SeparateOptions::competition_over_time`] (the default configuration's) since the
+    /// twelfth session; 0 in [`SeparateOptions::default`].
+    pub cell_cap: f64,
+    /// The grid (columns, rows) per camera image of [`SeparateOptions::cell_cap`].
+    pub cell_cap_grid: (usize, usize),
+    /// With [`SeparateOptions::cell_cap`], the frame's first motion A is also re-solved on the
+    /// capped matches (from A, the frame's loss and motion prior) before the separation
+    /// computes its supports and the match memory: the objects near the focus of expansion
+    /// then bias neither the support nor the labels. A keeps its inlier mask, cost and normal
+    /// matrix (they index and describe all matches).
+    pub cell_cap_first: bool,
+    /// [`SeparateOptions::cell_cap`] acts only in a frame where the cap would leave out at
+    /// least this share of the matches it is applied to (0: in every frame). Static scenes
+    /// are spread out: the cap at 2 leaves out at most 15 % of a frame's matches on the
+    /// simulated static scenarios and 2 % on real KITTI 00, against a median 37 % on the
+    /// moving-traffic family (docs/RESULTS.md §9, twelfth session).
+    pub cell_cap_min_share: f64,
 }
 
 impl Default for SeparateOptions {
@@ -208,6 +233,10 @@ impl Default for SeparateOptions {
             memory_final: false,
             own_share: 0.0,
             own_persistence: 0.0,
+            cell_cap: 0.0,
+            cell_cap_grid: (16, 8),
+            cell_cap_first: false,
+            cell_cap_min_share: 0.2,
         }
     }
 }
@@ -220,7 +249,10 @@ impl SeparateOptions {
     /// competition over time (`persistence = 0.4`, or 0.2 where the alternative's own matches
     /// hold at least a tenth of the frame's: `own_share = 0.1`, `own_persistence = 0.2`, since
     /// the eleventh session): a frame whose second motion does not persist in the memory is
-    /// solved exactly as without the separation. A config file's
+    /// solved exactly as without the separation. Since the twelfth session the matches are
+    /// balanced over image regions where they cluster (`cell_cap = 2`, `cell_cap_first`,
+    /// gated by `cell_cap_min_share = 0.2`): a frame whose matches are spread out is solved as
+    /// before. A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -233,6 +265,8 @@ impl SeparateOptions {
             persistence: 0.4,
             own_share: 0.1,
             own_persistence: 0.2,
+            cell_cap: 2.0,
+            cell_cap_first: true,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 ..HypothesesOptions::default()
@@ -295,6 +329,21 @@ impl SeparateOptions {
         }
         if !(0.0..=1.0).contains(&self.own_share) {
             return Err("odometry.separate.own_share must be in [0, 1]".into());
+        }
+        if !(self.cell_cap.is_finite() && self.cell_cap >= 0.0) {
+            return Err("odometry.separate.cell_cap must be a non-negative number".into());
+        }
+        let cap_cells = self.cell_cap_grid.0.checked_mul(self.cell_cap_grid.1);
+        if self.cell_cap_grid.0 == 0
+            || self.cell_cap_grid.1 == 0
+            || cap_cells.is_none_or(|c| c > 10_000)
+        {
+            return Err(
+                "odometry.separate.cell_cap_grid must be (columns, rows), 1 to 10000 cells".into(),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.cell_cap_min_share) {
+            return Err("odometry.separate.cell_cap_min_share must be in [0, 1]".into());
         }
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
@@ -562,6 +611,29 @@ pub fn separate(
 ) -> (FrameSolution, SeparationOutcome, NextStage) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
+    // A re-solved on the capped matches (`cell_cap_first`).
+    let first = if opts.cell_cap > 0.0 && opts.cell_cap_first {
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let capped = cell_capped(ctx.rig, obs, &all, opts.cell_cap_grid, opts.cell_cap);
+        let left_out = (n - count(&capped)) as f64;
+        match (left_out > 0.0
+            && left_out >= opts.cell_cap_min_share * n as f64
+            && count(&capped) >= 12)
+            .then(|| ctx.solve(&subset(obs, &capped), &first.params, ctx.loss, true))
+            .flatten()
+        {
+            Some(mut a) => {
+                a.inlier_mask = first.inlier_mask;
+                a.inliers_per_camera = first.inliers_per_camera;
+                a.report.normal_matrix = first.report.normal_matrix;
+                a.report.final_cost = first.report.final_cost;
+                a
+            }
+            None => first,
+        }
+    } else {
+        first
+    };
     let angles_a = epipolar_angles(ctx.rig, &ctx.estimator.motion(&first.params), obs);
     // The frame's noise (`threshold_sigmas`, `distinct_sigmas`).
     let sigma = (opts.threshold_sigmas > 0.0 || opts.distinct_sigmas > 0.0)
@@ -781,6 +853,24 @@ pub fn separate(
         } else {
             NextStage::FinalFit
         };
+        // Image-region balance of the final stage (`cell_cap`).
+        let next = if opts.cell_cap > 0.0 {
+            let base = match next {
+                NextStage::FinalFitOn(m) => m,
+                _ => obs.per_camera.iter().map(|m| vec![true; m.len()]).collect(),
+            };
+            let capped = cell_capped(ctx.rig, obs, &base, opts.cell_cap_grid, opts.cell_cap);
+            let (before, after) = (count(&base), count(&capped));
+            let cap = after < before
+                && (before - after) as f64 >= opts.cell_cap_min_share * before as f64;
+            match (cap, before == n) {
+                (true, _) => NextStage::FinalFitOn(capped),
+                (false, true) => NextStage::FinalFit,
+                (false, false) => NextStage::FinalFitOn(base),
+            }
+        } else {
+            next
+        };
         return (sol, outcome, next);
     }
     if !opts.final_stage || (opts.final_competing_only && !outcome.competing) {
@@ -841,6 +931,61 @@ pub fn separate(
         }
     }
     (sol, outcome, NextStage::Done)
+}
+
+/// The fewest matches [`cell_capped`] keeps in a cell.
+pub const CELL_CAP_MIN: usize = 2;
+
+/// `mask` with at most `max(CELL_CAP_MIN, ceil(factor · m))` matches per image cell (frame k-1
+/// pixels, `grid` per camera), `m` the median count of the camera's cells that hold a match of
+/// `mask`: a cell above the cap keeps the matches that come first in the order of a hash of
+/// their pixels (independent of the order of the matches, deterministic). The matches outside
+/// `mask` stay out.
+pub fn cell_capped(
+    rig: &Rig,
+    obs: &FrameObservations,
+    mask: &[Vec<bool>],
+    grid: (usize, usize),
+    factor: f64,
+) -> Vec<Vec<bool>> {
+    use momo_core::CameraModel;
+    let mut out = Vec::with_capacity(mask.len());
+    for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
+        let (w, h) = cam.model.size();
+        let cell_of = |o: &momo_core::Observation| {
+            let cx = ((o.px0.x / w.max(1.0)) * grid.0 as f64).clamp(0.0, grid.0 as f64 - 1.0);
+            let cy = ((o.px0.y / h.max(1.0)) * grid.1 as f64).clamp(0.0, grid.1 as f64 - 1.0);
+            // NaN pixels clamp to NaN, which `as usize` maps to 0.
+            cy as usize * grid.0 + cx as usize
+        };
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); grid.0 * grid.1];
+        for (i, (o, _)) in m.iter().zip(k).enumerate().filter(|(_, (_, k))| **k) {
+            members[cell_of(o)].push(i);
+        }
+        let mut counts: Vec<usize> = members.iter().map(Vec::len).filter(|c| *c > 0).collect();
+        let mut keep = k.clone();
+        if !counts.is_empty() {
+            counts.sort_unstable();
+            let median = counts[counts.len() / 2] as f64;
+            let cap = ((factor * median).ceil() as usize).max(CELL_CAP_MIN);
+            let hash = |o: &momo_core::Observation| {
+                let mut x = o.px0.x.to_bits() ^ o.px0.y.to_bits().rotate_left(21);
+                x ^= o.px1.x.to_bits().rotate_left(42) ^ o.px1.y.to_bits().rotate_left(11);
+                // splitmix64's finaliser.
+                x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+                x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+                x ^ (x >> 31)
+            };
+            for cell in members.iter_mut().filter(|c| c.len() > cap) {
+                cell.sort_by_key(|i| (hash(&m[*i]), *i));
+                for i in &cell[cap..] {
+                    keep[*i] = false;
+                }
+            }
+        }
+        out.push(keep);
+    }
+    out
 }
 
 /// The frame's noise `σ̂` from the epipolar angles under A, trimmed as the final stage trims
@@ -964,6 +1109,82 @@ mod tests {
             "min_cell_ratio = -1.0",
             "final_passes = 0",
             "final_passes = 11",
+        ] {
+            let o: SeparateOptions = toml::from_str(bad).unwrap();
+            assert!(o.validate().is_err(), "{bad}");
+        }
+    }
+
+    /// `cell_cap`: a compact cluster of matches is cut to the cap, a spread-out scene (one
+    /// match per cell) is kept whole, matches outside the mask stay out, and which matches a
+    /// full cell keeps does not depend on the order of the matches.
+    #[test]
+    fn cell_cap_cuts_a_compact_cluster_and_keeps_a_spread_scene() {
+        use momo_core::{CameraModel, Observation};
+        use nalgebra::Vector2;
+        let rig = momo_testing::canned::pinhole_rig();
+        let cam = &rig.cameras()[0];
+        let (w, h) = cam.model.size();
+        let grid = (16, 8);
+        let (cw, ch) = (w / 16.0, h / 8.0);
+        let at = |x: f64, y: f64| {
+            Observation::new(
+                &cam.model,
+                Vector2::new(x, y),
+                Vector2::new(x + 1.0, y - 0.5),
+            )
+            .expect("the pixel unprojects")
+        };
+        // One match at the centre of every cell (the median count is 1), then 40 more in
+        // cell (7, 4): a compact object near the image centre.
+        let mut matches: Vec<Observation> = (0..8)
+            .flat_map(|r| (0..16).map(move |c| (c, r)))
+            .map(|(c, r)| at((f64::from(c) + 0.5) * cw, (f64::from(r) + 0.5) * ch))
+            .collect();
+        let cluster = 4 * 16 + 7;
+        for i in 0..40 {
+            let (dx, dy) = (f64::from(i % 8) + 0.5, f64::from(i / 8) + 0.5);
+            matches.push(at(7.0 * cw + dx * cw / 8.5, 4.0 * ch + dy * ch / 5.5));
+        }
+        let n = matches.len();
+        let frame = |m: Vec<Observation>| FrameObservations {
+            per_camera: vec![m],
+            cross_camera: Vec::new(),
+        };
+        let obs = frame(matches.clone());
+        let kept = cell_capped(&rig, &obs, &[vec![true; n]], grid, 2.0);
+        // The cap is max(2, ceil(2 · 1)) = 2: the cluster's cell keeps 2 of its 41 matches,
+        // every other cell its one.
+        assert_eq!(count(&kept), 127 + 2);
+        assert!((0..128).all(|i| kept[0][i] || i == cluster));
+        // A factor of 10 lifts the cap to 10.
+        assert_eq!(
+            count(&cell_capped(&rig, &obs, &[vec![true; n]], grid, 10.0)),
+            127 + 10
+        );
+        // The spread-out scene alone is kept whole.
+        let spread = frame(matches[..128].to_vec());
+        assert_eq!(
+            cell_capped(&rig, &spread, &[vec![true; 128]], grid, 2.0),
+            vec![vec![true; 128]]
+        );
+        // Matches outside the mask stay out and do not count.
+        let mut mask = vec![true; n];
+        mask[0] = false;
+        mask[130] = false;
+        let k = cell_capped(&rig, &obs, &[mask], grid, 2.0);
+        assert!(!k[0][0] && !k[0][130]);
+        assert_eq!(count(&k), 126 + 2);
+        // Order independence: the reversed matches keep the reversed choice.
+        let reversed = frame(matches.iter().rev().copied().collect());
+        let mut back = cell_capped(&rig, &reversed, &[vec![true; n]], grid, 2.0);
+        back[0].reverse();
+        assert_eq!(back, kept);
+        // Validation.
+        for bad in [
+            "cell_cap = -1.0",
+            "cell_cap_grid = [0, 8]",
+            "cell_cap_min_share = 1.5",
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
