@@ -3,7 +3,8 @@
 //! separation alone (built-in drive, 150 frames, seeds 1-6 with the release CLI: 0.153 ->
 //! 0.099, 0.115 -> 0.098, 0.074 -> 0.070, 0.142 -> 0.095, 0.081 -> 0.070, 0.072 -> 0.062 deg).
 
-use momo_vo::{Config, Odometry};
+use crate::support::median_rotation_error;
+use momo_vo::Config;
 
 const SOFT_SEP: &str = r#"
 [model]
@@ -32,27 +33,7 @@ fn the_road_at_the_odometry_scale_picks_the_static_world() {
     .expect("simulation");
     let median_error = |text: &str| {
         let config = Config::from_toml_str(text, "test").expect("valid config");
-        let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("valid config");
-        let mut errors: Vec<f64> = sim
-            .sequence
-            .frames
-            .iter()
-            .enumerate()
-            .skip(1)
-            .map(|(k, f)| {
-                let arc = sim.sequence.arc_lengths.as_ref().and_then(|a| a[k]);
-                let m = vo.process(f, arc).motion;
-                let truth = &sim.vehicle_motions[k];
-                (m.rotation.transpose() * truth.rotation)
-                    .trace()
-                    .mul_add(0.5, -0.5)
-                    .clamp(-1.0, 1.0)
-                    .acos()
-                    .to_degrees()
-            })
-            .collect();
-        errors.sort_by(f64::total_cmp);
-        errors[errors.len() / 2]
+        median_rotation_error(&sim, config)
     };
     // The separation alone: the default separation's multi-frame choice turned off (a partial
     // `[odometry.separate]` section starts from `competition_over_time`).
@@ -68,29 +49,9 @@ fn the_road_at_the_odometry_scale_picks_the_static_world() {
 
 /// The median frame-to-frame rotation error (deg) of the odometry with `config` (TOML) on a
 /// simulated sequence.
-fn median_rotation_error(sim: &momo_sim::Simulation, config: &str) -> f64 {
+fn median_rotation_error_toml(sim: &momo_sim::Simulation, config: &str) -> f64 {
     let config = Config::from_toml_str(config, "test").expect("valid config");
-    let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("valid config");
-    let mut errors: Vec<f64> = sim
-        .sequence
-        .frames
-        .iter()
-        .enumerate()
-        .skip(1)
-        .map(|(k, f)| {
-            let arc = sim.sequence.arc_lengths.as_ref().and_then(|a| a[k]);
-            let m = vo.process(f, arc).motion;
-            let truth = &sim.vehicle_motions[k];
-            (m.rotation.transpose() * truth.rotation)
-                .trace()
-                .mul_add(0.5, -0.5)
-                .clamp(-1.0, 1.0)
-                .acos()
-                .to_degrees()
-        })
-        .collect();
-    errors.sort_by(f64::total_cmp);
-    errors[errors.len() / 2]
+    median_rotation_error(sim, config)
 }
 
 /// `[odometry.separate] cell_cap` (on by default since the twelfth session: `cell_cap = 2`,
@@ -112,8 +73,8 @@ fn a_cell_cap_takes_the_weight_of_compact_objects() {
         })
         .expect("simulation");
         let (without, with) = (
-            median_rotation_error(&sim, off),
-            median_rotation_error(&sim, ""),
+            median_rotation_error_toml(&sim, off),
+            median_rotation_error_toml(&sim, ""),
         );
         eprintln!("moving_traffic seed {seed}: cell_cap 0 {without:.4}, default {with:.4} deg");
         assert!(with < 0.85 * without, "seed {seed}: {with} vs {without}");
@@ -125,8 +86,8 @@ fn a_cell_cap_takes_the_weight_of_compact_objects() {
     })
     .expect("simulation");
     let (without, with) = (
-        median_rotation_error(&sim, off),
-        median_rotation_error(&sim, ""),
+        median_rotation_error_toml(&sim, off),
+        median_rotation_error_toml(&sim, ""),
     );
     eprintln!("clean seed 1: cell_cap 0 {without:.4}, default {with:.4} deg");
     assert_eq!(with, without, "a spread-out scene is not capped");

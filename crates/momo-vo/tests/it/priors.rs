@@ -186,27 +186,7 @@ fn the_rotation_prior_lowers_the_error_on_sparse_noisy_frames() {
         };
         config.odometry.final_fit.enabled = false;
         config.odometry.rotation_change_sigma = sigma;
-        let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("valid config");
-        let mut errors: Vec<f64> = sim
-            .sequence
-            .frames
-            .iter()
-            .enumerate()
-            .skip(1)
-            .map(|(k, f)| {
-                let arc = sim.sequence.arc_lengths.as_ref().and_then(|a| a[k]);
-                let m = vo.process(f, arc).motion;
-                let truth = &sim.vehicle_motions[k];
-                (m.rotation.transpose() * truth.rotation)
-                    .trace()
-                    .mul_add(0.5, -0.5)
-                    .clamp(-1.0, 1.0)
-                    .acos()
-                    .to_degrees()
-            })
-            .collect();
-        errors.sort_by(f64::total_cmp);
-        errors[errors.len() / 2]
+        crate::support::median_rotation_error(&sim, config)
     };
     let (with, without) = (median_error(0.002), median_error(0.0));
     eprintln!("sparse_outliers median rotation error: prior {with:.4}, none {without:.4} deg");
