@@ -695,7 +695,9 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
 /// pull the estimate into a compromise without any drop of the inlier share, so the jackknife
 /// that ran only where that share dropped (`jackknife_support_drop` 0.7, the default until the
 /// twelfth session) left many of those frames far outside the 95 % bound. The default
-/// jackknife on every moving frame widens them.
+/// jackknife on every moving frame widens them (with sep27's `cell_cap` default, 200 frames,
+/// seeds 1-3: 92.3 % inside against 84.1 % with the old trigger; before the cap, 86.4 against
+/// 58.3 %).
 #[test]
 fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
     const CHI2_3_95: f64 = 7.814_727_903_251_178;
@@ -738,7 +740,7 @@ fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
     let (every, dropped) = (every as f64 / scored as f64, dropped as f64 / scored as f64);
     eprintln!("inside: {every:.3} on every frame, {dropped:.3} where the share dropped");
     assert!(
-        every >= 0.8 && every > dropped + 0.1,
+        every >= 0.9 && every > dropped + 0.05,
         "{every} against {dropped}"
     );
 }
