@@ -611,15 +611,19 @@ pub fn separate(
 ) -> (FrameSolution, SeparationOutcome, NextStage) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
-    // A re-solved on the capped matches (`cell_cap_first`).
-    let first = if opts.cell_cap > 0.0 && opts.cell_cap_first {
+    // All matches capped per image cell (`cell_cap`): computed once, for A's re-solve
+    // (`cell_cap_first`) and the final stage on all matches (`final_fit`).
+    let all_capped = (opts.cell_cap > 0.0 && (opts.cell_cap_first || opts.final_fit)).then(|| {
         let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
-        let capped = cell_capped(ctx.rig, obs, &all, opts.cell_cap_grid, opts.cell_cap);
-        let left_out = (n - count(&capped)) as f64;
+        cell_capped(ctx.rig, obs, &all, opts.cell_cap_grid, opts.cell_cap)
+    });
+    // A re-solved on the capped matches (`cell_cap_first`).
+    let first = if let Some(capped) = all_capped.as_ref().filter(|_| opts.cell_cap_first) {
+        let left_out = (n - count(capped)) as f64;
         match (left_out > 0.0
             && left_out >= opts.cell_cap_min_share * n as f64
-            && count(&capped) >= 12)
-            .then(|| ctx.solve(&subset(obs, &capped), &first.params, ctx.loss, true))
+            && count(capped) >= 12)
+            .then(|| ctx.solve(&subset(obs, capped), &first.params, ctx.loss, true))
             .flatten()
         {
             Some(mut a) => {
@@ -854,12 +858,17 @@ pub fn separate(
             NextStage::FinalFit
         };
         // Image-region balance of the final stage (`cell_cap`).
-        let next = if opts.cell_cap > 0.0 {
-            let base = match next {
-                NextStage::FinalFitOn(m) => m,
-                _ => obs.per_camera.iter().map(|m| vec![true; m.len()]).collect(),
+        let next = if let Some(all_capped) = all_capped {
+            let (base, capped) = match next {
+                NextStage::FinalFitOn(m) => {
+                    let capped = cell_capped(ctx.rig, obs, &m, opts.cell_cap_grid, opts.cell_cap);
+                    (m, capped)
+                }
+                _ => {
+                    let all = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+                    (all, all_capped)
+                }
             };
-            let capped = cell_capped(ctx.rig, obs, &base, opts.cell_cap_grid, opts.cell_cap);
             let (before, after) = (count(&base), count(&capped));
             let cap = after < before
                 && (before - after) as f64 >= opts.cell_cap_min_share * before as f64;
@@ -951,16 +960,11 @@ pub fn cell_capped(
     use momo_core::CameraModel;
     let mut out = Vec::with_capacity(mask.len());
     for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
-        let (w, h) = cam.model.size();
-        let cell_of = |o: &momo_core::Observation| {
-            let cx = ((o.px0.x / w.max(1.0)) * grid.0 as f64).clamp(0.0, grid.0 as f64 - 1.0);
-            let cy = ((o.px0.y / h.max(1.0)) * grid.1 as f64).clamp(0.0, grid.1 as f64 - 1.0);
-            // NaN pixels clamp to NaN, which `as usize` maps to 0.
-            cy as usize * grid.0 + cx as usize
-        };
+        let size = cam.model.size();
         let mut members: Vec<Vec<usize>> = vec![Vec::new(); grid.0 * grid.1];
         for (i, (o, _)) in m.iter().zip(k).enumerate().filter(|(_, (_, k))| **k) {
-            members[cell_of(o)].push(i);
+            // The cell shared with the covariance's jackknife (a NaN pixel: cell 0).
+            members[crate::trust::cell_of((o.px0.x, o.px0.y), size, grid)].push(i);
         }
         let mut counts: Vec<usize> = members.iter().map(Vec::len).filter(|c| *c > 0).collect();
         let mut keep = k.clone();
