@@ -1012,12 +1012,7 @@ fn packed_candidate<const MAX: bool>(
         .get(k0..k0 + 8)
         .and_then(|x| x.try_into().ok())
         .unwrap_or([best; 8]);
-    let mut mask = 0u32;
-    for (j, &x) in lanes.iter().enumerate() {
-        mask |= u32::from(x == best) << j;
-    }
-    mask &= (1u32 << (n + 1)) - 1;
-    let k = k0 + (mask.trailing_zeros() % 32) as usize;
+    let k = k0 + first_equal_lane(lanes, best, n + 1);
     let threshold = if MAX { best | 7 } else { best & !7 };
     let checked = k >= n && k - n + LANES <= inner;
     let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
@@ -1027,16 +1022,48 @@ fn packed_candidate<const MAX: bool>(
     (val, k, r, checked, strong & !beaten)
 }
 
+/// The first of `lanes[..len]` (`len` in 1..=8) equal to `x`, 0 if none: one vector
+/// comparison and a byte mask on x86-64 (two mask bits per lane).
+#[inline(always)]
+fn first_equal_lane(lanes: [i16; 8], x: i16, len: usize) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use safe_arch::{cmp_eq_mask_i16_m128i, m128i, move_mask_i8_m128i, set_splat_i16_m128i};
+        let bytes = move_mask_i8_m128i(cmp_eq_mask_i16_m128i(
+            m128i::from(lanes),
+            set_splat_i16_m128i(x),
+        )) as u32;
+        let mask = bytes & ((1u32 << (2 * len)) - 1);
+        (mask.trailing_zeros() % 32) as usize / 2
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let mut mask = 0u32;
+        for (j, &y) in lanes.iter().enumerate() {
+            mask |= u32::from(y == x) << j;
+        }
+        mask &= (1u32 << len) - 1;
+        (mask.trailing_zeros() % 32) as usize
+    }
+}
+
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
 const SOBEL_FLAT: u16 = 128 | 128 << 8;
 
 /// The descriptor at `(u, v)` from the interleaved Sobel images (`du | dv << 8`).
 #[inline]
 fn descriptor(sobel: &[u16], w: usize, u: usize, v: usize) -> Descriptor {
-    // Gathered first, then split into the du and dv halves (two vectorised byte packs).
+    // Gathered first, then split into the du and dv halves (two vectorised byte packs). The
+    // 11x11 window is one slice, each sample at a fixed offset of it plus a multiple of `w`.
+    let top = (v - DESCRIPTOR_REACH) * w + u - DESCRIPTOR_REACH;
+    let window = &sobel[top..top + 2 * DESCRIPTOR_REACH * w + 2 * DESCRIPTOR_REACH + 1];
     let s: [u16; 16] = std::array::from_fn(|k| {
         let (dx, dy) = PATTERN[k];
-        sobel[((v as i32 + dy) as usize) * w + (u as i32 + dx) as usize]
+        let (dx, dy) = (
+            (dx + DESCRIPTOR_REACH as i32) as usize,
+            (dy + DESCRIPTOR_REACH as i32) as usize,
+        );
+        window[dy * w + dx]
     });
     let mut d = [0u8; 32];
     for k in 0..16 {
@@ -1419,6 +1446,24 @@ fn filter_row(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The vectorised search of the first equal lane gives the scalar loop's answer: every
+    /// mask of 8 lanes, every length, 0 where none is equal.
+    #[test]
+    fn first_equal_lane_equals_the_loop() {
+        for bits in 0u32..256 {
+            let lanes: [i16; 8] =
+                std::array::from_fn(|j| if bits >> j & 1 == 1 { -3 } else { j as i16 });
+            for len in 1..=8 {
+                let expected = (0..len).find(|&j| lanes[j] == -3).unwrap_or(0);
+                assert_eq!(
+                    first_equal_lane(lanes, -3, len),
+                    expected,
+                    "{bits:08b} {len}"
+                );
+            }
+        }
+    }
 
     /// The separable 16-bit filters equal the 5x5 masks and the 3x3 Sobel masks applied
     /// directly, on a texture with the extreme values 0 and 255.
