@@ -607,12 +607,14 @@ impl FrameFeatures {
                     };
                     let [p0, p1, p2, p3] = std::array::from_fn(class_of);
                     // Every slot is written, the count advanced only for candidates (no
-                    // unpredictable branch per block and class).
+                    // unpredictable branch per block and class). Class `c`'s candidates fill
+                    // the slots from `c * blocks` (the list is by class, then block).
                     out.resize(blocks * CLASSES, Extremum::default());
-                    let mut len = 0;
+                    let mut len = [0usize; CLASSES];
                     let mut put = |class: u8, (val, k, r, checked, keep): Candidate| {
                         let v = v0 + r;
-                        if let Some(slot) = out.get_mut(len) {
+                        let c = usize::from(class) % CLASSES;
+                        if let Some(slot) = out.get_mut(c * blocks + len[c]) {
                             *slot = Extremum {
                                 val,
                                 u: (BORDER + k) as u16,
@@ -621,7 +623,7 @@ impl FrameFeatures {
                                 cleared: ((v1 - 1).saturating_sub(v) * usize::from(checked)) as u8,
                             };
                         }
-                        len += usize::from(keep);
+                        len[c] += usize::from(keep);
                     };
                     for blk in 0..blocks {
                         let k0 = blk * step;
@@ -642,7 +644,11 @@ impl FrameFeatures {
                             packed_candidate::<false>(p3.0, p3.1, p3.2, inner, k0, n, tau),
                         );
                     }
-                    out[..len].to_vec()
+                    let mut row = Vec::with_capacity(len.iter().sum());
+                    for (c, &l) in len.iter().enumerate() {
+                        row.extend_from_slice(&out[c * blocks..c * blocks + l]);
+                    }
+                    row
                 },
             )
             .collect()
@@ -737,6 +743,8 @@ impl FrameFeatures {
                             }
                         }
                     }
+                    // By class, then block (stable).
+                    out.sort_by_key(|e| e.class);
                     out
                 },
             )
@@ -755,41 +763,38 @@ impl FrameFeatures {
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
-                // Sized for every candidate of the class in this block row (no regrowth).
-                let mut counts = [0usize; CLASSES];
-                for e in &extrema[by] {
-                    counts[usize::from(e.class) % CLASSES] += 1;
-                }
-                let mut out: [Vec<Feature>; CLASSES] = counts.map(Vec::with_capacity);
-                for e in &extrema[by] {
-                    let class = usize::from(e.class) % CLASSES;
-                    let maximum = class % 2 == 0;
-                    let (u, v) = (usize::from(e.u), usize::from(e.v));
+                let mut out: [Vec<Feature>; CLASSES] = Default::default();
+                let mut kept: Vec<Extremum> = Vec::new();
+                // Pass 1 lists a block row's candidates by class: one run per class.
+                for run in extrema[by].chunk_by(|a, b| a.class == b.class) {
+                    let class = usize::from(run[0].class) % CLASSES;
                     let img = img_of(class);
-                    // The 16-column check where the window fits it, else the whole
-                    // window is scanned.
-                    let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
-                    let keep = match (fits, maximum) {
-                        (true, true) => window_check::<true>(img, w, mask, *e, n, lanes),
-                        (true, false) => window_check::<false>(img, w, mask, *e, n, lanes),
-                        (false, true) => is_extremum::<true>(img, w, h, mask, u, v, n, e.val),
-                        (false, false) => is_extremum::<false>(img, w, h, mask, u, v, n, e.val),
+                    // First the window checks, the survivors kept without a branch on the
+                    // outcome (close to a coin toss), then the survivors described.
+                    kept.clear();
+                    kept.resize(run.len(), Extremum::default());
+                    let len = if class % 2 == 0 {
+                        survivors::<true>(img, (w, h), mask, n, lanes, run, &mut kept)
+                    } else {
+                        survivors::<false>(img, (w, h), mask, n, lanes, run, &mut kept)
                     };
-                    if !keep {
-                        continue;
+                    let points = &mut out[class];
+                    points.reserve_exact(len);
+                    for e in &kept[..len] {
+                        let (u, v) = (usize::from(e.u), usize::from(e.v));
+                        let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
+                        let c = r(u, v);
+                        let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
+                        let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
+                        points.push(Feature {
+                            u: e.u,
+                            v: e.v,
+                            x: x as f32,
+                            y: y as f32,
+                            response: e.val,
+                            desc: descriptor(sobel, w, u, v),
+                        });
                     }
-                    let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
-                    let c = r(u, v);
-                    let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
-                    let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
-                    out[class].push(Feature {
-                        u: e.u,
-                        v: e.v,
-                        x: x as f32,
-                        y: y as f32,
-                        response: e.val,
-                        desc: descriptor(sobel, w, u, v),
-                    });
                 }
                 out
             })
@@ -802,8 +807,40 @@ impl FrameFeatures {
     }
 }
 
+/// Pass 2's window checks of one class's candidates `run` (maxima if `MAX`): the survivors
+/// are copied to the front of `kept` (at least `run.len()` long), their number returned. Every
+/// candidate is written and the count advanced by the outcome (no branch on it).
+#[inline(always)]
+fn survivors<const MAX: bool>(
+    img: &[i16],
+    (w, h): (usize, usize),
+    mask: usize,
+    n: usize,
+    lanes: &LaneOffsets,
+    run: &[Extremum],
+    kept: &mut [Extremum],
+) -> usize {
+    let mut len = 0;
+    for e in run {
+        let (u, v) = (usize::from(e.u), usize::from(e.v));
+        // The 16-column check where the window fits it, else the whole window is scanned.
+        let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
+        let keep = if fits {
+            window_check::<MAX>(img, w, mask, *e, n, lanes)
+        } else {
+            is_extremum::<MAX>(img, w, h, mask, u, v, n, e.val)
+        };
+        if let Some(slot) = kept.get_mut(len) {
+            *slot = *e;
+        }
+        len += usize::from(keep);
+    }
+    len
+}
+
 /// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
-/// row of blocks in the order of a serial scan: blocks, then classes).
+/// row of blocks by class, then block: each class's candidates in the order of a serial
+/// scan).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Extremum {
     val: i16,
