@@ -24,7 +24,7 @@
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, Feature, FrameFeatures, MIN_SIDE};
-use crate::refine::{KltOptions, MAX_HALF, refine_match};
+use crate::refine::{KltOptions, MAX_HALF, prefetch_patch, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
 
@@ -381,7 +381,13 @@ pub fn match_features_with_prior(
             let (p, c) = (prev.plane(), cur.plane());
             let refined: Vec<Match> = chosen
                 .par_iter()
-                .filter_map(|m| {
+                .enumerate()
+                .filter_map(|(i, m)| {
+                    // The patches of the match `KLT_AHEAD` on are loaded meanwhile.
+                    if let Some(next) = chosen.get(i + KLT_AHEAD) {
+                        prefetch_patch(p, (next.u0 as usize, next.v0 as usize), klt.half);
+                        prefetch_patch(c, (next.u1 as usize, next.v1 as usize), klt.half);
+                    }
                     let [u0, v0, u1, v1] = refine_match(
                         p,
                         c,
@@ -402,6 +408,10 @@ pub fn match_features_with_prior(
         }
     }
 }
+
+/// Matches ahead of the one being refined whose patches are prefetched
+/// ([`prefetch_patch`]).
+const KLT_AHEAD: usize = 2;
 
 /// The `per_cell` strongest features of each grid cell and class, `(class, index)`, in the
 /// order (class, cell, strength, index). With `packed` (and fewer than 2^16 cells, 2^32
