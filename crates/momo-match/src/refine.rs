@@ -147,6 +147,12 @@ pub fn align(
     )
 }
 
+/// Four lanes from `row[k..k + 4]`, zero where `k + lane >= side`.
+#[inline(always)]
+fn lanes(row: &[f32; 4 * VECS], k: usize) -> f32x4 {
+    f32x4::from([row[k], row[k + 1], row[k + 2], row[k + 3]])
+}
+
 /// Four lanes of bytes `b[k..k + 4]` as `f32` (a vector load and conversion).
 #[inline(always)]
 fn byte_lanes(b: &[u8; 4 * VECS], k: usize) -> f32x4 {
@@ -165,40 +171,6 @@ fn padded(px: &[u8], start: usize, side: usize) -> [u8; 4 * VECS] {
     let mut b = [0u8; 4 * VECS];
     b[..side].copy_from_slice(&px[start..start + side]);
     b
-}
-
-/// The pixels `px[start..start + side]` (`side <= 4 * VECS`) as `f32`, four lanes a vector,
-/// zero past `side`. On x86-64, where the 16 bytes from `start` lie in `px`: one 16-byte load,
-/// a byte mask and widening conversions in registers (the bytes converted one at a time and
-/// stored, then read back as vectors, stalled those loads).
-#[inline(always)]
-fn pixel_lanes(px: &[u8], start: usize, side: usize) -> [f32x4; VECS] {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(b) = px
-        .get(start..start + 16)
-        .and_then(|s| <[u8; 16]>::try_from(s).ok())
-    {
-        use safe_arch::{
-            bitand_m128i, convert_to_m128_from_i32_m128i, m128i, unpack_high_i8_m128i,
-            unpack_high_i16_m128i, unpack_low_i8_m128i, unpack_low_i16_m128i,
-        };
-        let keep: [u8; 16] = std::array::from_fn(|i| if i < side { 0xff } else { 0 });
-        let bytes = bitand_m128i(m128i::from(b), m128i::from(keep));
-        let zero = m128i::from([0u8; 16]);
-        let (lo, hi) = (
-            unpack_low_i8_m128i(bytes, zero),
-            unpack_high_i8_m128i(bytes, zero),
-        );
-        let quads = [
-            unpack_low_i16_m128i(lo, zero),
-            unpack_high_i16_m128i(lo, zero),
-            unpack_low_i16_m128i(hi, zero),
-            unpack_high_i16_m128i(hi, zero),
-        ];
-        return quads.map(|q| f32x4::from(<[f32; 4]>::from(convert_to_m128_from_i32_m128i(q))));
-    }
-    let b = padded(px, start, side);
-    std::array::from_fn(|k| byte_lanes(&b, 4 * k))
 }
 
 /// The template of [`align`] for the half-width `R`: the patch of `from` around `(u, v)`, its
@@ -223,15 +195,16 @@ fn template<const R: usize>(
         // Columns u - R - 1 + i (left), u - R + i (centre, and the rows above and below),
         // u - R + 1 + i (right) for i < side.
         let s = y * w + u - R;
-        let left = pixel_lanes(from.px, s - 1, side);
-        let centre = pixel_lanes(from.px, s, side);
-        let right = pixel_lanes(from.px, s + 1, side);
-        let up = pixel_lanes(from.px, s - w, side);
-        let down = pixel_lanes(from.px, s + w, side);
+        let left = padded(from.px, s - 1, side);
+        let centre = padded(from.px, s, side);
+        let right = padded(from.px, s + 1, side);
+        let up = padded(from.px, s - w, side);
+        let down = padded(from.px, s + w, side);
         for k in 0..nv {
-            let a = right[k] - left[k];
-            let b = down[k] - up[k];
-            tpl.t[j][k] = centre[k];
+            let i = 4 * k;
+            let a = byte_lanes(&right, i) - byte_lanes(&left, i);
+            let b = byte_lanes(&down, i) - byte_lanes(&up, i);
+            tpl.t[j][k] = byte_lanes(&centre, i);
             tpl.gx[j][k] = half * a;
             tpl.gy[j][k] = half * b;
             sxx += a * a;
@@ -291,8 +264,17 @@ fn iterate<const R: usize>(
             at = (ix, iy);
             for j in 0..side + 1 {
                 let start = (iy + j) * to.width + ix;
-                left[j] = pixel_lanes(to.px, start, side);
-                right[j] = pixel_lanes(to.px, start + 1, side);
+                let row = &to.px[start..start + side + 1];
+                let mut l = [0f32; 4 * VECS];
+                let mut r = [0f32; 4 * VECS];
+                for i in 0..side {
+                    l[i] = f32::from(row[i]);
+                    r[i] = f32::from(row[i + 1]);
+                }
+                for k in 0..nv {
+                    left[j][k] = lanes(&l, 4 * k);
+                    right[j][k] = lanes(&r, 4 * k);
+                }
             }
         }
         let (fx, fy) = (f32x4::splat(fx), f32x4::splat(fy));
@@ -432,30 +414,6 @@ pub fn prefetch_patch(plane: Plane<'_>, (u, v): (usize, usize), half: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The vectorised conversion of a patch row gives the bytes' values, zero past the side,
-    /// for every side and for rows that end near the end of the image (the scalar path).
-    #[test]
-    fn pixel_lanes_equal_the_bytes() {
-        let px: Vec<u8> = (0..40u32).map(|i| (i * 97 % 256) as u8).collect();
-        for side in 1..=2 * MAX_HALF + 1 {
-            for start in 0..=px.len() - side {
-                let lanes = pixel_lanes(&px, start, side);
-                for i in 0..4 * VECS {
-                    let expected = if i < side {
-                        f32::from(px[start + i])
-                    } else {
-                        0.0
-                    };
-                    assert_eq!(
-                        lanes[i / 4].to_array()[i % 4],
-                        expected,
-                        "{side} {start} {i}"
-                    );
-                }
-            }
-        }
-    }
 
     /// The comparisons from the sum of squares decide as `hypot` does: on random values, on
     /// values whose `hypot` is the threshold itself or one unit in the last place from it, and
