@@ -155,10 +155,6 @@ impl ClassFeatures {
         self.order.resize(n, 0);
         self.slot_of.clear();
         self.slot_of.resize(n, 0);
-        self.pos.clear();
-        self.pos.resize(n, [0, 0]);
-        self.descs.clear();
-        self.descs.resize(n, [0; 32]);
         // Stable within a cell: slots follow the feature order.
         let mut fill: Vec<u32> = self.cell_start[..cells].to_vec();
         for (i, f) in self.points.iter().enumerate() {
@@ -167,9 +163,17 @@ impl ClassFeatures {
             fill[c] += 1;
             self.order[slot] = i as u32;
             self.slot_of[i] = slot as u32;
-            self.pos[slot] = [f.u as i16, f.v as i16];
-            self.descs[slot] = f.desc;
         }
+        // Positions and descriptors gathered in slot order (no zero fill of the arrays first).
+        let points = &self.points;
+        self.pos.clear();
+        self.pos.extend(self.order.iter().map(|&i| {
+            let f = &points[i as usize];
+            [f.u as i16, f.v as i16]
+        }));
+        self.descs.clear();
+        self.descs
+            .extend(self.order.iter().map(|&i| points[i as usize].desc));
     }
 
     /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
