@@ -1094,59 +1094,24 @@ const SOBEL_FLAT: u16 = 128 | 128 << 8;
 /// The descriptor at `(u, v)` from the interleaved Sobel images (`du | dv << 8`).
 #[inline]
 fn descriptor(sobel: &[u16], w: usize, u: usize, v: usize) -> Descriptor {
-    // The window's rows `v + dy` (`dy` odd, as in `PATTERN`), columns `u - 5..=u + 5`: one
-    // bounds check per row, the samples at constant indices.
-    let reach = DESCRIPTOR_REACH;
-    let row = |dy: usize| -> [u16; 2 * DESCRIPTOR_REACH + 1] {
-        let at = (v + dy - reach) * w + u - reach;
-        sobel
-            .get(at..at + 2 * reach + 1)
-            .and_then(|r| r.try_into().ok())
-            .unwrap_or([SOBEL_FLAT; 2 * DESCRIPTOR_REACH + 1])
-    };
-    let rows = [row(0), row(2), row(4), row(6), row(8), row(10)];
+    // Gathered first, then split into the du and dv halves (two vectorised byte packs). The
+    // 11x11 window is one slice, each sample at a fixed offset of it plus a multiple of `w`.
+    let top = (v - DESCRIPTOR_REACH) * w + u - DESCRIPTOR_REACH;
+    let window = &sobel[top..top + 2 * DESCRIPTOR_REACH * w + 2 * DESCRIPTOR_REACH + 1];
     let s: [u16; 16] = std::array::from_fn(|k| {
         let (dx, dy) = PATTERN[k];
-        rows[(dy + 5) as usize / 2][(dx + 5) as usize]
+        let (dx, dy) = (
+            (dx + DESCRIPTOR_REACH as i32) as usize,
+            (dy + DESCRIPTOR_REACH as i32) as usize,
+        );
+        window[dy * w + dx]
     });
-    split_descriptor(s)
-}
-
-/// The descriptor of 16 interleaved Sobel samples (`du | dv << 8`): the du bytes, then the dv
-/// bytes. On x86-64 two byte packs of two registers, so that the descriptor is written as two
-/// 16-byte stores (byte-wise stores, read back as 16 bytes, stall the loads that follow).
-#[inline(always)]
-fn split_descriptor(s: [u16; 16]) -> Descriptor {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use safe_arch::{
-            bitand_m128i, m128i, pack_i16_to_u8_m128i, set_splat_i16_m128i, shr_imm_u16_m128i,
-        };
-        let half = |k: usize| -> m128i {
-            let h: [i16; 8] = std::array::from_fn(|i| s[8 * k + i] as i16);
-            m128i::from(h)
-        };
-        let (lo, hi) = (half(0), half(1));
-        let low_byte = set_splat_i16_m128i(0xff);
-        // Both packs see values in 0..=255: no saturation.
-        let du: [u8; 16] =
-            pack_i16_to_u8_m128i(bitand_m128i(lo, low_byte), bitand_m128i(hi, low_byte)).into();
-        let dv: [u8; 16] =
-            pack_i16_to_u8_m128i(shr_imm_u16_m128i::<8>(lo), shr_imm_u16_m128i::<8>(hi)).into();
-        let mut d = [0u8; 32];
-        d[..16].copy_from_slice(&du);
-        d[16..].copy_from_slice(&dv);
-        d
+    let mut d = [0u8; 32];
+    for k in 0..16 {
+        d[k] = (s[k] & 0xff) as u8;
+        d[16 + k] = (s[k] >> 8) as u8;
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let mut d = [0u8; 32];
-        for k in 0..16 {
-            d[k] = (s[k] & 0xff) as u8;
-            d[16 + k] = (s[k] >> 8) as u8;
-        }
-        d
-    }
+    d
 }
 
 /// The offset of the vertex of the parabola through `(-1, a)`, `(0, b)`, `(1, c)`, within
