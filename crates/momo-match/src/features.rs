@@ -155,10 +155,6 @@ impl ClassFeatures {
         self.order.resize(n, 0);
         self.slot_of.clear();
         self.slot_of.resize(n, 0);
-        self.pos.clear();
-        self.pos.resize(n, [0, 0]);
-        self.descs.clear();
-        self.descs.resize(n, [0; 32]);
         // Stable within a cell: slots follow the feature order.
         let mut fill: Vec<u32> = self.cell_start[..cells].to_vec();
         for (i, f) in self.points.iter().enumerate() {
@@ -167,9 +163,17 @@ impl ClassFeatures {
             fill[c] += 1;
             self.order[slot] = i as u32;
             self.slot_of[i] = slot as u32;
-            self.pos[slot] = [f.u as i16, f.v as i16];
-            self.descs[slot] = f.desc;
         }
+        // Positions and descriptors gathered in slot order (no zero fill of the arrays first).
+        let points = &self.points;
+        self.pos.clear();
+        self.pos.extend(self.order.iter().map(|&i| {
+            let f = &points[i as usize];
+            [f.u as i16, f.v as i16]
+        }));
+        self.descs.clear();
+        self.descs
+            .extend(self.order.iter().map(|&i| points[i as usize].desc));
     }
 
     /// Calls `visit(slot, sad)` for every feature inside the window `|u - cu| <= ru`,
@@ -607,12 +611,14 @@ impl FrameFeatures {
                     };
                     let [p0, p1, p2, p3] = std::array::from_fn(class_of);
                     // Every slot is written, the count advanced only for candidates (no
-                    // unpredictable branch per block and class).
+                    // unpredictable branch per block and class). Class `c`'s candidates fill
+                    // the slots from `c * blocks` (the list is by class, then block).
                     out.resize(blocks * CLASSES, Extremum::default());
-                    let mut len = 0;
+                    let mut len = [0usize; CLASSES];
                     let mut put = |class: u8, (val, k, r, checked, keep): Candidate| {
                         let v = v0 + r;
-                        if let Some(slot) = out.get_mut(len) {
+                        let c = usize::from(class) % CLASSES;
+                        if let Some(slot) = out.get_mut(c * blocks + len[c]) {
                             *slot = Extremum {
                                 val,
                                 u: (BORDER + k) as u16,
@@ -621,7 +627,7 @@ impl FrameFeatures {
                                 cleared: ((v1 - 1).saturating_sub(v) * usize::from(checked)) as u8,
                             };
                         }
-                        len += usize::from(keep);
+                        len[c] += usize::from(keep);
                     };
                     for blk in 0..blocks {
                         let k0 = blk * step;
@@ -642,7 +648,11 @@ impl FrameFeatures {
                             packed_candidate::<false>(p3.0, p3.1, p3.2, inner, k0, n, tau),
                         );
                     }
-                    out[..len].to_vec()
+                    let mut row = Vec::with_capacity(len.iter().sum());
+                    for (c, &l) in len.iter().enumerate() {
+                        row.extend_from_slice(&out[c * blocks..c * blocks + l]);
+                    }
+                    row
                 },
             )
             .collect()
@@ -737,6 +747,8 @@ impl FrameFeatures {
                             }
                         }
                     }
+                    // By class, then block (stable).
+                    out.sort_by_key(|e| e.class);
                     out
                 },
             )
@@ -755,41 +767,38 @@ impl FrameFeatures {
         let found: Vec<[Vec<Feature>; CLASSES]> = (0..extrema.len())
             .into_par_iter()
             .map(|by| {
-                // Sized for every candidate of the class in this block row (no regrowth).
-                let mut counts = [0usize; CLASSES];
-                for e in &extrema[by] {
-                    counts[usize::from(e.class) % CLASSES] += 1;
-                }
-                let mut out: [Vec<Feature>; CLASSES] = counts.map(Vec::with_capacity);
-                for e in &extrema[by] {
-                    let class = usize::from(e.class) % CLASSES;
-                    let maximum = class % 2 == 0;
-                    let (u, v) = (usize::from(e.u), usize::from(e.v));
+                let mut out: [Vec<Feature>; CLASSES] = Default::default();
+                let mut kept: Vec<Extremum> = Vec::new();
+                // Pass 1 lists a block row's candidates by class: one run per class.
+                for run in extrema[by].chunk_by(|a, b| a.class == b.class) {
+                    let class = usize::from(run[0].class) % CLASSES;
                     let img = img_of(class);
-                    // The 16-column check where the window fits it, else the whole
-                    // window is scanned.
-                    let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
-                    let keep = match (fits, maximum) {
-                        (true, true) => window_check::<true>(img, w, mask, *e, n, lanes),
-                        (true, false) => window_check::<false>(img, w, mask, *e, n, lanes),
-                        (false, true) => is_extremum::<true>(img, w, h, mask, u, v, n, e.val),
-                        (false, false) => is_extremum::<false>(img, w, h, mask, u, v, n, e.val),
+                    // First the window checks, the survivors kept without a branch on the
+                    // outcome (close to a coin toss), then the survivors described.
+                    kept.clear();
+                    kept.resize(run.len(), Extremum::default());
+                    let len = if class % 2 == 0 {
+                        survivors::<true>(img, (w, h), mask, n, lanes, run, &mut kept)
+                    } else {
+                        survivors::<false>(img, (w, h), mask, n, lanes, run, &mut kept)
                     };
-                    if !keep {
-                        continue;
+                    let points = &mut out[class];
+                    points.reserve_exact(len);
+                    for e in &kept[..len] {
+                        let (u, v) = (usize::from(e.u), usize::from(e.v));
+                        let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
+                        let c = r(u, v);
+                        let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
+                        let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
+                        points.push(Feature {
+                            u: e.u,
+                            v: e.v,
+                            x: x as f32,
+                            y: y as f32,
+                            response: e.val,
+                            desc: descriptor(sobel, w, u, v),
+                        });
                     }
-                    let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
-                    let c = r(u, v);
-                    let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
-                    let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
-                    out[class].push(Feature {
-                        u: e.u,
-                        v: e.v,
-                        x: x as f32,
-                        y: y as f32,
-                        response: e.val,
-                        desc: descriptor(sobel, w, u, v),
-                    });
                 }
                 out
             })
@@ -802,8 +811,40 @@ impl FrameFeatures {
     }
 }
 
+/// Pass 2's window checks of one class's candidates `run` (maxima if `MAX`): the survivors
+/// are copied to the front of `kept` (at least `run.len()` long), their number returned. Every
+/// candidate is written and the count advanced by the outcome (no branch on it).
+#[inline(always)]
+fn survivors<const MAX: bool>(
+    img: &[i16],
+    (w, h): (usize, usize),
+    mask: usize,
+    n: usize,
+    lanes: &LaneOffsets,
+    run: &[Extremum],
+    kept: &mut [Extremum],
+) -> usize {
+    let mut len = 0;
+    for e in run {
+        let (u, v) = (usize::from(e.u), usize::from(e.v));
+        // The 16-column check where the window fits it, else the whole window is scanned.
+        let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
+        let keep = if fits {
+            window_check::<MAX>(img, w, mask, *e, n, lanes)
+        } else {
+            is_extremum::<MAX>(img, w, h, mask, u, v, n, e.val)
+        };
+        if let Some(slot) = kept.get_mut(len) {
+            *slot = *e;
+        }
+        len += usize::from(keep);
+    }
+    len
+}
+
 /// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
-/// row of blocks in the order of a serial scan: blocks, then classes).
+/// row of blocks by class, then block: each class's candidates in the order of a serial
+/// scan).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Extremum {
     val: i16,
@@ -1012,12 +1053,7 @@ fn packed_candidate<const MAX: bool>(
         .get(k0..k0 + 8)
         .and_then(|x| x.try_into().ok())
         .unwrap_or([best; 8]);
-    let mut mask = 0u32;
-    for (j, &x) in lanes.iter().enumerate() {
-        mask |= u32::from(x == best) << j;
-    }
-    mask &= (1u32 << (n + 1)) - 1;
-    let k = k0 + (mask.trailing_zeros() % 32) as usize;
+    let k = k0 + first_equal_lane(lanes, best, n + 1);
     let threshold = if MAX { best | 7 } else { best & !7 };
     let checked = k >= n && k - n + LANES <= inner;
     let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
@@ -1027,16 +1063,48 @@ fn packed_candidate<const MAX: bool>(
     (val, k, r, checked, strong & !beaten)
 }
 
+/// The first of `lanes[..len]` (`len` in 1..=8) equal to `x`, 0 if none: one vector
+/// comparison and a byte mask on x86-64 (two mask bits per lane).
+#[inline(always)]
+fn first_equal_lane(lanes: [i16; 8], x: i16, len: usize) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use safe_arch::{cmp_eq_mask_i16_m128i, m128i, move_mask_i8_m128i, set_splat_i16_m128i};
+        let bytes = move_mask_i8_m128i(cmp_eq_mask_i16_m128i(
+            m128i::from(lanes),
+            set_splat_i16_m128i(x),
+        )) as u32;
+        let mask = bytes & ((1u32 << (2 * len)) - 1);
+        (mask.trailing_zeros() % 32) as usize / 2
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let mut mask = 0u32;
+        for (j, &y) in lanes.iter().enumerate() {
+            mask |= u32::from(y == x) << j;
+        }
+        mask &= (1u32 << len) - 1;
+        (mask.trailing_zeros() % 32) as usize
+    }
+}
+
 /// A flat pixel of the interleaved Sobel images: `du = dv = 128`.
 const SOBEL_FLAT: u16 = 128 | 128 << 8;
 
 /// The descriptor at `(u, v)` from the interleaved Sobel images (`du | dv << 8`).
 #[inline]
 fn descriptor(sobel: &[u16], w: usize, u: usize, v: usize) -> Descriptor {
-    // Gathered first, then split into the du and dv halves (two vectorised byte packs).
+    // Gathered first, then split into the du and dv halves (two vectorised byte packs). The
+    // 11x11 window is one slice, each sample at a fixed offset of it plus a multiple of `w`.
+    let top = (v - DESCRIPTOR_REACH) * w + u - DESCRIPTOR_REACH;
+    let window = &sobel[top..top + 2 * DESCRIPTOR_REACH * w + 2 * DESCRIPTOR_REACH + 1];
     let s: [u16; 16] = std::array::from_fn(|k| {
         let (dx, dy) = PATTERN[k];
-        sobel[((v as i32 + dy) as usize) * w + (u as i32 + dx) as usize]
+        let (dx, dy) = (
+            (dx + DESCRIPTOR_REACH as i32) as usize,
+            (dy + DESCRIPTOR_REACH as i32) as usize,
+        );
+        window[dy * w + dx]
     });
     let mut d = [0u8; 32];
     for k in 0..16 {
@@ -1419,6 +1487,44 @@ fn filter_row(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The descriptor equals its definition: du at the 16 `PATTERN` positions, then dv, on
+    /// Sobel values that use every byte value in both halves, at every pixel 5 inside.
+    #[test]
+    fn descriptor_equals_the_pattern() {
+        let (w, h) = (29usize, 17usize);
+        let sobel: Vec<u16> = (0..w * h)
+            .map(|i| ((i * 37 % 256) | (i * 101 % 256) << 8) as u16)
+            .collect();
+        for v in 5..h - 5 {
+            for u in 5..w - 5 {
+                let d = descriptor(&sobel, w, u, v);
+                for (k, &(dx, dy)) in PATTERN.iter().enumerate() {
+                    let s = sobel[(v as i32 + dy) as usize * w + (u as i32 + dx) as usize];
+                    assert_eq!(d[k], (s & 0xff) as u8, "du {k} at {u},{v}");
+                    assert_eq!(d[16 + k], (s >> 8) as u8, "dv {k} at {u},{v}");
+                }
+            }
+        }
+    }
+
+    /// The vectorised search of the first equal lane gives the scalar loop's answer: every
+    /// mask of 8 lanes, every length, 0 where none is equal.
+    #[test]
+    fn first_equal_lane_equals_the_loop() {
+        for bits in 0u32..256 {
+            let lanes: [i16; 8] =
+                std::array::from_fn(|j| if bits >> j & 1 == 1 { -3 } else { j as i16 });
+            for len in 1..=8 {
+                let expected = (0..len).find(|&j| lanes[j] == -3).unwrap_or(0);
+                assert_eq!(
+                    first_equal_lane(lanes, -3, len),
+                    expected,
+                    "{bits:08b} {len}"
+                );
+            }
+        }
+    }
 
     /// The separable 16-bit filters equal the 5x5 masks and the 3x3 Sobel masks applied
     /// directly, on a texture with the extreme values 0 and 255.

@@ -24,7 +24,7 @@
 
 use crate::error::MatchError;
 use crate::features::{CLASSES, DetectorOptions, Feature, FrameFeatures, MIN_SIDE};
-use crate::refine::{KltOptions, MAX_HALF, refine_match};
+use crate::refine::{KltOptions, MAX_HALF, prefetch_patch, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
 
@@ -316,7 +316,11 @@ pub fn match_features_with_prior(
     let grid = Grid::new(w, h, options.matches_per_frame);
 
     // 1. Candidates: the strongest features per cell and class.
-    let candidates = strongest_per_cell(prev, &grid, options.candidates_per_cell, true);
+    let candidates = if options.candidates_per_cell <= MAX_SELECTED {
+        strongest_per_cell_selected(prev, &grid, options.candidates_per_cell)
+    } else {
+        strongest_per_cell(prev, &grid, options.candidates_per_cell, true)
+    };
 
     // 2.-4. Forward, backward, sub-pixel.
     let (ru, rv) = (options.max_flow_u as i32, options.max_flow_v as i32);
@@ -377,7 +381,13 @@ pub fn match_features_with_prior(
             let (p, c) = (prev.plane(), cur.plane());
             let refined: Vec<Match> = chosen
                 .par_iter()
-                .filter_map(|m| {
+                .enumerate()
+                .filter_map(|(i, m)| {
+                    // The patches of the match `KLT_AHEAD` on are loaded meanwhile.
+                    if let Some(next) = chosen.get(i + KLT_AHEAD) {
+                        prefetch_patch(p, (next.u0 as usize, next.v0 as usize), klt.half);
+                        prefetch_patch(c, (next.u1 as usize, next.v1 as usize), klt.half);
+                    }
                     let [u0, v0, u1, v1] = refine_match(
                         p,
                         c,
@@ -398,6 +408,10 @@ pub fn match_features_with_prior(
         }
     }
 }
+
+/// Matches ahead of the one being refined whose patches are prefetched
+/// ([`prefetch_patch`]).
+const KLT_AHEAD: usize = 2;
 
 /// The `per_cell` strongest features of each grid cell and class, `(class, index)`, in the
 /// order (class, cell, strength, index). With `packed` (and fewer than 2^16 cells, 2^32
@@ -453,6 +467,67 @@ fn strongest_per_cell(
             for &(cell, _, i) in &keyed {
                 take(cell, i);
             }
+        }
+    }
+    candidates
+}
+
+/// Candidates per cell up to which [`strongest_per_cell_selected`] is used (each cell's slots
+/// are shifted on an insertion); more go by [`strongest_per_cell`]'s sort.
+const MAX_SELECTED: usize = 8;
+
+/// [`strongest_per_cell`] without a sort, the same list in the same order: per class, one pass
+/// over the features in index order keeps each cell's `per_cell` strongest, ordered by
+/// strength, then index (a later feature of equal strength goes behind: the index order);
+/// the cells are read in order at the end. The cell of a feature comes from per-column and
+/// per-row tables of [`Grid::of`] (the same divisions, once per image column and row instead
+/// of twice per feature).
+fn strongest_per_cell_selected(
+    frame: &FrameFeatures,
+    grid: &Grid,
+    per_cell: usize,
+) -> Vec<(usize, usize)> {
+    let (w, h) = (frame.width, frame.height);
+    let col_of: Vec<usize> = (0..w).map(|u| grid.of(u as f64, 0.0)).collect();
+    let row_of: Vec<usize> = (0..h)
+        .map(|v| grid.of(0.0, v as f64) - grid.of(0.0, 0.0))
+        .collect();
+    let cells = grid.len();
+    let per_cell = per_cell.max(1);
+    // Per cell: the number kept and `per_cell` slots of (strength, index).
+    let mut count = vec![0usize; cells];
+    let mut slots = vec![(0i32, 0usize); cells * per_cell];
+    let mut candidates: Vec<(usize, usize)> = Vec::new();
+    for class in 0..CLASSES {
+        count.fill(0);
+        for (i, f) in frame.classes[class].points.iter().enumerate() {
+            let (Some(&c), Some(&r)) = (col_of.get(usize::from(f.u)), row_of.get(usize::from(f.v)))
+            else {
+                continue;
+            };
+            let cell = r + c;
+            let strength = i32::from(f.response).abs();
+            let kept = &mut count[cell];
+            let cell_slots = &mut slots[cell * per_cell..(cell + 1) * per_cell];
+            // Behind every kept feature at least as strong (earlier index).
+            let at = cell_slots[..*kept]
+                .iter()
+                .position(|&(s, _)| s < strength)
+                .unwrap_or(*kept);
+            if at == per_cell {
+                continue;
+            }
+            let end = (*kept + 1).min(per_cell);
+            cell_slots.copy_within(at..end - 1, at + 1);
+            cell_slots[at] = (strength, i);
+            *kept = end;
+        }
+        for (cell, &kept) in count.iter().enumerate() {
+            candidates.extend(
+                slots[cell * per_cell..cell * per_cell + kept]
+                    .iter()
+                    .map(|&(_, i)| (class, i)),
+            );
         }
     }
     candidates
@@ -673,12 +748,14 @@ mod tests {
         let mut f = FrameFeatures::default();
         f.extract(&img, &DetectorOptions::default());
         assert!(f.len() > 100, "{}", f.len());
-        for (n, per_cell) in [(10, 1), (50, 2), (300, 3), (2000, 2)] {
+        for (n, per_cell) in [(10, 1), (50, 2), (300, 3), (2000, 2), (50, 5), (10, 8)] {
             let grid = Grid::new(f.width, f.height, n);
             let packed = strongest_per_cell(&f, &grid, per_cell, true);
             let tuple = strongest_per_cell(&f, &grid, per_cell, false);
             assert!(!packed.is_empty());
             assert_eq!(packed, tuple, "n {n} per cell {per_cell}");
+            let selected = strongest_per_cell_selected(&f, &grid, per_cell);
+            assert_eq!(selected, tuple, "selected: n {n} per cell {per_cell}");
         }
     }
 

@@ -387,6 +387,30 @@ pub fn refine_match(
     Some([u0 as f64, v0 as f64, u0 as f64 + out[0], v0 as f64 + out[1]])
 }
 
+/// Asks the cache for the pixels that [`align`] with half-width `half` reads around `(u, v)`
+/// of `plane` (rows `v - half - 1..=v + half + 1`, columns `u - half - 1..=u + half + 1`), so
+/// that a match's patches can be loaded while the one before is refined (the patches of
+/// scattered matches are mostly not in the cache). Only a hint: nothing is read or changed;
+/// a no-op off x86-64.
+pub fn prefetch_patch(plane: Plane<'_>, (u, v): (usize, usize), half: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let reach = half.min(MAX_HALF) + 1;
+        let (x0, x1) = (u.saturating_sub(reach), u + reach);
+        let rows = v.saturating_sub(reach)..(v + reach + 1).min(plane.height);
+        for y in rows {
+            let row = y * plane.width;
+            for x in [x0, x1] {
+                if let Some(p) = plane.px.get(row + x) {
+                    safe_arch::prefetch_t0(p);
+                }
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (plane, u, v, half);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
