@@ -25,10 +25,13 @@ fn simulate_writes_the_bound_and_eval_reports_the_efficiency() {
     let rows: Vec<&str> = bound.lines().collect();
     assert_eq!(rows[0], "frame,rotation_bound_deg,static_matches");
     assert_eq!(rows.len(), 30, "one row per frame pair");
-    // labels.csv (FORMAT.md version 6): a header and one label per row of matches.csv.
+    // labels.csv (FORMAT.md versions 6-7): a header and one label per row of matches.csv.
     let labels = std::fs::read_to_string(seq.join("labels.csv")).expect("labels.csv written");
     let matches = std::fs::read_to_string(seq.join("matches.csv")).expect("matches.csv");
-    assert_eq!(labels.lines().next(), Some("frame,camera,label"));
+    assert_eq!(
+        labels.lines().next(),
+        Some("frame,camera,label,object,object_kind")
+    );
     assert_eq!(labels.lines().count(), matches.lines().count());
     let est = dir.path().join("est.txt");
     let o = out(momo()

@@ -75,7 +75,7 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
     // bound.csv (FORMAT.md version 3): the Cramér-Rao bound of every frame pair's rotation.
     let bounds = momo_sim::bound::rotation_bounds(&sim, cfg.pixel_noise);
     momo_sim::bound::write_bound_csv(&args.out_dir, &sim, &bounds).map_err(Failure::other)?;
-    // labels.csv (FORMAT.md version 6): the true label of every match, row for row.
+    // labels.csv (FORMAT.md versions 6-7): the true label (and traffic object) of every match, row for row.
     momo_sim::labels::write_labels_csv(&args.out_dir, &sim).map_err(Failure::other)?;
     if !args.quiet {
         let seq = &sim.sequence;

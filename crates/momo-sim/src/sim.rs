@@ -477,6 +477,14 @@ pub struct Simulation {
     /// k, in camera j coordinates at frame k-1, for static matches ([`MatchLabel::Inlier`]);
     /// `None` for every other label. What [`crate::bound`] needs.
     pub static_points: Vec<Vec<Vec<Option<Vector3<f64>>>>>,
+    /// `objects[k][j][i]`: the traffic object ([`SimConfig::traffic`]) whose point match i of
+    /// camera j in frame pair k is, as an index into [`Simulation::object_kinds`]; `None` for
+    /// every match that is not on a traffic object (static points, outliers, the scripted
+    /// [`MovingObject`]). Parallel to `labels`; `labels.csv`'s `object` column.
+    pub objects: Vec<Vec<Vec<Option<usize>>>>,
+    /// The kind of each traffic object (`lead`, `bus`, `cut_in`, `oncoming`, `crossing`), by the
+    /// index of [`Simulation::objects`]; empty without traffic.
+    pub object_kinds: Vec<&'static str>,
 }
 
 impl Simulation {
@@ -541,8 +549,14 @@ fn scene_range(rng: &mut StdRng, scene: &SceneConfig, mount: &Pose<f64>, b: &Vec
     }
 }
 
-/// The matches of one camera and frame pair, their labels and the static points.
-type Generated = (Vec<Observation>, Vec<MatchLabel>, Vec<Option<Vector3<f64>>>);
+/// The matches of one camera and frame pair, their labels, the static points and the traffic
+/// object of each match.
+type Generated = (
+    Vec<Observation>,
+    Vec<MatchLabel>,
+    Vec<Option<Vector3<f64>>>,
+    Vec<Option<usize>>,
+);
 
 /// One camera of one frame pair.
 struct CameraFrame<'a> {
@@ -654,7 +668,7 @@ impl CameraFrame<'_> {
         let n = self.cfg.matches_per_camera;
         let model = &self.camera.model;
         match blind {
-            Some(BlindMode::Absent) => return (Vec::new(), Vec::new(), Vec::new()),
+            Some(BlindMode::Absent) => return (Vec::new(), Vec::new(), Vec::new(), Vec::new()),
             Some(BlindMode::Outliers) => {
                 let obs: Vec<Observation> = (0..n)
                     .filter_map(|_| {
@@ -664,7 +678,8 @@ impl CameraFrame<'_> {
                     .collect();
                 let labels = vec![MatchLabel::Blinded; obs.len()];
                 let points = vec![None; obs.len()];
-                return (obs, labels, points);
+                let objects = vec![None; obs.len()];
+                return (obs, labels, points, objects);
             }
             None => {}
         }
@@ -685,12 +700,17 @@ impl CameraFrame<'_> {
         let mut obs = Vec::with_capacity(n);
         let mut labels = Vec::with_capacity(n);
         let mut points = Vec::with_capacity(n);
+        let mut objects = Vec::with_capacity(n);
         for kind in kinds {
             for _ in 0..100 {
                 if let Some((o, x0)) = self.try_match(rng, kind) {
                     obs.push(o);
                     let on_object = kind != Kind::Static;
                     points.push((!on_object).then_some(x0));
+                    objects.push(match (kind, &self.traffic) {
+                        (Kind::Traffic(i), Some(t)) => t.objects.get(i).map(|v| v.index),
+                        _ => None,
+                    });
                     labels.push(if on_object {
                         MatchLabel::MovingObject
                     } else {
@@ -709,6 +729,7 @@ impl CameraFrame<'_> {
                     obs[i] = o;
                     labels[i] = MatchLabel::Outlier;
                     points[i] = None;
+                    objects[i] = None;
                 }
                 None => drop.push(i),
             }
@@ -720,8 +741,9 @@ impl CameraFrame<'_> {
             obs.remove(i);
             labels.remove(i);
             points.remove(i);
+            objects.remove(i);
         }
-        (obs, labels, points)
+        (obs, labels, points, objects)
     }
 }
 
@@ -753,11 +775,13 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     let mut frames = vec![FrameObservations::new(n_cams)];
     let mut labels = vec![vec![Vec::new(); n_cams]];
     let mut static_points = vec![vec![Vec::new(); n_cams]];
+    let mut objects = vec![vec![Vec::new(); n_cams]];
     for k in 1..n_frames {
         let m = &vehicle_motions[k];
         let mut frame = FrameObservations::new(n_cams);
         let mut frame_labels = vec![Vec::new(); n_cams];
         let mut frame_points = vec![Vec::new(); n_cams];
+        let mut frame_objects = vec![Vec::new(); n_cams];
         for (j, camera) in rig.cameras().iter().enumerate() {
             let mut rng = StdRng::seed_from_u64(mix(mix(mix(cfg.seed) ^ k as u64) ^ j as u64));
             let p = &camera.t_vehicle_camera;
@@ -780,14 +804,16 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
                     .as_ref()
                     .and_then(|(t, tr)| CameraTraffic::new(t, tr, camera, k)),
             };
-            let (obs, lab, pts) = cf.generate(&mut rng, blind);
+            let (obs, lab, pts, objs) = cf.generate(&mut rng, blind);
             frame.per_camera[j] = obs;
             frame_labels[j] = lab;
             frame_points[j] = pts;
+            frame_objects[j] = objs;
         }
         frames.push(frame);
         labels.push(frame_labels);
         static_points.push(frame_points);
+        objects.push(frame_objects);
     }
 
     let arc_lengths = cfg.odometry.then(|| {
@@ -819,6 +845,10 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
         true_arc_lengths: drive.arc_lengths,
         labels,
         static_points,
+        objects,
+        object_kinds: traffic.as_ref().map_or_else(Vec::new, |(_, tr)| {
+            tr.objects.iter().map(|o| o.kind).collect()
+        }),
     })
 }
 

@@ -424,6 +424,7 @@ fn labels_csv_matches_matches_csv_row_for_row() {
         ..SimConfig::fisheye_surround()
     };
     let mut seen = std::collections::BTreeSet::new();
+    let mut kinds = std::collections::BTreeSet::new();
     for cfg in [traffic, rig] {
         let sim = simulate(&cfg).unwrap();
         let dir = tempfile::tempdir().unwrap();
@@ -434,7 +435,7 @@ fn labels_csv_matches_matches_csv_row_for_row() {
         let matches = std::fs::read_to_string(dir.path().join("matches.csv")).unwrap();
         let mut m = matches.lines();
         let mut l = labels.lines();
-        assert_eq!(l.next(), Some("frame,camera,label"));
+        assert_eq!(l.next(), Some("frame,camera,label,object,object_kind"));
         let header: Vec<&str> = m.next().unwrap().split(',').collect();
         let (fi, ci) = (
             header.iter().position(|h| *h == "frame").unwrap(),
@@ -460,6 +461,19 @@ fn labels_csv_matches_matches_csv_row_for_row() {
                 (k.to_string().as_str(), j.to_string().as_str())
             );
             assert_eq!(lf[2], label.name());
+            assert_eq!(lf.len(), 5, "row {rows}");
+            // The object columns: filled exactly on the traffic's moving-object matches (this
+            // traffic scenario has no scripted object), with the object's index and kind.
+            if lf[3].is_empty() {
+                assert!(lf[4].is_empty(), "row {rows}");
+                assert!(*label != MatchLabel::MovingObject || sim.object_kinds.is_empty());
+            } else {
+                assert_eq!(*label, MatchLabel::MovingObject, "row {rows}");
+                let o: usize = lf[3].parse().unwrap();
+                assert_eq!(lf[4], sim.object_kinds[o]);
+                assert!(sim.objects[*k][*j].iter().flatten().any(|x| *x == o));
+                kinds.insert(lf[4].to_string());
+            }
             seen.insert(lf[2].to_string());
             rows += 1;
         }
@@ -472,4 +486,5 @@ fn labels_csv_matches_matches_csv_row_for_row() {
         .map(|s| s.to_string())
         .collect();
     assert_eq!(seen, all);
+    assert!(!kinds.is_empty(), "the traffic scenario names its objects");
 }
