@@ -147,6 +147,15 @@ pub struct OdometryOptions {
     /// solved again from its solution (at most 3 times): the prior yields on the frames in the
     /// slip's tails and keeps its pull on the typical ones (`ν = 1`: Cauchy).
     pub soft_prior_student_nu: f64,
+    /// Learn, besides each soft-prior standard deviation `σ_r` (`soft_prior_sigma_learning`),
+    /// a sideways / vertical *displacement* jitter `δ_r` that widens the prior of a short step:
+    /// the frame's prior standard deviation is `√(σ_r² + δ_r² / s²)` at arc length `s`, with
+    /// `δ_r²` the non-negative least-squares slope of the innovations' excess `d² − v` over
+    /// `1 / s²` on the learning window ([`crate::Odometry::soft_prior_sigma`]). Where the
+    /// motion's direction jitters by centimetres (the KITTI ground truth's slow frames) a short
+    /// step's prior yields; where it does not (real matches, the built-in drive), `δ_r ≈ 0`.
+    /// Default false.
+    pub soft_prior_arc_learning: bool,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -176,6 +185,7 @@ impl Default for OdometryOptions {
             soft_prior_sigma_max: 10.0,
             soft_prior_sigma_factor: 1.0,
             soft_prior_student_nu: 0.0,
+            soft_prior_arc_learning: false,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }

@@ -110,6 +110,13 @@ pub struct FinalFitOptions {
     /// poses move by the omitted steps. Default false (docs/RESULTS.md, "Speed", eleventh
     /// session).
     pub one_step: bool,
+    /// The support leaves out a match whose parallax (the angle between its two rays under the
+    /// first stage's rotation, [`parallax`]) exceeds this multiple of the median parallax of
+    /// the support (after the residual and cheirality tests). A mismatch whose wrong pixel
+    /// lands near its epipolar line in front of both cameras is a point at a wrong depth,
+    /// usually near: a large parallax and with it a large leverage on the direction of
+    /// travel. 0: no cap (the default).
+    pub parallax_cap: f64,
 }
 
 impl Default for FinalFitOptions {
@@ -135,6 +142,7 @@ impl Default for FinalFitOptions {
             cheirality_sigmas: 3.0,
             metric: None,
             one_step: false,
+            parallax_cap: 0.0,
         }
     }
 }
@@ -200,6 +208,12 @@ impl FinalFitOptions {
             return Err(format!(
                 "odometry.final_fit.cheirality_sigmas must be a number >= 0, found {}",
                 self.cheirality_sigmas
+            ));
+        }
+        if !(self.parallax_cap.is_finite() && self.parallax_cap >= 0.0) {
+            return Err(format!(
+                "odometry.final_fit.parallax_cap must be a number >= 0, found {}",
+                self.parallax_cap
             ));
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
@@ -286,6 +300,17 @@ pub fn cheiral(
         return true;
     };
     f0.dot(&u) > -tolerance && -g.dot(&u1) > -tolerance
+}
+
+/// The parallax of a match under the camera motion `c`: the angle (radians) between its
+/// frame-(k-1) ray `f₀` and its frame-k ray rotated into frame k-1, `R f₁`.
+pub fn parallax(
+    c: &momo_core::Pose<f64>,
+    f0: &nalgebra::Vector3<f64>,
+    f1: &nalgebra::Vector3<f64>,
+) -> f64 {
+    let g = c.rotation * f1;
+    f0.cross(&g).norm().atan2(f0.dot(&g))
 }
 
 /// What the final stage needs besides the matches and the first stage's solution.
@@ -401,20 +426,51 @@ fn refit_once(
     let m = ctx.estimator.match_constant_count();
     let share = m > 0 && constants.len() == m * norms.iter().map(Vec::len).sum::<usize>();
     let mut core_constants = Vec::with_capacity(if share { constants.len() } else { 0 });
+    // Per camera: each match's membership by residual and cheirality, and its parallax.
+    let passing: Vec<Vec<(bool, f64)>> = obs
+        .per_camera
+        .iter()
+        .zip(&norms)
+        .zip(ctx.rig.cameras())
+        .map(|((ms, n), cam)| {
+            let c = momo_core::camera_motion(&motion, &cam.t_vehicle_camera);
+            ms.iter()
+                .zip(n)
+                .map(|(o, r)| {
+                    let ok = *r < cut
+                        && (opts.cheirality_sigmas <= 0.0 || cheiral(&c, &o.f0, &o.f1, tolerance));
+                    (ok, parallax(&c, &o.f0, &o.f1))
+                })
+                .collect()
+        })
+        .collect();
+    let parallax_limit = if opts.parallax_cap > 0.0 {
+        let mut kept: Vec<f64> = passing
+            .iter()
+            .flatten()
+            .filter(|(ok, _)| *ok)
+            .map(|(_, p)| *p)
+            .collect();
+        let mid = kept.len() / 2;
+        if kept.is_empty() {
+            f64::INFINITY
+        } else {
+            let (_, m, _) = kept.select_nth_unstable_by(mid, f64::total_cmp);
+            opts.parallax_cap * *m
+        }
+    } else {
+        f64::INFINITY
+    };
     let mut k = 0;
     let core = FrameObservations {
         per_camera: obs
             .per_camera
             .iter()
-            .zip(&norms)
-            .zip(ctx.rig.cameras())
-            .map(|((ms, n), cam)| {
-                let c = momo_core::camera_motion(&motion, &cam.t_vehicle_camera);
+            .zip(&passing)
+            .map(|(ms, pass)| {
                 let mut kept = Vec::with_capacity(ms.len());
-                for (o, r) in ms.iter().zip(n) {
-                    if *r < cut
-                        && (opts.cheirality_sigmas <= 0.0 || cheiral(&c, &o.f0, &o.f1, tolerance))
-                    {
+                for (o, (ok, par)) in ms.iter().zip(pass) {
+                    if *ok && !(*par > parallax_limit) {
                         kept.push(*o);
                         if share {
                             core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
@@ -482,6 +538,22 @@ fn refit_once(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_parallax_is_the_angle_between_the_rays_under_the_rotation() {
+        let c = momo_core::Pose {
+            rotation: *nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), 0.1)
+                .matrix(),
+            translation: nalgebra::Vector3::new(0.0, 0.0, 1.0),
+        };
+        let f1 = nalgebra::Vector3::new(0.2, -0.1, 1.0).normalize();
+        let g = c.rotation * f1;
+        // f₀ = g turned by 0.03 rad about an axis orthogonal to g.
+        let axis = nalgebra::Unit::new_normalize(g.cross(&nalgebra::Vector3::x()));
+        let f0 = nalgebra::Rotation3::from_axis_angle(&axis, 0.03) * g;
+        assert!((parallax(&c, &f0, &f1) - 0.03).abs() < 1e-12);
+        assert!(parallax(&c, &g, &f1).abs() < 1e-12);
+    }
 
     #[test]
     fn sigma_of_gaussian_residuals_with_outliers() {

@@ -201,6 +201,9 @@ pub struct Odometry {
     /// residual, newest last (at most `soft_prior_centring_frames`), see
     /// [`Odometry::soft_prior_sigma`].
     soft_samples: std::collections::VecDeque<(f64, Vec<(f64, f64)>)>,
+    /// The learnt displacement jitters `δ_r²` (units of the model's sigma squared times
+    /// metres squared) of `odometry.soft_prior_arc_learning`; empty until learnt.
+    soft_arc_jitter: Vec<f64>,
     /// This frame's first-stage solution where the final efficient stage replaced it (`None`
     /// otherwise): the soft prior's data view ([`Odometry::soft_data_view`]) needs the solution
     /// whose normal matrix and prior weighting it inverts; the refit weighs the priors in units
@@ -293,6 +296,7 @@ impl Odometry {
             soft_count: 0,
             soft_inv_scale,
             soft_samples: Default::default(),
+            soft_arc_jitter: Vec::new(),
             first_stage: None,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
@@ -647,11 +651,41 @@ impl Odometry {
         if self.soft_samples.len() < SOFT_SIGMA_MIN_FRAMES || !(factor > 0.0) {
             return;
         }
+        let arc_learning = self.config.odometry.soft_prior_arc_learning;
+        if arc_learning {
+            self.soft_arc_jitter = vec![0.0; self.soft_inv_scale.len()];
+        }
         for (r, k) in self.soft_inv_scale.iter_mut().enumerate() {
+            // With `soft_prior_arc_learning`: the jitter `δ_r²`, the slope of `d² − v` over
+            // `1 / s²`; its share `δ_r² / s²` then adds to each frame's `v`.
+            let jitter = if arc_learning {
+                let pts: Vec<(f64, f64)> = self
+                    .soft_samples
+                    .iter()
+                    .filter(|(s, _)| s.is_finite() && *s > 0.0)
+                    .filter_map(|(s, f)| f.get(r).map(|(d2, v)| (1.0 / (s * s), d2 - v)))
+                    .collect();
+                let (_, b) = nonnegative_line_fit(&pts);
+                if b.is_finite() { b } else { 0.0 }
+            } else {
+                0.0
+            };
+            if let Some(j) = self.soft_arc_jitter.get_mut(r) {
+                *j = jitter;
+            }
             let samples: Vec<(f64, f64)> = self
                 .soft_samples
                 .iter()
-                .filter_map(|(_, f)| f.get(r).copied())
+                .filter_map(|(s, f)| {
+                    f.get(r).map(|(d2, v)| {
+                        let extra = if jitter > 0.0 && s.is_finite() && *s > 0.0 {
+                            jitter / (s * s)
+                        } else {
+                            0.0
+                        };
+                        (*d2, v + extra)
+                    })
+                })
                 .collect();
             // median_j d_j² / (σ² + v_j), decreasing in σ².
             let median_ratio = |s2: f64| {
@@ -738,6 +772,7 @@ impl Odometry {
             Vec::new()
         };
         self.soft_samples.clear();
+        self.soft_arc_jitter.clear();
         self.hypotheses.reset();
     }
 
@@ -859,6 +894,9 @@ impl Odometry {
             }
             prior.soft_center.clone_from(&self.soft_center);
             prior.soft_inv_scale.clone_from(&self.soft_inv_scale);
+            if let Some(i) = arc_index {
+                arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
+            }
         }
         let enough = matches >= self.config.odometry.min_matches.max(1);
         let verdict = if !enough && repeated > 0 {
@@ -1963,6 +2001,22 @@ impl Trajectory {
     }
 }
 
+/// The soft prior's factors `k_r` (units of the model's sigma) widened for a step of arc
+/// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
+/// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
+/// jitter is learnt or the arc length is not positive.
+fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
+    let s = arc.abs();
+    if !(s.is_finite() && s > 0.0) {
+        return;
+    }
+    for (k, j) in inv_scale.iter_mut().zip(jitter) {
+        if *j > 0.0 && *k > 0.0 {
+            *k = 1.0 / (1.0 / (*k * *k) + j / (s * s)).sqrt();
+        }
+    }
+}
+
 /// The least-squares line `y ≈ a + b x` through `(x, y)` with `a, b ≥ 0` (`b = 0` where all
 /// `x` coincide); `(0, 0)` for no points.
 fn nonnegative_line_fit(pts: &[(f64, f64)]) -> (f64, f64) {
@@ -2017,4 +2071,32 @@ struct SoftDataView {
     q_d: nalgebra::DVector<f64>,
     /// The data's covariance of the residuals.
     v: nalgebra::DMatrix<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_learnt_jitter_widens_the_soft_prior_of_short_steps_only() {
+        // k = 0.5 (σ = 2 model sigmas), δ² = 0.12: at s = 0.2 m σ² = 4 + 3 = 7, at s = 10 m
+        // σ² = 4.0012; no jitter or no arc length: unchanged.
+        let mut k = vec![0.5, 1.0];
+        arc_widened_inv_scale(&mut k, &[0.12, 0.0], 0.2);
+        assert!((k[0] - 1.0 / 7f64.sqrt()).abs() < 1e-12, "{k:?}");
+        assert_eq!(k[1], 1.0);
+        let mut far = vec![0.5];
+        arc_widened_inv_scale(&mut far, &[0.12], 10.0);
+        assert!((far[0] - 0.5).abs() < 2e-4 && far[0] < 0.5);
+        let mut none = vec![0.5];
+        arc_widened_inv_scale(&mut none, &[0.12], 0.0);
+        assert_eq!(none, [0.5]);
+        // The jitter is the slope of the innovations' excess over 1 / s².
+        let pts: Vec<(f64, f64)> = [0.3, 0.5, 1.0, 1.5]
+            .iter()
+            .map(|s: &f64| (1.0 / (s * s), 2.0 + 0.12 / (s * s)))
+            .collect();
+        let (a, b) = nonnegative_line_fit(&pts);
+        assert!((a - 2.0).abs() < 1e-9 && (b - 0.12).abs() < 1e-9);
+    }
 }
