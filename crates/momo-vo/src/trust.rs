@@ -739,8 +739,10 @@ pub fn widen(base: &DMatrix<f64>, other: &DMatrix<f64>, min_ratio: f64) -> DMatr
     {
         return base.clone();
     }
-    // On the stack for the sizes of the models' free parameters (no allocation per product);
-    // the same arithmetic on heap matrices beyond.
+    // On the stack up to 5 free parameters (no allocation per product). nalgebra multiplies
+    // heap matrices of up to 5 rows and columns by the same column loop as stack ones, so the
+    // result is the heap form's bit for bit; from 6 on it takes `matrixmultiply` (another
+    // order of the sums): those stay on the heap.
     macro_rules! fixed {
         ($($k:literal)*) => {
             match n {
@@ -756,7 +758,7 @@ pub fn widen(base: &DMatrix<f64>, other: &DMatrix<f64>, min_ratio: f64) -> DMatr
             }
         };
     }
-    fixed!(1 2 3 4 5 6 7 8);
+    fixed!(1 2 3 4 5);
     widen_in(base.clone(), other.clone(), min_ratio).unwrap_or_else(|| base.clone())
 }
 
