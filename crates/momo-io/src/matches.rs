@@ -4,7 +4,10 @@
 
 use crate::atomic::{AtomicFile, put};
 use crate::error::{IoError, IoErrorKind};
-use crate::text::{Exact, LineReader, is_blank, parse_f64, parse_header, parse_index, split_row};
+use crate::text::{
+    Exact, LineReader, PlainField, is_blank, parse_f64, parse_header, parse_index, plain_row,
+    split_row,
+};
 use momo_core::{Camera, CameraModel, CrossObservation, FrameObservations, Observation, Rig};
 use nalgebra::{Vector2, Vector3};
 use std::fs::File;
@@ -60,6 +63,37 @@ pub(crate) fn check_pixel(
         u,
         v,
     })
+}
+
+/// The fields of a row of plain numbers ([`plain_row`]) as [`MatchReader::parse_fields`] reads
+/// them, or `None` where one of them is not read by the one pass (a sign or a point in an
+/// index, a mantissa whose rounding the exact comparisons do not settle).
+#[allow(clippy::type_complexity)]
+fn plain_fields(
+    f: &[PlainField],
+    c: &[usize; 7],
+) -> Option<(
+    usize,
+    usize,
+    f64,
+    f64,
+    f64,
+    f64,
+    Result<Option<usize>, IoErrorKind>,
+)> {
+    let camera_to = match f.get(c[6]) {
+        Some(t) => Some(t.index()?),
+        None => None,
+    };
+    Some((
+        f.get(c[0])?.index()?,
+        f.get(c[1])?.index()?,
+        f.get(c[2])?.value()?,
+        f.get(c[3])?.value()?,
+        f.get(c[4])?.value()?,
+        f.get(c[5])?.value()?,
+        Ok(camera_to),
+    ))
 }
 
 /// One parsed row.
@@ -177,21 +211,17 @@ impl<R: BufRead> MatchReader<R> {
         last_row_frame: usize,
     ) -> Result<Row, IoErrorKind> {
         let with_to = c[6] != usize::MAX;
-        let seven: [&str; 7];
-        let six: [&str; 6];
-        let fields: &[&str] = if with_to {
-            seven = split_row(line)?;
-            &seven
+        // A row of plain numbers in one pass (most rows); any other row, and any value the
+        // one pass does not read exactly as the field parsers do, through them.
+        let fast = if with_to {
+            plain_row::<7>(line).and_then(|f| plain_fields(&f, c))
         } else {
-            six = split_row(line)?;
-            &six
+            plain_row::<6>(line).and_then(|f| plain_fields(&f, c))
         };
-        let frame = parse_index("frame", fields[c[0]])?;
-        let camera = parse_index("camera", fields[c[1]])?;
-        let u0 = parse_f64("u0", fields[c[2]])?;
-        let v0 = parse_f64("v0", fields[c[3]])?;
-        let u1 = parse_f64("u1", fields[c[4]])?;
-        let v1 = parse_f64("v1", fields[c[5]])?;
+        let (frame, camera, u0, v0, u1, v1, camera_to) = match fast {
+            Some(v) => v,
+            None => Self::parse_fields(line, c, with_to)?,
+        };
         if frame == 0 {
             return Err(IoErrorKind::FrameZero);
         }
@@ -214,10 +244,7 @@ impl<R: BufRead> MatchReader<R> {
                 count: cameras.len(),
             });
         };
-        let camera_to = match fields.get(c[6]) {
-            Some(t) if !t.is_empty() => parse_index("camera_to", t)?,
-            _ => camera,
-        };
+        let camera_to = camera_to?.unwrap_or(camera);
         let Some((model_to, margin_to)) = cameras.get(camera_to) else {
             return Err(IoErrorKind::UnknownCamera {
                 camera: camera_to,
@@ -245,6 +272,48 @@ impl<R: BufRead> MatchReader<R> {
         })
     }
 
+    /// A row's fields through [`split_row`] and the field parsers: frame, camera, `u0`, `v0`,
+    /// `u1`, `v1` and `camera_to` (`None` where the column is missing or empty; its error is
+    /// returned in place, to be raised after the camera's, as before).
+    #[allow(clippy::type_complexity)]
+    fn parse_fields(
+        line: &str,
+        c: &[usize; 7],
+        with_to: bool,
+    ) -> Result<
+        (
+            usize,
+            usize,
+            f64,
+            f64,
+            f64,
+            f64,
+            Result<Option<usize>, IoErrorKind>,
+        ),
+        IoErrorKind,
+    > {
+        let seven: [&str; 7];
+        let six: [&str; 6];
+        let fields: &[&str] = if with_to {
+            seven = split_row(line)?;
+            &seven
+        } else {
+            six = split_row(line)?;
+            &six
+        };
+        let frame = parse_index("frame", fields[c[0]])?;
+        let camera = parse_index("camera", fields[c[1]])?;
+        let u0 = parse_f64("u0", fields[c[2]])?;
+        let v0 = parse_f64("v0", fields[c[3]])?;
+        let u1 = parse_f64("u1", fields[c[4]])?;
+        let v1 = parse_f64("v1", fields[c[5]])?;
+        let camera_to = match fields.get(c[6]) {
+            Some(t) if !t.is_empty() => parse_index("camera_to", t).map(Some),
+            _ => Ok(None),
+        };
+        Ok((frame, camera, u0, v0, u1, v1, camera_to))
+    }
+
     /// The next row, `None` at the end of the file.
     fn read_row(&mut self) -> Result<Option<Row>, IoError> {
         loop {
@@ -253,7 +322,8 @@ impl<R: BufRead> MatchReader<R> {
                 Ok(None) => return Ok(None),
                 Err(k) => return Err(IoError::at(&self.path, self.lines.line(), k)),
             };
-            if is_blank(line) {
+            // (A line that starts with a digit is not blank.)
+            if !line.as_bytes().first().is_some_and(u8::is_ascii_digit) && is_blank(line) {
                 continue;
             }
             let row = Self::parse_row(line, &self.columns, &self.cameras, self.last_row_frame)

@@ -198,10 +198,6 @@ fn trim(s: &str) -> &str {
 /// digits, as a shortest round-trip print of a pixel coordinate has) take the division as an
 /// estimate and correct it by exact integer comparisons ([`round_quotient`]).
 fn parse_plain_decimal(text: &str) -> Option<f64> {
-    const POW10: [f64; 23] = [
-        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-    ];
     let b = text.as_bytes();
     let (negative, digits) = match b.first()? {
         b'-' => (true, &b[1..]),
@@ -233,6 +229,17 @@ fn parse_plain_decimal(text: &str) -> Option<f64> {
     if i != n || int_digits == 0 || int_digits + k > 19 || k > 22 {
         return None;
     }
+    plain_value(negative, w, k)
+}
+
+/// The value of a plain decimal of at most 19 digits `w` with `k <= 22` of them after the point
+/// ([`parse_plain_decimal`], which has checked the text): correctly rounded, `None` where the
+/// integer comparisons of [`round_quotient`] would not fit.
+fn plain_value(negative: bool, w: u64, k: usize) -> Option<f64> {
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
     let v = if w < 1 << 53 {
         // `w < 2^53` converts exactly.
         w as f64 / POW10[k]
@@ -245,6 +252,97 @@ fn parse_plain_decimal(text: &str) -> Option<f64> {
         round_quotient(w, POW10[k] as u64, w as f64 / POW10[k])?
     };
     Some(if negative { -v } else { v })
+}
+
+/// One field of a row of plain numbers ([`plain_row`]): its sign, its digits as an integer,
+/// and how many of them follow the point (`None`: no point).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct PlainField {
+    /// A leading `-`.
+    pub negative: bool,
+    /// A leading sign (`-` or `+`).
+    pub signed: bool,
+    /// The digits (at most 19) as one integer.
+    pub digits: u64,
+    /// Digits after the point, if there is one.
+    pub fraction: Option<usize>,
+}
+
+impl PlainField {
+    /// The field as [`parse_index`] reads it, where it is a plain unsigned integer (no sign, no
+    /// point): `usize::from_str` of it.
+    pub fn index(&self) -> Option<usize> {
+        if self.signed || self.fraction.is_some() {
+            return None;
+        }
+        usize::try_from(self.digits).ok()
+    }
+
+    /// The field as [`parse_f64`] reads it (a plain decimal is read exactly as
+    /// [`parse_plain_decimal`] reads it).
+    pub fn value(&self) -> Option<f64> {
+        plain_value(self.negative, self.digits, self.fraction.unwrap_or(0))
+    }
+}
+
+/// A CSV row of exactly `N` plain numbers (`[+-]digits[.digits]`, at least one digit before the
+/// point and one after it, at most 19 digits in all, separated by single commas, no whitespace)
+/// scanned in one pass, or `None` for any other row (the caller then takes [`split_row`] and
+/// the field parsers, which read these rows to the same values: the reading of `matches.csv`,
+/// issue 19, thirteenth session).
+pub(crate) fn plain_row<const N: usize>(line: &str) -> Option<[PlainField; N]> {
+    let b = line.as_bytes();
+    let mut out = [PlainField::default(); N];
+    let mut i = 0;
+    for (f, field) in out.iter_mut().enumerate() {
+        if f > 0 {
+            if b.get(i) != Some(&b',') {
+                return None;
+            }
+            i += 1;
+        }
+        match b.get(i) {
+            Some(b'-') => {
+                field.negative = true;
+                field.signed = true;
+                i += 1;
+            }
+            Some(b'+') => {
+                field.signed = true;
+                i += 1;
+            }
+            _ => {}
+        }
+        let start = i;
+        let mut w: u64 = 0;
+        while let Some(&d) = b.get(i).filter(|d| d.is_ascii_digit()) {
+            w = w.wrapping_mul(10).wrapping_add(u64::from(d - b'0'));
+            i += 1;
+        }
+        let int_digits = i - start;
+        if int_digits == 0 {
+            return None;
+        }
+        let mut k = None;
+        if b.get(i) == Some(&b'.') {
+            i += 1;
+            let first = i;
+            while let Some(&d) = b.get(i).filter(|d| d.is_ascii_digit()) {
+                w = w.wrapping_mul(10).wrapping_add(u64::from(d - b'0'));
+                i += 1;
+            }
+            if i == first {
+                return None;
+            }
+            k = Some(i - first);
+        }
+        if int_digits + k.unwrap_or(0) > 19 {
+            return None;
+        }
+        field.digits = w;
+        field.fraction = k;
+    }
+    (i == b.len()).then_some(out)
 }
 
 /// The correctly rounded (ties to even) `f64` of `w / d` for `d <= 10^19`, `w < 2^64` and a
@@ -465,6 +563,111 @@ mod tests {
         // The fast path takes the usual pixel columns.
         assert!(parse_plain_decimal("612.3125").is_some());
         assert!(parse_plain_decimal("-0.5").is_some());
+    }
+
+    /// [`plain_row`]'s reading of a row, where it gives one: each field as the split row's
+    /// field parsers read it (indices as [`parse_index`], values bit for bit as [`parse_f64`]).
+    /// Returns whether the one pass read every field (the row took the fast path).
+    fn check_plain_row<const N: usize>(
+        line: &str,
+    ) -> Result<bool, proptest::test_runner::TestCaseError> {
+        let Some(fast) = plain_row::<N>(line) else {
+            return Ok(false);
+        };
+        let fields = split_row::<N>(line);
+        proptest::prop_assert!(fields.is_ok(), "{}", line);
+        let fields = fields.unwrap_or([""; N]);
+        let mut all = true;
+        for (f, text) in fast.iter().zip(fields) {
+            if let Some(i) = f.index() {
+                proptest::prop_assert_eq!(Some(i), parse_index("i", text).ok(), "{}", line);
+            }
+            match f.value() {
+                Some(v) => proptest::prop_assert_eq!(
+                    Some(v.to_bits()),
+                    parse_f64("v", text).ok().map(f64::to_bits),
+                    "{}",
+                    line
+                ),
+                None => all = false,
+            }
+        }
+        Ok(all)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+        /// Rows of pixels as `momo` and numpy write them (shortest round-trip prints of random
+        /// values, 17-digit mantissas, integers, signs) read by the one pass exactly as by the
+        /// split and the field parsers; rows with anything else (spaces, exponents, empty or
+        /// extra fields, a bare point) are left to them.
+        #[test]
+        fn plain_rows_read_as_the_field_parsers(
+            frame in 0u64..100_000,
+            camera in 0u64..8,
+            pixels in proptest::collection::vec(-2000.0f64..3000.0, 4),
+            style in 0usize..6,
+            junk in "[ ,0-9.eE+-]{0,6}",
+            at in 0usize..80,
+        ) {
+            let px = |v: f64| match style {
+                0 => format!("{v}"),
+                1 => format!("{v:.3}"),
+                2 => format!("{}", v.round()),
+                3 => format!("{:.0}", v),
+                4 => format!("+{}", v.abs()),
+                _ => format!("{:.17}", v),
+            };
+            let line = format!(
+                "{frame},{camera},{},{},{},{}",
+                px(pixels[0]), px(pixels[1]), px(pixels[2]), px(pixels[3])
+            );
+            let took = check_plain_row::<6>(&line)?;
+            if style < 4 && pixels.iter().all(|v| v.abs() >= 0.01) {
+                // Every such row takes the one pass (at most 19 digits a field).
+                proptest::prop_assert!(took, "{}", line);
+            }
+            check_plain_row::<7>(&format!("{line},{camera}"))?;
+            check_plain_row::<7>(&format!("{line},"))?;
+            // Anything spliced in anywhere: either the same reading or the field parsers.
+            let at = at.min(line.len());
+            let spliced = format!("{}{junk}{}", &line[..at], &line[at..]);
+            check_plain_row::<6>(&spliced)?;
+            check_plain_row::<7>(&spliced)?;
+        }
+
+        /// Any short text over the row's bytes: wherever the one pass reads a row, it reads it
+        /// as the field parsers do.
+        #[test]
+        fn plain_rows_of_any_bytes(line in "[ ,0-9.eE+-]{0,40}") {
+            check_plain_row::<6>(&line)?;
+            check_plain_row::<7>(&line)?;
+        }
+    }
+
+    #[test]
+    fn plain_rows_refuse_what_the_field_parsers_would_read_otherwise() {
+        // Whitespace, exponents, a bare point, an empty field, 20 digits: not the one pass.
+        for line in [
+            "1, 0,1,2,3,4",
+            "1,0,1e3,2,3,4",
+            "1,0,1.,2,3,4",
+            "1,0,.5,2,3,4",
+            "1,0,,2,3,4",
+            "1,0,12345678901234567890,2,3,4",
+            "1,0,1,2,3,4,",
+            "1,0,1,2,3",
+            "1,0,1,2,3,4\r",
+        ] {
+            assert!(plain_row::<6>(line).is_none(), "{line}");
+        }
+        // A sign or a point in an index: read as a value, not as an index.
+        let f = plain_row::<6>("+1,0.0,1,2,3,-4.25").expect("plain");
+        assert_eq!(f[0].index(), None);
+        assert_eq!(f[1].index(), None);
+        assert_eq!(f[5].value(), Some(-4.25));
+        let f = plain_row::<6>("7,0,1,2,3,4").expect("plain");
+        assert_eq!(f[0].index(), Some(7));
     }
 
     proptest::proptest! {

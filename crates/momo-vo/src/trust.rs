@@ -732,29 +732,69 @@ pub fn cell_of(px: (f64, f64), size: (f64, f64), grid: (usize, usize)) -> usize 
 pub fn widen(base: &DMatrix<f64>, other: &DMatrix<f64>, min_ratio: f64) -> DMatrix<f64> {
     let n = base.nrows();
     if base.iter().any(|v| !v.is_finite())
+        || base.ncols() != n
         || other.nrows() != n
+        || other.ncols() != n
         || other.iter().any(|v| !v.is_finite())
     {
         return base.clone();
     }
-    let eig = SymmetricEigen::new(base.clone());
-    if eig.eigenvalues.iter().any(|l| !(*l > 0.0)) {
-        return base.clone();
+    // On the stack up to 5 free parameters (no allocation per product). nalgebra multiplies
+    // heap matrices of up to 5 rows and columns by the same column loop as stack ones, so the
+    // result is the heap form's bit for bit; from 6 on it takes `matrixmultiply` (another
+    // order of the sums): those stay on the heap.
+    macro_rules! fixed {
+        ($($k:literal)*) => {
+            match n {
+                $($k => {
+                    let b = nalgebra::SMatrix::<f64, $k, $k>::from_iterator(base.iter().copied());
+                    let o = nalgebra::SMatrix::<f64, $k, $k>::from_iterator(other.iter().copied());
+                    return match widen_in(b, o, min_ratio) {
+                        Some(w) => DMatrix::from_iterator(n, n, w.iter().copied()),
+                        None => base.clone(),
+                    };
+                })*
+                _ => {}
+            }
+        };
     }
-    let half = &eig.eigenvectors
-        * DMatrix::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
-        * eig.eigenvectors.transpose();
-    let inv_half = &eig.eigenvectors
-        * DMatrix::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.sqrt()))
-        * eig.eigenvectors.transpose();
+    fixed!(1 2 3 4 5);
+    widen_in(base.clone(), other.clone(), min_ratio).unwrap_or_else(|| base.clone())
+}
+
+/// [`widen`] of finite square matrices of one size `D`; `None` where `base` is not positive
+/// definite.
+fn widen_in<D>(
+    base: nalgebra::OMatrix<f64, D, D>,
+    other: nalgebra::OMatrix<f64, D, D>,
+    min_ratio: f64,
+) -> Option<nalgebra::OMatrix<f64, D, D>>
+where
+    D: nalgebra::Dim + nalgebra::DimSub<nalgebra::U1>,
+    nalgebra::DefaultAllocator: nalgebra::allocator::Allocator<D, D>
+        + nalgebra::allocator::Allocator<D>
+        + nalgebra::allocator::Allocator<nalgebra::DimDiff<D, nalgebra::U1>>,
+{
+    let eig = SymmetricEigen::new(base);
+    if eig.eigenvalues.iter().any(|l| !(*l > 0.0)) {
+        return None;
+    }
+    let v = &eig.eigenvectors;
+    let half =
+        v * nalgebra::OMatrix::from_diagonal(&eig.eigenvalues.map(f64::sqrt)) * v.transpose();
+    let inv_half = v
+        * nalgebra::OMatrix::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.sqrt()))
+        * v.transpose();
     let rel = &inv_half * other * &inv_half;
     let rel = (&rel + rel.transpose()) * 0.5;
     let e = SymmetricEigen::new(rel);
     let stretched = &e.eigenvectors
-        * DMatrix::from_diagonal(&e.eigenvalues.map(|l| if l > min_ratio { l } else { 1.0 }))
+        * nalgebra::OMatrix::from_diagonal(
+            &e.eigenvalues.map(|l| if l > min_ratio { l } else { 1.0 }),
+        )
         * e.eigenvectors.transpose();
     let out = &half * stretched * &half;
-    (&out + out.transpose()) * 0.5
+    Some((&out + out.transpose()) * 0.5)
 }
 
 /// Per camera of the rig that has matches in `obs`: its index and each match's image cell
@@ -819,18 +859,37 @@ pub fn cells_alone(
 ) -> Vec<FrameObservations> {
     let cells = grid.0.max(1) * grid.1.max(1);
     let mut out = Vec::new();
-    for (j, of) in cells_per_camera(rig, obs, grid) {
-        let mut by_cell: Vec<Vec<Observation>> = vec![Vec::new(); cells];
-        for (o, &c) in obs.per_camera[j].iter().zip(&of) {
+    // Per camera: each match's cell, the cells' sizes, then every match copied once into its
+    // cell's vector allocated at its exact size (no growth, no reallocation).
+    let mut of: Vec<usize> = Vec::new();
+    let mut counts: Vec<usize> = vec![0; cells];
+    for (j, matches) in obs.per_camera.iter().enumerate() {
+        let Some(camera) = rig.cameras().get(j) else {
+            continue;
+        };
+        let size = camera.model.size();
+        of.clear();
+        of.extend(
+            matches
+                .iter()
+                .map(|o| cell_of((o.px0.x, o.px0.y), size, grid)),
+        );
+        counts.fill(0);
+        for &c in &of {
+            counts[c] += 1;
+        }
+        let mut by_cell: Vec<Vec<Observation>> =
+            counts.iter().map(|&n| Vec::with_capacity(n)).collect();
+        for (o, &c) in matches.iter().zip(&of) {
             by_cell[c].push(*o);
         }
         for cell in by_cell.into_iter().filter(|c| !c.is_empty()) {
-            let mut sample = FrameObservations {
-                per_camera: vec![Vec::new(); obs.per_camera.len()],
+            let mut per_camera = vec![Vec::new(); obs.per_camera.len()];
+            per_camera[j] = cell;
+            out.push(FrameObservations {
+                per_camera,
                 cross_camera: Vec::new(),
-            };
-            sample.per_camera[j] = cell;
-            out.push(sample);
+            });
         }
     }
     out
@@ -863,6 +922,14 @@ impl RobustLoss for NegativeCurvature {
     fn evaluate(&self, s: f64) -> [f64; 3] {
         let [rho, d1, d2] = self.inner.evaluate(s);
         [rho, d1, (-d2).max(0.0)]
+    }
+
+    /// The wrapped loss's lanes (one virtual call per four matches instead of eight), each
+    /// entry [`evaluate`](RobustLoss::evaluate)'s bit for bit as the wrapped loss's lanes are.
+    fn evaluate_lanes(&self, s: &[f64; 4]) -> [[f64; 3]; 4] {
+        self.inner
+            .evaluate_lanes(s)
+            .map(|[rho, d1, d2]| [rho, d1, (-d2).max(0.0)])
     }
 
     fn scale(&self) -> f64 {

@@ -642,6 +642,25 @@ fn the_negative_curvature_loss_negates_the_second_derivative() {
         assert!(d2 < 0.0);
         assert_eq!(wrapped.evaluate(s), [r, d1, -d2]);
     }
+    // Its lanes (the fused linearisation's path) are its per-match values bit for bit, for a
+    // loss with a negative (Cauchy) and a positive or zero (Huber, Tukey) second derivative.
+    let losses: [Box<dyn RobustLoss>; 3] = [
+        Box::new(cauchy),
+        Box::new(momo_costs::Huber::new(0.001)),
+        Box::new(momo_costs::Tukey::new(0.001)),
+    ];
+    for loss in &losses {
+        let wrapped = momo_vo::trust::NegativeCurvature::of(loss.as_ref()).expect("round-trips");
+        for lanes in [[0.0, 1e-8, 1e-6, 4e-6], [1e-3, 2e-6, 0.5e-6, 1e9]] {
+            let got = wrapped.evaluate_lanes(&lanes);
+            for (l, &s) in lanes.iter().enumerate() {
+                assert_eq!(
+                    got[l].map(f64::to_bits),
+                    wrapped.evaluate(s).map(f64::to_bits)
+                );
+            }
+        }
+    }
 }
 
 /// The one-linearisation jackknife (`trust.jackknife_influence`, the default) changes only the
