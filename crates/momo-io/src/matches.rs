@@ -65,14 +65,9 @@ pub(crate) fn check_pixel(
     })
 }
 
-/// The fields of a row of plain numbers ([`plain_row`]) as [`MatchReader::parse_fields`] reads
-/// them, or `None` where one of them is not read by the one pass (a sign or a point in an
-/// index, a mantissa whose rounding the exact comparisons do not settle).
-#[allow(clippy::type_complexity)]
-fn plain_fields(
-    f: &[PlainField],
-    c: &[usize; 7],
-) -> Option<(
+/// A row's fields as read: frame, camera, `u0`, `v0`, `u1`, `v1` and `camera_to` (its error kept
+/// in place, to be raised after the camera's).
+type RowFields = (
     usize,
     usize,
     f64,
@@ -80,7 +75,12 @@ fn plain_fields(
     f64,
     f64,
     Result<Option<usize>, IoErrorKind>,
-)> {
+);
+
+/// The fields of a row of plain numbers ([`plain_row`]) as [`MatchReader::parse_fields`] reads
+/// them, or `None` where one of them is not read by the one pass (a sign or a point in an
+/// index, a mantissa whose rounding the exact comparisons do not settle).
+fn plain_fields(f: &[PlainField], c: &[usize; 7]) -> Option<RowFields> {
     let camera_to = match f.get(c[6]) {
         Some(t) => Some(t.index()?),
         None => None,
@@ -275,23 +275,7 @@ impl<R: BufRead> MatchReader<R> {
     /// A row's fields through [`split_row`] and the field parsers: frame, camera, `u0`, `v0`,
     /// `u1`, `v1` and `camera_to` (`None` where the column is missing or empty; its error is
     /// returned in place, to be raised after the camera's, as before).
-    #[allow(clippy::type_complexity)]
-    fn parse_fields(
-        line: &str,
-        c: &[usize; 7],
-        with_to: bool,
-    ) -> Result<
-        (
-            usize,
-            usize,
-            f64,
-            f64,
-            f64,
-            f64,
-            Result<Option<usize>, IoErrorKind>,
-        ),
-        IoErrorKind,
-    > {
+    fn parse_fields(line: &str, c: &[usize; 7], with_to: bool) -> Result<RowFields, IoErrorKind> {
         let seven: [&str; 7];
         let six: [&str; 6];
         let fields: &[&str] = if with_to {
