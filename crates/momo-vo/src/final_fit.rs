@@ -426,7 +426,9 @@ fn refit_once(
     let m = ctx.estimator.match_constant_count();
     let share = m > 0 && constants.len() == m * norms.iter().map(Vec::len).sum::<usize>();
     let mut core_constants = Vec::with_capacity(if share { constants.len() } else { 0 });
-    // Per camera: each match's membership by residual and cheirality, and its parallax.
+    // Per camera: each match's membership by residual and cheirality, and its parallax (only
+    // where `parallax_cap` asks for it; 0 otherwise, which no limit excludes).
+    let with_parallax = opts.parallax_cap > 0.0;
     let passing: Vec<Vec<(bool, f64)>> = obs
         .per_camera
         .iter()
@@ -439,12 +441,17 @@ fn refit_once(
                 .map(|(o, r)| {
                     let ok = *r < cut
                         && (opts.cheirality_sigmas <= 0.0 || cheiral(&c, &o.f0, &o.f1, tolerance));
-                    (ok, parallax(&c, &o.f0, &o.f1))
+                    let par = if with_parallax {
+                        parallax(&c, &o.f0, &o.f1)
+                    } else {
+                        0.0
+                    };
+                    (ok, par)
                 })
                 .collect()
         })
         .collect();
-    let parallax_limit = if opts.parallax_cap > 0.0 {
+    let parallax_limit = if with_parallax {
         let mut kept: Vec<f64> = passing
             .iter()
             .flatten()

@@ -859,21 +859,11 @@ pub fn cells_alone(
 ) -> Vec<FrameObservations> {
     let cells = grid.0.max(1) * grid.1.max(1);
     let mut out = Vec::new();
-    // Per camera: each match's cell, the cells' sizes, then every match copied once into its
-    // cell's vector allocated at its exact size (no growth, no reallocation).
-    let mut of: Vec<usize> = Vec::new();
+    // Per camera: the cells' sizes, then every match copied once into its cell's vector
+    // allocated at its exact size (no growth, no reallocation).
     let mut counts: Vec<usize> = vec![0; cells];
-    for (j, matches) in obs.per_camera.iter().enumerate() {
-        let Some(camera) = rig.cameras().get(j) else {
-            continue;
-        };
-        let size = camera.model.size();
-        of.clear();
-        of.extend(
-            matches
-                .iter()
-                .map(|o| cell_of((o.px0.x, o.px0.y), size, grid)),
-        );
+    for (j, of) in cells_per_camera(rig, obs, grid) {
+        let matches = &obs.per_camera[j];
         counts.fill(0);
         for &c in &of {
             counts[c] += 1;
