@@ -198,42 +198,13 @@ fn trim(s: &str) -> &str {
 /// digits, as a shortest round-trip print of a pixel coordinate has) take the division as an
 /// estimate and correct it by exact integer comparisons ([`round_quotient`]).
 fn parse_plain_decimal(text: &str) -> Option<f64> {
-    let b = text.as_bytes();
-    let (negative, digits) = match b.first()? {
-        b'-' => (true, &b[1..]),
-        b'+' => (false, &b[1..]),
-        _ => (false, b),
-    };
-    let n = digits.len();
-    // Wrapping arithmetic: with more than 19 digits `w` may wrap, but is then not used.
-    let mut w: u64 = 0;
-    let mut i = 0;
-    while i < n && digits[i].is_ascii_digit() {
-        w = w.wrapping_mul(10).wrapping_add(u64::from(digits[i] - b'0'));
-        i += 1;
-    }
-    let int_digits = i;
-    let mut k = 0;
-    if i < n && digits[i] == b'.' {
-        i += 1;
-        let first = i;
-        while i < n && digits[i].is_ascii_digit() {
-            w = w.wrapping_mul(10).wrapping_add(u64::from(digits[i] - b'0'));
-            i += 1;
-        }
-        k = i - first;
-        if k == 0 {
-            return None;
-        }
-    }
-    if i != n || int_digits == 0 || int_digits + k > 19 || k > 22 {
-        return None;
-    }
-    plain_value(negative, w, k)
+    // The one scanner of plain decimals: a row of one field is exactly this text.
+    let [field] = plain_row::<1>(text)?;
+    field.value()
 }
 
 /// The value of a plain decimal of at most 19 digits `w` with `k <= 22` of them after the point
-/// ([`parse_plain_decimal`], which has checked the text): correctly rounded, `None` where the
+/// (checked by [`plain_row`]): correctly rounded, `None` where the
 /// integer comparisons of [`round_quotient`] would not fit.
 fn plain_value(negative: bool, w: u64, k: usize) -> Option<f64> {
     const POW10: [f64; 23] = [
