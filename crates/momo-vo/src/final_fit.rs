@@ -117,6 +117,17 @@ pub struct FinalFitOptions {
     /// usually near: a large parallax and with it a large leverage on the direction of
     /// travel. 0: no cap (the default).
     pub parallax_cap: f64,
+    /// With `parallax_cap`: the median is each camera's own (over that camera's matches that
+    /// pass the residual and cheirality tests; no cap in a camera with fewer than
+    /// [`MIN_SUPPORT`] of them) instead of one over the rig. A side or rear camera of a rig
+    /// sees parallaxes far from the front camera's, so one median over all cameras caps the
+    /// wrong matches there. Default true.
+    pub parallax_cap_per_camera: bool,
+    /// With `parallax_cap`: the cap also acts on frames where two motions competed in the
+    /// motion separation ([`crate::separate`]). Default false: there the support is the
+    /// chosen motion's, and a moving object's near-zero parallaxes pull the median down
+    /// (docs/RESULTS.md §9, thirteenth session: the cap cost the moving-traffic family).
+    pub parallax_cap_competing: bool,
 }
 
 impl Default for FinalFitOptions {
@@ -143,6 +154,8 @@ impl Default for FinalFitOptions {
             metric: None,
             one_step: false,
             parallax_cap: 0.0,
+            parallax_cap_per_camera: true,
+            parallax_cap_competing: false,
         }
     }
 }
@@ -327,6 +340,21 @@ pub struct FinalFitContext<'a> {
     pub fixed: &'a [bool],
     /// The frame's motion prior.
     pub motion_prior: &'a MotionPrior,
+    /// Two motions competed in this frame's motion separation (`parallax_cap_competing`).
+    pub competing: bool,
+}
+
+/// The parallax cap (`parallax_cap`) over the matches `passing` (membership, parallax):
+/// `cap` times the median parallax of the members; no cap (infinity) with fewer than `min`
+/// members.
+fn parallax_limit<'a>(passing: impl Iterator<Item = &'a (bool, f64)>, cap: f64, min: usize) -> f64 {
+    let mut kept: Vec<f64> = passing.filter(|(ok, _)| *ok).map(|(_, p)| *p).collect();
+    if kept.is_empty() || kept.len() < min {
+        return f64::INFINITY;
+    }
+    let mid = kept.len() / 2;
+    let (_, m, _) = kept.select_nth_unstable_by(mid, f64::total_cmp);
+    cap * *m
 }
 
 /// The final stage (module doc): the refit solution, or `first` unchanged where the noise
@@ -428,7 +456,8 @@ fn refit_once(
     let mut core_constants = Vec::with_capacity(if share { constants.len() } else { 0 });
     // Per camera: each match's membership by residual and cheirality, and its parallax (only
     // where `parallax_cap` asks for it; 0 otherwise, which no limit excludes).
-    let with_parallax = opts.parallax_cap > 0.0;
+    let with_parallax =
+        opts.parallax_cap > 0.0 && (opts.parallax_cap_competing || !ctx.competing);
     let passing: Vec<Vec<(bool, f64)>> = obs
         .per_camera
         .iter()
@@ -451,22 +480,16 @@ fn refit_once(
                 .collect()
         })
         .collect();
-    let parallax_limit = if with_parallax {
-        let mut kept: Vec<f64> = passing
+    let limits: Vec<f64> = if !with_parallax {
+        vec![f64::INFINITY; passing.len()]
+    } else if opts.parallax_cap_per_camera {
+        passing
             .iter()
-            .flatten()
-            .filter(|(ok, _)| *ok)
-            .map(|(_, p)| *p)
-            .collect();
-        let mid = kept.len() / 2;
-        if kept.is_empty() {
-            f64::INFINITY
-        } else {
-            let (_, m, _) = kept.select_nth_unstable_by(mid, f64::total_cmp);
-            opts.parallax_cap * *m
-        }
+            .map(|p| parallax_limit(p.iter(), opts.parallax_cap, MIN_SUPPORT))
+            .collect()
     } else {
-        f64::INFINITY
+        let limit = parallax_limit(passing.iter().flatten(), opts.parallax_cap, 1);
+        vec![limit; passing.len()]
     };
     let mut k = 0;
     let core = FrameObservations {
@@ -474,10 +497,11 @@ fn refit_once(
             .per_camera
             .iter()
             .zip(&passing)
-            .map(|(ms, pass)| {
+            .zip(&limits)
+            .map(|((ms, pass), limit)| {
                 let mut kept = Vec::with_capacity(ms.len());
                 for (o, (ok, par)) in ms.iter().zip(pass) {
-                    if *ok && !(*par > parallax_limit) {
+                    if *ok && !(*par > *limit) {
                         kept.push(*o);
                         if share {
                             core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
@@ -814,6 +838,7 @@ mod tests {
                 solver: &solver,
                 fixed: &fixed,
                 motion_prior: &prior,
+                competing: false,
             };
             let req = ctx.request(&obs, &from);
             let constants = est.match_constants(&req);

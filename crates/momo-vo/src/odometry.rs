@@ -201,8 +201,11 @@ pub struct Odometry {
     /// residual, newest last (at most `soft_prior_centring_frames`), see
     /// [`Odometry::soft_prior_sigma`].
     soft_samples: std::collections::VecDeque<(f64, Vec<(f64, f64)>)>,
-    /// The learnt displacement jitters `δ_r²` (units of the model's sigma squared times
-    /// metres squared) of `odometry.soft_prior_arc_learning`; empty until learnt.
+    /// The displacement jitters `δ_r²` (units of the model's sigma squared times metres
+    /// squared) that widen a short step's soft prior ([`arc_widened_inv_scale`]): until the
+    /// sigmas are learnt the seed `L²` of `odometry.soft_prior_arc_jitter`
+    /// ([`seeded_arc_jitter`]), then the learnt ones of `odometry.soft_prior_arc_learning`
+    /// (empty without it).
     soft_arc_jitter: Vec<f64>,
     /// This frame's first-stage solution where the final efficient stage replaced it (`None`
     /// otherwise): the soft prior's data view ([`Odometry::soft_data_view`]) needs the solution
@@ -273,6 +276,7 @@ impl Odometry {
         } else {
             Vec::new()
         };
+        let soft_arc_jitter = seeded_arc_jitter(&config.odometry, soft_inv_scale.len());
         Ok(Self {
             rig,
             config,
@@ -296,7 +300,7 @@ impl Odometry {
             soft_count: 0,
             soft_inv_scale,
             soft_samples: Default::default(),
-            soft_arc_jitter: Vec::new(),
+            soft_arc_jitter,
             first_stage: None,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
@@ -654,6 +658,9 @@ impl Odometry {
         let arc_learning = self.config.odometry.soft_prior_arc_learning;
         if arc_learning {
             self.soft_arc_jitter = vec![0.0; self.soft_inv_scale.len()];
+        } else {
+            // The seed (`soft_prior_arc_jitter`) holds until the sigmas are learnt.
+            self.soft_arc_jitter.clear();
         }
         for (r, k) in self.soft_inv_scale.iter_mut().enumerate() {
             // With `soft_prior_arc_learning`: the jitter `δ_r²`, the slope of `d² − v` over
@@ -772,7 +779,8 @@ impl Odometry {
             Vec::new()
         };
         self.soft_samples.clear();
-        self.soft_arc_jitter.clear();
+        self.soft_arc_jitter =
+            seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
     }
 
@@ -1048,9 +1056,9 @@ impl Odometry {
                     sol = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
-                            self.final_fit(&chosen, sol, &fixed, diag.scale)
+                            self.final_fit(&chosen, sol, &fixed, diag.scale, competing)
                         }
-                        _ => self.final_fit(obs, sol, &fixed, diag.scale),
+                        _ => self.final_fit(obs, sol, &fixed, diag.scale, competing),
                     };
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
@@ -1461,13 +1469,15 @@ impl Odometry {
     }
 
     /// The final efficient stage ([`crate::final_fit`], `odometry.final_fit`), with the arc
-    /// length held where the frame holds it.
+    /// length held where the frame holds it. `competing`: two motions competed in the frame's
+    /// motion separation.
     fn final_fit(
         &self,
         obs: &FrameObservations,
         sol: FrameSolution,
         fixed: &[bool],
         scale: ScaleSource,
+        competing: bool,
     ) -> FrameSolution {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
@@ -1489,6 +1499,7 @@ impl Odometry {
             solver: self.config.solver.as_ref(),
             fixed: &fixed,
             motion_prior: &self.motion_prior,
+            competing,
         };
         crate::final_fit::refit(&ctx, opts, obs, sol)
     }
@@ -2014,6 +2025,20 @@ fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
         if *j > 0.0 && *k > 0.0 {
             *k = 1.0 / (1.0 / (*k * *k) + j / (s * s)).sqrt();
         }
+    }
+}
+
+/// The soft prior's displacement jitters `δ_r² = L²` (units of the model's sigma squared times
+/// metres squared) before any learning, for `n` soft-prior residuals: `L` is
+/// `odometry.soft_prior_arc_jitter`, the arc length at which a step's prior is √2 times as
+/// wide as the model's (`√(1 + L² / s²)` times at arc length `s`, [`arc_widened_inv_scale`]).
+/// Empty where `L` is 0 or the sigmas are not learnt (`soft_prior_sigma_learning` off).
+fn seeded_arc_jitter(opts: &crate::config::OdometryOptions, n: usize) -> Vec<f64> {
+    let l = opts.soft_prior_arc_jitter;
+    if l > 0.0 && l.is_finite() && opts.soft_prior_sigma_learning {
+        vec![l * l; n]
+    } else {
+        Vec::new()
     }
 }
 
