@@ -128,6 +128,12 @@ pub struct FinalFitOptions {
     /// chosen motion's, and a moving object's near-zero parallaxes pull the median down
     /// (docs/RESULTS.md §9, thirteenth session: the cap cost the moving-traffic family).
     pub parallax_cap_competing: bool,
+    /// With `parallax_cap`: the cap acts only where the residual and cheirality tests leave
+    /// out at least this share of the frame's matches (0: always). The near mismatches that
+    /// pass both tests are a share of all mismatches, so a frame without a tail outside the
+    /// support has few of them, and a cap there only drops true matches with a large parallax
+    /// (the near points of a wide-angle rig's side cameras). Default 0.1.
+    pub parallax_cap_min_outside: f64,
 }
 
 impl Default for FinalFitOptions {
@@ -156,6 +162,7 @@ impl Default for FinalFitOptions {
             parallax_cap: 0.0,
             parallax_cap_per_camera: true,
             parallax_cap_competing: false,
+            parallax_cap_min_outside: 0.1,
         }
     }
 }
@@ -227,6 +234,12 @@ impl FinalFitOptions {
             return Err(format!(
                 "odometry.final_fit.parallax_cap must be a number >= 0, found {}",
                 self.parallax_cap
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.parallax_cap_min_outside) {
+            return Err(format!(
+                "odometry.final_fit.parallax_cap_min_outside must be within [0, 1], found {}",
+                self.parallax_cap_min_outside
             ));
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
@@ -456,8 +469,7 @@ fn refit_once(
     let mut core_constants = Vec::with_capacity(if share { constants.len() } else { 0 });
     // Per camera: each match's membership by residual and cheirality, and its parallax (only
     // where `parallax_cap` asks for it; 0 otherwise, which no limit excludes).
-    let with_parallax =
-        opts.parallax_cap > 0.0 && (opts.parallax_cap_competing || !ctx.competing);
+    let with_parallax = opts.parallax_cap > 0.0 && (opts.parallax_cap_competing || !ctx.competing);
     let passing: Vec<Vec<(bool, f64)>> = obs
         .per_camera
         .iter()
@@ -480,7 +492,10 @@ fn refit_once(
                 .collect()
         })
         .collect();
-    let limits: Vec<f64> = if !with_parallax {
+    let total: usize = passing.iter().map(Vec::len).sum();
+    let outside = passing.iter().flatten().filter(|(ok, _)| !*ok).count();
+    let tail = outside as f64 >= opts.parallax_cap_min_outside * total as f64;
+    let limits: Vec<f64> = if !(with_parallax && tail) {
         vec![f64::INFINITY; passing.len()]
     } else if opts.parallax_cap_per_camera {
         passing
@@ -584,6 +599,16 @@ mod tests {
         let f0 = nalgebra::Rotation3::from_axis_angle(&axis, 0.03) * g;
         assert!((parallax(&c, &f0, &f1) - 0.03).abs() < 1e-12);
         assert!(parallax(&c, &g, &f1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_parallax_limit_is_a_multiple_of_the_members_median() {
+        // Members 1, 2, 3 (and a non-member at 100): median 2, the cap 8 -> 16.
+        let p = [(true, 3.0), (false, 100.0), (true, 1.0), (true, 2.0)];
+        assert_eq!(parallax_limit(p.iter(), 8.0, 1), 16.0);
+        // Too few members for a camera's own median: no cap.
+        assert_eq!(parallax_limit(p.iter(), 8.0, 4), f64::INFINITY);
+        assert_eq!(parallax_limit([].iter(), 8.0, 0), f64::INFINITY);
     }
 
     #[test]

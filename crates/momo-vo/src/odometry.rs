@@ -779,8 +779,7 @@ impl Odometry {
             Vec::new()
         };
         self.soft_samples.clear();
-        self.soft_arc_jitter =
-            seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
+        self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
     }
 
@@ -2123,5 +2122,53 @@ mod tests {
             .collect();
         let (a, b) = nonnegative_line_fit(&pts);
         assert!((a - 2.0).abs() < 1e-9 && (b - 0.12).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_seeded_jitter_widens_short_steps_until_the_sigmas_are_learnt() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 61,
+            seed: 5,
+            ..SimConfig::clean_pinhole()
+        };
+        let sim = simulate(&cfg).expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            // Per frame: the jitter in use and the frame's soft-prior factors.
+            let mut out = Vec::new();
+            for k in 1..seq.num_frames() {
+                let arc = seq
+                    .arc_lengths
+                    .as_ref()
+                    .and_then(|a| a.get(k).copied().flatten());
+                let jitter = vo.soft_arc_jitter.clone();
+                vo.process(&seq.frames[k], arc);
+                out.push((jitter, vo.motion_prior.soft_inv_scale.clone(), arc));
+            }
+            (out, vo.soft_samples.len())
+        };
+        let (seeded, learnt) = run("[odometry]\nsoft_prior_arc_jitter = 0.5\n");
+        let (plain, _) = run("");
+        assert!(learnt >= SOFT_SIGMA_MIN_FRAMES, "{learnt} frames learnt");
+        // Before learning: δ² = L² = 0.25 on both residuals, and the frame's factors are
+        // 1 / √(1 + L² / s²) of the model's (the estimate's arc length, near the truth).
+        let (j, k, arc) = &seeded[2];
+        assert_eq!(j, &[0.25, 0.25]);
+        let s = arc.expect("the scenario has odometry");
+        for k in k {
+            let want = 1.0 / (1.0 + 0.25 / (s * s)).sqrt();
+            assert!(
+                (k - want).abs() < 0.05 * want,
+                "k {k}, want {want} at s = {s}"
+            );
+        }
+        // Without the seed the factors are the model's.
+        assert!(plain[2].1.iter().all(|k| *k == 1.0), "{:?}", plain[2].1);
+        // Once learnt (without `soft_prior_arc_learning`) the seed is gone.
+        let (j, _, _) = seeded.last().expect("frames");
+        assert!(j.is_empty(), "{j:?}");
     }
 }
