@@ -134,6 +134,13 @@ pub struct FinalFitOptions {
     /// support has few of them, and a cap there only drops true matches with a large parallax
     /// (the near points of a wide-angle rig's side cameras). Default 0.1.
     pub parallax_cap_min_outside: f64,
+    /// With `parallax_cap`: cap each match's baseline over distance
+    /// ([`baseline_over_distance`], `sin θ / sin α`: the parallax `θ` over the sine of its ray's
+    /// angle `α` to the direction of travel) instead of its parallax. A true point's parallax
+    /// is `|t| sin α / λ₁`, so a wide-angle camera's rays near its epipole have a small one and
+    /// those across it a large one at the same distance; the ratio is the point's inverse
+    /// distance times the baseline whatever its direction. Default false.
+    pub parallax_cap_inverse_distance: bool,
 }
 
 impl Default for FinalFitOptions {
@@ -163,6 +170,7 @@ impl Default for FinalFitOptions {
             parallax_cap_per_camera: true,
             parallax_cap_competing: false,
             parallax_cap_min_outside: 0.1,
+            parallax_cap_inverse_distance: false,
         }
     }
 }
@@ -339,6 +347,28 @@ pub fn parallax(
     f0.cross(&g).norm().atan2(f0.dot(&g))
 }
 
+/// A match's baseline over its distance under the camera motion `c` (`X₀ = R X₁ + t`): by the
+/// sine rule in the triangle of the two camera centres and the point, `|t| / λ₁ = sin θ / sin α`
+/// with `θ` the parallax ([`parallax`]) and `α` the angle between the frame-(k-1) ray `f₀` and
+/// `t`. `sin α` is floored at [`MIN_EPIPOLE_SINE`] (a ray at the epipole has no parallax to
+/// measure, only noise); 0 without translation.
+pub fn baseline_over_distance(
+    c: &momo_core::Pose<f64>,
+    f0: &nalgebra::Vector3<f64>,
+    f1: &nalgebra::Vector3<f64>,
+) -> f64 {
+    let t = c.translation;
+    let (tn, f0n) = (t.norm(), f0.norm());
+    if !(tn > 1e-12 && f0n > 0.0) {
+        return 0.0;
+    }
+    let sin_alpha = f0.cross(&t).norm() / (f0n * tn);
+    parallax(c, f0, f1).sin().abs() / sin_alpha.max(MIN_EPIPOLE_SINE)
+}
+
+/// The floor of `sin α` in [`baseline_over_distance`] (about 0.6 deg from the epipole).
+pub const MIN_EPIPOLE_SINE: f64 = 0.01;
+
 /// What the final stage needs besides the matches and the first stage's solution.
 pub struct FinalFitContext<'a> {
     /// The rig.
@@ -482,7 +512,9 @@ fn refit_once(
                 .map(|(o, r)| {
                     let ok = *r < cut
                         && (opts.cheirality_sigmas <= 0.0 || cheiral(&c, &o.f0, &o.f1, tolerance));
-                    let par = if with_parallax {
+                    let par = if with_parallax && opts.parallax_cap_inverse_distance {
+                        baseline_over_distance(&c, &o.f0, &o.f1)
+                    } else if with_parallax {
                         parallax(&c, &o.f0, &o.f1)
                     } else {
                         0.0
@@ -599,6 +631,41 @@ mod tests {
         let f0 = nalgebra::Rotation3::from_axis_angle(&axis, 0.03) * g;
         assert!((parallax(&c, &f0, &f1) - 0.03).abs() < 1e-12);
         assert!(parallax(&c, &g, &f1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_baseline_over_distance_is_the_parallax_over_the_epipole_sine() {
+        let rot =
+            *nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), 0.05).matrix();
+        let t = nalgebra::Vector3::new(0.1, 0.0, 0.8);
+        let c = momo_core::Pose {
+            rotation: rot,
+            translation: t,
+        };
+        // Points at 12 m from the frame-k camera centre in several directions (near the
+        // direction of travel and across it): the parallax differs, |t| / λ₁ does not.
+        let mut pars = Vec::new();
+        for dir in [
+            nalgebra::Vector3::new(0.05, -0.02, 1.0),
+            nalgebra::Vector3::new(0.8, 0.1, 1.0),
+            nalgebra::Vector3::new(-1.0, 0.3, 0.2),
+        ] {
+            let x0 = t + dir.normalize() * 12.0;
+            let f0 = x0.normalize();
+            let f1 = (rot.transpose() * (x0 - t)).normalize();
+            let b = baseline_over_distance(&c, &f0, &f1);
+            assert!((b - t.norm() / 12.0).abs() < 1e-9, "{b}");
+            pars.push(parallax(&c, &f0, &f1));
+        }
+        assert!(pars[2] > 5.0 * pars[0], "{pars:?}");
+        // At the epipole no parallax; without translation 0.
+        let f = t.normalize();
+        assert!(baseline_over_distance(&c, &f, &(rot.transpose() * f)).abs() < 1e-12);
+        let still = momo_core::Pose {
+            rotation: rot,
+            translation: nalgebra::Vector3::zeros(),
+        };
+        assert_eq!(baseline_over_distance(&still, &f, &f), 0.0);
     }
 
     #[test]
