@@ -156,6 +156,14 @@ pub struct OdometryOptions {
     /// step's prior yields; where it does not (real matches, the built-in drive), `δ_r ≈ 0`.
     /// Default false.
     pub soft_prior_arc_learning: bool,
+    /// The soft prior's displacement jitter before any learning, as an arc length `L`
+    /// (metres; 0: none, the default): until the soft-prior sigmas are learnt
+    /// (`soft_prior_sigma_learning`, [`crate::odometry::SOFT_SIGMA_MIN_FRAMES`] trusted moving
+    /// frames) each frame's prior standard deviation is `σ √(1 + L² / s²)` at arc length `s`
+    /// (a sideways / vertical displacement jitter `δ = L σ`: `L = 0.5` m with the model's
+    /// `σ = 0.01` rad is 5 mm), so a short step's direction may yield from the first frame
+    /// on; then the learnt jitter of `soft_prior_arc_learning` takes over (none without it).
+    pub soft_prior_arc_jitter: f64,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -186,6 +194,7 @@ impl Default for OdometryOptions {
             soft_prior_sigma_factor: 1.0,
             soft_prior_student_nu: 0.0,
             soft_prior_arc_learning: false,
+            soft_prior_arc_jitter: 0.0,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -745,6 +754,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_student_nu must be finite and at least 0, got {}",
                     o.soft_prior_student_nu
+                ),
+            );
+        }
+        if !(o.soft_prior_arc_jitter.is_finite() && o.soft_prior_arc_jitter >= 0.0) {
+            bad(
+                &["odometry.soft_prior_arc_jitter"],
+                format!(
+                    "odometry.soft_prior_arc_jitter must be finite and at least 0, got {}",
+                    o.soft_prior_arc_jitter
                 ),
             );
         }

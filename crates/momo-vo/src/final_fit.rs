@@ -117,6 +117,30 @@ pub struct FinalFitOptions {
     /// usually near: a large parallax and with it a large leverage on the direction of
     /// travel. 0: no cap (the default).
     pub parallax_cap: f64,
+    /// With `parallax_cap`: the median is each camera's own (over that camera's matches that
+    /// pass the residual and cheirality tests; no cap in a camera with fewer than
+    /// [`MIN_SUPPORT`] of them) instead of one over the rig. A side or rear camera of a rig
+    /// sees parallaxes far from the front camera's, so one median over all cameras caps the
+    /// wrong matches there. Default true.
+    pub parallax_cap_per_camera: bool,
+    /// With `parallax_cap`: the cap also acts on frames where two motions competed in the
+    /// motion separation ([`crate::separate`]). Default false: there the support is the
+    /// chosen motion's, and a moving object's near-zero parallaxes pull the median down
+    /// (docs/RESULTS.md §9, thirteenth session: the cap cost the moving-traffic family).
+    pub parallax_cap_competing: bool,
+    /// With `parallax_cap`: the cap acts only where the residual and cheirality tests leave
+    /// out at least this share of the frame's matches (0: always). The near mismatches that
+    /// pass both tests are a share of all mismatches, so a frame without a tail outside the
+    /// support has few of them, and a cap there only drops true matches with a large parallax
+    /// (the near points of a wide-angle rig's side cameras). Default 0.1.
+    pub parallax_cap_min_outside: f64,
+    /// With `parallax_cap`: cap each match's baseline over distance
+    /// ([`baseline_over_distance`], `sin θ / sin α`: the parallax `θ` over the sine of its ray's
+    /// angle `α` to the direction of travel) instead of its parallax. A true point's parallax
+    /// is `|t| sin α / λ₁`, so a wide-angle camera's rays near its epipole have a small one and
+    /// those across it a large one at the same distance; the ratio is the point's inverse
+    /// distance times the baseline whatever its direction. Default false.
+    pub parallax_cap_inverse_distance: bool,
 }
 
 impl Default for FinalFitOptions {
@@ -143,6 +167,10 @@ impl Default for FinalFitOptions {
             metric: None,
             one_step: false,
             parallax_cap: 0.0,
+            parallax_cap_per_camera: true,
+            parallax_cap_competing: false,
+            parallax_cap_min_outside: 0.1,
+            parallax_cap_inverse_distance: false,
         }
     }
 }
@@ -214,6 +242,12 @@ impl FinalFitOptions {
             return Err(format!(
                 "odometry.final_fit.parallax_cap must be a number >= 0, found {}",
                 self.parallax_cap
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.parallax_cap_min_outside) {
+            return Err(format!(
+                "odometry.final_fit.parallax_cap_min_outside must be within [0, 1], found {}",
+                self.parallax_cap_min_outside
             ));
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
@@ -313,6 +347,28 @@ pub fn parallax(
     f0.cross(&g).norm().atan2(f0.dot(&g))
 }
 
+/// A match's baseline over its distance under the camera motion `c` (`X₀ = R X₁ + t`): by the
+/// sine rule in the triangle of the two camera centres and the point, `|t| / λ₁ = sin θ / sin α`
+/// with `θ` the parallax ([`parallax`]) and `α` the angle between the frame-(k-1) ray `f₀` and
+/// `t`. `sin α` is floored at [`MIN_EPIPOLE_SINE`] (a ray at the epipole has no parallax to
+/// measure, only noise); 0 without translation.
+pub fn baseline_over_distance(
+    c: &momo_core::Pose<f64>,
+    f0: &nalgebra::Vector3<f64>,
+    f1: &nalgebra::Vector3<f64>,
+) -> f64 {
+    let t = c.translation;
+    let (tn, f0n) = (t.norm(), f0.norm());
+    if !(tn > 1e-12 && f0n > 0.0) {
+        return 0.0;
+    }
+    let sin_alpha = f0.cross(&t).norm() / (f0n * tn);
+    parallax(c, f0, f1).sin().abs() / sin_alpha.max(MIN_EPIPOLE_SINE)
+}
+
+/// The floor of `sin α` in [`baseline_over_distance`] (about 0.6 deg from the epipole).
+pub const MIN_EPIPOLE_SINE: f64 = 0.01;
+
 /// What the final stage needs besides the matches and the first stage's solution.
 pub struct FinalFitContext<'a> {
     /// The rig.
@@ -327,6 +383,21 @@ pub struct FinalFitContext<'a> {
     pub fixed: &'a [bool],
     /// The frame's motion prior.
     pub motion_prior: &'a MotionPrior,
+    /// Two motions competed in this frame's motion separation (`parallax_cap_competing`).
+    pub competing: bool,
+}
+
+/// The parallax cap (`parallax_cap`) over the matches `passing` (membership, parallax):
+/// `cap` times the median parallax of the members; no cap (infinity) with fewer than `min`
+/// members.
+fn parallax_limit<'a>(passing: impl Iterator<Item = &'a (bool, f64)>, cap: f64, min: usize) -> f64 {
+    let mut kept: Vec<f64> = passing.filter(|(ok, _)| *ok).map(|(_, p)| *p).collect();
+    if kept.is_empty() || kept.len() < min {
+        return f64::INFINITY;
+    }
+    let mid = kept.len() / 2;
+    let (_, m, _) = kept.select_nth_unstable_by(mid, f64::total_cmp);
+    cap * *m
 }
 
 /// The final stage (module doc): the refit solution, or `first` unchanged where the noise
@@ -428,7 +499,7 @@ fn refit_once(
     let mut core_constants = Vec::with_capacity(if share { constants.len() } else { 0 });
     // Per camera: each match's membership by residual and cheirality, and its parallax (only
     // where `parallax_cap` asks for it; 0 otherwise, which no limit excludes).
-    let with_parallax = opts.parallax_cap > 0.0;
+    let with_parallax = opts.parallax_cap > 0.0 && (opts.parallax_cap_competing || !ctx.competing);
     let passing: Vec<Vec<(bool, f64)>> = obs
         .per_camera
         .iter()
@@ -441,7 +512,9 @@ fn refit_once(
                 .map(|(o, r)| {
                     let ok = *r < cut
                         && (opts.cheirality_sigmas <= 0.0 || cheiral(&c, &o.f0, &o.f1, tolerance));
-                    let par = if with_parallax {
+                    let par = if with_parallax && opts.parallax_cap_inverse_distance {
+                        baseline_over_distance(&c, &o.f0, &o.f1)
+                    } else if with_parallax {
                         parallax(&c, &o.f0, &o.f1)
                     } else {
                         0.0
@@ -451,22 +524,19 @@ fn refit_once(
                 .collect()
         })
         .collect();
-    let parallax_limit = if with_parallax {
-        let mut kept: Vec<f64> = passing
+    let total: usize = passing.iter().map(Vec::len).sum();
+    let outside = passing.iter().flatten().filter(|(ok, _)| !*ok).count();
+    let tail = outside as f64 >= opts.parallax_cap_min_outside * total as f64;
+    let limits: Vec<f64> = if !(with_parallax && tail) {
+        vec![f64::INFINITY; passing.len()]
+    } else if opts.parallax_cap_per_camera {
+        passing
             .iter()
-            .flatten()
-            .filter(|(ok, _)| *ok)
-            .map(|(_, p)| *p)
-            .collect();
-        let mid = kept.len() / 2;
-        if kept.is_empty() {
-            f64::INFINITY
-        } else {
-            let (_, m, _) = kept.select_nth_unstable_by(mid, f64::total_cmp);
-            opts.parallax_cap * *m
-        }
+            .map(|p| parallax_limit(p.iter(), opts.parallax_cap, MIN_SUPPORT))
+            .collect()
     } else {
-        f64::INFINITY
+        let limit = parallax_limit(passing.iter().flatten(), opts.parallax_cap, 1);
+        vec![limit; passing.len()]
     };
     let mut k = 0;
     let core = FrameObservations {
@@ -474,10 +544,11 @@ fn refit_once(
             .per_camera
             .iter()
             .zip(&passing)
-            .map(|(ms, pass)| {
+            .zip(&limits)
+            .map(|((ms, pass), limit)| {
                 let mut kept = Vec::with_capacity(ms.len());
                 for (o, (ok, par)) in ms.iter().zip(pass) {
-                    if *ok && !(*par > parallax_limit) {
+                    if *ok && !(*par > *limit) {
                         kept.push(*o);
                         if share {
                             core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
@@ -560,6 +631,51 @@ mod tests {
         let f0 = nalgebra::Rotation3::from_axis_angle(&axis, 0.03) * g;
         assert!((parallax(&c, &f0, &f1) - 0.03).abs() < 1e-12);
         assert!(parallax(&c, &g, &f1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_baseline_over_distance_is_the_parallax_over_the_epipole_sine() {
+        let rot =
+            *nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), 0.05).matrix();
+        let t = nalgebra::Vector3::new(0.1, 0.0, 0.8);
+        let c = momo_core::Pose {
+            rotation: rot,
+            translation: t,
+        };
+        // Points at 12 m from the frame-k camera centre in several directions (near the
+        // direction of travel and across it): the parallax differs, |t| / λ₁ does not.
+        let mut pars = Vec::new();
+        for dir in [
+            nalgebra::Vector3::new(0.05, -0.02, 1.0),
+            nalgebra::Vector3::new(0.8, 0.1, 1.0),
+            nalgebra::Vector3::new(-1.0, 0.3, 0.2),
+        ] {
+            let x0 = t + dir.normalize() * 12.0;
+            let f0 = x0.normalize();
+            let f1 = (rot.transpose() * (x0 - t)).normalize();
+            let b = baseline_over_distance(&c, &f0, &f1);
+            assert!((b - t.norm() / 12.0).abs() < 1e-9, "{b}");
+            pars.push(parallax(&c, &f0, &f1));
+        }
+        assert!(pars[2] > 5.0 * pars[0], "{pars:?}");
+        // At the epipole no parallax; without translation 0.
+        let f = t.normalize();
+        assert!(baseline_over_distance(&c, &f, &(rot.transpose() * f)).abs() < 1e-12);
+        let still = momo_core::Pose {
+            rotation: rot,
+            translation: nalgebra::Vector3::zeros(),
+        };
+        assert_eq!(baseline_over_distance(&still, &f, &f), 0.0);
+    }
+
+    #[test]
+    fn the_parallax_limit_is_a_multiple_of_the_members_median() {
+        // Members 1, 2, 3 (and a non-member at 100): median 2, the cap 8 -> 16.
+        let p = [(true, 3.0), (false, 100.0), (true, 1.0), (true, 2.0)];
+        assert_eq!(parallax_limit(p.iter(), 8.0, 1), 16.0);
+        // Too few members for a camera's own median: no cap.
+        assert_eq!(parallax_limit(p.iter(), 8.0, 4), f64::INFINITY);
+        assert_eq!(parallax_limit([].iter(), 8.0, 0), f64::INFINITY);
     }
 
     #[test]
@@ -814,6 +930,7 @@ mod tests {
                 solver: &solver,
                 fixed: &fixed,
                 motion_prior: &prior,
+                competing: false,
             };
             let req = ctx.request(&obs, &from);
             let constants = est.match_constants(&req);

@@ -201,8 +201,11 @@ pub struct Odometry {
     /// residual, newest last (at most `soft_prior_centring_frames`), see
     /// [`Odometry::soft_prior_sigma`].
     soft_samples: std::collections::VecDeque<(f64, Vec<(f64, f64)>)>,
-    /// The learnt displacement jitters `δ_r²` (units of the model's sigma squared times
-    /// metres squared) of `odometry.soft_prior_arc_learning`; empty until learnt.
+    /// The displacement jitters `δ_r²` (units of the model's sigma squared times metres
+    /// squared) that widen a short step's soft prior ([`arc_widened_inv_scale`]): until the
+    /// sigmas are learnt the seed `L²` of `odometry.soft_prior_arc_jitter`
+    /// ([`seeded_arc_jitter`]), then the learnt ones of `odometry.soft_prior_arc_learning`
+    /// (empty without it).
     soft_arc_jitter: Vec<f64>,
     /// This frame's first-stage solution where the final efficient stage replaced it (`None`
     /// otherwise): the soft prior's data view ([`Odometry::soft_data_view`]) needs the solution
@@ -273,6 +276,7 @@ impl Odometry {
         } else {
             Vec::new()
         };
+        let soft_arc_jitter = seeded_arc_jitter(&config.odometry, soft_inv_scale.len());
         Ok(Self {
             rig,
             config,
@@ -296,7 +300,7 @@ impl Odometry {
             soft_count: 0,
             soft_inv_scale,
             soft_samples: Default::default(),
-            soft_arc_jitter: Vec::new(),
+            soft_arc_jitter,
             first_stage: None,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
@@ -654,6 +658,9 @@ impl Odometry {
         let arc_learning = self.config.odometry.soft_prior_arc_learning;
         if arc_learning {
             self.soft_arc_jitter = vec![0.0; self.soft_inv_scale.len()];
+        } else {
+            // The seed (`soft_prior_arc_jitter`) holds until the sigmas are learnt.
+            self.soft_arc_jitter.clear();
         }
         for (r, k) in self.soft_inv_scale.iter_mut().enumerate() {
             // With `soft_prior_arc_learning`: the jitter `δ_r²`, the slope of `d² − v` over
@@ -772,7 +779,7 @@ impl Odometry {
             Vec::new()
         };
         self.soft_samples.clear();
-        self.soft_arc_jitter.clear();
+        self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
     }
 
@@ -1048,9 +1055,9 @@ impl Odometry {
                     sol = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
-                            self.final_fit(&chosen, sol, &fixed, diag.scale)
+                            self.final_fit(&chosen, sol, &fixed, diag.scale, competing)
                         }
-                        _ => self.final_fit(obs, sol, &fixed, diag.scale),
+                        _ => self.final_fit(obs, sol, &fixed, diag.scale, competing),
                     };
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
@@ -1461,13 +1468,15 @@ impl Odometry {
     }
 
     /// The final efficient stage ([`crate::final_fit`], `odometry.final_fit`), with the arc
-    /// length held where the frame holds it.
+    /// length held where the frame holds it. `competing`: two motions competed in the frame's
+    /// motion separation.
     fn final_fit(
         &self,
         obs: &FrameObservations,
         sol: FrameSolution,
         fixed: &[bool],
         scale: ScaleSource,
+        competing: bool,
     ) -> FrameSolution {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
@@ -1489,6 +1498,7 @@ impl Odometry {
             solver: self.config.solver.as_ref(),
             fixed: &fixed,
             motion_prior: &self.motion_prior,
+            competing,
         };
         crate::final_fit::refit(&ctx, opts, obs, sol)
     }
@@ -2017,6 +2027,20 @@ fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
     }
 }
 
+/// The soft prior's displacement jitters `δ_r² = L²` (units of the model's sigma squared times
+/// metres squared) before any learning, for `n` soft-prior residuals: `L` is
+/// `odometry.soft_prior_arc_jitter`, the arc length at which a step's prior is √2 times as
+/// wide as the model's (`√(1 + L² / s²)` times at arc length `s`, [`arc_widened_inv_scale`]).
+/// Empty where `L` is 0 or the sigmas are not learnt (`soft_prior_sigma_learning` off).
+fn seeded_arc_jitter(opts: &crate::config::OdometryOptions, n: usize) -> Vec<f64> {
+    let l = opts.soft_prior_arc_jitter;
+    if l > 0.0 && l.is_finite() && opts.soft_prior_sigma_learning {
+        vec![l * l; n]
+    } else {
+        Vec::new()
+    }
+}
+
 /// The least-squares line `y ≈ a + b x` through `(x, y)` with `a, b ≥ 0` (`b = 0` where all
 /// `x` coincide); `(0, 0)` for no points.
 fn nonnegative_line_fit(pts: &[(f64, f64)]) -> (f64, f64) {
@@ -2098,5 +2122,53 @@ mod tests {
             .collect();
         let (a, b) = nonnegative_line_fit(&pts);
         assert!((a - 2.0).abs() < 1e-9 && (b - 0.12).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_seeded_jitter_widens_short_steps_until_the_sigmas_are_learnt() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 61,
+            seed: 5,
+            ..SimConfig::clean_pinhole()
+        };
+        let sim = simulate(&cfg).expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            // Per frame: the jitter in use and the frame's soft-prior factors.
+            let mut out = Vec::new();
+            for k in 1..seq.num_frames() {
+                let arc = seq
+                    .arc_lengths
+                    .as_ref()
+                    .and_then(|a| a.get(k).copied().flatten());
+                let jitter = vo.soft_arc_jitter.clone();
+                vo.process(&seq.frames[k], arc);
+                out.push((jitter, vo.motion_prior.soft_inv_scale.clone(), arc));
+            }
+            (out, vo.soft_samples.len())
+        };
+        let (seeded, learnt) = run("[odometry]\nsoft_prior_arc_jitter = 0.5\n");
+        let (plain, _) = run("");
+        assert!(learnt >= SOFT_SIGMA_MIN_FRAMES, "{learnt} frames learnt");
+        // Before learning: δ² = L² = 0.25 on both residuals, and the frame's factors are
+        // 1 / √(1 + L² / s²) of the model's (the estimate's arc length, near the truth).
+        let (j, k, arc) = &seeded[2];
+        assert_eq!(j, &[0.25, 0.25]);
+        let s = arc.expect("the scenario has odometry");
+        for k in k {
+            let want = 1.0 / (1.0 + 0.25 / (s * s)).sqrt();
+            assert!(
+                (k - want).abs() < 0.05 * want,
+                "k {k}, want {want} at s = {s}"
+            );
+        }
+        // Without the seed the factors are the model's.
+        assert!(plain[2].1.iter().all(|k| *k == 1.0), "{:?}", plain[2].1);
+        // Once learnt (without `soft_prior_arc_learning`) the seed is gone.
+        let (j, _, _) = seeded.last().expect("frames");
+        assert!(j.is_empty(), "{j:?}");
     }
 }
