@@ -885,6 +885,34 @@ pub fn cells_alone(
     out
 }
 
+/// Each match's cell in the numbering of [`cells_alone`] and [`leave_one_cell_out`] (the
+/// cells that hold matches, camera by camera), in the order a frame's problem evaluates its
+/// matches (cameras of the rig in order, their matches in order), and the number of such
+/// cells: the labelling of [`momo_core::Problem::exact_data_terms_by_group`] whose groups are
+/// the cells of `cells_alone`. Matches of a camera the rig does not have are not counted.
+pub fn cell_labels(
+    rig: &Rig,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+) -> (Vec<usize>, usize) {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let mut labels = Vec::with_capacity(obs.len());
+    let mut number = vec![usize::MAX; cells];
+    let mut next = 0;
+    for (_, of) in cells_per_camera(rig, obs, grid) {
+        number.fill(usize::MAX);
+        for &c in &of {
+            number[c] = 0;
+        }
+        for n in number.iter_mut().filter(|n| **n == 0) {
+            *n = next;
+            next += 1;
+        }
+        labels.extend(of.iter().map(|&c| number[c]));
+    }
+    (labels, next)
+}
+
 /// A robust loss's negative curvature as a Gauss-Newton correction: `[ρ, ρ', max(-ρ'', 0)]` of
 /// the wrapped loss. The solver's linearisation (Ceres' corrector) drops the `2ρ''(Jᵀr)(rᵀJ)`
 /// term where `ρ'' <= 0` (Cauchy everywhere) and adds it where `ρ'' > 0`, so with `A` the

@@ -338,3 +338,277 @@ fn widen_matches_its_reference() {
     }
     assert!(widened > cases / 2, "{widened} of {cases} widened");
 }
+
+/// The largest entry-wise difference of `got` against `want` over the first `n` free
+/// parameters, relative to the size of `want`: its normal matrix's largest entry, and for the
+/// gradient the larger of its largest entry and the Cauchy-Schwarz bound on its terms
+/// `sqrt(max|H| · 2 cost)` (near a minimum the gradient is a sum of terms that cancel), as the
+/// kernel tests of momo-models measure it; the costs relative to the larger. `terms`: the
+/// size of the Hessian's terms where it is larger than the Hessian (the exact robust Hessian of
+/// Huber's or Cauchy's outliers is a difference of terms that cancel: Huber's is 0 beyond its
+/// scale).
+fn grouped_difference(
+    got: &momo_core::Linearization,
+    want: &momo_core::Linearization,
+    terms: f64,
+    n: usize,
+) -> f64 {
+    let h_scale = want
+        .hessian
+        .view((0, 0), (n, n))
+        .amax()
+        .max(terms)
+        .max(f64::MIN_POSITIVE);
+    let g_scale = want
+        .gradient
+        .rows(0, n)
+        .amax()
+        .max((h_scale * 2.0 * want.cost.abs()).sqrt())
+        .max(f64::MIN_POSITIVE);
+    let dg = (got.gradient - want.gradient).rows(0, n).amax() / g_scale;
+    let dh = (got.hessian - want.hessian).view((0, 0), (n, n)).amax() / h_scale;
+    let dc = (got.cost - want.cost).abs() / got.cost.abs().max(want.cost.abs()).max(1e-300);
+    dg.max(dh).max(dc)
+}
+
+/// The matches of `obs` (cameras of `rig`, camera order) whose label is `group`.
+fn group_of(
+    rig: &momo_core::Rig,
+    obs: &FrameObservations,
+    labels: &[usize],
+    group: usize,
+) -> FrameObservations {
+    let mut out = FrameObservations::new(obs.per_camera.len());
+    let mut k = 0;
+    for (j, list) in obs.per_camera.iter().enumerate().take(rig.len()) {
+        for o in list {
+            if labels.get(k) == Some(&group) {
+                out.per_camera[j].push(*o);
+            }
+            k += 1;
+        }
+    }
+    out
+}
+
+/// One frame: [`momo_core::Problem::exact_data_terms_by_group`] (one pass) against the
+/// separate linearisations the jackknife took before the fourteenth session (speed29): per
+/// group, `2 L(ρ) - L(NegativeCurvature(ρ))` of the group's matches less the prior terms' (an
+/// empty frame's linearisation), and the same of the whole frame for the total. Returns the
+/// largest relative difference and the number of groups compared.
+#[allow(clippy::too_many_arguments)]
+fn grouped_case<R: momo_core::ResidualMetric>(
+    model: &dyn momo_core::DynManifold,
+    metric: &R,
+    loss: &dyn momo_core::RobustLoss,
+    rig: &momo_core::Rig,
+    obs: &FrameObservations,
+    params: &[f64],
+    fixed: &[bool],
+    prior: Option<&momo_core::MotionPrior>,
+    automatic: bool,
+    labellings: &[(Vec<usize>, usize)],
+) -> (f64, usize) {
+    use momo_core::{LeastSquares, Problem};
+    let curvature = momo_vo::trust::NegativeCurvature::of(loss).expect("round trip");
+    let lin = |o: &FrameObservations, l: &dyn momo_core::RobustLoss| {
+        let p = Problem::new(model, metric, l, rig, o, params)
+            .expect("problem")
+            .with_fixed(fixed)
+            .with_motion_prior(prior)
+            .with_automatic(automatic);
+        (p.linearize(&p.free_params()), p.num_params())
+    };
+    let empty = FrameObservations::new(obs.per_camera.len());
+    let (prior_lin, n) = lin(&empty, loss);
+    let separate = |o: &FrameObservations| {
+        let a = lin(o, loss).0;
+        let c = lin(o, &curvature).0;
+        // The size of the terms: the Gauss-Newton ρ' JᵀJ and the negative curvature's.
+        let terms = (a.hessian - prior_lin.hessian)
+            .amax()
+            .max((c.hessian - prior_lin.hessian).amax());
+        let l = momo_core::Linearization {
+            cost: a.cost - prior_lin.cost,
+            gradient: a.gradient - prior_lin.gradient,
+            hessian: momo_vo::trust::exact_hessian(&a, &c) - prior_lin.hessian,
+        };
+        (l, terms)
+    };
+    let refs: Vec<(&[usize], usize)> = labellings.iter().map(|(l, g)| (l.as_slice(), *g)).collect();
+    let frame = Problem::new(model, metric, loss, rig, obs, params)
+        .expect("problem")
+        .with_fixed(fixed)
+        .with_motion_prior(prior)
+        .with_automatic(automatic);
+    let got = frame.exact_data_terms_by_group(&frame.free_params(), &refs);
+    assert_eq!(got.groups.len(), labellings.len());
+    let (want, terms) = separate(obs);
+    let mut worst = grouped_difference(&got.total, &want, terms, n);
+    let mut compared = 0;
+    for ((labels, groups), sums) in labellings.iter().zip(&got.groups) {
+        assert_eq!(sums.len(), *groups);
+        for (g, s) in sums.iter().enumerate() {
+            let (want, terms) = separate(&group_of(rig, obs, labels, g));
+            worst = worst.max(grouped_difference(s, &want, terms, n));
+            compared += 1;
+        }
+    }
+    (worst, compared)
+}
+
+/// [`momo_core::Problem::exact_data_terms_by_group`] equals the separate linearisations of the
+/// jackknife (two per group: the loss and its negative curvature, less the prior terms) within
+/// 1e-12 relative, in total and per group, and [`momo_vo::trust::cell_labels`] numbers the
+/// matches as [`momo_vo::trust::cells_alone`] groups them: 240 frames on the canned pinhole
+/// and fisheye rigs (inliers and outliers), four models (the soft one with its prior
+/// residuals), four metrics (AnglePlane's and AnglePlaneMl's fused kernels, GeoLine's two
+/// residuals on the pinhole rig and Sampson's on the fisheye one by automatic differentiation) and AnglePlane on the automatic path, the four
+/// losses, the arc length fixed or free, with and without a motion prior; the cells of two
+/// grids and a random labelling with labels out of range.
+#[test]
+fn grouped_linearisation_equals_the_separate_ones() {
+    use momo_costs::{AnglePlane, AnglePlaneMl, Cauchy, GeoLine, Huber, Sampson, Trivial, Tukey};
+    use momo_models::{Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack};
+    let mut rng = Rng(29);
+    let rigs = [canned::pinhole_rig(), canned::fisheye_rig()];
+    let (mut worst, mut groups) = (0.0f64, 0usize);
+    for case in 0..240 {
+        let rig = &rigs[case % 2];
+        let truth = Pose::new(
+            so3_exp(&Vector3::new(
+                0.02 * (rng.next() - 0.5),
+                0.3 * (rng.next() - 0.5),
+                0.02 * (rng.next() - 0.5),
+            )),
+            Vector3::new(
+                0.2 * (rng.next() - 0.5),
+                0.05 * rng.next(),
+                0.3 + 2.0 * rng.next(),
+            ),
+        );
+        let obs =
+            canned::synthetic_observations(rig, &truth, 30 + case % 50, case % 15, case as u64);
+        let scale = 10f64.powf(-4.0 + 2.0 * rng.next());
+        let loss: Box<dyn momo_core::RobustLoss> = match case % 4 {
+            0 => Box::new(Cauchy::new(scale)),
+            1 => Box::new(Huber::new(scale)),
+            2 => Box::new(Tukey::new(3.0 * scale)),
+            _ => Box::new(Trivial),
+        };
+        let model: Box<dyn momo_core::DynManifold> = match case / 4 % 4 {
+            0 => Box::new(Se3),
+            1 => Box::new(SoftSingleTrack::default()),
+            2 => Box::new(SingleTrack3d::default()),
+            _ => Box::new(SingleTrack2d),
+        };
+        // A start off the true motion (residuals, weights and the curvature all matter).
+        let mut params = model
+            .params_from_motion(&truth)
+            .unwrap_or_else(|| model.initial_params(truth.translation.norm()));
+        for (i, p) in params.iter_mut().enumerate() {
+            *p += 2e-3 * (i as f64 + 1.0) * (rng.next() - 0.5);
+        }
+        let mut fixed = vec![false; params.len()];
+        if let (true, Some(i)) = (case % 3 == 0, model.arc_length_index()) {
+            fixed[i] = true;
+        }
+        let prior = momo_core::MotionPrior {
+            center: params.iter().map(|p| p + 0.01).collect(),
+            inv_sigma: vec![10.0; params.len()],
+            rotation_center: [0.0, 0.0, 0.01],
+            rotation_inv_sigma: 50.0,
+            scale: 1e-3,
+            ..momo_core::MotionPrior::default()
+        };
+        let prior = (case % 5 < 3).then_some(&prior);
+        // The cells of two grids as the jackknife numbers them, and a random labelling.
+        let mut labellings = Vec::new();
+        for grid in [(3, 2), (4, 2)] {
+            let (labels, cells) = momo_vo::trust::cell_labels(rig, &obs, grid);
+            let alone = momo_vo::trust::cells_alone(rig, &obs, grid);
+            assert_eq!(cells, alone.len(), "case {case}");
+            for (g, cell) in alone.iter().enumerate() {
+                assert_eq!(group_of(rig, &obs, &labels, g), *cell, "case {case}");
+            }
+            labellings.push((labels, cells));
+        }
+        let random: Vec<usize> = (0..obs.len())
+            .map(|_| (rng.next() * 6.0) as usize)
+            .collect();
+        labellings.push((random, 5));
+        let (m, r) = (model.as_ref(), loss.as_ref());
+        let runs = [
+            grouped_case(
+                m,
+                &AnglePlane,
+                r,
+                rig,
+                &obs,
+                &params,
+                &fixed,
+                prior,
+                false,
+                &labellings,
+            ),
+            grouped_case(
+                m,
+                &AnglePlane,
+                r,
+                rig,
+                &obs,
+                &params,
+                &fixed,
+                prior,
+                true,
+                &labellings,
+            ),
+            grouped_case(
+                m,
+                &AnglePlaneMl,
+                r,
+                rig,
+                &obs,
+                &params,
+                &fixed,
+                prior,
+                false,
+                &labellings,
+            ),
+            if case % 2 == 0 {
+                grouped_case(
+                    m,
+                    &GeoLine,
+                    r,
+                    rig,
+                    &obs,
+                    &params,
+                    &fixed,
+                    prior,
+                    false,
+                    &labellings,
+                )
+            } else {
+                grouped_case(
+                    m,
+                    &Sampson,
+                    r,
+                    rig,
+                    &obs,
+                    &params,
+                    &fixed,
+                    prior,
+                    false,
+                    &labellings,
+                )
+            },
+        ];
+        for (d, g) in runs {
+            assert!(d <= 1e-12, "case {case}: {d:e} relative");
+            worst = worst.max(d);
+            groups += g;
+        }
+    }
+    assert!(groups > 10_000, "{groups} groups");
+    eprintln!("one pass against the separate linearisations: {worst:e} relative, {groups} groups");
+}
