@@ -1594,7 +1594,8 @@ impl Odometry {
             .chain(extra)
             .map(|&[gx, gy]| (gx, gy))
             .collect();
-        let frame = if t.jackknife_influence {
+        // (No grid: nothing to linearise.)
+        let frame = if t.jackknife_influence && !grids.is_empty() {
             self.influence_frame(obs, sol, &fixed, &grids)
         } else {
             None
@@ -1625,7 +1626,18 @@ impl Odometry {
         sol: &FrameSolution,
         fixed: &[bool],
     ) -> Option<Vec<f64>> {
-        let steps = self.config.trust.jackknife_steps;
+        self.jackknife_steps_sample(obs, sol, fixed, self.config.trust.jackknife_steps)
+    }
+
+    /// [`jackknife_sample`](Self::jackknife_sample) with `steps` Gauss-Newton steps (0: a full
+    /// solve).
+    fn jackknife_steps_sample(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        steps: usize,
+    ) -> Option<Vec<f64>> {
         if steps == 0 {
             let s = self.solve_once(obs, &sol.params, fixed, false)?;
             return Some(sol.free.iter().map(|&i| s.params[i]).collect());
@@ -1787,8 +1799,17 @@ impl Odometry {
         );
         if !solve.is_empty() {
             let without = trust::leave_one_cell_out(&self.rig, obs, grid);
+            let steps = self.config.trust.jackknife_undefined_steps;
             for k in solve {
                 if let Some(o) = without.get(k) {
+                    // An undefined step: `trust.jackknife_undefined_steps` Gauss-Newton steps
+                    // where set (a full solve where one of them is undefined too).
+                    if samples[k].is_none() && steps > 0 {
+                        samples[k] = self.jackknife_steps_sample(o, sol, fixed, steps);
+                        if samples[k].is_some() {
+                            continue;
+                        }
+                    }
                     samples[k] = self
                         .solve_once(o, &sol.params, fixed, false)
                         .map(|s| sol.free.iter().map(|&i| s.params[i]).collect());

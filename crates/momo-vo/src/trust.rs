@@ -129,6 +129,15 @@ pub struct TrustOptions {
     /// jackknife only where the inlier share dropped, 1 was better (93.7 / 90.6 % against
     /// 90.5 / 89.9 %).
     pub jackknife_solves: usize,
+    /// With [`TrustOptions::jackknife_influence`]: a cell whose one-step re-estimate is not
+    /// defined (`H - H_c` not positive definite: the exact robust Hessian of the other cells'
+    /// matches has a direction of negative curvature, as Cauchy's outliers give it) gets this
+    /// many Gauss-Newton steps from the frame's solution on the matches without the cell (one
+    /// linearisation each: the solver's normal matrix `Σ ρ' JᵀJ` and the priors, as
+    /// [`TrustOptions::jackknife_steps`]) instead of a full solve; a full solve still where a
+    /// step is not defined either. Default 0: a full solve (see docs/RESULTS.md, fifteenth
+    /// session, speed29, for the measured cost and rotation NEES).
+    pub jackknife_undefined_steps: usize,
     /// Competing motions: when at least this share of the matches lies outside the estimate's
     /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
     /// fitted to them; if it explains that share of the matches, the frame's covariance is
@@ -186,6 +195,7 @@ impl Default for TrustOptions {
             jackknife_steps: 0,
             jackknife_influence: true,
             jackknife_solves: 0,
+            jackknife_undefined_steps: 0,
             competing_min_fraction: 0.15,
             competing_fit_matches: 32,
             weak_prior_factor: 0.1,
