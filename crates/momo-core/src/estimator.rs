@@ -120,7 +120,8 @@ pub trait FrameEstimator: Send + Sync + Debug {
     /// The data terms' exact robust normal equations at a full parameter vector, in total and
     /// per group of matches of each labelling, in one pass
     /// ([`Problem::exact_data_terms_by_group`]; no prior terms). `None` (the default): the
-    /// estimator cannot say.
+    /// estimator cannot say (`momo-vo`'s jackknife then solves each leave-one-cell-out
+    /// problem in full).
     fn exact_data_terms_by_group(
         &self,
         _request: &SolveRequest<'_>,
