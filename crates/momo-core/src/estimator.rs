@@ -15,7 +15,7 @@ use crate::lie::Pose;
 use crate::loss::RobustLoss;
 use crate::manifold::{Manifold, MotionPrior};
 use crate::metric::{ResidualMetric, RotationOnly};
-use crate::problem::Problem;
+use crate::problem::{GroupedLinearization, Problem};
 use crate::rig::{FrameObservations, Rig};
 use crate::solver::{LeastSquares, Linearization, ParamVec, Solver, SolverReport};
 use std::fmt::Debug;
@@ -117,6 +117,19 @@ pub trait FrameEstimator: Send + Sync + Debug {
         request: &SolveRequest<'_>,
         params: &[f64],
     ) -> Result<Linearization, CoreError>;
+    /// The data terms' exact robust normal equations at a full parameter vector, in total and
+    /// per group of matches of each labelling, in one pass
+    /// ([`Problem::exact_data_terms_by_group`]; no prior terms). `None` (the default): the
+    /// estimator cannot say (`momo-vo`'s jackknife then solves each leave-one-cell-out
+    /// problem in full).
+    fn exact_data_terms_by_group(
+        &self,
+        _request: &SolveRequest<'_>,
+        _params: &[f64],
+        _labellings: &[(&[usize], usize)],
+    ) -> Result<Option<GroupedLinearization>, CoreError> {
+        Ok(None)
+    }
     /// Matches whose residual norm is within the loss scale, per camera, at a full parameter
     /// vector.
     fn inliers(&self, request: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError>;
@@ -321,6 +334,19 @@ impl<R: ResidualMetric> FrameEstimator for Erased<R> {
         let problem = self.problem(req, params)?;
         let x: ParamVec = problem.free_params();
         Ok(problem.linearize(&x))
+    }
+
+    fn exact_data_terms_by_group(
+        &self,
+        req: &SolveRequest<'_>,
+        params: &[f64],
+        labellings: &[(&[usize], usize)],
+    ) -> Result<Option<GroupedLinearization>, CoreError> {
+        let problem = self.problem(req, params)?;
+        Ok(Some(problem.exact_data_terms_by_group(
+            &problem.free_params(),
+            labellings,
+        )))
     }
 
     fn inliers(&self, req: &SolveRequest<'_>, params: &[f64]) -> Result<Vec<usize>, CoreError> {

@@ -64,7 +64,9 @@ pub use loss::RobustLoss;
 pub use loss_trivial::TrivialLoss;
 pub use manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior, ROTATION_PRIOR_CAUCHY};
 pub use metric::{MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric, RotationOnly, essential};
-pub use problem::{Problem, camera_motion, compute_match_constants, cross_camera_motion};
+pub use problem::{
+    GroupedLinearization, Problem, camera_motion, compute_match_constants, cross_camera_motion,
+};
 pub use rig::{CrossObservation, FrameObservations, Observation, Rig, RigCamera};
 pub use scalar::{Scalar, cosc, dot_const, mul_const, sinc, tr_mul_const};
 pub use solver::{

@@ -921,6 +921,229 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
     }
 }
 
+/// The data terms' exact robust normal equations of a [`Problem`], in total and per group of
+/// matches ([`Problem::exact_data_terms_by_group`]).
+#[derive(Clone, Debug)]
+pub struct GroupedLinearization {
+    /// All matches: `cost` `½ Σ ρ(|r|²)`, `gradient` `Σ ρ' Jᵀr`, `hessian` the exact robust
+    /// `Σ ρ' JᵀJ + 2ρ'' (Jᵀr)(rᵀJ)` (over the free parameters; no prior terms).
+    pub total: Linearization,
+    /// Per labelling, per group: the same sums over the group's matches.
+    pub groups: Vec<Vec<Linearization>>,
+}
+
+impl<R: ResidualMetric> Problem<'_, R> {
+    /// The data terms' exact robust normal equations at the solver's `x` in one pass over the
+    /// matches: each match's residuals `r` and Jacobian `J` (the fused kernel where the metric
+    /// has one, else automatic differentiation) and the loss's `ρ, ρ', ρ''` at `|r|²` evaluated
+    /// once, and its `½ρ`, gradient `ρ' Jᵀr` and exact robust Hessian
+    /// `ρ' JᵀJ + 2ρ'' (Jᵀr)(rᵀJ)` (the Gauss-Newton Hessian of `½ρ(|r|²)`, negative curvature
+    /// included; nothing where `ρ' <= 0`) added to the total and, for each labelling
+    /// `(labels, groups)`, to the sums of group `labels[k]` of match `k` (camera order, as
+    /// [`num_matches`](Self::num_matches) counts them; a label `>= groups` or a short `labels`:
+    /// in no group of that labelling). The prior terms are not included. What
+    /// `2 L(ρ) - L(ρ, max(-ρ'', 0))` of two [`LeastSquares::linearize`] calls per group gives
+    /// for a loss with `ρ'' <= 0` (the leave-one-group-out influence of `momo-vo`'s jackknife),
+    /// with the sums in another order.
+    pub fn exact_data_terms_by_group(
+        &self,
+        x: &ParamVec,
+        labellings: &[(&[usize], usize)],
+    ) -> GroupedLinearization {
+        match self.n_free {
+            // No free parameter: zero derivatives (none seeded), the costs as they are.
+            0 => self.exact_data_terms_n::<1>(x, labellings),
+            1 => self.exact_data_terms_n::<1>(x, labellings),
+            2 => self.exact_data_terms_n::<2>(x, labellings),
+            3 => self.exact_data_terms_n::<3>(x, labellings),
+            4 => self.exact_data_terms_n::<4>(x, labellings),
+            5 => self.exact_data_terms_n::<5>(x, labellings),
+            6 => self.exact_data_terms_n::<6>(x, labellings),
+            7 => self.exact_data_terms_n::<7>(x, labellings),
+            _ => self.exact_data_terms_n::<8>(x, labellings),
+        }
+    }
+
+    /// [`exact_data_terms_by_group`](Self::exact_data_terms_by_group) for `N` free parameters.
+    fn exact_data_terms_n<const N: usize>(
+        &self,
+        x: &ParamVec,
+        labellings: &[(&[usize], usize)],
+    ) -> GroupedLinearization
+    where
+        DualSVec64<N>: ErasedScalar,
+    {
+        /// One group's sums: cost, gradient, upper triangle of the Hessian.
+        #[derive(Clone, Copy)]
+        struct Sums<const N: usize> {
+            cost: f64,
+            g: SVector<f64, N>,
+            h: SMatrix<f64, N, N>,
+        }
+        impl<const N: usize> Sums<N> {
+            fn zero() -> Self {
+                Self {
+                    cost: 0.0,
+                    g: SVector::zeros(),
+                    h: SMatrix::zeros(),
+                }
+            }
+            #[inline(always)]
+            fn add(&mut self, cost: f64, g: &[f64; N], h: &[[f64; N]; N]) {
+                self.cost += cost;
+                for a in 0..N {
+                    self.g[a] += g[a];
+                    for b in a..N {
+                        self.h[(a, b)] += h[a][b];
+                    }
+                }
+            }
+            fn finish(mut self) -> Linearization {
+                for a in 0..N {
+                    for b in 0..a {
+                        self.h[(a, b)] = self.h[(b, a)];
+                    }
+                }
+                let mut out = Linearization {
+                    cost: self.cost,
+                    gradient: ParamVec::zeros(),
+                    hessian: NormalMatrix::zeros(),
+                };
+                out.hessian.fixed_view_mut::<N, N>(0, 0).copy_from(&self.h);
+                out.gradient.fixed_rows_mut::<N>(0).copy_from(&self.g);
+                out
+            }
+        }
+        let mut total = Sums::<N>::zero();
+        let mut groups: Vec<Vec<Sums<N>>> = labellings
+            .iter()
+            .map(|&(_, n)| vec![Sums::zero(); n])
+            .collect();
+        let loss = self.loss;
+        let mut k_match = 0;
+        self.for_each_match_jacobian::<N>(x, |r, jac| {
+            let k = k_match;
+            k_match += 1;
+            let mut s = 0.0;
+            for v in r {
+                s += v * v;
+            }
+            let [rho, rho1, rho2] = loss.evaluate(s);
+            let cost = 0.5 * rho;
+            let mut g = [0.0; N];
+            let mut h = [[0.0; N]; N];
+            if rho1 > 0.0 {
+                // Jᵀr, then ρ' JᵀJ + 2ρ'' (Jᵀr)(rᵀJ) (upper triangle) and ρ' Jᵀr.
+                let mut jtr = [0.0; N];
+                for (v, e) in r.iter().zip(jac) {
+                    for a in 0..N {
+                        jtr[a] += e[a] * v;
+                    }
+                }
+                for e in jac {
+                    for a in 0..N {
+                        let ja = rho1 * e[a];
+                        for b in a..N {
+                            h[a][b] += ja * e[b];
+                        }
+                    }
+                }
+                let c = 2.0 * rho2;
+                for a in 0..N {
+                    g[a] = rho1 * jtr[a];
+                    for b in a..N {
+                        h[a][b] += c * jtr[a] * jtr[b];
+                    }
+                }
+            }
+            total.add(cost, &g, &h);
+            for ((labels, _), sums) in labellings.iter().zip(&mut groups) {
+                if let Some(group) = labels.get(k).and_then(|&c| sums.get_mut(c)) {
+                    group.add(cost, &g, &h);
+                }
+            }
+        });
+        GroupedLinearization {
+            total: total.finish(),
+            groups: groups
+                .into_iter()
+                .map(|g| g.into_iter().map(Sums::finish).collect())
+                .collect(),
+        }
+    }
+
+    /// Calls `f(r, J)` with every match's residuals and their Jacobian rows over the `N` free
+    /// parameters at the solver's `x` (camera order): the fused kernel's
+    /// `J = (dr/dq)(dq/dp)` where the metric has one (as [`LeastSquares::linearize`] computes
+    /// them), else automatic differentiation.
+    fn for_each_match_jacobian<const N: usize>(
+        &self,
+        x: &ParamVec,
+        mut f: impl FnMut(&[f64], &[[f64; N]]),
+    ) where
+        DualSVec64<N>: ErasedScalar,
+    {
+        let n_res = R::RESIDUALS;
+        let mut r = [0.0; MAX_RESIDUALS];
+        let mut jac = [[0.0; N]; MAX_RESIDUALS];
+        if !self.uses_kernel() {
+            self.visit::<N>(x, |rd| {
+                for (i, v) in rd.iter().enumerate() {
+                    r[i] = v.re;
+                    jac[i] = match &v.eps.0 {
+                        Some(e) => std::array::from_fn(|k| e[k]),
+                        None => [0.0; N],
+                    };
+                }
+                f(&r[..n_res], &jac[..n_res]);
+            });
+            return;
+        }
+        let k_in = R::KERNEL_INPUTS;
+        let p = self.seeded::<N>(x);
+        let m = self.model.motion_of(&p[..self.np]);
+        let mut q_dual = [DualSVec64::<N>::from_re(0.0); MAX_KERNEL_INPUTS];
+        let mut q = [0.0; MAX_KERNEL_INPUTS];
+        let mut dq = [[0.0; N]; MAX_KERNEL_INPUTS];
+        let mut dr_dq = [[0.0; MAX_KERNEL_INPUTS]; MAX_RESIDUALS];
+        let constants = self.match_constants();
+        let n_c = R::MATCH_CONSTANTS;
+        let mut k_match = 0;
+        for (j, cam) in self.rig.cameras().iter().enumerate() {
+            let Some(obs) = self.obs.per_camera.get(j) else {
+                continue;
+            };
+            if obs.is_empty() {
+                continue;
+            }
+            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
+            for o in obs {
+                self.metric.kernel(
+                    &cam.model,
+                    &q[..k_in],
+                    o,
+                    &constants[k_match * n_c..(k_match + 1) * n_c],
+                    &mut r[..n_res],
+                    &mut dr_dq[..n_res],
+                );
+                k_match += 1;
+                for i in 0..n_res {
+                    let mut row = [0.0; N];
+                    for a in 0..k_in {
+                        let d = dr_dq[i][a];
+                        for k in 0..N {
+                            row[k] += d * dq[a][k];
+                        }
+                    }
+                    jac[i] = row;
+                }
+                f(&r[..n_res], &jac[..n_res]);
+            }
+        }
+    }
+}
+
 impl<R: ResidualMetric> LeastSquares for Problem<'_, R> {
     fn num_params(&self) -> usize {
         self.n_free

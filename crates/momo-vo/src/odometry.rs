@@ -1596,15 +1596,23 @@ impl Odometry {
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let t = &self.config.trust;
         let extra: &[[usize; 2]] = if clustered { &t.clustering_grids } else { &[] };
-        // The one-linearisation jackknife: the frame's exact Hessian and gradient once.
-        let frame = if t.jackknife_influence {
-            self.influence_frame(obs, sol, &fixed)
+        // The one-linearisation jackknife: the frame's exact Hessian and gradient and every
+        // grid's cells' data terms, in one pass over the matches.
+        let grids: Vec<(usize, usize)> = t
+            .jackknife_grids
+            .iter()
+            .chain(extra)
+            .map(|&[gx, gy]| (gx, gy))
+            .collect();
+        // (No grid: nothing to linearise.)
+        let frame = if t.jackknife_influence && !grids.is_empty() {
+            self.influence_frame(obs, sol, &fixed, &grids)
         } else {
             None
         };
-        for &[gx, gy] in t.jackknife_grids.iter().chain(extra) {
+        for (k, &(gx, gy)) in grids.iter().enumerate() {
             let samples: Vec<Vec<f64>> = match &frame {
-                Some(f) => self.influence_samples(f, obs, sol, &fixed, &cov, (gx, gy)),
+                Some(f) => self.influence_samples(f, k, obs, sol, &fixed, &cov, (gx, gy)),
                 None => trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
                     .iter()
                     .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
@@ -1628,7 +1636,18 @@ impl Odometry {
         sol: &FrameSolution,
         fixed: &[bool],
     ) -> Option<Vec<f64>> {
-        let steps = self.config.trust.jackknife_steps;
+        self.jackknife_steps_sample(obs, sol, fixed, self.config.trust.jackknife_steps)
+    }
+
+    /// [`jackknife_sample`](Self::jackknife_sample) with `steps` Gauss-Newton steps (0: a full
+    /// solve).
+    fn jackknife_steps_sample(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        steps: usize,
+    ) -> Option<Vec<f64>> {
         if steps == 0 {
             let s = self.solve_once(obs, &sol.params, fixed, false)?;
             return Some(sol.free.iter().map(|&i| s.params[i]).collect());
@@ -1684,75 +1703,83 @@ impl Odometry {
     }
 
     /// The frame's part of the one-linearisation jackknife
-    /// ([`trust::TrustOptions::jackknife_influence`]): the stage's loss wrapped as its
-    /// [`trust::NegativeCurvature`], the prior terms' linearisation alone (no match) and the
-    /// frame's exact Hessian and gradient at the solution. `None` where a linearisation fails.
+    /// ([`trust::TrustOptions::jackknife_influence`]) for the cells of `grids`: the prior
+    /// terms' linearisation alone (no match), then in one pass over the matches
+    /// ([`momo_core::FrameEstimator::exact_data_terms_by_group`]) the frame's exact robust
+    /// Hessian and gradient at the solution and every grid's cells' data terms. `None` where
+    /// a linearisation fails or the estimator cannot give them.
     fn influence_frame(
         &self,
         obs: &FrameObservations,
         sol: &FrameSolution,
         fixed: &[bool],
+        grids: &[(usize, usize)],
     ) -> Option<InfluenceFrame> {
         let loss = self
             .config
             .refine_loss
             .as_deref()
             .unwrap_or(self.config.loss.as_ref());
-        let curvature = trust::NegativeCurvature::of(loss)?;
-        let lin = |o: &FrameObservations, l: &dyn momo_core::RobustLoss| {
-            self.estimator
-                .linearize(&self.stage_request(o, l, sol, fixed), &sol.params)
-                .ok()
-        };
         let empty = FrameObservations {
             per_camera: vec![Vec::new(); obs.per_camera.len()],
             cross_camera: Vec::new(),
         };
-        let prior = lin(&empty, loss)?;
-        let a = lin(obs, loss)?;
-        let n = lin(obs, &curvature)?;
+        let prior = self
+            .estimator
+            .linearize(&self.stage_request(&empty, loss, sol, fixed), &sol.params)
+            .ok()?;
+        let labels: Vec<(Vec<usize>, usize)> = grids
+            .iter()
+            .map(|&g| trust::cell_labels(&self.rig, obs, g))
+            .collect();
+        let labellings: Vec<(&[usize], usize)> =
+            labels.iter().map(|(l, n)| (l.as_slice(), *n)).collect();
+        let data = self
+            .estimator
+            .exact_data_terms_by_group(
+                &self.stage_request(obs, loss, sol, fixed),
+                &sol.params,
+                &labellings,
+            )
+            .ok()??;
         Some(InfluenceFrame {
-            hessian: trust::exact_hessian(&a, &n),
-            gradient: a.gradient,
-            prior,
-            curvature,
+            hessian: data.total.hessian + prior.hessian,
+            gradient: data.total.gradient + prior.gradient,
+            cells: data.groups,
         })
     }
 
-    /// The leave-one-cell-out re-estimates of one `grid` from the frame's linearisation
-    /// ([`trust::influence_step`]); cells whose step is not defined, and the
-    /// `trust.jackknife_solves` cells that move farthest under `cov`, get a full solve.
+    /// The leave-one-cell-out re-estimates of one `grid` (the `index`-th of the frame's
+    /// [`InfluenceFrame::cells`]) from the frame's linearisation ([`trust::influence_step`]);
+    /// cells whose step is not defined, and the `trust.jackknife_solves` cells that move
+    /// farthest under `cov`, get a full solve.
+    #[allow(clippy::too_many_arguments)]
     fn influence_samples(
         &self,
         frame: &InfluenceFrame,
+        index: usize,
         obs: &FrameObservations,
         sol: &FrameSolution,
         fixed: &[bool],
         cov: &nalgebra::DMatrix<f64>,
         grid: (usize, usize),
     ) -> Vec<Vec<f64>> {
-        let loss = self
-            .config
-            .refine_loss
-            .as_deref()
-            .unwrap_or(self.config.loss.as_ref());
         let n = sol.free.len();
         let theta: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
-        let cells = trust::cells_alone(&self.rig, obs, grid);
-        let mut samples: Vec<Option<Vec<f64>>> = cells
+        let mut samples: Vec<Option<Vec<f64>>> = frame
+            .cells
+            .get(index)
+            .map(Vec::as_slice)
+            .unwrap_or_default()
             .iter()
-            .map(|cell| {
-                let lin = |l: &dyn momo_core::RobustLoss| {
-                    self.estimator
-                        .linearize(&self.stage_request(cell, l, sol, fixed), &sol.params)
-                        .ok()
-                };
-                let a = lin(loss)?;
-                let c = lin(&frame.curvature)?;
-                // The cell's data terms: its linearisation less the prior terms' (in both).
-                let h_c = trust::exact_hessian(&a, &c) - frame.prior.hessian;
-                let g_c = a.gradient - frame.prior.gradient;
-                trust::influence_step(&theta, (&frame.hessian, &frame.gradient), (&h_c, &g_c), n)
+            .map(|c| {
+                // The cell's data terms (its exact robust Hessian and gradient).
+                trust::influence_step(
+                    &theta,
+                    (&frame.hessian, &frame.gradient),
+                    (&c.hessian, &c.gradient),
+                    n,
+                )
             })
             .collect();
         // The cells to solve in full: undefined steps, and the farthest steps.
@@ -1782,8 +1809,17 @@ impl Odometry {
         );
         if !solve.is_empty() {
             let without = trust::leave_one_cell_out(&self.rig, obs, grid);
+            let steps = self.config.trust.jackknife_undefined_steps;
             for k in solve {
                 if let Some(o) = without.get(k) {
+                    // An undefined step: `trust.jackknife_undefined_steps` Gauss-Newton steps
+                    // where set (a full solve where one of them is undefined too).
+                    if samples[k].is_none() && steps > 0 {
+                        samples[k] = self.jackknife_steps_sample(o, sol, fixed, steps);
+                        if samples[k].is_some() {
+                            continue;
+                        }
+                    }
                     samples[k] = self
                         .solve_once(o, &sol.params, fixed, false)
                         .map(|s| sol.free.iter().map(|&i| s.params[i]).collect());
@@ -1966,10 +2002,9 @@ struct InfluenceFrame {
     hessian: momo_core::NormalMatrix,
     /// The gradient there.
     gradient: momo_core::ParamVec,
-    /// The prior terms' linearisation alone.
-    prior: momo_core::Linearization,
-    /// The stage's loss as its negative curvature.
-    curvature: trust::NegativeCurvature,
+    /// Per grid, per cell (in the order of [`trust::cells_alone`]): the cell's data terms,
+    /// their exact robust Hessian and gradient at the solution.
+    cells: Vec<Vec<momo_core::Linearization>>,
 }
 
 /// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:

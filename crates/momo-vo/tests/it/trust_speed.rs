@@ -338,3 +338,479 @@ fn widen_matches_its_reference() {
     }
     assert!(widened > cases / 2, "{widened} of {cases} widened");
 }
+
+/// The largest entry-wise difference of `got` against `want` over the first `n` free
+/// parameters, relative to the size of `want`: its normal matrix's largest entry, and for the
+/// gradient the larger of its largest entry and the Cauchy-Schwarz bound on its terms
+/// `sqrt(max|H| · 2 cost)` (near a minimum the gradient is a sum of terms that cancel), as the
+/// kernel tests of momo-models measure it; the costs relative to the larger cost or
+/// `cost_terms`. `terms`: the size of the Hessian's terms where it is larger than the Hessian
+/// (the exact robust Hessian of Huber's or Cauchy's outliers is a difference of terms that
+/// cancel: Huber's is 0 beyond its scale; and the reference's linearisations, prior terms
+/// included, that it subtracts); `cost_terms`: the size of the costs the reference
+/// took its cost as a difference of (a group's data cost is its linearisation's cost less
+/// the prior terms', which can be 1e5 times larger: the reference's own rounding is relative
+/// to that).
+fn grouped_difference(
+    got: &momo_core::Linearization,
+    want: &momo_core::Linearization,
+    (terms, cost_terms): (f64, f64),
+    n: usize,
+) -> f64 {
+    let h_scale = want
+        .hessian
+        .view((0, 0), (n, n))
+        .amax()
+        .max(terms)
+        .max(f64::MIN_POSITIVE);
+    let g_scale = want
+        .gradient
+        .rows(0, n)
+        .amax()
+        .max((h_scale * 2.0 * want.cost.abs()).sqrt())
+        .max(f64::MIN_POSITIVE);
+    let dg = (got.gradient - want.gradient).rows(0, n).amax() / g_scale;
+    let dh = (got.hessian - want.hessian).view((0, 0), (n, n)).amax() / h_scale;
+    let dc = (got.cost - want.cost).abs()
+        / got
+            .cost
+            .abs()
+            .max(want.cost.abs())
+            .max(cost_terms)
+            .max(1e-300);
+    dg.max(dh).max(dc)
+}
+
+/// The matches of `obs` (cameras of `rig`, camera order) whose label is `group`.
+fn group_of(
+    rig: &momo_core::Rig,
+    obs: &FrameObservations,
+    labels: &[usize],
+    group: usize,
+) -> FrameObservations {
+    let mut out = FrameObservations::new(obs.per_camera.len());
+    let mut k = 0;
+    for (j, list) in obs.per_camera.iter().enumerate().take(rig.len()) {
+        for o in list {
+            if labels.get(k) == Some(&group) {
+                out.per_camera[j].push(*o);
+            }
+            k += 1;
+        }
+    }
+    out
+}
+
+/// One frame: [`momo_core::Problem::exact_data_terms_by_group`] (one pass) against the
+/// separate linearisations the jackknife took before the fifteenth session (speed29): per
+/// group, `2 L(ρ) - L(NegativeCurvature(ρ))` of the group's matches less the prior terms' (an
+/// empty frame's linearisation), and the same of the whole frame for the total. Returns the
+/// largest relative difference and the number of groups compared.
+#[allow(clippy::too_many_arguments)]
+fn grouped_case<R: momo_core::ResidualMetric>(
+    model: &dyn momo_core::DynManifold,
+    metric: &R,
+    loss: &dyn momo_core::RobustLoss,
+    rig: &momo_core::Rig,
+    obs: &FrameObservations,
+    params: &[f64],
+    fixed: &[bool],
+    prior: Option<&momo_core::MotionPrior>,
+    automatic: bool,
+    labellings: &[(Vec<usize>, usize)],
+) -> (f64, usize) {
+    use momo_core::{LeastSquares, Problem};
+    let curvature = momo_vo::trust::NegativeCurvature::of(loss).expect("round trip");
+    let lin = |o: &FrameObservations, l: &dyn momo_core::RobustLoss| {
+        let p = Problem::new(model, metric, l, rig, o, params)
+            .expect("problem")
+            .with_fixed(fixed)
+            .with_motion_prior(prior)
+            .with_automatic(automatic);
+        (p.linearize(&p.free_params()), p.num_params())
+    };
+    let empty = FrameObservations::new(obs.per_camera.len());
+    let (prior_lin, n) = lin(&empty, loss);
+    let separate = |o: &FrameObservations| {
+        let a = lin(o, loss).0;
+        let c = lin(o, &curvature).0;
+        // The size of the terms: the Gauss-Newton ρ' JᵀJ and the negative curvature's, and
+        // the linearisations with the prior terms the reference subtracts (its own rounding is
+        // relative to them: a prior 1e3 times a cell's data terms leaves 1e-13 of them).
+        let terms = (a.hessian - prior_lin.hessian)
+            .amax()
+            .max((c.hessian - prior_lin.hessian).amax())
+            .max(a.hessian.amax())
+            .max(c.hessian.amax());
+        let cost_terms = a.cost.abs().max(prior_lin.cost.abs());
+        let l = momo_core::Linearization {
+            cost: a.cost - prior_lin.cost,
+            gradient: a.gradient - prior_lin.gradient,
+            hessian: momo_vo::trust::exact_hessian(&a, &c) - prior_lin.hessian,
+        };
+        (l, (terms, cost_terms))
+    };
+    let refs: Vec<(&[usize], usize)> = labellings.iter().map(|(l, g)| (l.as_slice(), *g)).collect();
+    let frame = Problem::new(model, metric, loss, rig, obs, params)
+        .expect("problem")
+        .with_fixed(fixed)
+        .with_motion_prior(prior)
+        .with_automatic(automatic);
+    let got = frame.exact_data_terms_by_group(&frame.free_params(), &refs);
+    assert_eq!(got.groups.len(), labellings.len());
+    // Where the prior terms are not finite (the trivial loss's infinite scale weighs a soft
+    // model's prior residuals: the reference is NaN) there is nothing to compare; the one pass
+    // leaves the prior out and stays finite.
+    if !prior_lin.cost.is_finite() {
+        assert!(got.total.cost.is_finite() && got.total.hessian.iter().all(|v| v.is_finite()));
+        return (0.0, 0);
+    }
+    let (want, terms) = separate(obs);
+    let mut worst = grouped_difference(&got.total, &want, terms, n);
+    let mut compared = 0;
+    for ((labels, groups), sums) in labellings.iter().zip(&got.groups) {
+        assert_eq!(sums.len(), *groups);
+        for (g, s) in sums.iter().enumerate() {
+            let (want, terms) = separate(&group_of(rig, obs, labels, g));
+            worst = worst.max(grouped_difference(s, &want, terms, n));
+            compared += 1;
+        }
+    }
+    (worst, compared)
+}
+
+/// [`momo_core::Problem::exact_data_terms_by_group`] equals the separate linearisations of the
+/// jackknife (two per group: the loss and its negative curvature, less the prior terms) within
+/// 1e-12 relative (of the reference's own terms: it subtracts the prior terms), in total and
+/// per group, and [`momo_vo::trust::cell_labels`] numbers the matches as
+/// [`momo_vo::trust::cells_alone`] groups them: 240 frames on the canned pinhole and fisheye
+/// rigs (inliers and outliers), four models (the soft one with its prior residuals), four
+/// metrics (AnglePlane's and AnglePlaneMl's fused kernels, GeoLine's two residuals on the
+/// pinhole rig and Sampson's on the fisheye one by automatic differentiation) and AnglePlane
+/// on the automatic path, the four losses, the arc length fixed or free, with and without a
+/// motion prior; the cells of two grids and a random labelling with labels out of range.
+/// Where the reference is NaN (the trivial loss's infinite scale on the soft model's prior
+/// residuals) the one pass is only checked to be finite.
+#[test]
+fn grouped_linearisation_equals_the_separate_ones() {
+    use momo_costs::{AnglePlane, AnglePlaneMl, Cauchy, GeoLine, Huber, Sampson, Trivial, Tukey};
+    use momo_models::{Se3, SingleTrack2d, SingleTrack3d, SoftSingleTrack};
+    let mut rng = Rng(29);
+    let rigs = [canned::pinhole_rig(), canned::fisheye_rig()];
+    let (mut worst, mut groups) = (0.0f64, 0usize);
+    for case in 0..240 {
+        let rig = &rigs[case % 2];
+        let truth = Pose::new(
+            so3_exp(&Vector3::new(
+                0.02 * (rng.next() - 0.5),
+                0.3 * (rng.next() - 0.5),
+                0.02 * (rng.next() - 0.5),
+            )),
+            Vector3::new(
+                0.2 * (rng.next() - 0.5),
+                0.05 * rng.next(),
+                0.3 + 2.0 * rng.next(),
+            ),
+        );
+        let obs =
+            canned::synthetic_observations(rig, &truth, 30 + case % 50, case % 15, case as u64);
+        let scale = 10f64.powf(-4.0 + 2.0 * rng.next());
+        let loss: Box<dyn momo_core::RobustLoss> = match case % 4 {
+            0 => Box::new(Cauchy::new(scale)),
+            1 => Box::new(Huber::new(scale)),
+            2 => Box::new(Tukey::new(3.0 * scale)),
+            _ => Box::new(Trivial),
+        };
+        let model: Box<dyn momo_core::DynManifold> = match case / 4 % 4 {
+            0 => Box::new(Se3),
+            1 => Box::new(SoftSingleTrack::default()),
+            2 => Box::new(SingleTrack3d::default()),
+            _ => Box::new(SingleTrack2d),
+        };
+        // A start off the true motion (residuals, weights and the curvature all matter).
+        let mut params = model
+            .params_from_motion(&truth)
+            .unwrap_or_else(|| model.initial_params(truth.translation.norm()));
+        for (i, p) in params.iter_mut().enumerate() {
+            *p += 2e-3 * (i as f64 + 1.0) * (rng.next() - 0.5);
+        }
+        let mut fixed = vec![false; params.len()];
+        if let (true, Some(i)) = (case % 3 == 0, model.arc_length_index()) {
+            fixed[i] = true;
+        }
+        let prior = momo_core::MotionPrior {
+            center: params.iter().map(|p| p + 0.01).collect(),
+            inv_sigma: vec![10.0; params.len()],
+            rotation_center: [0.0, 0.0, 0.01],
+            rotation_inv_sigma: 50.0,
+            scale: 1e-3,
+            ..momo_core::MotionPrior::default()
+        };
+        let prior = (case % 5 < 3).then_some(&prior);
+        // The cells of two grids as the jackknife numbers them, and a random labelling.
+        let mut labellings = Vec::new();
+        for grid in [(3, 2), (4, 2)] {
+            let (labels, cells) = momo_vo::trust::cell_labels(rig, &obs, grid);
+            let alone = momo_vo::trust::cells_alone(rig, &obs, grid);
+            assert_eq!(cells, alone.len(), "case {case}");
+            for (g, cell) in alone.iter().enumerate() {
+                assert_eq!(group_of(rig, &obs, &labels, g), *cell, "case {case}");
+            }
+            labellings.push((labels, cells));
+        }
+        let random: Vec<usize> = (0..obs.len())
+            .map(|_| (rng.next() * 6.0) as usize)
+            .collect();
+        labellings.push((random, 5));
+        let (m, r) = (model.as_ref(), loss.as_ref());
+        let runs = [
+            grouped_case(
+                m,
+                &AnglePlane,
+                r,
+                rig,
+                &obs,
+                &params,
+                &fixed,
+                prior,
+                false,
+                &labellings,
+            ),
+            grouped_case(
+                m,
+                &AnglePlane,
+                r,
+                rig,
+                &obs,
+                &params,
+                &fixed,
+                prior,
+                true,
+                &labellings,
+            ),
+            grouped_case(
+                m,
+                &AnglePlaneMl,
+                r,
+                rig,
+                &obs,
+                &params,
+                &fixed,
+                prior,
+                false,
+                &labellings,
+            ),
+            if case % 2 == 0 {
+                grouped_case(
+                    m,
+                    &GeoLine,
+                    r,
+                    rig,
+                    &obs,
+                    &params,
+                    &fixed,
+                    prior,
+                    false,
+                    &labellings,
+                )
+            } else {
+                grouped_case(
+                    m,
+                    &Sampson,
+                    r,
+                    rig,
+                    &obs,
+                    &params,
+                    &fixed,
+                    prior,
+                    false,
+                    &labellings,
+                )
+            },
+        ];
+        for (d, g) in runs {
+            assert!(d <= 1e-12, "case {case}: {d:e} relative");
+            worst = worst.max(d);
+            groups += g;
+        }
+    }
+    assert!(groups > 10_000, "{groups} groups");
+    eprintln!("one pass against the separate linearisations: {worst:e} relative, {groups} groups");
+}
+
+/// The jackknife's leave-one-cell-out steps ([`momo_vo::trust::influence_step`]) and their
+/// covariance ([`momo_vo::trust::jackknife_covariance`]) from the one-pass sums
+/// ([`momo_core::Problem::exact_data_terms_by_group`]) against those from the separate
+/// linearisations the jackknife took before the fifteenth session (speed29: per cell, the loss
+/// and its [`momo_vo::trust::NegativeCurvature`], less the prior terms), on the frames of a
+/// simulated `moving_traffic` drive (5 % outliers, traffic) at the solver's minimum: the
+/// default stage loss, three models (the soft one with its prior residuals), a motion prior,
+/// the arc length fixed on every other frame, the cells of the default grids and of the
+/// clustering test's. The same cells have a step (`H - H_c` positive definite), and where the
+/// frame's exact Hessian is not near singular (condition at most 1e7) the steps agree within
+/// 1e-9 of the covariance's own scale and the covariances and their sigmas within 1e-9
+/// relative. The near-singular frames are not compared (about 30 of 400 covariances on this
+/// drive: conditions 1.2e7-4e7 and one frame at 6e15), as both paths' rounding is amplified
+/// there: on the 1e7-1e8 ones the sigmas differed by up to 2.8e-8 relative, the covariances
+/// by up to 9.5e-10 of their largest entry.
+#[test]
+fn one_pass_jackknife_equals_the_separate_linearisations() {
+    use momo_core::{LeastSquares, Problem};
+    use momo_costs::AnglePlane;
+    use momo_models::{Se3, SingleTrack3d, SoftSingleTrack};
+    use momo_vo::trust::{
+        NegativeCurvature, cell_labels, cells_alone, exact_hessian, influence_step,
+        jackknife_covariance,
+    };
+    let mut cfg = momo_sim::SimConfig::moving_traffic();
+    cfg.frames = 40;
+    cfg.seed = 5;
+    let sim = momo_sim::simulate(&cfg).expect("simulated");
+    let seq = &sim.sequence;
+    let rig = &seq.rig;
+    let config = momo_vo::Config::default();
+    let loss = config
+        .refine_loss
+        .as_deref()
+        .unwrap_or(config.loss.as_ref());
+    let curvature = NegativeCurvature::of(loss).expect("round trip");
+    let grids: Vec<(usize, usize)> = config
+        .trust
+        .jackknife_grids
+        .iter()
+        .chain(&config.trust.clustering_grids)
+        .map(|&[gx, gy]| (gx, gy))
+        .collect();
+    let models: [Box<dyn momo_core::DynManifold>; 3] = [
+        Box::new(SoftSingleTrack::default()),
+        Box::new(SingleTrack3d::default()),
+        Box::new(Se3),
+    ];
+    let (mut worst_cov, mut worst_sigma, mut worst_step) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut steps, mut undefined, mut covariances) = (0usize, 0usize, 0usize);
+    let mut ill_conditioned = 0usize;
+    for k in 1..seq.num_frames() {
+        let obs = &seq.frames[k];
+        let empty = FrameObservations::new(obs.per_camera.len());
+        for model in &models {
+            let model = model.as_ref();
+            let truth = sim.vehicle_motions[k];
+            let start = model
+                .params_from_motion(&truth)
+                .unwrap_or_else(|| model.initial_params(truth.translation.norm()));
+            let mut fixed = vec![false; start.len()];
+            if let (true, Some(i)) = (k % 2 == 0, model.arc_length_index()) {
+                fixed[i] = true;
+            }
+            let prior = momo_core::MotionPrior {
+                center: start.iter().map(|p| p + 1e-3).collect(),
+                inv_sigma: vec![20.0; start.len()],
+                rotation_center: [0.0, 0.0, 0.0],
+                rotation_inv_sigma: 100.0,
+                scale: 1e-3,
+                ..momo_core::MotionPrior::default()
+            };
+            macro_rules! problem {
+                ($o:expr, $l:expr, $p:expr) => {
+                    Problem::new(model, &AnglePlane, $l, rig, $o, $p)
+                        .expect("problem")
+                        .with_fixed(&fixed)
+                        .with_motion_prior(Some(&prior))
+                };
+            }
+            // The frame's minimum, as the odometry's stage solves it.
+            let p0 = problem!(obs, loss, &start);
+            let report = config.solver.solve(&p0, &p0.free_params());
+            let params = p0.full_params(&report.x);
+            let frame = problem!(obs, loss, &params);
+            let x = frame.free_params();
+            let n = frame.num_params();
+            let theta: Vec<f64> = x.rows(0, n).iter().copied().collect();
+            let lin = |o: &FrameObservations, l: &dyn momo_core::RobustLoss| {
+                problem!(o, l, &params).linearize(&x)
+            };
+            // Before: two linearisations of the frame and two of each cell.
+            let prior_lin = lin(&empty, loss);
+            let a = lin(obs, loss);
+            let old_h = exact_hessian(&a, &lin(obs, &curvature));
+            let old_g = a.gradient;
+            // Now: one pass.
+            let labels: Vec<(Vec<usize>, usize)> =
+                grids.iter().map(|&g| cell_labels(rig, obs, g)).collect();
+            let refs: Vec<(&[usize], usize)> =
+                labels.iter().map(|(l, c)| (l.as_slice(), *c)).collect();
+            let data = frame.exact_data_terms_by_group(&x, &refs);
+            let new_h = data.total.hessian + prior_lin.hessian;
+            let new_g = data.total.gradient + prior_lin.gradient;
+            for (&grid, sums) in grids.iter().zip(&data.groups) {
+                let cells = cells_alone(rig, obs, grid);
+                assert_eq!(cells.len(), sums.len(), "frame {k}");
+                let (mut old, mut new) = (Vec::new(), Vec::new());
+                for (cell, s) in cells.iter().zip(sums) {
+                    let ca = lin(cell, loss);
+                    let h_c = exact_hessian(&ca, &lin(cell, &curvature)) - prior_lin.hessian;
+                    let g_c = ca.gradient - prior_lin.gradient;
+                    let o = influence_step(&theta, (&old_h, &old_g), (&h_c, &g_c), n);
+                    let m = influence_step(&theta, (&new_h, &new_g), (&s.hessian, &s.gradient), n);
+                    assert_eq!(o.is_some(), m.is_some(), "frame {k}, grid {grid:?}");
+                    match (o, m) {
+                        (Some(o), Some(m)) => {
+                            steps += 1;
+                            old.push(o);
+                            new.push(m);
+                        }
+                        _ => undefined += 1,
+                    }
+                }
+                let (Some(co), Some(cn)) = (jackknife_covariance(&old), jackknife_covariance(&new))
+                else {
+                    continue;
+                };
+                // A frame whose exact Hessian is near singular (condition above 1e7 over the
+                // free parameters: both paths' rounding, about 1e-16 of its largest entries,
+                // is amplified by the condition into the weak directions) is not compared.
+                let e = nalgebra::SymmetricEigen::new(old_h.view((0, 0), (n, n)).into_owned())
+                    .eigenvalues;
+                let smallest = e.iter().fold(f64::INFINITY, |a, b| a.min(b.abs()));
+                if !(e.amax() <= 1e7 * smallest) {
+                    ill_conditioned += 1;
+                    continue;
+                }
+                covariances += 1;
+                let scale = co.amax().max(f64::MIN_POSITIVE);
+                worst_cov = worst_cov.max((&cn - &co).amax() / scale);
+                for i in 0..n {
+                    let (so, sn) = (co[(i, i)].sqrt(), cn[(i, i)].sqrt());
+                    if so > 0.0 {
+                        worst_sigma = worst_sigma.max((sn - so).abs() / so);
+                    }
+                }
+                // Each step against the spread of the samples (the covariance's scale).
+                let spread = scale.sqrt();
+                for (o, m) in old.iter().zip(&new) {
+                    for (a, b) in o.iter().zip(m) {
+                        worst_step = worst_step.max((a - b).abs() / spread);
+                    }
+                }
+            }
+        }
+    }
+    assert!(steps > 1000, "{steps} steps");
+    assert!(
+        undefined > 0,
+        "no cell without a step: the check is not exercised"
+    );
+    assert!(covariances > 100, "{covariances} covariances");
+    assert!(
+        ill_conditioned * 8 <= covariances,
+        "{ill_conditioned} near-singular frames' covariances not compared, {covariances} compared"
+    );
+    assert!(worst_cov <= 1e-9, "covariance {worst_cov:e} relative");
+    assert!(worst_sigma <= 1e-9, "sigma {worst_sigma:e} relative");
+    assert!(worst_step <= 1e-9, "step {worst_step:e} of the spread");
+    eprintln!(
+        "{steps} steps, {undefined} undefined, {covariances} covariances ({ill_conditioned} \
+         near-singular not compared): covariance {worst_cov:e}, sigma {worst_sigma:e}, step \
+         {worst_step:e} relative"
+    );
+}
