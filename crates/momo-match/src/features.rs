@@ -624,7 +624,10 @@ impl FrameFeatures {
                                 u: (BORDER + k) as u16,
                                 v: v as u16,
                                 class,
-                                cleared: ((v1 - 1).saturating_sub(v) * usize::from(checked)) as u8,
+                                cleared: Extremum::cleared_rows(
+                                    (v1 - 1).saturating_sub(v) * usize::from(checked),
+                                    r * usize::from(checked),
+                                ),
                             };
                         }
                         len[c] += usize::from(keep);
@@ -851,9 +854,31 @@ struct Extremum {
     u: u16,
     v: u16,
     class: u8,
-    /// Rows below `v` that pass 1 has cleared: the rest of the candidate's block row, where its
-    /// necessary condition ran ([`packed_candidate`]), else 0.
+    /// Rows that pass 1 has cleared, where its necessary condition ran ([`packed_candidate`],
+    /// else 0): the low nibble those below `v` (the rest of the candidate's block row: no pixel
+    /// strictly better), the high nibble those above `v` within the block row (no pixel at
+    /// least as good). Both are below [`PACKED_ROWS`].
     cleared: u8,
+}
+
+impl Extremum {
+    /// The [`cleared`](Self::cleared) field of `below` and `above` rows (each below 16).
+    #[inline(always)]
+    fn cleared_rows(below: usize, above: usize) -> u8 {
+        ((below & 15) | (above & 15) << 4) as u8
+    }
+
+    /// Rows below `v` that pass 1 has cleared.
+    #[inline(always)]
+    fn cleared_below(self) -> usize {
+        usize::from(self.cleared & 15)
+    }
+
+    /// Rows above `v` that pass 1 has cleared.
+    #[inline(always)]
+    fn cleared_above(self) -> usize {
+        usize::from(self.cleared >> 4)
+    }
 }
 
 /// Rows of a block whose row index fits the packed keys of
@@ -1027,9 +1052,10 @@ type Candidate = (i16, usize, usize, bool, bool);
 /// response, column `k` and row within the block of the first pixel holding the block's
 /// extreme, and whether it is a candidate: strong (`|response| >= tau`) and no column extreme
 /// of the block row within its window (columns `k - n..=k + n`, where those and the 16 lanes
-/// from `k - n` lie inside) strictly better (a key beyond `8 val + 7` for maxima, below `8 val`
-/// for minima: a strictly better response); the fourth field says whether that check ran (then
-/// no pixel of the block row in the window is strictly better). Without branches on the data
+/// from `k - n` lie inside) beyond the block's best key (a strictly better response, or an
+/// equal one in an earlier row of the block row, which comes before the candidate); the fourth
+/// field says whether that check ran (then no pixel of the block row in the window is strictly
+/// better, and none in the rows above the candidate's is as good). Without branches on the data
 /// (whether a block has a candidate is close to a coin toss): every column of the block is
 /// compared at once (the padding never equals a block's extreme), the conditions are combined
 /// as booleans.
@@ -1054,7 +1080,9 @@ fn packed_candidate<const MAX: bool>(
         .and_then(|x| x.try_into().ok())
         .unwrap_or([best; 8]);
     let k = k0 + first_equal_lane(lanes, best, n + 1);
-    let threshold = if MAX { best | 7 } else { best & !7 };
+    // A key beyond the block's best: a strictly better response, or an equal one in an
+    // earlier row of the block row (inside the window, and before the candidate).
+    let threshold = best;
     let checked = k >= n && k - n + LANES <= inner;
     let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
     let beaten = checked & better::<MAX>(lane, threshold);
@@ -1222,7 +1250,8 @@ fn beaten_in_block_row<const MAX: bool>(
 /// likewise the rows below, then per lane one comparison of each ([`LaneOffsets`]): above, a
 /// pixel at least as good beats `val`, below one strictly better; in row `v` those left of `u`
 /// when at least as good, those right of it when better. The rows below start after the
-/// `e.cleared` rows that pass 1 has cleared (no pixel strictly better there). Row `y` of `img`
+/// rows that pass 1 has cleared ([`Extremum::cleared`]: below, none strictly better; above, none at
+/// least as good). Row `y` of `img`
 /// is at `(y & mask) * w` (a ring of rows, [`FrameFeatures::filter_and_suppress`]).
 #[inline(always)]
 fn window_check<const MAX: bool>(
@@ -1250,8 +1279,8 @@ fn window_check<const MAX: bool>(
         }
         acc
     };
-    let above = reduce(v - n..v);
-    let below = reduce((v + 1 + usize::from(e.cleared)).min(v + n + 1)..v + n + 1);
+    let above = reduce(v - n..v - e.cleared_above().min(n));
+    let below = reduce((v + 1 + e.cleared_below()).min(v + n + 1)..v + n + 1);
     let centre = row(v);
     let m = usize::from(!MAX);
     !(any_better::<MAX>(&above, &lanes.above[m], val)
