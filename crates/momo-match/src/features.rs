@@ -392,6 +392,9 @@ pub struct FrameFeatures {
     corner: Vec<i16>,
     /// Rows of the response ring, a power of two.
     ring: usize,
+    /// Pass 1's packed column keys of the block rows in use ([`KeyRing`]), for pass 2's test
+    /// against the block rows above and below.
+    keys: Vec<i16>,
     /// The features per class: blob max, blob min, corner max, corner min.
     pub classes: [ClassFeatures; CLASSES],
 }
@@ -471,19 +474,27 @@ impl FrameFeatures {
         let tau = options.threshold.clamp(1, i32::from(i16::MAX)) as i16;
         let step = n + 1;
         let block_rows: Vec<usize> = (BORDER..h - BORDER).step_by(step).collect();
-        let per_strip = (strip_rows / step).max(1);
-        // The ring holds the rows a strip reads: from `n` above its first block row to what its
-        // windows and descriptors reach below its end, and the first strip's filters from row 0.
+        let per_strip = (strip_rows / step).clamp(1, block_rows.len().max(1));
         let reach = n.max(DESCRIPTOR_REACH);
-        let ring = (BORDER + per_strip * step + 2 * reach + 1)
+        // Pass 2 of a strip's last block row waits for the next strip's pass 1 (the column keys
+        // of the block row below it). So the ring holds the rows from `n` above the block row
+        // before the strip (or from row 0 for the first strip) to what the strip's windows and
+        // descriptors reach below its end.
+        let ring = (BORDER.max(n + step) + per_strip * step + reach)
             .min(h)
             .next_power_of_two();
         self.ring = ring;
         self.blob.resize(ring * w, 0);
         self.corner.resize(ring * w, 0);
+        let packed = n < PACKED_ROWS;
+        let key_ring = KeyRing::new(w, per_strip);
+        let mut keys = std::mem::take(&mut self.keys);
+        key_ring.reset(&mut keys);
         // Rows `..filtered` hold their responses.
         let mut filtered = 0;
-        for strip in block_rows.chunks(per_strip) {
+        // The block row whose pass 2 waits: its index and candidates.
+        let mut pending: Option<(usize, Vec<Extremum>)> = None;
+        for (s, strip) in block_rows.chunks(per_strip).enumerate() {
             let last = strip.last().copied().unwrap_or(BORDER);
             let end = (last + step).min(h - BORDER);
             // The windows reach `n` rows below the strip's last row, the descriptors 5.
@@ -501,13 +512,26 @@ impl FrameFeatures {
                 );
                 filtered = target;
             }
-            let extrema = if n < PACKED_ROWS {
-                self.block_extrema_packed(strip, n, tau)
+            let first = s * per_strip;
+            let mut extrema = if packed {
+                self.block_extrema_packed(strip, n, tau, key_ring.strip_mut(&mut keys, first))
             } else {
                 self.block_extrema(strip, n, tau)
             };
-            self.check_and_describe(n, &extrema);
+            let later = extrema.pop().unwrap_or_default();
+            let (from, rows) = match pending.take() {
+                Some((b, row)) => (b, std::iter::once(row).chain(extrema).collect()),
+                None => (first, extrema),
+            };
+            let neighbours = packed.then(|| (&keys[..], key_ring, block_rows.len()));
+            self.check_and_describe(n, from, &rows, neighbours);
+            pending = Some((first + strip.len() - 1, later));
         }
+        if let Some((b, row)) = pending {
+            let neighbours = packed.then(|| (&keys[..], key_ring, block_rows.len()));
+            self.check_and_describe(n, b, &[row], neighbours);
+        }
+        self.keys = keys;
         if filtered < h {
             responses(
                 px,
@@ -535,6 +559,7 @@ impl FrameFeatures {
         block_rows: &[usize],
         n: usize,
         tau: i16,
+        keys: &mut [i16],
     ) -> Vec<Vec<Extremum>> {
         let (w, h) = (self.width, self.height);
         let step = n + 1;
@@ -547,6 +572,7 @@ impl FrameFeatures {
         let blocks = inner.div_ceil(step);
         block_rows
             .par_iter()
+            .zip(keys.par_chunks_mut(CLASSES * total))
             .map_init(
                 || {
                     let mut s = Reused::take(&PASS_ONE_SCRATCH);
@@ -560,7 +586,7 @@ impl FrameFeatures {
                     }
                     s
                 },
-                |s, &v0| {
+                |s, (&v0, keys)| {
                     let PassOneScratch {
                         cols,
                         sliding: scratch,
@@ -654,6 +680,10 @@ impl FrameFeatures {
                     let mut row = Vec::with_capacity(len.iter().sum());
                     for (c, &l) in len.iter().enumerate() {
                         row.extend_from_slice(&out[c * blocks..c * blocks + l]);
+                    }
+                    // The column keys, for pass 2 of the block rows above and below.
+                    for (dst, col) in keys.chunks_exact_mut(total).zip(cols.iter()) {
+                        dst.copy_from_slice(&col[..total]);
                     }
                     row
                 },
@@ -761,7 +791,13 @@ impl FrameFeatures {
     /// Pass 2 of the suppression: the window check of every strong block extremum; survivors
     /// are refined to sub-pixel and described, in the order of a serial scan.
     #[inline(never)]
-    fn check_and_describe(&mut self, n: usize, extrema: &[Vec<Extremum>]) {
+    fn check_and_describe(
+        &mut self,
+        n: usize,
+        from: usize,
+        extrema: &[Vec<Extremum>],
+        neighbours: Option<(&[i16], KeyRing, usize)>,
+    ) {
         let (w, h) = (self.width, self.height);
         let lanes = &LaneOffsets::new(n);
         let (blob, corner, sobel) = (&self.blob, &self.corner, &self.sobel);
@@ -780,10 +816,18 @@ impl FrameFeatures {
                     // outcome (close to a coin toss), then the survivors described.
                     kept.clear();
                     kept.resize(run.len(), Extremum::default());
+                    // The column keys of the block rows above and below (padding where there
+                    // is none).
+                    let b = from + by;
+                    let near = neighbours.map(|(keys, ring, rows)| {
+                        let above = ring.class(keys, b.checked_sub(1), class);
+                        let below = ring.class(keys, (b + 1 < rows).then_some(b + 1), class);
+                        (above, below, BORDER + b * (n + 1))
+                    });
                     let len = if class % 2 == 0 {
-                        survivors::<true>(img, (w, h), mask, n, lanes, run, &mut kept)
+                        survivors::<true>(img, (w, h), mask, n, lanes, run, &mut kept, near)
                     } else {
-                        survivors::<false>(img, (w, h), mask, n, lanes, run, &mut kept)
+                        survivors::<false>(img, (w, h), mask, n, lanes, run, &mut kept, near)
                     };
                     let points = &mut out[class];
                     points.reserve_exact(len);
@@ -816,7 +860,11 @@ impl FrameFeatures {
 
 /// Pass 2's window checks of one class's candidates `run` (maxima if `MAX`): the survivors
 /// are copied to the front of `kept` (at least `run.len()` long), their number returned. Every
-/// candidate is written and the count advanced by the outcome (no branch on it).
+/// candidate is written and the count advanced by the outcome (no branch on it). With
+/// `neighbours` (the class's column keys of the block rows above and below the candidates',
+/// and the first row of theirs), a first round drops the candidates that those keys beat
+/// ([`beaten_by_neighbours`], a necessary condition), so that fewer reach the window check.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn survivors<const MAX: bool>(
     img: &[i16],
@@ -826,23 +874,139 @@ fn survivors<const MAX: bool>(
     lanes: &LaneOffsets,
     run: &[Extremum],
     kept: &mut [Extremum],
+    neighbours: Option<(&[i16], &[i16], usize)>,
 ) -> usize {
-    let mut len = 0;
-    for e in run {
+    let check = |e: Extremum| {
         let (u, v) = (usize::from(e.u), usize::from(e.v));
         // The 16-column check where the window fits it, else the whole window is scanned.
         let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
-        let keep = if fits {
-            window_check::<MAX>(img, w, mask, *e, n, lanes)
+        if fits {
+            window_check::<MAX>(img, w, mask, e, n, lanes)
         } else {
             is_extremum::<MAX>(img, w, h, mask, u, v, n, e.val)
-        };
-        if let Some(slot) = kept.get_mut(len) {
+        }
+    };
+    let Some((above, below, v0)) = neighbours else {
+        let mut len = 0;
+        for e in run {
+            let keep = check(*e);
+            if let Some(slot) = kept.get_mut(len) {
+                *slot = *e;
+            }
+            len += usize::from(keep);
+        }
+        return len;
+    };
+    let mut first = 0;
+    for e in run {
+        let k = usize::from(e.u) - BORDER;
+        let r = usize::from(e.v) - v0;
+        let beaten = beaten_by_neighbours::<MAX>(above, below, &lanes.inside, k, n, r, e.val);
+        if let Some(slot) = kept.get_mut(first) {
             *slot = *e;
         }
+        first += usize::from(!beaten);
+    }
+    let mut len = 0;
+    for i in 0..first.min(kept.len()) {
+        let e = kept[i];
+        let keep = check(e);
+        kept[len] = e;
         len += usize::from(keep);
     }
     len
+}
+
+/// Where pass 1's column keys of block row `b` are kept for pass 2
+/// ([`FrameFeatures::filter_and_suppress`]): slot `b % (3 * per_strip)`, each slot the four
+/// classes' padded keys (`inner + PAD` each), so that a strip's block rows take consecutive
+/// slots and the two strips before it stay; one last slot of padding (keys that never beat) for
+/// the missing neighbours of the first and last block rows.
+#[derive(Clone, Copy, Debug)]
+struct KeyRing {
+    total: usize,
+    per_strip: usize,
+}
+
+impl KeyRing {
+    fn new(w: usize, per_strip: usize) -> Self {
+        Self {
+            total: w - 2 * BORDER + PAD,
+            per_strip,
+        }
+    }
+
+    fn slots(self) -> usize {
+        3 * self.per_strip
+    }
+
+    fn slot_len(self) -> usize {
+        CLASSES * self.total
+    }
+
+    /// Sizes `keys` and fills the padding slot.
+    fn reset(self, keys: &mut Vec<i16>) {
+        keys.resize((self.slots() + 1) * self.slot_len(), 0);
+        let pad = &mut keys[self.slots() * self.slot_len()..];
+        for (class, row) in pad.chunks_exact_mut(self.total).enumerate() {
+            row.fill(if class % 2 == 0 { i16::MIN } else { i16::MAX });
+        }
+    }
+
+    /// The slots of the strip whose first block row is `first`.
+    fn strip_mut(self, keys: &mut [i16], first: usize) -> &mut [i16] {
+        let a = first % self.slots();
+        &mut keys[a * self.slot_len()..(a + self.per_strip) * self.slot_len()]
+    }
+
+    /// The keys of `class` of block row `b` (the padding if `None`).
+    fn class(self, keys: &[i16], b: Option<usize>, class: usize) -> &[i16] {
+        let slot = b.map_or(self.slots(), |b| b % self.slots());
+        let at = (slot * CLASSES + class) * self.total;
+        &keys[at..at + self.total]
+    }
+}
+
+/// Pass 2's first test: true if a packed column key ([`pack_max`], [`pack_min`]) of the block
+/// row above or below the candidate's, within its window's columns (lanes `inside`, from column
+/// `k - n`; `k` the candidate's column less [`BORDER`]), beats it from a row inside its window
+/// (`r` the candidate's row within its block row): above (its row after `r` in its block), a
+/// response at least as good; below (its row before `r`), a strictly better one. A key holds
+/// its column's best response in that block row and the first row holding it, so this is a
+/// necessary condition only (ties and pixels behind a key are left to [`window_check`]). False
+/// where the 16 lanes do not fit.
+#[inline(always)]
+fn beaten_by_neighbours<const MAX: bool>(
+    above: &[i16],
+    below: &[i16],
+    inside: &[bool; LANES],
+    k: usize,
+    n: usize,
+    r: usize,
+    val: i16,
+) -> bool {
+    let k0 = k.wrapping_sub(n);
+    let lanes = |keys: &[i16]| -> Option<[i16; LANES]> {
+        keys.get(k0..k0.wrapping_add(LANES))
+            .and_then(|x| x.try_into().ok())
+    };
+    let (Some(a), Some(b)) = (lanes(above), lanes(below)) else {
+        return false;
+    };
+    let r = r as i16;
+    let mut any = false;
+    for j in 0..LANES {
+        let (va, vb) = (a[j] >> 3, b[j] >> 3);
+        let (ra, rb) = if MAX {
+            (7 - (a[j] & 7), 7 - (b[j] & 7))
+        } else {
+            (a[j] & 7, b[j] & 7)
+        };
+        let hit_a = (if MAX { va >= val } else { va <= val }) & (ra > r);
+        let hit_b = better::<MAX>(vb, val) & (rb < r);
+        any |= inside[j] & (hit_a | hit_b);
+    }
+    any
 }
 
 /// The strong extremum of one block and class: a candidate of pass 2 (pass 1 lists them per
@@ -1175,6 +1339,8 @@ struct LaneOffsets {
     /// The block row's column extremes (strictly better beats; ties are left to the exact
     /// check).
     block_row: [[i16; LANES]; 2],
+    /// The lanes inside the window (`k <= 2n`).
+    inside: [bool; LANES],
 }
 
 impl LaneOffsets {
@@ -1200,6 +1366,7 @@ impl LaneOffsets {
                 std::cmp::Ordering::Greater => NEVER,
             }),
             block_row: lane(&|k| if inside(k) { 0 } else { NEVER }),
+            inside: std::array::from_fn(inside),
         }
     }
 }
@@ -1821,7 +1988,8 @@ mod tests {
                 for tau in [1i16, 50, 600] {
                     let rows: Vec<usize> = (BORDER..f.height - BORDER).step_by(n + 1).collect();
                     let a = f.block_extrema(&rows, n, tau);
-                    let b = f.block_extrema_packed(&rows, n, tau);
+                    let mut keys = vec![0; rows.len() * CLASSES * (w - 2 * BORDER + PAD)];
+                    let b = f.block_extrema_packed(&rows, n, tau, &mut keys);
                     let key = |e: &Extremum| (e.class, e.val, e.u, e.v);
                     let mask = f.ring - 1;
                     let exact = |e: &Extremum| {
