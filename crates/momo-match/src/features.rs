@@ -876,16 +876,7 @@ fn survivors<const MAX: bool>(
     kept: &mut [Extremum],
     neighbours: Option<(&[i16], &[i16], usize)>,
 ) -> usize {
-    let check = |e: Extremum| {
-        let (u, v) = (usize::from(e.u), usize::from(e.v));
-        // The 16-column check where the window fits it, else the whole window is scanned.
-        let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
-        if fits {
-            window_check::<MAX>(img, w, mask, e, n, lanes)
-        } else {
-            is_extremum::<MAX>(img, w, h, mask, u, v, n, e.val)
-        }
-    };
+    let check = |e: Extremum| check_one::<MAX>(img, (w, h), mask, n, lanes, e);
     let Some((above, below, v0)) = neighbours else {
         let mut len = 0;
         for e in run {
@@ -915,6 +906,26 @@ fn survivors<const MAX: bool>(
         len += usize::from(keep);
     }
     len
+}
+
+/// The exact window check of one candidate: the 16-column check where the window fits it,
+/// else the whole window is scanned.
+#[inline(always)]
+fn check_one<const MAX: bool>(
+    img: &[i16],
+    (w, h): (usize, usize),
+    mask: usize,
+    n: usize,
+    lanes: &LaneOffsets,
+    e: Extremum,
+) -> bool {
+    let (u, v) = (usize::from(e.u), usize::from(e.v));
+    let fits = lanes.fits && u >= n && u - n + LANES <= w && v >= n && v + n < h;
+    if fits {
+        window_check::<MAX>(img, w, mask, e, n, lanes)
+    } else {
+        is_extremum::<MAX>(img, w, h, mask, u, v, n, e.val)
+    }
 }
 
 /// Where pass 1's column keys of block row `b` are kept for pass 2
