@@ -2033,7 +2033,11 @@ mod tests {
                         let img = if e.class < 2 { &f.blob } else { &f.corner };
                         let (u, v) = (usize::from(e.u), usize::from(e.v));
                         let beats = |x: i16, equal: bool| {
-                            let better = if e.class % 2 == 0 { x > e.val } else { x < e.val };
+                            let better = if e.class % 2 == 0 {
+                                x > e.val
+                            } else {
+                                x < e.val
+                            };
                             better || (equal && x == e.val)
                         };
                         let cols = u.saturating_sub(n)..(u + n + 1).min(w);
