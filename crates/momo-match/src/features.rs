@@ -650,10 +650,9 @@ impl FrameFeatures {
                                 u: (BORDER + k) as u16,
                                 v: v as u16,
                                 class,
-                                cleared: Extremum::cleared_rows(
-                                    (v1 - 1).saturating_sub(v) * usize::from(checked),
-                                    r * usize::from(checked),
-                                ),
+                                // `v < v1`: the rows below `v` in its block row.
+                                cleared: Extremum::cleared_rows(v1 - 1 - v, r)
+                                    & 0u8.wrapping_sub(u8::from(checked)),
                             };
                         }
                         len[c] += usize::from(keep);
@@ -1037,10 +1036,12 @@ struct Extremum {
 }
 
 impl Extremum {
-    /// The [`cleared`](Self::cleared) field of `below` and `above` rows (each below 16).
+    /// The [`cleared`](Self::cleared) field of `below` and `above` rows (each below 16, as
+    /// the rows of a block are: [`PACKED_ROWS`]).
     #[inline(always)]
     fn cleared_rows(below: usize, above: usize) -> u8 {
-        ((below & 15) | (above & 15) << 4) as u8
+        debug_assert!(below < 16 && above < 16, "{below} {above}");
+        (below | above << 4) as u8
     }
 
     /// Rows below `v` that pass 1 has cleared.
