@@ -55,6 +55,15 @@ const PATTERN: [(i32, i32); 16] = [
     (1, 5),
 ];
 
+// The descriptor reads every other row of its window ([`descriptor`]).
+const _: () = {
+    let mut k = 0;
+    while k < PATTERN.len() {
+        assert!((PATTERN[k].1 + DESCRIPTOR_REACH as i32) % 2 == 0);
+        k += 1;
+    }
+};
+
 /// Options of the detector.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DetectorOptions {
@@ -1299,16 +1308,25 @@ const SOBEL_FLAT: u16 = 128 | 128 << 8;
 #[inline]
 fn descriptor(sobel: &[u16], w: usize, u: usize, v: usize) -> Descriptor {
     // Gathered first, then split into the du and dv halves (two vectorised byte packs). The
-    // 11x11 window is one slice, each sample at a fixed offset of it plus a multiple of `w`.
+    // pattern reads every other row of the 11x11 window; each of those rows is an array of its
+    // 11 columns, so that the samples' columns (constants) need no bounds check: one check per
+    // row read (6), not per sample (16).
+    const SPAN: usize = 2 * DESCRIPTOR_REACH + 1;
     let top = (v - DESCRIPTOR_REACH) * w + u - DESCRIPTOR_REACH;
-    let window = &sobel[top..top + 2 * DESCRIPTOR_REACH * w + 2 * DESCRIPTOR_REACH + 1];
+    let rows: [&[u16; SPAN]; SPAN.div_ceil(2)] = std::array::from_fn(|i| {
+        let at = top + 2 * i * w;
+        // A window that does not fit (never: the features lie `DESCRIPTOR_REACH` inside)
+        // panics here as before; the fallback is dead (the slice is `SPAN` long).
+        let row: &[u16] = &sobel[at..at + SPAN];
+        row.try_into().unwrap_or(&[SOBEL_FLAT; SPAN])
+    });
     let s: [u16; 16] = std::array::from_fn(|k| {
         let (dx, dy) = PATTERN[k];
         let (dx, dy) = (
             (dx + DESCRIPTOR_REACH as i32) as usize,
             (dy + DESCRIPTOR_REACH as i32) as usize,
         );
-        window[dy * w + dx]
+        rows[dy / 2][dx]
     });
     let mut d = [0u8; 32];
     for k in 0..16 {
