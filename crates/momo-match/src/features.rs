@@ -1268,7 +1268,7 @@ fn packed_candidate<const MAX: bool>(
     // A key beyond the block's best: a strictly better response, or an equal one in an
     // earlier row of the block row (inside the window, and before the candidate).
     let threshold = best;
-    let checked = k >= n && k - n + LANES <= inner;
+    let checked = (k >= n) & (k.wrapping_sub(n).wrapping_add(LANES) <= inner);
     let lane = window.get(k.wrapping_sub(n)).copied().unwrap_or(threshold);
     let beaten = checked & better::<MAX>(lane, threshold);
     let low = best & 7;
