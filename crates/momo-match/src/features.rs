@@ -841,10 +841,15 @@ impl FrameFeatures {
                     points.reserve_exact(len);
                     for e in &kept[..len] {
                         let (u, v) = (usize::from(e.u), usize::from(e.v));
-                        let r = |x: usize, y: usize| f64::from(img[(y & mask) * w + x]);
-                        let c = r(u, v);
-                        let x = u as f64 + vertex(r(u - 1, v), c, r(u + 1, v));
-                        let y = v as f64 + vertex(r(u, v - 1), c, r(u, v + 1));
+                        // The candidate's row from `u - 1` to `u + 1` and the pixels above
+                        // and below it (inside: the window check has read them).
+                        let at = |y: usize| (y & mask) * w + u;
+                        let [l, c, r]: [i16; 3] =
+                            img[at(v) - 1..at(v) + 2].try_into().unwrap_or([e.val; 3]);
+                        let (a, b) = (img[at(v - 1)], img[at(v + 1)]);
+                        let f = f64::from;
+                        let x = u as f64 + vertex(f(l), f(c), f(r));
+                        let y = v as f64 + vertex(f(a), f(c), f(b));
                         points.push(Feature {
                             u: e.u,
                             v: e.v,
