@@ -1001,7 +1001,7 @@ mod partial_tests {
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
-             [odometry.separate.hypotheses]\nenabled = false\n",
+             ground_admit = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )
         .expect("the bare separation");

@@ -213,7 +213,9 @@ pub struct SeparateOptions {
     /// the next frame's first motion A follows the bus, the split between A and the static
     /// motion does not persist in the memory and competition over time rejects the static
     /// motion, whose road is spread over the lower image while the bus hides the road from A
-    /// (docs/RESULTS.md §9, fifteenth session).
+    /// (docs/RESULTS.md §9, fifteenth session). 2 in
+    /// [`SeparateOptions::competition_over_time`] (the default configuration's) since the
+    /// fifteenth session; 0 in [`SeparateOptions::default`].
     pub ground_admit: f64,
     /// The least score (image cells) of an alternative admitted by
     /// [`SeparateOptions::ground_admit`].
@@ -272,7 +274,9 @@ impl SeparateOptions {
     /// solved exactly as without the separation. Since the twelfth session the matches are
     /// balanced over image regions where they cluster (`cell_cap = 2`, `cell_cap_first`,
     /// gated by `cell_cap_min_share = 0.2`): a frame whose matches are spread out is solved as
-    /// before. A config file's
+    /// before. Since the fifteenth session a second motion that fails competition over time
+    /// still competes where its ground score is at least twice A's (`ground_admit = 2`,
+    /// `ground_admit_min = 12`). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -287,6 +291,7 @@ impl SeparateOptions {
             own_persistence: 0.2,
             cell_cap: 2.0,
             cell_cap_first: true,
+            ground_admit: 2.0,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 ..HypothesesOptions::default()
