@@ -471,7 +471,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # support without the remembered-other matches (final_fit, memory_exclude);\n\
          # cell_cap: at most max(2, ceil(cell_cap x median)) matches per image cell\n\
          # (cell_cap_grid per camera) in the final stage and, with cell_cap_first, in a\n\
-         # re-solve of the first motion, where that leaves out cell_cap_min_share of them.\n\
+         # re-solve of the first motion, where that leaves out cell_cap_min_share of them;\n\
+         # ground_admit: a second motion failing the persistence test still competes if its\n\
+         # ground score is at least ground_admit_min and ground_admit times the first's.\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
@@ -1017,7 +1019,7 @@ mod partial_tests {
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
-             [odometry.separate.hypotheses]\nenabled = false\n",
+             ground_admit = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )
         .expect("the bare separation");

@@ -200,6 +200,26 @@ pub struct SeparateOptions {
     /// simulated static scenarios and 2 % on real KITTI 00, against a median 37 % on the
     /// moving-traffic family (docs/RESULTS.md §9, twelfth session).
     pub cell_cap_min_share: f64,
+    /// Competition by the ground cue (0: off; needs [`SeparateOptions::persistence`] and the
+    /// multi-frame choice, [`SeparateOptions::hypotheses`]): an alternative whose split the
+    /// memory does not follow (its [`persistence`] below what
+    /// [`SeparateOptions::persistence`] / [`SeparateOptions::own_persistence`] ask) still
+    /// competes if its own matches (in its support, outside A's) hold at least
+    /// [`SeparateOptions::own_share`] of the frame's matches and its score of the multi-frame
+    /// choice ([`crate::hypotheses::score`]: the image cells of its road points with the
+    /// default's `spread_grid`) is at least [`SeparateOptions::ground_admit_min`] and at least
+    /// this factor times A's. A bus driving with the ego vehicle fits the static motion near
+    /// the focus of expansion: the memory of a frame solved right labels it static, so where
+    /// the next frame's first motion A follows the bus, the split between A and the static
+    /// motion does not persist in the memory and competition over time rejects the static
+    /// motion, whose road is spread over the lower image while the bus hides the road from A
+    /// (docs/RESULTS.md §9, fifteenth session). 2 in
+    /// [`SeparateOptions::competition_over_time`] (the default configuration's) since the
+    /// fifteenth session; 0 in [`SeparateOptions::default`].
+    pub ground_admit: f64,
+    /// The least score (image cells) of an alternative admitted by
+    /// [`SeparateOptions::ground_admit`].
+    pub ground_admit_min: usize,
 }
 
 impl Default for SeparateOptions {
@@ -237,6 +257,8 @@ impl Default for SeparateOptions {
             cell_cap_grid: (16, 8),
             cell_cap_first: false,
             cell_cap_min_share: 0.2,
+            ground_admit: 0.0,
+            ground_admit_min: 12,
         }
     }
 }
@@ -252,7 +274,9 @@ impl SeparateOptions {
     /// solved exactly as without the separation. Since the twelfth session the matches are
     /// balanced over image regions where they cluster (`cell_cap = 2`, `cell_cap_first`,
     /// gated by `cell_cap_min_share = 0.2`): a frame whose matches are spread out is solved as
-    /// before. A config file's
+    /// before. Since the fifteenth session a second motion that fails competition over time
+    /// still competes where its ground score is at least twice A's (`ground_admit = 2`,
+    /// `ground_admit_min = 12`). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -267,6 +291,7 @@ impl SeparateOptions {
             own_persistence: 0.2,
             cell_cap: 2.0,
             cell_cap_first: true,
+            ground_admit: 2.0,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 ..HypothesesOptions::default()
@@ -344,6 +369,9 @@ impl SeparateOptions {
         }
         if !(0.0..=1.0).contains(&self.cell_cap_min_share) {
             return Err("odometry.separate.cell_cap_min_share must be in [0, 1]".into());
+        }
+        if !(self.ground_admit.is_finite() && self.ground_admit >= 0.0) {
+            return Err("odometry.separate.ground_admit must be a non-negative number".into());
         }
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
@@ -756,14 +784,41 @@ pub fn separate(
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
+        // A's score of the multi-frame choice, for `ground_admit` (computed once, if asked).
+        let mut score_a: Option<usize> = None;
         alternatives.retain(|alt| {
             let p = labels
                 .as_ref()
                 .map_or(0.0, |l| persistence(l, &alt.1, &chosen.1));
-            p >= opts.persistence
-                || (opts.own_share > 0.0
-                    && p >= opts.own_persistence
-                    && count(&and(&alt.1, &not(&chosen.1))) as f64 >= opts.own_share * n as f64)
+            let own_share_met = opts.own_share > 0.0
+                && count(&and(&alt.1, &not(&chosen.1))) as f64 >= opts.own_share * n as f64;
+            if p >= opts.persistence || (own_share_met && p >= opts.own_persistence) {
+                return true;
+            }
+            // Competition by the ground cue (`ground_admit`).
+            let Some(h) = opts
+                .hypotheses()
+                .filter(|_| opts.ground_admit > 0.0 && own_share_met)
+            else {
+                return false;
+            };
+            let s = score(
+                h,
+                ctx.rig,
+                &ctx.estimator.motion(&alt.0.params),
+                obs,
+                &alt.1,
+            );
+            let sa = *score_a.get_or_insert_with(|| {
+                score(
+                    h,
+                    ctx.rig,
+                    &ctx.estimator.motion(&chosen.0.params),
+                    obs,
+                    &chosen.1,
+                )
+            });
+            s >= opts.ground_admit_min && s as f64 >= opts.ground_admit * sa as f64
         });
     }
     outcome.competing = !alternatives.is_empty();
@@ -1189,6 +1244,8 @@ mod tests {
             "cell_cap = -1.0",
             "cell_cap_grid = [0, 8]",
             "cell_cap_min_share = 1.5",
+            "ground_admit = -1.0",
+            "ground_admit = nan",
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");

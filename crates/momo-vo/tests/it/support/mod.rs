@@ -125,18 +125,24 @@ pub fn rot_err_deg(a: &Pose<f64>, b: &Pose<f64>) -> f64 {
         .to_degrees()
 }
 
-/// The median frame-to-frame rotation error (deg) of the odometry with `config` over a
-/// simulated sequence (every frame pair after the first frame).
-pub fn median_rotation_error(sim: &momo_sim::Simulation, config: momo_vo::Config) -> f64 {
+/// The frame-to-frame rotation errors (deg) of the odometry with `config` over a simulated
+/// sequence (every frame pair after the first frame, in order).
+pub fn rotation_errors(sim: &momo_sim::Simulation, config: momo_vo::Config) -> Vec<f64> {
     let seq = &sim.sequence;
     let mut vo = momo_vo::Odometry::new(seq.rig.clone(), config).expect("valid config");
-    let mut errors: Vec<f64> = (1..seq.num_frames())
+    (1..seq.num_frames())
         .map(|k| {
             let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
             let m = vo.process(&seq.frames[k], arc).motion;
             rot_err_deg(&m, &sim.vehicle_motions[k])
         })
-        .collect();
+        .collect()
+}
+
+/// The median frame-to-frame rotation error (deg) of the odometry with `config` over a
+/// simulated sequence (every frame pair after the first frame).
+pub fn median_rotation_error(sim: &momo_sim::Simulation, config: momo_vo::Config) -> f64 {
+    let mut errors = rotation_errors(sim, config);
     errors.sort_by(f64::total_cmp);
     errors[errors.len() / 2]
 }
