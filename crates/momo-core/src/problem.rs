@@ -688,63 +688,23 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         if R::RESIDUALS == 1 {
             return self.linearize_kernel_lanes_n::<N>(x, known_cost);
         }
-        let k_in = R::KERNEL_INPUTS;
-        let n_res = R::RESIDUALS;
         let mut h = SMatrix::<f64, N, N>::zeros();
         let mut g = SVector::<f64, N>::zeros();
         let mut cost = 0.0;
         let p = self.seeded::<N>(x);
         let m = self.model.motion_of(&p[..self.np]);
-        let mut q_dual = [DualSVec64::<N>::from_re(0.0); MAX_KERNEL_INPUTS];
-        let mut q = [0.0; MAX_KERNEL_INPUTS];
-        let mut dq = [[0.0; N]; MAX_KERNEL_INPUTS];
-        let mut r = [0.0; MAX_RESIDUALS];
-        let mut dr_dq = [[0.0; MAX_KERNEL_INPUTS]; MAX_RESIDUALS];
-        let mut jac = [[0.0; N]; MAX_RESIDUALS];
-        let constants = self.match_constants();
-        let n_c = R::MATCH_CONSTANTS;
-        let mut k_match = 0;
         let mut last = self.record_norms(x);
-        for (j, cam) in self.rig.cameras().iter().enumerate() {
-            let Some(obs) = self.obs.per_camera.get(j) else {
-                continue;
-            };
-            if obs.is_empty() {
-                continue;
-            }
-            let c = camera_motion(&m, &cam.t_vehicle_camera);
-            self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
-            for o in obs {
-                self.metric.kernel(
-                    &cam.model,
-                    &q[..k_in],
-                    o,
-                    &constants[k_match * n_c..(k_match + 1) * n_c],
-                    &mut r[..n_res],
-                    &mut dr_dq[..n_res],
-                );
-                k_match += 1;
-                for i in 0..n_res {
-                    let mut row = [0.0; N];
-                    for a in 0..k_in {
-                        let d = dr_dq[i][a];
-                        for k in 0..N {
-                            row[k] += d * dq[a][k];
-                        }
-                    }
-                    jac[i] = row;
-                }
-                last.put(accumulate_robust(
-                    self.loss,
-                    known_cost.is_some(),
-                    &r[..n_res],
-                    &jac[..n_res],
-                    &mut cost,
-                    &mut h,
-                    &mut g,
-                ));
-            }
-        }
+        self.for_each_kernel_jacobian::<N>(&m, |r, jac| {
+            last.put(accumulate_robust(
+                self.loss,
+                known_cost.is_some(),
+                r,
+                jac,
+                &mut cost,
+                &mut h,
+                &mut g,
+            ));
+        });
         drop(last);
         self.finish_linearization(x, Some(&m), known_cost, cost, h, g)
     }
@@ -1099,9 +1059,28 @@ impl<R: ResidualMetric> Problem<'_, R> {
             });
             return;
         }
-        let k_in = R::KERNEL_INPUTS;
         let p = self.seeded::<N>(x);
         let m = self.model.motion_of(&p[..self.np]);
+        self.for_each_kernel_jacobian::<N>(&m, f);
+    }
+
+    /// The fused kernel's per-match residuals `r` and Jacobian rows `J = (dr/dq)(dq/dp)` at the
+    /// vehicle motion `m` (on dual numbers over the `N` free parameters), passed to `f` in
+    /// camera order: the kernel's inputs `q(C_j(m))` and `dq/dp` once per camera, then the
+    /// metric's [`kernel`](ResidualMetric::kernel) per match in plain `f64`. One loop for
+    /// [`linearize_kernel_n`](Self::linearize_kernel_n) and
+    /// [`for_each_match_jacobian`](Self::for_each_match_jacobian).
+    fn for_each_kernel_jacobian<const N: usize>(
+        &self,
+        m: &Pose<DualSVec64<N>>,
+        mut f: impl FnMut(&[f64], &[[f64; N]]),
+    ) where
+        DualSVec64<N>: ErasedScalar,
+    {
+        let k_in = R::KERNEL_INPUTS;
+        let n_res = R::RESIDUALS;
+        let mut r = [0.0; MAX_RESIDUALS];
+        let mut jac = [[0.0; N]; MAX_RESIDUALS];
         let mut q_dual = [DualSVec64::<N>::from_re(0.0); MAX_KERNEL_INPUTS];
         let mut q = [0.0; MAX_KERNEL_INPUTS];
         let mut dq = [[0.0; N]; MAX_KERNEL_INPUTS];
@@ -1116,7 +1095,7 @@ impl<R: ResidualMetric> Problem<'_, R> {
             if obs.is_empty() {
                 continue;
             }
-            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            let c = camera_motion(m, &cam.t_vehicle_camera);
             self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
             for o in obs {
                 self.metric.kernel(
