@@ -266,7 +266,6 @@ impl FinalFitOptions {
 }
 
 /// The median of `v` (reordered in place); `None` if empty.
-#[cfg(test)]
 fn median(v: &mut [f64]) -> Option<f64> {
     if v.is_empty() {
         return None;
@@ -280,7 +279,7 @@ fn median(v: &mut [f64]) -> Option<f64> {
 /// loss scale `scale`; `None` if no residual lies within `start_scales · scale`.
 ///
 /// The finite norms are sorted once; each of the three trimmed sets is then a prefix of them
-/// (`r < cut`), whose median (the element of rank `len / 2`, as [`median`] selects it) is read
+/// (`r < cut`), whose median (the element of rank `len / 2`, as `median` selects it) is read
 /// off directly: the same `σ̂` as selecting each set's median anew, for one sort.
 pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Option<f64> {
     let lo = opts.min_scale_ratio * scale;
@@ -392,12 +391,10 @@ pub struct FinalFitContext<'a> {
 /// members.
 fn parallax_limit<'a>(passing: impl Iterator<Item = &'a (bool, f64)>, cap: f64, min: usize) -> f64 {
     let mut kept: Vec<f64> = passing.filter(|(ok, _)| *ok).map(|(_, p)| *p).collect();
-    if kept.is_empty() || kept.len() < min {
+    if kept.len() < min {
         return f64::INFINITY;
     }
-    let mid = kept.len() / 2;
-    let (_, m, _) = kept.select_nth_unstable_by(mid, f64::total_cmp);
-    cap * *m
+    median(&mut kept).map_or(f64::INFINITY, |m| cap * m)
 }
 
 /// The final stage (module doc): the refit solution, or `first` unchanged where the noise
@@ -524,10 +521,14 @@ fn refit_once(
                 .collect()
         })
         .collect();
-    let total: usize = passing.iter().map(Vec::len).sum();
-    let outside = passing.iter().flatten().filter(|(ok, _)| !*ok).count();
-    let tail = outside as f64 >= opts.parallax_cap_min_outside * total as f64;
-    let limits: Vec<f64> = if !(with_parallax && tail) {
+    // The cap acts only where the residual and cheirality tests leave out a tail
+    // (`parallax_cap_min_outside`); counted only where the cap is on.
+    let tail = || {
+        let total: usize = passing.iter().map(Vec::len).sum();
+        let outside = passing.iter().flatten().filter(|(ok, _)| !*ok).count();
+        outside as f64 >= opts.parallax_cap_min_outside * total as f64
+    };
+    let limits: Vec<f64> = if !(with_parallax && tail()) {
         vec![f64::INFINITY; passing.len()]
     } else if opts.parallax_cap_per_camera {
         passing

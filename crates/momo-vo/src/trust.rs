@@ -934,8 +934,10 @@ pub fn cell_labels(
 /// term where `ρ'' <= 0` (Cauchy everywhere) and adds it where `ρ'' > 0`, so with `A` the
 /// linearisation under the loss and `N` under this one, `2A - N` is the exact robust Hessian
 /// `Σ ρ' JᵀJ + 2ρ'' (Jᵀr)(rᵀJ)` (for a loss with `ρ'' <= 0`; the prior terms, plain least
-/// squares in both, stay as they are). Used by the one-linearisation jackknife
-/// ([`TrustOptions::jackknife_influence`]); not meant as a configured loss.
+/// squares in both, stay as they are). The one-linearisation jackknife
+/// ([`TrustOptions::jackknife_influence`]) now takes these sums in one pass
+/// ([`momo_core::Problem::exact_data_terms_by_group`]); this two-linearisation form stays as
+/// the reference its tests compare against. Not meant as a configured loss.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct NegativeCurvature {
     /// The wrapped loss.
