@@ -164,6 +164,24 @@ pub struct OdometryOptions {
     /// `σ = 0.01` rad is 5 mm), so a short step's direction may yield from the first frame
     /// on; then the learnt jitter of `soft_prior_arc_learning` takes over (none without it).
     pub soft_prior_arc_jitter: f64,
+    /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
+    /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
+    /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
+    /// `d_r² / (σ_r² + v_r)` above this χ²₁ threshold, the frame uses `σ_r'² = d_r² − v_r`
+    /// (the one-sample type-II maximum-likelihood prior variance) and is solved again from its
+    /// solution (at most twice), before and after the sigmas are learnt. The prior yields where
+    /// the data disagree with it beyond their own noise (the KITTI ground truth's slow frames,
+    /// whose direction of travel drifts away from the centre by tens of prior sigmas). Off by
+    /// default: measured (docs/RESULTS.md §9, sixteenth session), `2` on the climb only lowers
+    /// outliers along KITTI 08 but costs 00 and part of the moving-traffic family; on both
+    /// residuals it breaks the family (an object pulls the side slip).
+    pub soft_prior_conflict_widening: f64,
+    /// The soft-prior residuals that `soft_prior_conflict_widening` may widen, by index in the
+    /// model's prior residuals (`soft_single_track`: 0 side slip, 1 climb); empty (the
+    /// default): all. `[1]` widens only the climb: a vertical drift of the ground truth (KITTI
+    /// 08's first 100 frames: 16-29 cm per frame, up to 1.5 rad at 0.2 m steps) conflicts there,
+    /// whereas a moving object pulls the side slip, where the prior protects the estimate.
+    pub soft_prior_conflict_residuals: Vec<usize>,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -195,6 +213,8 @@ impl Default for OdometryOptions {
             soft_prior_student_nu: 0.0,
             soft_prior_arc_learning: false,
             soft_prior_arc_jitter: 0.0,
+            soft_prior_conflict_widening: 0.0,
+            soft_prior_conflict_residuals: Vec::new(),
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -605,6 +625,22 @@ impl Config {
                 ),
             ));
         }
+        let count = manifold.prior_residual_count();
+        if let Some(bad) = self
+            .odometry
+            .soft_prior_conflict_residuals
+            .iter()
+            .find(|&&r| r >= count)
+        {
+            return Err(self.error_at(
+                &name,
+                &["odometry.soft_prior_conflict_residuals"],
+                format!(
+                    "odometry.soft_prior_conflict_residuals: the model has {count} soft-prior \
+                     residuals, no index {bad}"
+                ),
+            ));
+        }
         let metric = type_tag(&self.metric);
         if metric == "geo_line"
             && let Some((j, _)) = rig
@@ -765,6 +801,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_arc_jitter must be finite and at least 0, got {}",
                     o.soft_prior_arc_jitter
+                ),
+            );
+        }
+        if !(o.soft_prior_conflict_widening.is_finite() && o.soft_prior_conflict_widening >= 0.0) {
+            bad(
+                &["odometry.soft_prior_conflict_widening"],
+                format!(
+                    "odometry.soft_prior_conflict_widening must be finite and at least 0, got {}",
+                    o.soft_prior_conflict_widening
                 ),
             );
         }

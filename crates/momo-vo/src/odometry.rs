@@ -399,6 +399,68 @@ impl Odometry {
         sol
     }
 
+    /// The soft prior widened by the frame's own prior-data conflict
+    /// (`odometry.soft_prior_conflict_widening = T`): from the data's view of the solution
+    /// ([`Odometry::soft_data_view`]: innovation `d_r = q_d,r − c_r`, data variance `v_r`),
+    /// each residual with `d_r² / (σ_r² + v_r) > T` (`σ_r = 1 / k_r` the frame's width) gets
+    /// `σ_r'² = d_r² − v_r`, the maximum of the one-sample marginal likelihood
+    /// `N(d_r; 0, σ² + v_r)` over `σ²`, and the frame is solved again from its solution; at
+    /// most twice (the view moves with the solution). Only the residuals listed in
+    /// `odometry.soft_prior_conflict_residuals` (all where empty). Unchanged where the data
+    /// agree with the prior, the model has no soft prior, or the option is off.
+    fn conflict_widened_soft_prior(
+        &mut self,
+        obs: &FrameObservations,
+        sol: FrameSolution,
+        fixed: &[bool],
+    ) -> FrameSolution {
+        let limit = self.config.odometry.soft_prior_conflict_widening;
+        if !(limit > 0.0) || self.soft_inv_scale.is_empty() {
+            return sol;
+        }
+        let only = &self.config.odometry.soft_prior_conflict_residuals;
+        let mut sol = sol;
+        for _ in 0..2 {
+            let Some(view) = self.soft_data_view(&sol).filter(|v| v.centred) else {
+                return sol;
+            };
+            let current = self.frame_soft_inv_scale().to_vec();
+            let mut changed = false;
+            let target: Vec<f64> = current
+                .iter()
+                .enumerate()
+                .map(|(r, &k)| {
+                    let (d2, v) = ((view.q_d[r] - view.c[r]).powi(2), view.v[(r, r)].max(0.0));
+                    let sigma2 = 1.0 / (k * k);
+                    let widened = d2 - v;
+                    let chosen = only.is_empty() || only.contains(&r);
+                    if chosen
+                        && d2 / (sigma2 + v) > limit
+                        && widened > sigma2
+                        && widened.is_finite()
+                    {
+                        changed = true;
+                        1.0 / widened.sqrt()
+                    } else {
+                        k
+                    }
+                })
+                .collect();
+            if !changed || target.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+                return sol;
+            }
+            self.motion_prior.soft_inv_scale = target;
+            match self.solve_once(obs, &sol.params, fixed, false) {
+                Some(s2) => sol = s2,
+                None => {
+                    self.motion_prior.soft_inv_scale = current;
+                    return sol;
+                }
+            }
+        }
+        sol
+    }
+
     /// The soft prior's residuals at `params` and their Jacobian over the free parameters
     /// `free` (central differences; units of the model's sigmas).
     fn soft_jacobian(&self, params: &[f64], free: &[usize]) -> (Vec<f64>, nalgebra::DMatrix<f64>) {
@@ -944,7 +1006,10 @@ impl Odometry {
         } else {
             let sol = self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag);
             let sol = match sol {
-                Some(sol) if !standstill => Some(self.student_soft_prior(obs, sol, &fixed)),
+                Some(sol) if !standstill => {
+                    let sol = self.student_soft_prior(obs, sol, &fixed);
+                    Some(self.conflict_widened_soft_prior(obs, sol, &fixed))
+                }
                 other => other,
             };
             match sol {
