@@ -220,6 +220,23 @@ pub struct SeparateOptions {
     /// The least score (image cells) of an alternative admitted by
     /// [`SeparateOptions::ground_admit`].
     pub ground_admit_min: usize,
+    /// The second motion B is solved from one start first, the one of least cost `½ Σ ρ(|r|²)`
+    /// on the matches outside A's support (one evaluation per start), and from the other
+    /// starts only if that solve fails or its support fails the tests (then, as without this
+    /// option, the lowest final cost over all starts wins). Off by default: B's lowest cost
+    /// over the starts decides which local minimum B is; measured in docs/RESULTS.md §8
+    /// (sixteenth session, rig30).
+    pub candidate_one_start: bool,
+    /// The most iterations of the alternatives' solves (B, C and M; 0: the solver's
+    /// `max_iterations`): they are solved for their support, which a pose short of the
+    /// optimum already gives. Applied where the configured solver has `max_iterations`
+    /// (Levenberg-Marquardt). Off by default; measured in docs/RESULTS.md §8 (sixteenth
+    /// session, rig30).
+    pub candidate_max_iterations: usize,
+    /// The function tolerance of the alternatives' solves (B, C and M; 0: the solver's
+    /// `function_tolerance`, which a larger value replaces): see
+    /// [`SeparateOptions::candidate_max_iterations`]. Off by default.
+    pub candidate_function_tolerance: f64,
 }
 
 impl Default for SeparateOptions {
@@ -259,6 +276,9 @@ impl Default for SeparateOptions {
             cell_cap_min_share: 0.2,
             ground_admit: 0.0,
             ground_admit_min: 12,
+            candidate_one_start: false,
+            candidate_max_iterations: 0,
+            candidate_function_tolerance: 0.0,
         }
     }
 }
@@ -372,6 +392,14 @@ impl SeparateOptions {
         }
         if !(self.ground_admit.is_finite() && self.ground_admit >= 0.0) {
             return Err("odometry.separate.ground_admit must be a non-negative number".into());
+        }
+        if !(self.candidate_function_tolerance.is_finite()
+            && self.candidate_function_tolerance >= 0.0)
+        {
+            return Err(
+                "odometry.separate.candidate_function_tolerance must be a non-negative number"
+                    .into(),
+            );
         }
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
@@ -596,6 +624,25 @@ pub struct SolveContext<'a> {
 }
 
 impl SolveContext<'_> {
+    /// The cost `½ Σ ρ(|r|²)` of the matches `obs` at `params` under `loss` (no motion prior),
+    /// if finite.
+    fn cost(&self, obs: &FrameObservations, params: &[f64], loss: &dyn RobustLoss) -> Option<f64> {
+        let req = SolveRequest {
+            rig: self.rig,
+            observations: obs,
+            loss,
+            solver: self.solver,
+            initial: params,
+            fixed: self.fixed,
+            rotation_only: false,
+            motion_prior: None,
+        };
+        self.estimator
+            .cost(&req, params)
+            .ok()
+            .filter(|c| c.is_finite())
+    }
+
     fn solve(
         &self,
         obs: &FrameObservations,
@@ -636,6 +683,23 @@ pub fn separate(
     starts: &[Vec<f64>],
     tracker: &mut HypothesisTracker,
     arc_length: Option<f64>,
+) -> (FrameSolution, SeparationOutcome, NextStage) {
+    separate_with(ctx, opts, obs, first, starts, tracker, arc_length, true)
+}
+
+/// [`separate`], with (`pretests`) or without the exact pre-tests that skip the solves of
+/// alternatives that could not be kept ([`retain_possible`]; the same outcome either way:
+/// `pretests = false` is the reference of the tests).
+#[allow(clippy::too_many_arguments)]
+fn separate_with(
+    ctx: &SolveContext<'_>,
+    opts: &SeparateOptions,
+    obs: &FrameObservations,
+    first: FrameSolution,
+    starts: &[Vec<f64>],
+    tracker: &mut HypothesisTracker,
+    arc_length: Option<f64>,
+    pretests: bool,
 ) -> (FrameSolution, SeparationOutcome, NextStage) {
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
@@ -717,26 +781,76 @@ pub fn separate(
     // `hypotheses` and odometry) C, the previous frame's motion (the first start) re-solved on
     // the matches it puts on the road: the continued track of the static world.
     let mut alternatives: Vec<Candidate> = Vec::new();
-    if opts.second_motion && n - count(&chosen.1) >= min_n {
+    // Exact pre-tests: the alternatives are solved only where one could still be kept.
+    let rest_n = n - count(&chosen.1);
+    let admissible = opts.second_motion
+        && (!pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n));
+    // The candidates' solver (`candidate_max_iterations`, `candidate_function_tolerance`).
+    let candidate = admissible
+        .then(|| candidate_solver(ctx.solver, opts))
+        .flatten();
+    let cctx = SolveContext {
+        rig: ctx.rig,
+        estimator: ctx.estimator,
+        loss: ctx.loss,
+        solver: candidate.as_deref().unwrap_or(ctx.solver),
+        fixed: ctx.fixed,
+        motion_prior: ctx.motion_prior,
+    };
+    // `distinct` needs this many own matches, all outside A's support (C and M).
+    let distinct_possible = !pretests || rest_n >= (min_n / 3).max(12);
+    if admissible && rest_n >= min_n {
         let rest_mask: Vec<Vec<bool>> = chosen
             .1
             .iter()
             .map(|m| m.iter().map(|k| !k).collect())
             .collect();
         let rest = subset(obs, &rest_mask);
-        let mut best: Option<FrameSolution> = None;
-        for s in starts {
-            if let Some(sol) = ctx.solve(&rest, s, ctx.loss, false)
-                && best
-                    .as_ref()
-                    .is_none_or(|b| sol.report.final_cost < b.report.final_cost)
+        // B's support where it passes the tests.
+        let tested = |b: &FrameSolution| -> Option<Vec<Vec<bool>>> {
+            let sup_b = support(&b.params);
+            (own_count(&sup_b) >= min_n && coherent(&sup_b, &chosen.1)).then_some(sup_b)
+        };
+        // `candidate_one_start`: B from the start of least cost first.
+        let mut first_try: Option<(usize, Option<FrameSolution>)> = None;
+        let mut done = false;
+        if opts.candidate_one_start
+            && starts.len() > 1
+            && let Some(i) = starts
+                .iter()
+                .enumerate()
+                .filter_map(|(i, s)| ctx.cost(&rest, s, ctx.loss).map(|c| (i, c)))
+                .min_by(|x, y| x.1.total_cmp(&y.1))
+                .map(|(i, _)| i)
+        {
+            let sol = cctx.solve(&rest, &starts[i], ctx.loss, false);
+            if let Some(b) = &sol
+                && let Some(sup_b) = tested(b)
             {
-                best = Some(sol);
+                alternatives.push((b.clone(), sup_b));
+                done = true;
+            } else {
+                first_try = Some((i, sol));
             }
         }
-        if let Some(b) = best {
-            let sup_b = support(&b.params);
-            if own_count(&sup_b) >= min_n && coherent(&sup_b, &chosen.1) {
+        if !done {
+            let mut best: Option<FrameSolution> = None;
+            for (i, s) in starts.iter().enumerate() {
+                let sol = match &mut first_try {
+                    Some((j, sol)) if *j == i => sol.take(),
+                    _ => cctx.solve(&rest, s, ctx.loss, false),
+                };
+                if let Some(sol) = sol
+                    && best
+                        .as_ref()
+                        .is_none_or(|b| sol.report.final_cost < b.report.final_cost)
+                {
+                    best = Some(sol);
+                }
+            }
+            if let Some(b) = best
+                && let Some(sup_b) = tested(&b)
+            {
                 alternatives.push((b, sup_b));
             }
         }
@@ -748,7 +862,8 @@ pub fn separate(
             && count(sup) >= min_n
             && coherent(sup, a)
     };
-    if opts.second_motion
+    if admissible
+        && distinct_possible
         && let Some(h) = opts.hypotheses()
         && arc_length.is_some()
         && let Some(previous) = starts.first()
@@ -756,7 +871,7 @@ pub fn separate(
         let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
         let road = ground_mask(ctx.rig, &ctx.estimator.motion(previous), obs, &all, h);
         if count(&road) >= 12
-            && let Some(c) = ctx.solve(&subset(obs, &road), previous, ctx.loss, false)
+            && let Some(c) = cctx.solve(&subset(obs, &road), previous, ctx.loss, false)
         {
             let sup_c = support(&c.params);
             if distinct(&sup_c, &chosen.1) {
@@ -766,14 +881,15 @@ pub fn separate(
     }
     // M: the previous frame's motion re-solved on the remembered-static matches, where the
     // memory remembers another motion among A's support.
-    if opts.second_motion
+    if admissible
+        && distinct_possible
         && let Some(labels) = &labels
         && let Some(previous) = starts.first()
     {
         let (stat, other) = (label_mask(labels, true), label_mask(labels, false));
         if count(&stat) >= min_n
             && count(&and(&other, &chosen.1)) >= (min_n / 3).max(12)
-            && let Some(m) = ctx.solve(&subset(obs, &stat), previous, ctx.loss, false)
+            && let Some(m) = cctx.solve(&subset(obs, &stat), previous, ctx.loss, false)
         {
             let sup_m = support(&m.params);
             if distinct(&sup_m, &chosen.1) {
@@ -995,6 +1111,164 @@ pub fn separate(
         }
     }
     (sol, outcome, NextStage::Done)
+}
+
+/// The solver of the alternatives B, C and M: the frame's `solver` with
+/// [`SeparateOptions::candidate_max_iterations`] and
+/// [`SeparateOptions::candidate_function_tolerance`] applied to its `max_iterations` and
+/// `function_tolerance` (where its configuration has them; e.g. Levenberg-Marquardt's);
+/// `None` where neither option is set or nothing changes (the frame's solver then solves
+/// them).
+fn candidate_solver(solver: &dyn Solver, opts: &SeparateOptions) -> Option<Box<dyn Solver>> {
+    if opts.candidate_max_iterations == 0 && !(opts.candidate_function_tolerance > 0.0) {
+        return None;
+    }
+    let mut v = serde_json::to_value(solver).ok()?;
+    let o = v.as_object_mut()?;
+    let mut changed = false;
+    if opts.candidate_max_iterations > 0
+        && let Some(m) = o.get_mut("max_iterations")
+        && m.as_u64()
+            .is_some_and(|m| m > opts.candidate_max_iterations as u64)
+    {
+        *m = (opts.candidate_max_iterations as u64).into();
+        changed = true;
+    }
+    if opts.candidate_function_tolerance > 0.0
+        && let Some(f) = o.get_mut("function_tolerance")
+        && f.as_f64()
+            .is_some_and(|f| f < opts.candidate_function_tolerance)
+    {
+        *f = opts.candidate_function_tolerance.into();
+        changed = true;
+    }
+    if !changed {
+        return None;
+    }
+    serde_json::from_value(v).ok()
+}
+
+/// Whether competition over time ([`SeparateOptions::persistence`]; always where that is 0)
+/// could keep *any* alternative to A (`chosen`: A and its support; `rest_n` matches outside
+/// that support), decided before an alternative is solved: the alternatives have no other
+/// use, so where this is false the separation skips their solves and its outcome is the
+/// same. An alternative `x` is kept only if
+/// - its persistence is at least [`SeparateOptions::persistence`], and it is at most
+///   [`persistence_bound`]; or
+/// - its own matches (in `x`, outside A's support, so at most `rest_n`) hold at least
+///   [`SeparateOptions::own_share`] of the `n` matches, and either its persistence is at least
+///   [`SeparateOptions::own_persistence`] or (`ground_admit`) its score is at least
+///   [`SeparateOptions::ground_admit_min`] and `ground_admit` times A's, its score being at most
+///   [`score_bound`].
+fn retain_possible(
+    ctx: &SolveContext<'_>,
+    opts: &SeparateOptions,
+    obs: &FrameObservations,
+    labels: Option<&[Vec<Option<bool>>]>,
+    chosen: &Candidate,
+    rest_n: usize,
+) -> bool {
+    if opts.persistence <= 0.0 {
+        return true;
+    }
+    let n = obs.len();
+    let p_max = labels.map_or(0.0, |l| persistence_bound(l, &chosen.1));
+    if p_max >= opts.persistence {
+        return true;
+    }
+    let own_share_possible = opts.own_share > 0.0 && rest_n as f64 >= opts.own_share * n as f64;
+    if !own_share_possible {
+        return false;
+    }
+    if p_max >= opts.own_persistence {
+        return true;
+    }
+    let Some(h) = opts.hypotheses().filter(|_| opts.ground_admit > 0.0) else {
+        return false;
+    };
+    let s_max = score_bound(h, ctx.rig, obs);
+    if s_max < opts.ground_admit_min {
+        return false;
+    }
+    let sa = score(
+        h,
+        ctx.rig,
+        &ctx.estimator.motion(&chosen.0.params),
+        obs,
+        &chosen.1,
+    );
+    s_max as f64 >= opts.ground_admit * sa as f64
+}
+
+/// An upper bound of [`persistence`]`(labels, x, a)` over every mask `x`: `x \ a` may be any
+/// subset of the matches outside `a`, and `a \ x` any subset of `a`, independently. The share
+/// `p(S)` of a subset `S` of a set `T` (`o` remembered-other and `s` remembered-static labelled
+/// matches) is the share over all labelled matches if `S` holds fewer than
+/// [`PERSISTENCE_MIN_LABELLED`] (`m`) labelled matches, else `j / (i + j)` with `i ≤ s`,
+/// `j ≤ o`, `i + j ≥ m`: at most `o / max(m, o)` (all `o`, the fewest static ones) and at least
+/// `max(0, m − s) / max(m, s)` (`T` needs `o + s ≥ m`). The bound is the largest difference
+/// of the two sides' extremes, computed with the same floating-point operations as
+/// [`persistence`] (monotone in each count), so it holds in floating point too.
+fn persistence_bound(labels: &[Vec<Option<bool>>], a: &[Vec<bool>]) -> f64 {
+    // (labelled, other) inside and outside `a`.
+    let (mut inside, mut outside) = ((0usize, 0usize), (0usize, 0usize));
+    for (l, a) in labels.iter().zip(a) {
+        for (l, a) in l.iter().zip(a) {
+            if let Some(s) = l {
+                let t = if *a { &mut inside } else { &mut outside };
+                t.0 += 1;
+                t.1 += usize::from(!s);
+            }
+        }
+    }
+    let all = (inside.0 + outside.0, inside.1 + outside.1);
+    if all.0 == 0 {
+        return 0.0;
+    }
+    let m = PERSISTENCE_MIN_LABELLED;
+    let share = |t: (usize, usize)| t.1 as f64 / t.0 as f64;
+    // The least and largest share of a subset of a side (labelled, other).
+    let range = |(l, o): (usize, usize)| -> (f64, f64) {
+        let s_all = share(all);
+        if l < m {
+            return (s_all, s_all);
+        }
+        let s = l - o;
+        let hi = share((o.max(m), o));
+        let lo = share((s.max(m), m.saturating_sub(s)));
+        (lo.min(s_all), hi.max(s_all))
+    };
+    let (x, a) = (range(outside), range(inside));
+    (x.1 - a.0).abs().max((a.1 - x.0).abs())
+}
+
+/// An upper bound of [`score`]`(opts, rig, motion, obs, support)` over every motion and
+/// support: with [`HypothesesOptions::spread_grid`], the image cells of the matches that can
+/// be road points (the ground cue: on a camera more than 0.2 m above the road, with a ray
+/// below the horizon: a road point `x_v = R f₀ z₀ + c` with `z₀ > 0` lies within half the
+/// camera height `h` of the road, so `(R f₀)_z < −h / (2 z₀) < 0`; a margin of `1e-6 |f₀|`
+/// covers the rounding) or of all matches (the parallax cue); without it, the number of
+/// matches.
+fn score_bound(opts: &HypothesesOptions, rig: &Rig, obs: &FrameObservations) -> usize {
+    let Some(grid) = opts.spread_grid else {
+        return obs.len();
+    };
+    let mask: Vec<Vec<bool>> = rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .map(|(cam, m)| {
+            let mount = &cam.t_vehicle_camera;
+            let road_camera = mount.translation.z - opts.ground_z > 0.2;
+            m.iter()
+                .map(|o| {
+                    !opts.ground
+                        || (road_camera && !((mount.rotation * o.f0).z >= 1e-6 * o.f0.norm()))
+                })
+                .collect()
+        })
+        .collect();
+    cells(rig, obs, &mask, grid)
 }
 
 /// The fewest matches [`cell_capped`] keeps in a cell.
@@ -1537,5 +1811,324 @@ mod tests {
             t_own > t_persistent + 2,
             "traffic: {t_persistent} -> {t_own} of {m}"
         );
+    }
+    /// [`persistence_bound`] is the largest [`persistence`] over every mask `x` (all `2ⁿ` of
+    /// them enumerated), so the pre-test that skips a solve by it never skips one competition
+    /// over time could keep.
+    #[test]
+    fn persistence_bound_is_the_largest_persistence() {
+        use proptest::prelude::*;
+        let labels = proptest::collection::vec(
+            prop_oneof![Just(None), Just(Some(true)), Just(Some(false))],
+            1..=13,
+        );
+        let case = labels.prop_flat_map(|l| {
+            let n = l.len();
+            (Just(l), proptest::collection::vec(any::<bool>(), n))
+        });
+        proptest!(ProptestConfig::with_cases(200), |((l, a) in case)| {
+            let n = l.len();
+            let (labels, a) = (vec![l], vec![a]);
+            let mut largest = 0.0f64;
+            for bits in 0u32..(1 << n) {
+                let x = vec![(0..n).map(|i| bits >> i & 1 == 1).collect::<Vec<_>>()];
+                largest = largest.max(persistence(&labels, &x, &a));
+            }
+            prop_assert_eq!(persistence_bound(&labels, &a), largest);
+        });
+    }
+
+    /// [`score_bound`] bounds the score of every motion and support (the true motion, others
+    /// off it and random supports) on simulated frames of a fisheye rig and of moving traffic,
+    /// and the ground cue's bound leaves out the cells of rays above the horizon.
+    #[test]
+    fn score_bound_bounds_every_score() {
+        use momo_sim::{SimConfig, simulate};
+        let h = HypothesesOptions {
+            spread_grid: Some((16, 8)),
+            ..HypothesesOptions::default()
+        };
+        let parallax = HypothesesOptions {
+            ground: false,
+            ..h.clone()
+        };
+        let mut below = 0;
+        for config in [SimConfig::fisheye_surround(), SimConfig::moving_traffic()] {
+            let sim = simulate(&SimConfig {
+                frames: 6,
+                seed: 3,
+                ..config
+            })
+            .expect("simulation");
+            let rig = &sim.sequence.rig;
+            let mut rng = 0x2545_f491_4f6c_dd1du64;
+            let mut coin = || {
+                rng ^= rng << 13;
+                rng ^= rng >> 7;
+                rng ^= rng << 17;
+                rng % 3 != 0
+            };
+            for (k, obs) in sim.sequence.frames.iter().enumerate().skip(1) {
+                let truth = sim.vehicle_motions[k];
+                let all: Vec<Vec<bool>> =
+                    obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+                let random: Vec<Vec<bool>> = obs
+                    .per_camera
+                    .iter()
+                    .map(|m| m.iter().map(|_| coin()).collect())
+                    .collect();
+                let turned = Pose::new(
+                    momo_core::so3_exp(&nalgebra::Vector3::new(0.0, 0.01, 0.05)) * truth.rotation,
+                    truth.translation,
+                );
+                let lifted = Pose::new(
+                    truth.rotation,
+                    truth.translation + nalgebra::Vector3::new(0.0, 0.3, 0.2),
+                );
+                for motion in [truth, turned, lifted] {
+                    for support in [&all, &random] {
+                        for o in [&h, &parallax] {
+                            let s = score(o, rig, &motion, obs, support);
+                            assert!(s <= score_bound(o, rig, obs), "{s}");
+                        }
+                    }
+                }
+                below += usize::from(score_bound(&h, rig, obs) < cells(rig, obs, &all, (16, 8)));
+                assert_eq!(
+                    score_bound(&parallax, rig, obs),
+                    cells(rig, obs, &all, (16, 8))
+                );
+            }
+        }
+        assert!(below > 0, "the horizon cut no cell");
+    }
+
+    /// A solver that counts its solves.
+    #[derive(Debug, Serialize, Deserialize)]
+    struct Counting {
+        inner: Box<dyn Solver>,
+        #[serde(skip)]
+        calls: std::sync::atomic::AtomicUsize,
+    }
+
+    #[typetag::serde(name = "separate_test_counting")]
+    impl Solver for Counting {
+        fn solve(
+            &self,
+            problem: &dyn momo_core::LeastSquares,
+            x0: &momo_core::ParamVec,
+        ) -> momo_core::SolverReport {
+            self.calls
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.inner.solve(problem, x0)
+        }
+    }
+
+    /// Simulated drives (a static pinhole scene, its outlier variant, the fisheye rig and
+    /// moving traffic) with the default configuration's separation, with and without the
+    /// exact pre-tests ([`retain_possible`], C and M's `distinct` bound): every frame's
+    /// solution (bit for bit), outcome, next stage and match memory are the same, and the
+    /// pre-tests skip solves.
+    #[test]
+    fn pretests_skip_solves_and_keep_the_outcome() {
+        use momo_sim::{SimConfig, simulate};
+        use std::sync::atomic::Ordering::Relaxed;
+        let opts = SeparateOptions::competition_over_time();
+        let config = crate::Config::default();
+        let estimator = config.model.build(config.metric.as_ref()).expect("model");
+        let solver = Counting {
+            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
+                .expect("solver"),
+            calls: Default::default(),
+        };
+        let (mut skipped, mut competing) = (0, 0);
+        for config_sim in [
+            SimConfig::clean_pinhole(),
+            SimConfig::outliers(),
+            SimConfig::fisheye_surround(),
+            SimConfig::moving_traffic(),
+        ] {
+            let sim = simulate(&SimConfig {
+                frames: 30,
+                seed: 2,
+                ..config_sim
+            })
+            .expect("simulation");
+            let rig = &sim.sequence.rig;
+            let arc_index = estimator.arc_length_index().expect("arc length");
+            let mut fixed = vec![false; estimator.param_names().len()];
+            fixed[arc_index] = true;
+            let ctx = SolveContext {
+                rig,
+                estimator: estimator.as_ref(),
+                loss: config.loss.as_ref(),
+                solver: &solver,
+                fixed: &fixed,
+                motion_prior: None,
+            };
+            let (mut with, mut without) =
+                (HypothesisTracker::default(), HypothesisTracker::default());
+            let mut previous = estimator.initial_params(sim.true_arc_lengths[1]);
+            for (k, obs) in sim.sequence.frames.iter().enumerate().skip(1) {
+                let arc = sim.true_arc_lengths[k];
+                previous[arc_index] = arc;
+                let starts = vec![previous.clone(), estimator.initial_params(arc)];
+                let Some(first) = ctx.solve(obs, &starts[1], ctx.loss, false) else {
+                    continue;
+                };
+                let c0 = solver.calls.load(Relaxed);
+                let old = separate_with(
+                    &ctx,
+                    &opts,
+                    obs,
+                    first.clone(),
+                    &starts,
+                    &mut without,
+                    Some(arc),
+                    false,
+                );
+                let c1 = solver.calls.load(Relaxed);
+                let new =
+                    separate_with(&ctx, &opts, obs, first, &starts, &mut with, Some(arc), true);
+                let c2 = solver.calls.load(Relaxed);
+                assert!(c2 - c1 <= c1 - c0);
+                skipped += (c1 - c0) - (c2 - c1);
+                assert_eq!(
+                    new.0.params.iter().map(|p| p.to_bits()).collect::<Vec<_>>(),
+                    old.0.params.iter().map(|p| p.to_bits()).collect::<Vec<_>>(),
+                    "frame {k}"
+                );
+                assert_eq!(
+                    new.0.report.final_cost.to_bits(),
+                    old.0.report.final_cost.to_bits()
+                );
+                assert_eq!((new.1, &new.2), (old.1, &old.2), "frame {k}");
+                assert_eq!(with, without, "frame {k}");
+                competing += usize::from(new.1.competing);
+                previous = new.0.params;
+            }
+        }
+        eprintln!("pre-tests: {skipped} solves skipped, {competing} competing frames");
+        assert!(skipped > 0, "no solve skipped");
+        assert!(
+            competing > 0,
+            "no competing frame: the kept path is not exercised"
+        );
+    }
+    /// The alternatives' solver: the frame's Levenberg-Marquardt with the capped iterations
+    /// and the looser function tolerance, none where the options are off or change nothing;
+    /// the options parse and validate.
+    #[test]
+    fn candidate_solver_caps_the_iterations_and_loosens_the_tolerance() {
+        let config = crate::Config::default();
+        let solver = config.solver.as_ref();
+        let json = |s: &dyn Solver| serde_json::to_value(s).expect("json");
+        let base = json(solver);
+        let off = SeparateOptions::competition_over_time();
+        assert!(candidate_solver(solver, &off).is_none());
+        let o: SeparateOptions = toml::from_str(
+            "candidate_max_iterations = 8\ncandidate_function_tolerance = 0.001\ncandidate_one_start = true",
+        )
+        .expect("toml");
+        assert!(o.validate().is_ok() && o.candidate_one_start);
+        let c = json(
+            candidate_solver(solver, &o)
+                .expect("a candidate solver")
+                .as_ref(),
+        );
+        assert_eq!(c["max_iterations"], 8);
+        assert_eq!(c["function_tolerance"], 0.001);
+        for key in [
+            "type",
+            "gradient_tolerance",
+            "initial_lambda",
+            "max_linearizations",
+        ] {
+            assert_eq!(c[key], base[key], "{key}");
+        }
+        // A cap above the solver's own and a tolerance below it change nothing.
+        let loose: SeparateOptions =
+            toml::from_str("candidate_max_iterations = 1000\ncandidate_function_tolerance = 1e-12")
+                .expect("toml");
+        assert!(candidate_solver(solver, &loose).is_none());
+        let bad: SeparateOptions =
+            toml::from_str("candidate_function_tolerance = -1.0").expect("toml");
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .contains("candidate_function_tolerance")
+        );
+    }
+
+    /// `candidate_one_start` on the static fisheye rig (B fitted every frame, 6 starts): far
+    /// fewer solves than from every start.
+    #[test]
+    fn one_start_solves_b_once_where_it_passes() {
+        use momo_sim::{SimConfig, simulate};
+        use std::sync::atomic::Ordering::Relaxed;
+        let sim = simulate(&SimConfig {
+            frames: 12,
+            seed: 1,
+            ..SimConfig::fisheye_surround()
+        })
+        .expect("simulation");
+        let config = crate::Config::default();
+        let estimator = config.model.build(config.metric.as_ref()).expect("model");
+        let solver = Counting {
+            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
+                .expect("solver"),
+            calls: Default::default(),
+        };
+        let arc_index = estimator.arc_length_index().expect("arc length");
+        let mut fixed = vec![false; estimator.param_names().len()];
+        fixed[arc_index] = true;
+        let ctx = SolveContext {
+            rig: &sim.sequence.rig,
+            estimator: estimator.as_ref(),
+            loss: config.loss.as_ref(),
+            solver: &solver,
+            fixed: &fixed,
+            motion_prior: None,
+        };
+        let every = SeparateOptions::competition_over_time();
+        let one = SeparateOptions {
+            candidate_one_start: true,
+            ..every.clone()
+        };
+        let calls = [&every, &one].map(|opts| {
+            let mut calls = 0;
+            let mut tracker = HypothesisTracker::default();
+            for (k, obs) in sim.sequence.frames.iter().enumerate().skip(1) {
+                let arc = sim.true_arc_lengths[k];
+                let straight = estimator.initial_params(arc);
+                let starts: Vec<Vec<f64>> = [-0.1, -0.03, 0.0, 0.03, 0.1]
+                    .iter()
+                    .map(|dy| {
+                        let mut s = straight.clone();
+                        if let Some(p) = estimator.params_from_motion(&Pose::new(
+                            momo_core::so3_exp(&nalgebra::Vector3::new(0.0, 0.0, *dy)),
+                            estimator.motion(&straight).translation,
+                        )) {
+                            s = p;
+                            s[arc_index] = arc;
+                        }
+                        s
+                    })
+                    .collect();
+                let Some(first) = ctx.solve(obs, &straight, ctx.loss, false) else {
+                    continue;
+                };
+                let c0 = solver.calls.load(Relaxed);
+                separate(&ctx, opts, obs, first, &starts, &mut tracker, Some(arc));
+                calls += solver.calls.load(Relaxed) - c0;
+            }
+            calls
+        });
+        eprintln!(
+            "separation solves over 11 fisheye pairs: every start {}, one start {}",
+            calls[0], calls[1]
+        );
+        assert!(calls[0] >= 11 * 5, "B from every start: {}", calls[0]);
+        assert!(2 * calls[1] < calls[0], "{calls:?}");
     }
 }
