@@ -220,6 +220,27 @@ pub struct SeparateOptions {
     /// The least score (image cells) of an alternative admitted by
     /// [`SeparateOptions::ground_admit`].
     pub ground_admit_min: usize,
+    /// The memory's vote in the multi-frame choice (0: off; needs
+    /// [`SeparateOptions::memory_radius`] and [`SeparateOptions::hypotheses`]): where the
+    /// ground scores of A and the best alternative B ([`crate::hypotheses::score`], `s_A`,
+    /// `s_B`) are not decisive — neither is at least [`SeparateOptions::ground_admit_min`] and
+    /// at least [`SeparateOptions::memory_vote_ground`] times the other — and both supports
+    /// hold at least [`SeparateOptions::memory_vote_min`] matches the memory labels, the
+    /// remembered-static shares `f = static / (static + other)` of the two supports decide:
+    /// B replaces A if `f_B - f_A >= memory_vote`, A stays if `f_A - f_B >= memory_vote`;
+    /// otherwise the ground choice stands. A co-moving bus gives A and B ground scores of a
+    /// few cells each (7-13 against 2-10) while the memory of a frame solved right labels the
+    /// bus's matches other (docs/RESULTS.md §9, sixteenth session). The vote follows the
+    /// memory, which follows the choice: a lock-in that the memory has learnt is left only
+    /// by a decisive ground score (`ground_admit`). 0 in both
+    /// [`SeparateOptions::competition_over_time`] and [`SeparateOptions::default`].
+    pub memory_vote: f64,
+    /// The ratio of ground scores above which the ground decides alone, for
+    /// [`SeparateOptions::memory_vote`].
+    pub memory_vote_ground: f64,
+    /// The least number of labelled matches in each support for
+    /// [`SeparateOptions::memory_vote`].
+    pub memory_vote_min: usize,
 }
 
 impl Default for SeparateOptions {
@@ -259,6 +280,9 @@ impl Default for SeparateOptions {
             cell_cap_min_share: 0.2,
             ground_admit: 0.0,
             ground_admit_min: 12,
+            memory_vote: 0.0,
+            memory_vote_ground: 2.0,
+            memory_vote_min: 20,
         }
     }
 }
@@ -372,6 +396,12 @@ impl SeparateOptions {
         }
         if !(self.ground_admit.is_finite() && self.ground_admit >= 0.0) {
             return Err("odometry.separate.ground_admit must be a non-negative number".into());
+        }
+        if !(0.0..=1.0).contains(&self.memory_vote) {
+            return Err("odometry.separate.memory_vote must be in [0, 1]".into());
+        }
+        if !(self.memory_vote_ground.is_finite() && self.memory_vote_ground >= 1.0) {
+            return Err("odometry.separate.memory_vote_ground must be a number >= 1".into());
         }
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
@@ -845,7 +875,7 @@ pub fn separate(
             })
             .collect();
         scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
-        let (_, best) = scored.swap_remove(0);
+        let (score_b, best) = scored.swap_remove(0);
         let a = Hypothesis {
             motion: motion_a,
             support: &chosen.1,
@@ -854,9 +884,21 @@ pub fn separate(
             motion: ctx.estimator.motion(&best.0.params),
             support: &best.1,
         };
-        if tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true)
-            && spread_ok(&best.1, &chosen.1)
-        {
+        let ground_choice = tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true);
+        // The memory's vote where the ground scores are not decisive (`memory_vote`).
+        let vote = labels
+            .as_ref()
+            .filter(|_| {
+                opts.memory_vote > 0.0
+                    && arc.is_finite()
+                    && arc >= h.min_arc_length
+                    && (metric || !h.ground)
+            })
+            .and_then(|l| {
+                let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
+                memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
+            });
+        if vote.unwrap_or(ground_choice) && spread_ok(&best.1, &chosen.1) {
             outcome.switched = true;
             other = Some(std::mem::replace(&mut chosen, best).1);
         } else {
@@ -1120,6 +1162,47 @@ fn not(a: &[Vec<bool>]) -> Vec<Vec<bool>> {
 }
 
 /// The matches the memory labels `label` (static: `true`).
+/// The memory's vote between A and the alternative B ([`SeparateOptions::memory_vote`]), each
+/// given as (ground score, support): `Some(true)` for B, `Some(false)` for A, `None` where the
+/// ground scores are decisive, a support holds fewer than
+/// [`SeparateOptions::memory_vote_min`] labelled matches or the remembered-static shares differ
+/// by less than [`SeparateOptions::memory_vote`].
+pub fn memory_vote(
+    opts: &SeparateOptions,
+    labels: &[Vec<Option<bool>>],
+    a: (usize, &[Vec<bool>]),
+    b: (usize, &[Vec<bool>]),
+) -> Option<bool> {
+    let decisive = |x: usize, y: usize| {
+        x >= opts.ground_admit_min && x as f64 >= opts.memory_vote_ground * y as f64
+    };
+    if opts.memory_vote <= 0.0 || decisive(a.0, b.0) || decisive(b.0, a.0) {
+        return None;
+    }
+    // The remembered-static share of a support's labelled matches.
+    let share = |sup: &[Vec<bool>]| -> Option<f64> {
+        let (mut st, mut ot) = (0usize, 0usize);
+        for (l, m) in labels.iter().zip(sup) {
+            for (l, m) in l.iter().zip(m) {
+                match (m, l) {
+                    (true, Some(true)) => st += 1,
+                    (true, Some(false)) => ot += 1,
+                    _ => {}
+                }
+            }
+        }
+        (st + ot >= opts.memory_vote_min.max(1)).then(|| st as f64 / (st + ot) as f64)
+    };
+    let d = share(b.1)? - share(a.1)?;
+    if d >= opts.memory_vote {
+        Some(true)
+    } else if -d >= opts.memory_vote {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 fn label_mask(labels: &[Vec<Option<bool>>], label: bool) -> Vec<Vec<bool>> {
     labels
         .iter()
