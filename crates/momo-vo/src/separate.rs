@@ -227,7 +227,10 @@ pub struct SeparateOptions {
     /// at least [`SeparateOptions::memory_vote_ground`] times the other — and both supports
     /// hold at least [`SeparateOptions::memory_vote_min`] matches the memory labels, the
     /// remembered-static shares `f = static / (static + other)` of the two supports decide:
-    /// B replaces A if `f_B - f_A >= memory_vote`, A stays if `f_A - f_B >= memory_vote`;
+    /// B replaces A if `f_B - f_A >= memory_vote` and B's own matches (in its support, outside
+    /// A's) hold [`SeparateOptions::own_share`] of the frame's (M, the previous motion re-solved
+    /// on the remembered-static matches, is remembered-static by construction and its support
+    /// mostly A's), A stays if `f_A - f_B >= memory_vote`;
     /// otherwise the ground choice stands. A co-moving bus gives A and B ground scores of a
     /// few cells each (7-13 against 2-10) while the memory of a frame solved right labels the
     /// bus's matches other (docs/RESULTS.md §9, sixteenth session). The vote follows the
@@ -1194,7 +1197,15 @@ pub fn memory_vote(
         (st + ot >= opts.memory_vote_min.max(1)).then(|| st as f64 / (st + ot) as f64)
     };
     let d = share(b.1)? - share(a.1)?;
-    if d >= opts.memory_vote {
+    // B's own matches (in its support, outside A's).
+    let own = b
+        .1
+        .iter()
+        .zip(a.1)
+        .map(|(b, a)| b.iter().zip(a).filter(|(b, a)| **b && !**a).count())
+        .sum::<usize>();
+    let n: usize = labels.iter().map(Vec::len).sum();
+    if d >= opts.memory_vote && own as f64 >= opts.own_share * n as f64 {
         Some(true)
     } else if -d >= opts.memory_vote {
         Some(false)
