@@ -1340,10 +1340,80 @@ mod tests {
             "cell_cap_min_share = 1.5",
             "ground_admit = -1.0",
             "ground_admit = nan",
+            "memory_vote = 1.5",
+            "memory_vote = -0.1",
+            "memory_vote_ground = 0.5",
+            "memory_vote_ground = inf",
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
         }
+    }
+
+    /// The memory's vote (`memory_vote`): it decides by the remembered-static shares only where
+    /// the ground scores are not decisive, both supports are labelled enough and the shares
+    /// differ by the margin; a vote for B needs B's own matches.
+    #[test]
+    fn memory_vote_follows_the_remembered_static_share_where_the_ground_does_not_decide() {
+        // 100 matches: 0..50 remembered static, 50..90 remembered other, 90..100 unlabelled.
+        let labels = vec![
+            (0..100)
+                .map(|i| match i {
+                    0..50 => Some(true),
+                    50..90 => Some(false),
+                    _ => None,
+                })
+                .collect::<Vec<_>>(),
+        ];
+        let mask = |r: &[std::ops::Range<usize>]| -> Vec<Vec<bool>> {
+            vec![(0..100).map(|i| r.iter().any(|r| r.contains(&i))).collect()]
+        };
+        // A: mostly remembered static (45 of 50); B: mostly remembered other (40 of 45),
+        // 35 own matches.
+        let a = mask(&[0..45, 50..55]);
+        let b = mask(&[45..50, 55..95]);
+        let opts = SeparateOptions {
+            memory_vote: 0.3,
+            memory_vote_ground: 1.5,
+            ..SeparateOptions::competition_over_time()
+        };
+        // Ground scores 4 and 7 (not decisive): the memory keeps A, or switches to it.
+        assert_eq!(memory_vote(&opts, &labels, (4, &a), (7, &b)), Some(false));
+        assert_eq!(memory_vote(&opts, &labels, (7, &b), (4, &a)), Some(true));
+        // A decisive ground score (at least 12 cells and 1.5 times the other) decides alone.
+        assert_eq!(memory_vote(&opts, &labels, (4, &a), (12, &b)), None);
+        assert_eq!(memory_vote(&opts, &labels, (12, &a), (8, &b)), None);
+        assert_eq!(memory_vote(&opts, &labels, (11, &a), (8, &b)), Some(false));
+        // Off, or a margin above the shares' difference (0.9 - 0.11): no vote.
+        for v in [0.0, 0.8] {
+            let o = SeparateOptions {
+                memory_vote: v,
+                ..opts.clone()
+            };
+            assert_eq!(memory_vote(&o, &labels, (4, &a), (7, &b)), None, "{v}");
+        }
+        // Too few labelled matches in a support.
+        let o = SeparateOptions {
+            memory_vote_min: 46,
+            ..opts.clone()
+        };
+        assert_eq!(memory_vote(&o, &labels, (4, &a), (7, &b)), None);
+        // A remembered-static alternative inside A's support (own matches 5 < 10): no switch
+        // to it, though its share is higher.
+        let inside = mask(&[0..40, 90..95]);
+        let a_other = mask(&[0..40, 50..90]);
+        assert_eq!(
+            memory_vote(&opts, &labels, (4, &a_other), (7, &inside)),
+            None
+        );
+        let o = SeparateOptions {
+            own_share: 0.0,
+            ..opts.clone()
+        };
+        assert_eq!(
+            memory_vote(&o, &labels, (4, &a_other), (7, &inside)),
+            Some(true)
+        );
     }
 
     /// The one-pass statistic and mask of the odometry (`trust::residual_statistic_and_outside`):
