@@ -493,7 +493,10 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # (cell_cap_grid per camera) in the final stage and, with cell_cap_first, in a\n\
          # re-solve of the first motion, where that leaves out cell_cap_min_share of them;\n\
          # ground_admit: a second motion failing the persistence test still competes if its\n\
-         # ground score is at least ground_admit_min and ground_admit times the first's.\n\
+         # ground score is at least ground_admit_min and ground_admit times the first's;\n\
+         # memory_vote (0: off): where neither ground score is at least ground_admit_min and\n\
+         # memory_vote_ground times the other, the supports' remembered-static shares decide\n\
+         # if they differ by memory_vote (each with memory_vote_min labelled matches).\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),

@@ -237,6 +237,30 @@ pub struct SeparateOptions {
     /// `function_tolerance`, which a larger value replaces): see
     /// [`SeparateOptions::candidate_max_iterations`]. Off by default.
     pub candidate_function_tolerance: f64,
+    /// The memory's vote in the multi-frame choice (0: off; needs
+    /// [`SeparateOptions::memory_radius`] and [`SeparateOptions::hypotheses`]): where the
+    /// ground scores of A and the best alternative B ([`crate::hypotheses::score`], `s_A`,
+    /// `s_B`) are not decisive — neither is at least [`SeparateOptions::ground_admit_min`] and
+    /// at least [`SeparateOptions::memory_vote_ground`] times the other — and both supports
+    /// hold at least [`SeparateOptions::memory_vote_min`] matches the memory labels, B
+    /// replaces A also where the ground does not choose it if the remembered-static shares
+    /// `f = static / (static + other)` of the supports differ by `f_B - f_A >= memory_vote` and
+    /// B's own matches (in its support, outside A's) hold [`SeparateOptions::own_share`] of
+    /// the frame's (M, the previous motion re-solved on the remembered-static matches, is
+    /// remembered-static by construction and its support mostly A's). A first motion that
+    /// follows a co-moving bus has a support the memory of a frame solved right labels mostly
+    /// other, while the static motion's road is hidden: both ground scores are a few cells
+    /// (e.g. 0 against 9, below the choice's `min_matches`, or 4 against 4). The vote only
+    /// adds switches: keeping A by the memory against the ground's switch (measured too) held
+    /// lock-ins the memory had learnt (docs/RESULTS.md §9, sixteenth session). 0 in both
+    /// [`SeparateOptions::competition_over_time`] and [`SeparateOptions::default`].
+    pub memory_vote: f64,
+    /// The ratio of ground scores above which the ground decides alone, for
+    /// [`SeparateOptions::memory_vote`].
+    pub memory_vote_ground: f64,
+    /// The least number of labelled matches in each support for
+    /// [`SeparateOptions::memory_vote`].
+    pub memory_vote_min: usize,
 }
 
 impl Default for SeparateOptions {
@@ -279,6 +303,9 @@ impl Default for SeparateOptions {
             candidate_one_start: false,
             candidate_max_iterations: 0,
             candidate_function_tolerance: 0.0,
+            memory_vote: 0.0,
+            memory_vote_ground: 1.5,
+            memory_vote_min: 20,
         }
     }
 }
@@ -400,6 +427,12 @@ impl SeparateOptions {
                 "odometry.separate.candidate_function_tolerance must be a non-negative number"
                     .into(),
             );
+        }
+        if !(0.0..=1.0).contains(&self.memory_vote) {
+            return Err("odometry.separate.memory_vote must be in [0, 1]".into());
+        }
+        if !(self.memory_vote_ground.is_finite() && self.memory_vote_ground >= 1.0) {
+            return Err("odometry.separate.memory_vote_ground must be a number >= 1".into());
         }
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
@@ -961,7 +994,7 @@ fn separate_with(
             })
             .collect();
         scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
-        let (_, best) = scored.swap_remove(0);
+        let (score_b, best) = scored.swap_remove(0);
         let a = Hypothesis {
             motion: motion_a,
             support: &chosen.1,
@@ -970,9 +1003,18 @@ fn separate_with(
             motion: ctx.estimator.motion(&best.0.params),
             support: &best.1,
         };
-        if tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true)
-            && spread_ok(&best.1, &chosen.1)
-        {
+        let ground_choice = tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true);
+        // The memory's vote where the ground scores are not decisive (`memory_vote`).
+        let vote = !ground_choice
+            && opts.memory_vote > 0.0
+            && arc.is_finite()
+            && arc >= h.min_arc_length
+            && (metric || !h.ground)
+            && labels.as_ref().is_some_and(|l| {
+                let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
+                memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
+            });
+        if (ground_choice || vote) && spread_ok(&best.1, &chosen.1) {
             outcome.switched = true;
             other = Some(std::mem::replace(&mut chosen, best).1);
         } else {
@@ -1394,6 +1436,50 @@ fn not(a: &[Vec<bool>]) -> Vec<Vec<bool>> {
 }
 
 /// The matches the memory labels `label` (static: `true`).
+/// The memory's vote for the alternative B against A ([`SeparateOptions::memory_vote`]),
+/// each given as (ground score, support): true where the ground scores are not decisive, both
+/// supports hold at least [`SeparateOptions::memory_vote_min`] labelled matches, B's
+/// remembered-static share exceeds A's by [`SeparateOptions::memory_vote`] and B's own matches
+/// hold [`SeparateOptions::own_share`] of the frame's.
+pub fn memory_vote(
+    opts: &SeparateOptions,
+    labels: &[Vec<Option<bool>>],
+    a: (usize, &[Vec<bool>]),
+    b: (usize, &[Vec<bool>]),
+) -> bool {
+    let decisive = |x: usize, y: usize| {
+        x >= opts.ground_admit_min && x as f64 >= opts.memory_vote_ground * y as f64
+    };
+    if opts.memory_vote <= 0.0 || decisive(a.0, b.0) || decisive(b.0, a.0) {
+        return false;
+    }
+    // The remembered-static share of a support's labelled matches.
+    let share = |sup: &[Vec<bool>]| -> Option<f64> {
+        let (mut st, mut ot) = (0usize, 0usize);
+        for (l, m) in labels.iter().zip(sup) {
+            for (l, m) in l.iter().zip(m) {
+                match (m, l) {
+                    (true, Some(true)) => st += 1,
+                    (true, Some(false)) => ot += 1,
+                    _ => {}
+                }
+            }
+        }
+        (st + ot >= opts.memory_vote_min.max(1)).then(|| st as f64 / (st + ot) as f64)
+    };
+    let (Some(fa), Some(fb)) = (share(a.1), share(b.1)) else {
+        return false;
+    };
+    // B's own matches (in its support, outside A's).
+    let own =
+        b.1.iter()
+            .zip(a.1)
+            .map(|(b, a)| b.iter().zip(a).filter(|(b, a)| **b && !**a).count())
+            .sum::<usize>();
+    let n: usize = labels.iter().map(Vec::len).sum();
+    fb - fa >= opts.memory_vote && own as f64 >= opts.own_share * n as f64
+}
+
 fn label_mask(labels: &[Vec<Option<bool>>], label: bool) -> Vec<Vec<bool>> {
     labels
         .iter()
@@ -1520,10 +1606,74 @@ mod tests {
             "cell_cap_min_share = 1.5",
             "ground_admit = -1.0",
             "ground_admit = nan",
+            "memory_vote = 1.5",
+            "memory_vote = -0.1",
+            "memory_vote_ground = 0.5",
+            "memory_vote_ground = inf",
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
         }
+    }
+
+    /// The memory's vote (`memory_vote`): for B only where the ground scores are not
+    /// decisive, both supports are labelled enough, B's remembered-static share exceeds A's by
+    /// the margin and B holds its own matches.
+    #[test]
+    fn memory_vote_follows_the_remembered_static_share_where_the_ground_does_not_decide() {
+        // 100 matches: 0..50 remembered static, 50..90 remembered other, 90..100 unlabelled.
+        let labels = vec![
+            (0..100)
+                .map(|i| match i {
+                    0..50 => Some(true),
+                    50..90 => Some(false),
+                    _ => None,
+                })
+                .collect::<Vec<_>>(),
+        ];
+        let mask = |r: &[std::ops::Range<usize>]| -> Vec<Vec<bool>> {
+            vec![(0..100).map(|i| r.iter().any(|r| r.contains(&i))).collect()]
+        };
+        // S: mostly remembered static (45 of 50 labelled); O: mostly remembered other (40 of
+        // 45), each with 35 or more own matches against the other.
+        let s = mask(&[0..45, 50..55]);
+        let o = mask(&[45..50, 55..95]);
+        let opts = SeparateOptions {
+            memory_vote: 0.3,
+            memory_vote_ground: 1.5,
+            ..SeparateOptions::competition_over_time()
+        };
+        // Ground scores 4 and 7 (not decisive): the memory votes for S against O, never for O.
+        assert!(memory_vote(&opts, &labels, (7, &o), (4, &s)));
+        assert!(!memory_vote(&opts, &labels, (4, &s), (7, &o)));
+        // A decisive ground score (at least 12 cells and 1.5 times the other) decides alone.
+        assert!(!memory_vote(&opts, &labels, (12, &o), (8, &s)));
+        assert!(!memory_vote(&opts, &labels, (4, &o), (12, &s)));
+        assert!(memory_vote(&opts, &labels, (11, &o), (8, &s)));
+        // Off, or a margin above the shares' difference (0.9 - 0.11): no vote.
+        for v in [0.0, 0.8] {
+            let off = SeparateOptions {
+                memory_vote: v,
+                ..opts.clone()
+            };
+            assert!(!memory_vote(&off, &labels, (7, &o), (4, &s)), "{v}");
+        }
+        // Too few labelled matches in a support (O has 45).
+        let few = SeparateOptions {
+            memory_vote_min: 46,
+            ..opts.clone()
+        };
+        assert!(!memory_vote(&few, &labels, (7, &o), (4, &s)));
+        // A remembered-static alternative inside A's support (own matches 5 < 10): no vote
+        // for it, though its share is higher; without the own-share test it would get one.
+        let inside = mask(&[0..40, 90..95]);
+        let a = mask(&[0..40, 50..90]);
+        assert!(!memory_vote(&opts, &labels, (4, &a), (7, &inside)));
+        let no_own = SeparateOptions {
+            own_share: 0.0,
+            ..opts.clone()
+        };
+        assert!(memory_vote(&no_own, &labels, (4, &a), (7, &inside)));
     }
 
     /// The one-pass statistic and mask of the odometry (`trust::residual_statistic_and_outside`):
