@@ -495,8 +495,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # ground_admit: a second motion failing the persistence test still competes if its\n\
          # ground score is at least ground_admit_min and ground_admit times the first's;\n\
          # memory_vote (0: off): where neither ground score is at least ground_admit_min and\n\
-         # memory_vote_ground times the other, the supports' remembered-static shares decide\n\
-         # if they differ by memory_vote (each with memory_vote_min labelled matches).\n\
+         # memory_vote_ground times the other, the alternative replaces the first motion if\n\
+         # its support's remembered-static share exceeds the first's by memory_vote (each\n\
+         # with memory_vote_min labelled matches, the alternative's own matches own_share).\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
@@ -1067,7 +1068,7 @@ mod partial_tests {
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
-             ground_admit = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
+             ground_admit = 0.0\nmemory_vote = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )
         .expect("the bare separation");
