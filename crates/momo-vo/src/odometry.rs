@@ -387,14 +387,29 @@ impl Odometry {
             if !changed || target.iter().any(|t| !t.is_finite()) {
                 return sol;
             }
-            self.motion_prior.soft_inv_scale = target;
-            match self.solve_once(obs, &sol.params, fixed, false) {
+            match self.solve_with_soft_inv_scale(obs, &sol.params, fixed, target, current) {
                 Some(s2) => sol = s2,
-                None => {
-                    self.motion_prior.soft_inv_scale = current;
-                    return sol;
-                }
+                None => return sol,
             }
+        }
+        sol
+    }
+
+    /// The frame solved again from `params` with the soft prior's factors `target`; where that
+    /// solve fails, the factors go back to `current` and `None` is returned (the re-solves of
+    /// [`Odometry::student_soft_prior`] and [`Odometry::conflict_widened_soft_prior`]).
+    fn solve_with_soft_inv_scale(
+        &mut self,
+        obs: &FrameObservations,
+        params: &[f64],
+        fixed: &[bool],
+        target: Vec<f64>,
+        current: Vec<f64>,
+    ) -> Option<FrameSolution> {
+        self.motion_prior.soft_inv_scale = target;
+        let sol = self.solve_once(obs, params, fixed, false);
+        if sol.is_none() {
+            self.motion_prior.soft_inv_scale = current;
         }
         sol
     }
@@ -418,7 +433,7 @@ impl Odometry {
         if !(limit > 0.0) || self.soft_inv_scale.is_empty() {
             return sol;
         }
-        let only = &self.config.odometry.soft_prior_conflict_residuals;
+        let only = self.config.odometry.soft_prior_conflict_residuals.clone();
         let mut sol = sol;
         for _ in 0..2 {
             let Some(view) = self.soft_data_view(&sol).filter(|v| v.centred) else {
@@ -449,13 +464,9 @@ impl Odometry {
             if !changed || target.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
                 return sol;
             }
-            self.motion_prior.soft_inv_scale = target;
-            match self.solve_once(obs, &sol.params, fixed, false) {
+            match self.solve_with_soft_inv_scale(obs, &sol.params, fixed, target, current) {
                 Some(s2) => sol = s2,
-                None => {
-                    self.motion_prior.soft_inv_scale = current;
-                    return sol;
-                }
+                None => return sol,
             }
         }
         sol
