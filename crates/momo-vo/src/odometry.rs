@@ -1884,10 +1884,11 @@ impl Odometry {
                 .map(|&(k, _)| k),
         );
         if !solve.is_empty() {
-            let without = trust::leave_one_cell_out(&self.rig, obs, grid);
+            // Only the cells solved in full are built.
+            let without = trust::leave_cells_out(&self.rig, obs, grid, |k| solve.contains(&k));
             let steps = self.config.trust.jackknife_undefined_steps;
             for k in solve {
-                if let Some(o) = without.get(k) {
+                if let Some(Some(o)) = without.get(k) {
                     // An undefined step: `trust.jackknife_undefined_steps` Gauss-Newton steps
                     // where set (a full solve where one of them is undefined too).
                     if samples[k].is_none() && steps > 0 {

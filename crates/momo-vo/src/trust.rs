@@ -843,6 +843,21 @@ pub fn leave_one_cell_out(
     obs: &FrameObservations,
     grid: (usize, usize),
 ) -> Vec<FrameObservations> {
+    leave_cells_out(rig, obs, grid, |_| true)
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// [`leave_one_cell_out`]'s samples of the cells `wanted` (by their index in its order), `None`
+/// for the others (not built: the one-linearisation jackknife solves only a few cells in full).
+/// The samples are [`leave_one_cell_out`]'s, match for match.
+pub fn leave_cells_out(
+    rig: &Rig,
+    obs: &FrameObservations,
+    grid: (usize, usize),
+    wanted: impl Fn(usize) -> bool,
+) -> Vec<Option<FrameObservations>> {
     let cells = grid.0.max(1) * grid.1.max(1);
     let mut out = Vec::new();
     for (j, of) in cells_per_camera(rig, obs, grid) {
@@ -851,14 +866,32 @@ pub fn leave_one_cell_out(
             if !of.contains(&c) {
                 continue;
             }
-            let mut sample = obs.clone();
-            sample.per_camera[j] = matches
+            if !wanted(out.len()) {
+                out.push(None);
+                continue;
+            }
+            // The other cameras' matches as they are, camera `j`'s without cell `c`.
+            let per_camera = obs
+                .per_camera
                 .iter()
-                .zip(&of)
-                .filter(|(_, k)| **k != c)
-                .map(|(o, _)| *o)
+                .enumerate()
+                .map(|(i, m)| {
+                    if i == j {
+                        matches
+                            .iter()
+                            .zip(&of)
+                            .filter(|(_, k)| **k != c)
+                            .map(|(o, _)| *o)
+                            .collect()
+                    } else {
+                        m.clone()
+                    }
+                })
                 .collect();
-            out.push(sample);
+            out.push(Some(FrameObservations {
+                per_camera,
+                cross_camera: obs.cross_camera.clone(),
+            }));
         }
     }
     out

@@ -808,3 +808,35 @@ fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
         "{every} against {dropped}"
     );
 }
+
+/// `trust::leave_cells_out` (the one-linearisation jackknife's full solves) builds the wanted
+/// cells' samples only, each equal to [`momo_vo::trust::leave_one_cell_out`]'s, in its order.
+#[test]
+fn leave_cells_out_builds_the_wanted_samples_of_leave_one_cell_out() {
+    use momo_vo::trust::{leave_cells_out, leave_one_cell_out};
+    for cfg in [
+        momo_sim::SimConfig::fisheye_surround(),
+        momo_sim::SimConfig::moving_traffic(),
+    ] {
+        let sim = momo_sim::simulate(&momo_sim::SimConfig {
+            frames: 3,
+            seed: 1,
+            ..cfg
+        })
+        .expect("simulated");
+        let (rig, obs) = (&sim.sequence.rig, &sim.sequence.frames[1]);
+        for grid in [(3, 2), (4, 2), (1, 2), (2, 1)] {
+            let all = leave_one_cell_out(rig, obs, grid);
+            let some = leave_cells_out(rig, obs, grid, |k| k % 3 == 1);
+            assert_eq!(some.len(), all.len(), "{grid:?}");
+            assert!(all.len() >= 2, "{grid:?}: {} cells", all.len());
+            for (k, (s, a)) in some.iter().zip(&all).enumerate() {
+                if k % 3 == 1 {
+                    assert_eq!(s.as_ref(), Some(a), "{grid:?} cell {k}");
+                } else {
+                    assert!(s.is_none(), "{grid:?} cell {k}");
+                }
+            }
+        }
+    }
+}
