@@ -241,8 +241,12 @@ pub struct SeparateOptions {
     /// the start of least cost gives a B far from being kept and another start one that is
     /// kept. On a static rig B is fitted to the noise tail every frame and rejected
     /// (docs/RESULTS.md §8, sixteenth session, rig30); an object's B is near or above the
-    /// thresholds. Off by default; measured in docs/RESULTS.md §8 (seventeenth session,
-    /// speed31).
+    /// thresholds. Off by default: measured in docs/RESULTS.md §8 (seventeenth session,
+    /// speed31), `f = 0.5` takes a third of the rigs' instructions (callgrind, whole process:
+    /// fisheye 28.5 -> 19.0, wide-angle 22.3 -> 15.8 M per pair; seed 1 byte-identical) but
+    /// moves lock-ins on the moving-traffic grid (120 sequences: 48 -> 52 frames above 1 deg,
+    /// mean eff 1.3128 -> 1.3142); `f = 0.25` saves nothing on the rigs (B's own matches reach
+    /// a quarter of `own_share`, and the ground test's thresholds scale with it).
     pub candidate_screen: f64,
     /// The most iterations of the alternatives' solves (B, C and M; 0: the solver's
     /// `max_iterations`): they are solved for their support, which a pose short of the
