@@ -468,6 +468,69 @@ fn refit_once(
     from: &[f64],
 ) -> Option<(FrameSolution, Vec<usize>)> {
     let scale = ctx.loss.scale();
+    let (core, core_constants, sigma) = stage_support(ctx, opts, obs, constants, from)?;
+    let req = ctx.request(obs, from);
+    let cauchy;
+    let loss: &dyn RobustLoss = if opts.cauchy_sigmas > 0.0 {
+        cauchy = momo_costs::Cauchy::new(opts.cauchy_sigmas * sigma);
+        &cauchy
+    } else {
+        &TrivialLoss
+    };
+    let mut prior = ctx.motion_prior.clone();
+    prior.scale = if opts.prior_in_sigma {
+        // The first stage's weighting of the priors relative to its loss scale carries over:
+        // a weak frame's priors (`trust.weak_prior_factor`) stay weak in the refit.
+        let relative = if prior.scale > 0.0 {
+            prior.scale / scale
+        } else {
+            1.0
+        };
+        sigma.max(opts.prior_min_scales * scale) * relative
+    } else if prior.scale > 0.0 {
+        prior.scale
+    } else {
+        scale
+    };
+    let one_step;
+    let solver: &dyn Solver = if opts.one_step {
+        one_step = momo_solvers::LevenbergMarquardt::default().with_max_linearizations(1);
+        &one_step
+    } else {
+        ctx.solver
+    };
+    let req = SolveRequest {
+        observations: &core,
+        loss,
+        motion_prior: Some(&prior),
+        solver,
+        ..req
+    };
+    match ctx.estimator.solve_with_constants(&req, &core_constants) {
+        Ok(fin)
+            if fin.report.termination != Termination::NumericalFailure
+                && fin.params.iter().all(|p| p.is_finite())
+                && fin.report.final_cost.is_finite() =>
+        {
+            let support = core.per_camera.iter().map(Vec::len).collect();
+            Some((fin, support))
+        }
+        _ => None,
+    }
+}
+
+/// The final stage's support (steps 1 and 2 of the module doc, with the parallax cap) at the
+/// parameters `from`: the matches kept, their per-match constants (empty where `constants`
+/// does not cover `obs`) and the noise `σ̂`; `None` where the noise cannot be estimated or
+/// fewer than [`MIN_SUPPORT`] matches are kept.
+fn stage_support(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    constants: &[f64],
+    from: &[f64],
+) -> Option<(FrameObservations, Vec<f64>, f64)> {
+    let scale = ctx.loss.scale();
     if !(scale.is_finite() && scale > 0.0) {
         return None;
     }
@@ -565,53 +628,23 @@ fn refit_once(
     if core.len() < MIN_SUPPORT {
         return None;
     }
-    let cauchy;
-    let loss: &dyn RobustLoss = if opts.cauchy_sigmas > 0.0 {
-        cauchy = momo_costs::Cauchy::new(opts.cauchy_sigmas * sigma);
-        &cauchy
-    } else {
-        &TrivialLoss
-    };
-    let mut prior = ctx.motion_prior.clone();
-    prior.scale = if opts.prior_in_sigma {
-        // The first stage's weighting of the priors relative to its loss scale carries over:
-        // a weak frame's priors (`trust.weak_prior_factor`) stay weak in the refit.
-        let relative = if prior.scale > 0.0 {
-            prior.scale / scale
-        } else {
-            1.0
-        };
-        sigma.max(opts.prior_min_scales * scale) * relative
-    } else if prior.scale > 0.0 {
-        prior.scale
-    } else {
-        scale
-    };
-    let one_step;
-    let solver: &dyn Solver = if opts.one_step {
-        one_step = momo_solvers::LevenbergMarquardt::default().with_max_linearizations(1);
-        &one_step
-    } else {
-        ctx.solver
-    };
-    let req = SolveRequest {
-        observations: &core,
-        loss,
-        motion_prior: Some(&prior),
-        solver,
-        ..req
-    };
-    match ctx.estimator.solve_with_constants(&req, &core_constants) {
-        Ok(fin)
-            if fin.report.termination != Termination::NumericalFailure
-                && fin.params.iter().all(|p| p.is_finite())
-                && fin.report.final_cost.is_finite() =>
-        {
-            let support = core.per_camera.iter().map(Vec::len).collect();
-            Some((fin, support))
-        }
-        _ => None,
-    }
+    Some((core, core_constants, sigma))
+}
+
+/// The matches of `obs` that the final stage would refit on from the parameters `from`
+/// ([`stage_support`]: within `inlier_sigmas · σ̂` in the stage's metric, in front of both
+/// cameras, under the parallax cap); `None` where the stage would not refit (noise not
+/// estimable, support smaller than [`MIN_SUPPORT`]). Mismatches and a moving object's matches
+/// far from the motion `from` are left out: the soft prior's conflict test
+/// (`odometry.soft_prior_conflict_on_support`) reads the data there.
+pub fn support(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> Option<FrameObservations> {
+    let constants = ctx.estimator.match_constants(&ctx.request(obs, from));
+    stage_support(ctx, opts, obs, &constants, from).map(|(core, _, _)| core)
 }
 
 #[cfg(test)]

@@ -422,7 +422,9 @@ impl Odometry {
     /// `N(d_r; 0, σ² + v_r)` over `σ²`, and the frame is solved again from its solution; at
     /// most twice (the view moves with the solution). Only the residuals listed in
     /// `odometry.soft_prior_conflict_residuals` (all where empty). Unchanged where the data
-    /// agree with the prior, the model has no soft prior, or the option is off.
+    /// agree with the prior, the model has no soft prior, or the option is off. With
+    /// `odometry.soft_prior_conflict_on_support` the view is that of the frame solved on the
+    /// final stage's support only ([`Odometry::support_solution`]).
     fn conflict_widened_soft_prior(
         &mut self,
         obs: &FrameObservations,
@@ -430,13 +432,25 @@ impl Odometry {
         fixed: &[bool],
     ) -> FrameSolution {
         let limit = self.config.odometry.soft_prior_conflict_widening;
-        if !(limit > 0.0) || self.soft_inv_scale.is_empty() {
+        if !(limit > 0.0)
+            || self.soft_inv_scale.is_empty()
+            || (self.config.odometry.soft_prior_conflict_after_trusted && !self.prior_ready)
+        {
             return sol;
         }
         let only = self.config.odometry.soft_prior_conflict_residuals.clone();
+        let on_support = self.config.odometry.soft_prior_conflict_on_support;
         let mut sol = sol;
         for _ in 0..2 {
-            let Some(view) = self.soft_data_view(&sol).filter(|v| v.centred) else {
+            let tested = if on_support {
+                match self.support_solution(obs, &sol, fixed) {
+                    Some(s) => s,
+                    None => return sol,
+                }
+            } else {
+                sol.clone()
+            };
+            let Some(view) = self.soft_data_view(&tested).filter(|v| v.centred) else {
                 return sol;
             };
             let current = self.frame_soft_inv_scale().to_vec();
@@ -470,6 +484,35 @@ impl Odometry {
             }
         }
         sol
+    }
+
+    /// The frame solved from `sol` on the matches of the final stage's support at `sol`
+    /// ([`crate::final_fit::support`]: within `inlier_sigmas · σ̂`, in front of both cameras,
+    /// under the parallax cap), with the first stage's loss and the frame's priors: the data
+    /// of the soft prior's conflict test without the mismatches and a moving object's matches
+    /// that the first stage's robust loss only down-weights. `None` where the stage would not
+    /// refit or the solve fails.
+    fn support_solution(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+    ) -> Option<FrameSolution> {
+        let ctx = crate::final_fit::FinalFitContext {
+            rig: &self.rig,
+            estimator: self
+                .final_estimator
+                .as_deref()
+                .unwrap_or(self.estimator.as_ref()),
+            loss: self.config.loss.as_ref(),
+            solver: self.config.solver.as_ref(),
+            fixed,
+            motion_prior: &self.motion_prior,
+            competing: false,
+        };
+        let core =
+            crate::final_fit::support(&ctx, &self.config.odometry.final_fit, obs, &sol.params)?;
+        self.solve_once(&core, &sol.params, fixed, false)
     }
 
     /// The soft prior's residuals at `params` and their Jacobian over the free parameters
