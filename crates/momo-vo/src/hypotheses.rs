@@ -93,8 +93,12 @@ pub struct HypothesesOptions {
     /// Here the match memory tells which of A and B continues the previous frame's chosen
     /// motion (the track whose support the memory labels static): the one whose support's
     /// remembered-static share `f = static / (static + other)` exceeds the other's by at least
-    /// [`HypothesesOptions::track_identity`] (both supports with at least
-    /// [`HypothesesOptions::track_min_labelled`] labelled matches). Each track's score is then
+    /// [`HypothesesOptions::track_identity`], the one at least one half, the other below it
+    /// (both supports with at least [`HypothesesOptions::track_min_labelled`] labelled
+    /// matches; two motions of the static world, one a purer subset of the other, or two fits
+    /// of a static scene's noise are not two tracks: without that rule a clean and an outliers
+    /// sequence along KITTI 08 took such a motion, 0.34 -> 0.99 and 0.54 -> 0.97 deg,
+    /// docs/RESULTS.md §9, seventeenth session). Each track's score is then
     /// summed over the run with this decay, `T_k = track_decay · T_{k-1} + s_k` (`s_k` the
     /// frame's [`score`] of the candidate continuing it; frames without competition only decay
     /// both sums), and B replaces A when

@@ -1037,9 +1037,15 @@ fn separate_with(
             .and_then(|l| {
                 let fa = static_share(l, &chosen.1, h.track_min_labelled)?;
                 let fb = static_share(l, &best.1, h.track_min_labelled)?;
-                if fa - fb >= h.track_identity {
+                // The chosen track's support is remembered mostly static, the other's mostly
+                // other: two motions of the static world (one a purer subset of the other),
+                // or two fits of a static scene's noise, are not two tracks.
+                let split = |hi: f64, lo: f64| {
+                    hi - lo >= h.track_identity && hi >= TRACK_SPLIT_SHARE && lo < TRACK_SPLIT_SHARE
+                };
+                if split(fa, fb) {
                     Some(false)
-                } else if fb - fa >= h.track_identity {
+                } else if split(fb, fa) {
                     Some(true)
                 } else {
                     None
@@ -1512,6 +1518,11 @@ pub fn memory_vote(
     let n: usize = labels.iter().map(Vec::len).sum();
     fb - fa >= opts.memory_vote && own as f64 >= opts.own_share * n as f64
 }
+
+/// The remembered-static share from which a support may continue the previous frame's chosen
+/// motion, and below which it may continue the rejected one
+/// ([`HypothesesOptions::track_decay`]).
+const TRACK_SPLIT_SHARE: f64 = 0.5;
 
 /// The remembered-static share `static / (static + other)` of the labelled matches in `sup`
 /// (labels per camera, per match: `Some(true)` static), where they are at least `min` (and 1).
