@@ -220,6 +220,12 @@ pub struct SeparateOptions {
     /// The least score (image cells) of an alternative admitted by
     /// [`SeparateOptions::ground_admit`].
     pub ground_admit_min: usize,
+    /// The least share of the frame's matches that an alternative's own matches (in its
+    /// support, outside A's) must hold to be admitted by [`SeparateOptions::ground_admit`]
+    /// (0: [`SeparateOptions::own_share`], as before this option). A slow pull's static
+    /// motion C or M can have a clear ground score (15-24 cells against A's 1-6) with only
+    /// 24-29 own matches of 300 (docs/RESULTS.md §9, seventeenth session). Off (0) by default.
+    pub ground_admit_own_share: f64,
     /// The second motion B is solved from one start first, the one of least cost `½ Σ ρ(|r|²)`
     /// on the matches outside A's support (one evaluation per start), and from the other
     /// starts only if that solve fails or its support fails the tests (then, as without this
@@ -324,6 +330,7 @@ impl Default for SeparateOptions {
             cell_cap_min_share: 0.2,
             ground_admit: 0.0,
             ground_admit_min: 12,
+            ground_admit_own_share: 0.0,
             candidate_one_start: false,
             candidate_screen: 0.0,
             candidate_max_iterations: 0,
@@ -372,6 +379,17 @@ impl SeparateOptions {
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
+        }
+    }
+
+    /// The own-match share [`SeparateOptions::ground_admit`] asks for:
+    /// [`SeparateOptions::ground_admit_own_share`], or [`SeparateOptions::own_share`] where
+    /// that is 0.
+    fn ground_admit_share(&self) -> f64 {
+        if self.ground_admit_own_share > 0.0 {
+            self.ground_admit_own_share
+        } else {
+            self.own_share
         }
     }
 
@@ -429,6 +447,9 @@ impl SeparateOptions {
         }
         if !(0.0..=1.0).contains(&self.own_share) {
             return Err("odometry.separate.own_share must be in [0, 1]".into());
+        }
+        if !(0.0..=1.0).contains(&self.ground_admit_own_share) {
+            return Err("odometry.separate.ground_admit_own_share must be in [0, 1]".into());
         }
         if !(self.cell_cap.is_finite() && self.cell_cap >= 0.0) {
             return Err("odometry.separate.cell_cap must be a non-negative number".into());
@@ -988,16 +1009,16 @@ fn separate_with(
             let p = labels
                 .as_ref()
                 .map_or(0.0, |l| persistence(l, &alt.1, &chosen.1));
-            let own_share_met = opts.own_share > 0.0
-                && count(&and(&alt.1, &not(&chosen.1))) as f64 >= opts.own_share * n as f64;
+            let own = count(&and(&alt.1, &not(&chosen.1))) as f64;
+            let own_share_met = opts.own_share > 0.0 && own >= opts.own_share * n as f64;
             if p >= opts.persistence || (own_share_met && p >= opts.own_persistence) {
                 return true;
             }
             // Competition by the ground cue (`ground_admit`).
-            let Some(h) = opts
-                .hypotheses()
-                .filter(|_| opts.ground_admit > 0.0 && own_share_met)
-            else {
+            let ga_share = opts.ground_admit_share();
+            let Some(h) = opts.hypotheses().filter(|_| {
+                opts.ground_admit > 0.0 && ga_share > 0.0 && own >= ga_share * n as f64
+            }) else {
                 return false;
             };
             let s = score(
@@ -1052,7 +1073,29 @@ fn separate_with(
             motion: ctx.estimator.motion(&best.0.params),
             support: &best.1,
         };
-        let ground_choice = tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b) == Some(true);
+        // Which of A and B continues the previous frame's chosen track (`track_decay`).
+        let b_continues = labels
+            .as_ref()
+            .filter(|_| h.track_decay > 0.0)
+            .and_then(|l| {
+                let fa = static_share(l, &chosen.1, h.track_min_labelled)?;
+                let fb = static_share(l, &best.1, h.track_min_labelled)?;
+                // The chosen track's support is remembered mostly static, the other's mostly
+                // other: two motions of the static world (one a purer subset of the other),
+                // or two fits of a static scene's noise, are not two tracks.
+                let split = |hi: f64, lo: f64| {
+                    hi - lo >= h.track_identity && hi >= TRACK_SPLIT_SHARE && lo < TRACK_SPLIT_SHARE
+                };
+                if split(fa, fb) {
+                    Some(false)
+                } else if split(fb, fa) {
+                    Some(true)
+                } else {
+                    None
+                }
+            });
+        let ground_choice =
+            tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b, b_continues) == Some(true);
         // The memory's vote where the ground scores are not decisive (`memory_vote`).
         let vote = !ground_choice
             && opts.memory_vote > 0.0
@@ -1069,6 +1112,7 @@ fn separate_with(
         } else {
             other = Some(best.1);
         }
+        tracker.settle(outcome.switched);
     } else if let Some(b) = alternatives.pop() {
         let (pa, pb) = (
             implausibility(ctx, &chosen.0.params),
@@ -1247,10 +1291,12 @@ fn candidate_solver(solver: &dyn Solver, opts: &SeparateOptions) -> Option<Box<d
 /// - its persistence is at least [`SeparateOptions::persistence`], and it is at most
 ///   [`persistence_bound`]; or
 /// - its own matches (in `x`, outside A's support, so at most `rest_n`) hold at least
-///   [`SeparateOptions::own_share`] of the `n` matches, and either its persistence is at least
-///   [`SeparateOptions::own_persistence`] or (`ground_admit`) its score is at least
-///   [`SeparateOptions::ground_admit_min`] and `ground_admit` times A's, its score being at most
-///   [`score_bound`].
+///   [`SeparateOptions::own_share`] of the `n` matches and its persistence is at least
+///   [`SeparateOptions::own_persistence`]; or
+/// - (`ground_admit`) its own matches hold at least the share
+///   [`SeparateOptions::ground_admit_own_share`] (or `own_share`) of the `n` matches and its
+///   score is at least [`SeparateOptions::ground_admit_min`] and `ground_admit` times A's, its
+///   score being at most [`score_bound`].
 fn retain_possible(
     ctx: &SolveContext<'_>,
     opts: &SeparateOptions,
@@ -1268,11 +1314,12 @@ fn retain_possible(
         return true;
     }
     let own_share_possible = opts.own_share > 0.0 && rest_n as f64 >= opts.own_share * n as f64;
-    if !own_share_possible {
-        return false;
-    }
-    if p_max >= opts.own_persistence {
+    if own_share_possible && p_max >= opts.own_persistence {
         return true;
+    }
+    let ga_share = opts.ground_admit_share();
+    if !(ga_share > 0.0 && rest_n as f64 >= ga_share * n as f64) {
+        return false;
     }
     let Some(h) = opts.hypotheses().filter(|_| opts.ground_admit > 0.0) else {
         return false;
@@ -1527,7 +1574,6 @@ fn not(a: &[Vec<bool>]) -> Vec<Vec<bool>> {
     a.iter().map(|m| m.iter().map(|k| !k).collect()).collect()
 }
 
-/// The matches the memory labels `label` (static: `true`).
 /// The memory's vote for the alternative B against A ([`SeparateOptions::memory_vote`]),
 /// each given as (ground score, support): true where the ground scores are not decisive, both
 /// supports hold at least [`SeparateOptions::memory_vote_min`] labelled matches, B's
@@ -1545,20 +1591,7 @@ pub fn memory_vote(
     if opts.memory_vote <= 0.0 || decisive(a.0, b.0) || decisive(b.0, a.0) {
         return false;
     }
-    // The remembered-static share of a support's labelled matches.
-    let share = |sup: &[Vec<bool>]| -> Option<f64> {
-        let (mut st, mut ot) = (0usize, 0usize);
-        for (l, m) in labels.iter().zip(sup) {
-            for (l, m) in l.iter().zip(m) {
-                match (m, l) {
-                    (true, Some(true)) => st += 1,
-                    (true, Some(false)) => ot += 1,
-                    _ => {}
-                }
-            }
-        }
-        (st + ot >= opts.memory_vote_min.max(1)).then(|| st as f64 / (st + ot) as f64)
-    };
+    let share = |sup: &[Vec<bool>]| static_share(labels, sup, opts.memory_vote_min);
     let (Some(fa), Some(fb)) = (share(a.1), share(b.1)) else {
         return false;
     };
@@ -1572,6 +1605,28 @@ pub fn memory_vote(
     fb - fa >= opts.memory_vote && own as f64 >= opts.own_share * n as f64
 }
 
+/// The remembered-static share from which a support may continue the previous frame's chosen
+/// motion, and below which it may continue the rejected one
+/// ([`HypothesesOptions::track_decay`]).
+const TRACK_SPLIT_SHARE: f64 = 0.5;
+
+/// The remembered-static share `static / (static + other)` of the labelled matches in `sup`
+/// (labels per camera, per match: `Some(true)` static), where they are at least `min` (and 1).
+fn static_share(labels: &[Vec<Option<bool>>], sup: &[Vec<bool>], min: usize) -> Option<f64> {
+    let (mut st, mut ot) = (0usize, 0usize);
+    for (l, m) in labels.iter().zip(sup) {
+        for (l, m) in l.iter().zip(m) {
+            match (m, l) {
+                (true, Some(true)) => st += 1,
+                (true, Some(false)) => ot += 1,
+                _ => {}
+            }
+        }
+    }
+    (st + ot >= min.max(1)).then(|| st as f64 / (st + ot) as f64)
+}
+
+/// The matches the memory labels `label` (static: `true`).
 fn label_mask(labels: &[Vec<Option<bool>>], label: bool) -> Vec<Vec<bool>> {
     labels
         .iter()
@@ -1702,6 +1757,8 @@ mod tests {
             "memory_vote = -0.1",
             "memory_vote_ground = 0.5",
             "memory_vote_ground = inf",
+            "ground_admit_own_share = 1.5",
+            "ground_admit_own_share = -0.1",
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
@@ -2175,7 +2232,13 @@ mod tests {
     fn pretests_skip_solves_and_keep_the_outcome() {
         use momo_sim::{SimConfig, simulate};
         use std::sync::atomic::Ordering::Relaxed;
-        let opts = SeparateOptions::competition_over_time();
+        let default = SeparateOptions::competition_over_time();
+        // The ground cue's own-share option and the run's track evidence (off by default).
+        let mut variant = default.clone();
+        variant.ground_admit_own_share = 0.05;
+        if let Some(h) = variant.hypotheses.as_mut() {
+            h.track_decay = 0.7;
+        }
         let config = crate::Config::default();
         let estimator = config.model.build(config.metric.as_ref()).expect("model");
         let solver = Counting {
@@ -2184,12 +2247,15 @@ mod tests {
             calls: Default::default(),
         };
         let (mut skipped, mut competing) = (0, 0);
-        for config_sim in [
-            SimConfig::clean_pinhole(),
-            SimConfig::outliers(),
-            SimConfig::fisheye_surround(),
-            SimConfig::moving_traffic(),
-        ] {
+        for (opts, config_sim) in [&default, &variant].into_iter().flat_map(|o| {
+            [
+                SimConfig::clean_pinhole(),
+                SimConfig::outliers(),
+                SimConfig::fisheye_surround(),
+                SimConfig::moving_traffic(),
+            ]
+            .map(move |c| (o, c))
+        }) {
             let sim = simulate(&SimConfig {
                 frames: 30,
                 seed: 2,
@@ -2221,7 +2287,7 @@ mod tests {
                 let c0 = solver.calls.load(Relaxed);
                 let old = separate_with(
                     &ctx,
-                    &opts,
+                    opts,
                     obs,
                     first.clone(),
                     &starts,
@@ -2231,7 +2297,7 @@ mod tests {
                 );
                 let c1 = solver.calls.load(Relaxed);
                 let new =
-                    separate_with(&ctx, &opts, obs, first, &starts, &mut with, Some(arc), true);
+                    separate_with(&ctx, opts, obs, first, &starts, &mut with, Some(arc), true);
                 let c2 = solver.calls.load(Relaxed);
                 assert!(c2 - c1 <= c1 - c0);
                 skipped += (c1 - c0) - (c2 - c1);
