@@ -163,6 +163,12 @@ pub struct HypothesisTracker {
     evidence: f64,
     /// The previous frame pair's labelled matches (`odometry.separate.memory_radius`).
     pub memory: MatchMemory,
+    /// The road track's start for the next frame (`odometry.separate.road_track`,
+    /// [`crate::road_track`]); `None`: the previous chosen motion.
+    pub road_track: Option<Vec<f64>>,
+    /// The recent frames' chosen motions' road scores (`odometry.separate.ground_drop`,
+    /// [`crate::ground_drop`]).
+    pub ground_scores: std::collections::VecDeque<usize>,
 }
 
 /// Per-match memory across frames by image position (issue 14): the second-image pixels
@@ -660,6 +666,8 @@ impl HypothesisTracker {
     pub fn reset(&mut self) {
         self.evidence = 0.0;
         self.memory = MatchMemory::default();
+        self.road_track = None;
+        self.ground_scores.clear();
     }
 
     /// Chooses between the continued motion `a` and the alternative `b` of a frame with arc
