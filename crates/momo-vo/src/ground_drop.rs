@@ -78,6 +78,24 @@ mod tests {
     }
 
     #[test]
+    fn the_option_is_validated() {
+        use crate::separate::SeparateOptions;
+        for (q, ok) in [
+            (0.0, true),
+            (0.4, true),
+            (1.0, false),
+            (-0.1, false),
+            (f64::NAN, false),
+        ] {
+            let o = SeparateOptions {
+                ground_drop: q,
+                ..SeparateOptions::competition_over_time()
+            };
+            assert_eq!(o.validate().is_ok(), ok, "ground_drop = {q}");
+        }
+    }
+
+    #[test]
     fn median_of_even_and_odd_counts() {
         assert_eq!(median(&VecDeque::new()), None);
         assert_eq!(median(&VecDeque::from(vec![3, 1, 2])), Some(2.0));
