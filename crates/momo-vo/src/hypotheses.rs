@@ -204,6 +204,12 @@ pub struct HypothesisTracker {
     pending: Option<(f64, f64)>,
     /// The previous frame pair's labelled matches (`odometry.separate.memory_radius`).
     pub memory: MatchMemory,
+    /// The road track's start for the next frame (`odometry.separate.road_track`,
+    /// [`crate::road_track`]); `None`: the previous chosen motion.
+    pub road_track: Option<Vec<f64>>,
+    /// The recent frames' chosen motions' road scores (`odometry.separate.ground_drop`,
+    /// [`crate::ground_drop`]).
+    pub ground_scores: std::collections::VecDeque<usize>,
 }
 
 /// Per-match memory across frames by image position (issue 14): the second-image pixels
@@ -706,6 +712,8 @@ impl HypothesisTracker {
         self.run = None;
         self.pending = None;
         self.memory = MatchMemory::default();
+        self.road_track = None;
+        self.ground_scores.clear();
     }
 
     /// The frame's choice after [`HypothesisTracker::choose`] (`switched`: B replaced A, by

@@ -1092,6 +1092,8 @@ impl Odometry {
         // What follows the separation (`separate.final_fit`: the final stage on all matches
         // or on the chosen motion's support).
         let mut next_stage = crate::separate::NextStage::FinalFit;
+        // The chosen motion's road score dropped (`separate.ground_drop`).
+        let mut ground_drop = false;
         let (result, competing) = match (
             result,
             self.config.odometry.separate.as_ref().filter(|s| s.enabled),
@@ -1117,6 +1119,7 @@ impl Odometry {
                     arc_length,
                 );
                 next_stage = next;
+                ground_drop = o.ground_drop;
                 (Some(sol), o.competing)
             }
             (r, _) => (r, false),
@@ -1253,6 +1256,10 @@ impl Odometry {
                     // The soft prior at its own strength (see estimated_arc_length_sigma).
                     let sigma = self.estimated_arc_length_sigma(&sol, i);
                     diag.param_sigmas[i] = diag.param_sigmas[i].max(sigma);
+                }
+                if ground_drop && diag.constraint == Constraint::Well {
+                    diag.constraint = Constraint::Weak;
+                    diag.reason = Some(Reason::RoadScoreDrop);
                 }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;

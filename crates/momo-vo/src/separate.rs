@@ -291,6 +291,23 @@ pub struct SeparateOptions {
     /// The least number of labelled matches in each support for
     /// [`SeparateOptions::memory_vote`].
     pub memory_vote_min: usize,
+    /// Offer the road track T ([`crate::road_track`]) as a further alternative (needs
+    /// [`SeparateOptions::hypotheses`] and odometry, as C): the motion re-solved on the matches
+    /// its start puts on the road, started from the previous frame's T where T's road score
+    /// beat the chosen motion's, so that a slow pull of the chosen motion (a lead vehicle or a
+    /// bus it follows part of the way) does not carry it. T competes as C does. Off by
+    /// default; measured in docs/RESULTS.md §9 (seventeenth session, pull31).
+    pub road_track: bool,
+    /// Flag a frame `weak` / `road_score_drop` where its chosen motion's road score
+    /// ([`crate::hypotheses::score`]) is at most this fraction of the median of the last 20
+    /// frames' (0: off; needs [`SeparateOptions::hypotheses`]; [`crate::ground_drop`]): a
+    /// motion that follows a vehicle ahead puts few road points on the road. As any weak frame
+    /// it does not centre the next frame's prior. Off by default; measured in
+    /// docs/RESULTS.md §9 (seventeenth session, pull31).
+    pub ground_drop: f64,
+    /// The least median road score (image cells) of the recent frames for
+    /// [`SeparateOptions::ground_drop`]: a scene without a visible road is never flagged.
+    pub ground_drop_min: usize,
 }
 
 impl Default for SeparateOptions {
@@ -338,6 +355,9 @@ impl Default for SeparateOptions {
             memory_vote: 0.0,
             memory_vote_ground: 1.5,
             memory_vote_min: 20,
+            road_track: false,
+            ground_drop: 0.0,
+            ground_drop_min: 8,
         }
     }
 }
@@ -489,6 +509,9 @@ impl SeparateOptions {
         if !(0.0..=1.0).contains(&self.persistence) {
             return Err("odometry.separate.persistence must be in [0, 1]".into());
         }
+        if !(self.ground_drop.is_finite() && (0.0..1.0).contains(&self.ground_drop)) {
+            return Err("odometry.separate.ground_drop must be in [0, 1)".into());
+        }
         if self.persistence > 0.0 && self.memory_radius <= 0.0 {
             return Err(
                 "odometry.separate.persistence needs the match memory (memory_radius > 0)".into(),
@@ -508,6 +531,8 @@ pub struct SeparationOutcome {
     pub competing: bool,
     /// The second motion was chosen over the first.
     pub switched: bool,
+    /// The chosen motion's road score dropped ([`SeparateOptions::ground_drop`]).
+    pub ground_drop: bool,
 }
 
 /// The sines of a match's two one-sided epipolar angles under the essential matrix `e`
@@ -728,7 +753,7 @@ impl SolveContext<'_> {
             .filter(|c| c.is_finite())
     }
 
-    fn solve(
+    pub(crate) fn solve(
         &self,
         obs: &FrameObservations,
         init: &[f64],
@@ -1000,6 +1025,24 @@ fn separate_with(
             }
         }
     }
+    // T: the road track (`road_track`).
+    let mut road_t: Option<Candidate> = None;
+    if opts.road_track
+        && admissible
+        && distinct_possible
+        && let Some(h) = opts.hypotheses()
+        && arc_length.is_some()
+        && let Some(previous) = starts.first()
+    {
+        let start = crate::road_track::start(ctx, previous, tracker.road_track.as_deref());
+        if let Some(t) = crate::road_track::solve(&cctx, h, obs, &start) {
+            let sup_t = support(&t.params);
+            if distinct(&sup_t, &chosen.1) {
+                alternatives.push((t.clone(), sup_t.clone()));
+            }
+            road_t = Some((t, sup_t));
+        }
+    }
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
@@ -1039,6 +1082,23 @@ fn separate_with(
             });
             s >= opts.ground_admit_min && s as f64 >= opts.ground_admit * sa as f64
         });
+    }
+    // T where competition over time rejected it: admitted by its road score (`road_track`).
+    if let Some((t, sup_t)) = &road_t
+        && let Some(h) = opts.hypotheses()
+        && opts.persistence > 0.0
+        && distinct(sup_t, &chosen.1)
+        && !alternatives.iter().any(|alt| alt.0.params == t.params)
+        && crate::road_track::admitted(
+            ctx,
+            h,
+            obs,
+            (opts.ground_admit_min, opts.ground_admit),
+            (&t.params, sup_t),
+            (&chosen.0.params, &chosen.1),
+        )
+    {
+        alternatives.push((t.clone(), sup_t.clone()));
     }
     outcome.competing = !alternatives.is_empty();
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
@@ -1139,8 +1199,36 @@ fn separate_with(
     {
         tracker.idle(h);
     }
+    if opts.road_track {
+        tracker.road_track = road_t.zip(opts.hypotheses()).and_then(|((t, sup_t), h)| {
+            crate::road_track::next(
+                ctx,
+                h,
+                obs,
+                (&t.params, &sup_t),
+                (&chosen.0.params, &chosen.1),
+            )
+        });
+    }
     if opts.memory_radius > 0.0 {
         tracker.memory = MatchMemory::record(obs, &chosen.1);
+    }
+    if opts.ground_drop > 0.0
+        && let Some(h) = opts.hypotheses()
+    {
+        let s = score(
+            h,
+            ctx.rig,
+            &ctx.estimator.motion(&chosen.0.params),
+            obs,
+            &chosen.1,
+        );
+        outcome.ground_drop = crate::ground_drop::observe(
+            &mut tracker.ground_scores,
+            s,
+            opts.ground_drop,
+            opts.ground_drop_min,
+        );
     }
     let (mut sol, mut mask) = chosen;
     // The remembered-other matches (`memory_exclude`).

@@ -362,6 +362,9 @@ pub enum Reason {
     /// A second motion explains a large share of the matches and the frame's covariance is
     /// dominated by the two motions' difference ([`mixture_covariance`]).
     CompetingMotions,
+    /// The chosen motion's road score fell far below the recent frames' (a motion that follows
+    /// a vehicle ahead; `odometry.separate.ground_drop`, [`crate::ground_drop`]).
+    RoadScoreDrop,
 }
 
 impl Reason {
@@ -377,6 +380,7 @@ impl Reason {
             Reason::TooFewInliers => "too_few_inliers",
             Reason::InliersInSmallRegion => "inliers_in_small_region",
             Reason::CompetingMotions => "competing_motions",
+            Reason::RoadScoreDrop => "road_score_drop",
         }
     }
 }

@@ -8,6 +8,7 @@ mod fuzz_regressions;
 mod hostile;
 mod hypotheses;
 mod priors;
+mod slow_pull;
 mod soft_sigma;
 mod stereo_scale;
 mod support;
