@@ -171,14 +171,18 @@ pub struct OdometryOptions {
     /// (the one-sample type-II maximum-likelihood prior variance) and is solved again from its
     /// solution (at most twice), before and after the sigmas are learnt. The prior yields where
     /// the data disagree with it beyond their own noise (the KITTI ground truth's slow frames,
-    /// whose direction of travel drifts away from the centre by tens of prior sigmas). Off by
-    /// default: measured (docs/RESULTS.md §9, sixteenth session), `2` on the climb only lowers
-    /// outliers along KITTI 08 but costs 00 and part of the moving-traffic family; on both
-    /// residuals it breaks the family (an object pulls the side slip).
+    /// whose direction of travel drifts away from the centre by tens of prior sigmas). Default
+    /// 4 (since the seventeenth session, with `soft_prior_conflict_residuals = [1]`, the
+    /// climb, `soft_prior_conflict_on_support` and `soft_prior_conflict_after_trusted`;
+    /// docs/RESULTS.md §9, seventeenth session, lead); 0 turns it off. Measured before
+    /// (sixteenth session): `2` on the climb, tested on all matches, lowers outliers along
+    /// KITTI 08 but costs 00 and part of the moving-traffic family; on both residuals it
+    /// breaks the family (an object pulls the side slip). A model without a soft prior
+    /// ignores it.
     pub soft_prior_conflict_widening: f64,
     /// The soft-prior residuals that `soft_prior_conflict_widening` may widen, by index in the
-    /// model's prior residuals (`soft_single_track`: 0 side slip, 1 climb); empty (the
-    /// default): all. `[1]` widens only the climb: a vertical drift of the ground truth (KITTI
+    /// model's prior residuals (`soft_single_track`: 0 side slip, 1 climb); empty: all;
+    /// default `[1]`. `[1]` widens only the climb: a vertical drift of the ground truth (KITTI
     /// 08's first 100 frames: 16-29 cm per frame, up to 1.5 rad at 0.2 m steps) conflicts there,
     /// whereas a moving object pulls the side slip, where the prior protects the estimate.
     pub soft_prior_conflict_residuals: Vec<usize>,
@@ -188,7 +192,8 @@ pub struct OdometryOptions {
     /// of on all matches, so that mismatches and a moving object's matches, which the first
     /// stage's robust loss only down-weights, cannot trip it; the widened prior then applies
     /// to the frame's solve on all its matches as without it. One more solve per frame.
-    /// Default false: measured (docs/RESULTS.md §9, seventeenth session) with
+    /// Default true since the seventeenth session (lead, with the memory-track options;
+    /// docs/RESULTS.md §9). Measured alone (docs/RESULTS.md §9, seventeenth session) with
     /// `soft_prior_conflict_widening = 4` on the climb and `soft_prior_conflict_after_trusted`,
     /// 8 -> 5 of the 66 static sequences along KITTI above 1.15 x the bound and the
     /// moving-traffic grid 48 -> 46 frames above 1 deg, but 4 static sequences worse by up to
@@ -196,7 +201,8 @@ pub struct OdometryOptions {
     pub soft_prior_conflict_on_support: bool,
     /// With `soft_prior_conflict_widening`: widen only where the previous frame centred the
     /// change-of-motion prior (estimated, trusted, no competing motions): an object that
-    /// persists over frames does not widen the prior of its frames. Default false.
+    /// persists over frames does not widen the prior of its frames. Default true since the
+    /// seventeenth session.
     pub soft_prior_conflict_after_trusted: bool,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
@@ -229,10 +235,10 @@ impl Default for OdometryOptions {
             soft_prior_student_nu: 0.0,
             soft_prior_arc_learning: false,
             soft_prior_arc_jitter: 0.0,
-            soft_prior_conflict_widening: 0.0,
-            soft_prior_conflict_residuals: Vec::new(),
-            soft_prior_conflict_on_support: false,
-            soft_prior_conflict_after_trusted: false,
+            soft_prior_conflict_widening: 4.0,
+            soft_prior_conflict_residuals: vec![1],
+            soft_prior_conflict_on_support: true,
+            soft_prior_conflict_after_trusted: true,
             motion_prior_sigmas: BTreeMap::new(),
         }
     }
@@ -647,12 +653,13 @@ impl Config {
                 ),
             ));
         }
+        // A model without a soft prior ignores the conflict widening (and its residual list).
         let count = manifold.prior_residual_count();
         if let Some(bad) = self
             .odometry
             .soft_prior_conflict_residuals
             .iter()
-            .find(|&&r| r >= count)
+            .find(|&&r| count > 0 && self.odometry.soft_prior_conflict_widening > 0.0 && r >= count)
         {
             return Err(self.error_at(
                 &name,
@@ -1086,7 +1093,8 @@ mod partial_tests {
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
-             ground_admit = 0.0\nmemory_vote = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
+             ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
+             ground_drop = 0.0\n[odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )
         .expect("the bare separation");

