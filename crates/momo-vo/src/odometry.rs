@@ -498,7 +498,20 @@ impl Odometry {
         sol: &FrameSolution,
         fixed: &[bool],
     ) -> Option<FrameSolution> {
-        let ctx = crate::final_fit::FinalFitContext {
+        let ctx = self.final_fit_context(fixed, false);
+        let core =
+            crate::final_fit::support(&ctx, &self.config.odometry.final_fit, obs, &sol.params)?;
+        self.solve_once(&core, &sol.params, fixed, false)
+    }
+
+    /// The final efficient stage's context: the final stage's estimator (the model's own where
+    /// the stage has no metric of its own), the frame's loss, solver and motion prior.
+    fn final_fit_context<'a>(
+        &'a self,
+        fixed: &'a [bool],
+        competing: bool,
+    ) -> crate::final_fit::FinalFitContext<'a> {
+        crate::final_fit::FinalFitContext {
             rig: &self.rig,
             estimator: self
                 .final_estimator
@@ -508,11 +521,8 @@ impl Odometry {
             solver: self.config.solver.as_ref(),
             fixed,
             motion_prior: &self.motion_prior,
-            competing: false,
-        };
-        let core =
-            crate::final_fit::support(&ctx, &self.config.odometry.final_fit, obs, &sol.params)?;
-        self.solve_once(&core, &sol.params, fixed, false)
+            competing,
+        }
     }
 
     /// The soft prior's residuals at `params` and their Jacobian over the free parameters
@@ -1614,18 +1624,7 @@ impl Odometry {
         {
             fixed[i] = true;
         }
-        let ctx = crate::final_fit::FinalFitContext {
-            rig: &self.rig,
-            estimator: self
-                .final_estimator
-                .as_deref()
-                .unwrap_or(self.estimator.as_ref()),
-            loss: self.config.loss.as_ref(),
-            solver: self.config.solver.as_ref(),
-            fixed: &fixed,
-            motion_prior: &self.motion_prior,
-            competing,
-        };
+        let ctx = self.final_fit_context(&fixed, competing);
         crate::final_fit::refit(&ctx, opts, obs, sol)
     }
 
