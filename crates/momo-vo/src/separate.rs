@@ -381,7 +381,10 @@ impl SeparateOptions {
     /// summed over a lock-in's run by track (`hypotheses.track_decay = 0.7`), the ground cue
     /// admits an alternative with 5 % own matches (`ground_admit_own_share = 0.05`), and a
     /// frame whose chosen motion's road score drops to 0.4 of the recent median is flagged
-    /// weak (`ground_drop = 0.4`; docs/RESULTS.md §9, seventeenth session, lead). A config file's
+    /// weak (`ground_drop = 0.4`; docs/RESULTS.md §9, seventeenth session, lead). Since the
+    /// eighteenth session a switch away from the continued track needs the alternative's own
+    /// frame score above that track's sum (`hypotheses.track_hold = 1`; docs/RESULTS.md §9,
+    /// eighteenth session, switch32). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -403,6 +406,7 @@ impl SeparateOptions {
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
+                track_hold: 1.0,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
