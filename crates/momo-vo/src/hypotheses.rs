@@ -121,7 +121,7 @@ pub struct HypothesesOptions {
     /// the evidence to leave a track held over the run. On the moving-traffic grid's frames
     /// where A continued the track and B's sum won (17, docs/RESULTS.md §9, eighteenth
     /// session), the four wrong switches (a bus at `s_B / T_A` = 0.39-0.76) and none of the
-    /// right ones (1.35-1.6, outside the flip-flops that those wrong switches start) fall
+    /// right ones (at least 1.35, outside the flip-flops that those wrong switches start) fall
     /// below 1. 0 (off) here; 1 in the default separation
     /// (`SeparateOptions::competition_over_time`, since the eighteenth session: grid 33 -> 28
     /// frames above 1 deg, hold-out 27 -> 22, no sequence with more; the static scenes and
