@@ -125,7 +125,9 @@ pub struct HypothesesOptions {
     /// below 1. 0 (off) here; 1 in the default separation
     /// (`SeparateOptions::competition_over_time`, since the eighteenth session: grid 33 -> 28
     /// frames above 1 deg, hold-out 27 -> 22, no sequence with more; the static scenes and
-    /// real KITTI 00 byte-identical).
+    /// real KITTI 00 byte-identical). Sensitive: a bus that gets through is then held too
+    /// (0.8: grid 39, one lock-in of 11 frames), and a larger factor holds off right switches
+    /// (1.25: hold-out 24, one sequence +2).
     pub track_hold: f64,
 }
 
