@@ -308,6 +308,24 @@ pub struct SeparateOptions {
     /// The least median road score (image cells) of the recent frames for
     /// [`SeparateOptions::ground_drop`]: a scene without a visible road is never flagged.
     pub ground_drop_min: usize,
+    /// Offer a second B, the local minimum with the most road (needs
+    /// [`SeparateOptions::hypotheses`]): of B's solutions from its starts (each a local minimum
+    /// of `½ Σ ρ(|r|²)` on the matches outside A's support), besides the one of least cost,
+    /// the one whose support (where it passes B's tests) has the highest score of the
+    /// multi-frame choice ([`crate::hypotheses::score`]: the image cells of its road points),
+    /// if that score exceeds A's and the least-cost B's (a local minimum with less road than A
+    /// is no static world that A missed). The solves are B's own (no further solve).
+    /// Where A follows a lead vehicle or a bus, the matches outside A's support are the rest
+    /// of the static world *and* another object; the object's tighter cluster has the lower
+    /// cost, the static world the road: in 7 of the 9 grid frames above 1 deg where no
+    /// candidate was within 1 deg, another start's B was (docs/RESULTS.md §9, eighteenth
+    /// session, cand32). It competes as B does. Off by default.
+    pub candidate_by_road: bool,
+    /// B is fitted to the matches outside A's support that the match memory does not
+    /// remember as the other motion (with [`SeparateOptions::memory_radius`]; where at least
+    /// 12 remain): the previous frame's object is left out of B's fit, so that B does not
+    /// converge to it again. B's support is still scored on all matches. Off by default.
+    pub candidate_forget_other: bool,
 }
 
 impl Default for SeparateOptions {
@@ -358,6 +376,8 @@ impl Default for SeparateOptions {
             road_track: false,
             ground_drop: 0.0,
             ground_drop_min: 8,
+            candidate_by_road: false,
+            candidate_forget_other: false,
         }
     }
 }
@@ -926,6 +946,14 @@ fn separate_with(
             .iter()
             .map(|m| m.iter().map(|k| !k).collect())
             .collect();
+        // `candidate_forget_other`: B's fit leaves out the remembered-other matches.
+        let rest_mask = match labels.as_deref().filter(|_| opts.candidate_forget_other) {
+            Some(l) => {
+                let kept = and(&rest_mask, &not(&label_mask(l, false)));
+                if count(&kept) >= 12 { kept } else { rest_mask }
+            }
+            None => rest_mask,
+        };
         let rest = subset(obs, &rest_mask);
         // B's support where it passes the tests.
         let tested = |b: &FrameSolution| -> Option<Vec<Vec<bool>>> {
@@ -973,24 +1001,58 @@ fn separate_with(
             }
         }
         if !done {
-            let mut best: Option<FrameSolution> = None;
+            // B's local minima, one per start that converged; B is the first of least cost.
+            let mut sols: Vec<FrameSolution> = Vec::new();
             for (i, s) in starts.iter().enumerate() {
                 let sol = match &mut first_try {
                     Some((j, sol)) if *j == i => sol.take(),
                     _ => cctx.solve(&rest, s, ctx.loss, false),
                 };
-                if let Some(sol) = sol
-                    && best
-                        .as_ref()
-                        .is_none_or(|b| sol.report.final_cost < b.report.final_cost)
-                {
-                    best = Some(sol);
+                sols.extend(sol);
+            }
+            let mut best_i: Option<usize> = None;
+            for (i, sol) in sols.iter().enumerate() {
+                if best_i.is_none_or(|b| sol.report.final_cost < sols[b].report.final_cost) {
+                    best_i = Some(i);
                 }
             }
+            // `candidate_by_road`: the other local minima, for their road scores.
+            let by_road = opts.hypotheses().filter(|_| opts.candidate_by_road);
+            let best = best_i.map(|i| sols.remove(i));
+            let others = if by_road.is_some() { sols } else { Vec::new() };
+            let road_score = |b: &FrameSolution, sup: &[Vec<bool>]| -> usize {
+                by_road.map_or(0, |h| {
+                    score(h, ctx.rig, &ctx.estimator.motion(&b.params), obs, sup)
+                })
+            };
+            // The road score a further B must exceed: A's and the least-cost B's (where that
+            // passes B's tests).
+            let mut floor = if others.is_empty() {
+                0
+            } else {
+                road_score(&chosen.0, &chosen.1)
+            };
             if let Some(b) = best
                 && let Some(sup_b) = tested(&b)
             {
+                if !others.is_empty() {
+                    floor = floor.max(road_score(&b, &sup_b));
+                }
                 alternatives.push((b, sup_b));
+            }
+            // The local minimum with the most road, where it has more than A and the least-cost
+            // B (the first of equal scores, in the order of the starts).
+            let mut road_best: Option<(usize, Candidate)> = None;
+            for b in others {
+                if let Some(sup_b) = tested(&b) {
+                    let s = road_score(&b, &sup_b);
+                    if s > floor && road_best.as_ref().is_none_or(|r| s > r.0) {
+                        road_best = Some((s, (b, sup_b)));
+                    }
+                }
+            }
+            if let Some((_, c)) = road_best {
+                alternatives.push(c);
             }
         }
     }
@@ -2335,6 +2397,9 @@ mod tests {
         // The ground cue's own-share option and the run's track evidence (off by default).
         let mut variant = default.clone();
         variant.ground_admit_own_share = 0.05;
+        // B's local minimum with the most road and B without the remembered-other matches.
+        variant.candidate_by_road = true;
+        variant.candidate_forget_other = true;
         if let Some(h) = variant.hypotheses.as_mut() {
             h.track_decay = 0.7;
         }
@@ -2537,6 +2602,74 @@ mod tests {
         );
         assert!(calls[0] >= 11 * 5, "B from every start: {}", calls[0]);
         assert!(2 * calls[1] < calls[0], "{calls:?}");
+    }
+
+    /// `candidate_by_road` takes B's other local minima from B's own solves: on a moving-traffic
+    /// drive every frame (from the same tracker state) makes as many solves with the option as
+    /// without, and in some frame the alternative it offers changes the outcome.
+    #[test]
+    fn by_road_adds_no_solve() {
+        use momo_sim::{SimConfig, simulate};
+        use std::sync::atomic::Ordering::Relaxed;
+        let off = SeparateOptions::competition_over_time();
+        let on = SeparateOptions {
+            candidate_by_road: true,
+            ..off.clone()
+        };
+        let config = crate::Config::default();
+        let estimator = config.model.build(config.metric.as_ref()).expect("model");
+        let solver = Counting {
+            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
+                .expect("solver"),
+            calls: Default::default(),
+        };
+        let sim = simulate(&SimConfig {
+            frames: 120,
+            seed: 2,
+            ..SimConfig::moving_traffic()
+        })
+        .expect("simulation");
+        let rig = &sim.sequence.rig;
+        let arc_index = estimator.arc_length_index().expect("arc length");
+        let mut fixed = vec![false; estimator.param_names().len()];
+        fixed[arc_index] = true;
+        let ctx = SolveContext {
+            rig,
+            estimator: estimator.as_ref(),
+            loss: config.loss.as_ref(),
+            solver: &solver,
+            fixed: &fixed,
+            motion_prior: None,
+        };
+        let mut tracker = HypothesisTracker::default();
+        let mut previous = estimator.initial_params(sim.true_arc_lengths[1]);
+        let mut changed = 0;
+        for (k, obs) in sim.sequence.frames.iter().enumerate().skip(1) {
+            let arc = sim.true_arc_lengths[k];
+            previous[arc_index] = arc;
+            let starts = vec![previous.clone(), estimator.initial_params(arc)];
+            let Some(first) = ctx.solve(obs, &starts[0], ctx.loss, false) else {
+                continue;
+            };
+            let mut t_on = tracker.clone();
+            let c0 = solver.calls.load(Relaxed);
+            let a = separate(
+                &ctx,
+                &off,
+                obs,
+                first.clone(),
+                &starts,
+                &mut tracker,
+                Some(arc),
+            );
+            let c1 = solver.calls.load(Relaxed);
+            let b = separate(&ctx, &on, obs, first, &starts, &mut t_on, Some(arc));
+            let c2 = solver.calls.load(Relaxed);
+            assert_eq!(c2 - c1, c1 - c0, "frame {k}");
+            changed += usize::from(a.0.params != b.0.params || a.1 != b.1);
+            previous = a.0.params;
+        }
+        assert!(changed > 0, "the option changed no frame");
     }
 
     /// `candidate_screen` on the static fisheye rig (B fitted every frame from 6 starts and

@@ -2,6 +2,7 @@
 //! binary before 2026-11-28; one binary compiles and links the dependencies' code once).
 
 mod calibrate;
+mod candidates;
 mod degenerate;
 mod final_fit;
 mod fuzz_regressions;
