@@ -122,12 +122,13 @@ pub struct HypothesesOptions {
     /// where A continued the track and B's sum won (17, docs/RESULTS.md §9, eighteenth
     /// session), the four wrong switches (a bus at `s_B / T_A` = 0.39-0.76) and none of the
     /// right ones (at least 1.35, outside the flip-flops that those wrong switches start) fall
-    /// below 1. 0 (off) here; 1 in the default separation
-    /// (`SeparateOptions::competition_over_time`, since the eighteenth session: grid 33 -> 28
-    /// frames above 1 deg, hold-out 27 -> 22, no sequence with more; the static scenes and
-    /// real KITTI 00 byte-identical). Sensitive: a bus that gets through is then held too
-    /// (0.8: grid 39, one lock-in of 11 frames), and a larger factor holds off right switches
-    /// (1.25: hold-out 24, one sequence +2).
+    /// below 1. Off by default: alone it gives grid 33 -> 28 frames above 1 deg and hold-out
+    /// 27 -> 22, no sequence with more (switch32), but beside the default's
+    /// `candidate_by_road` (since the eighteenth session) it gives grid 17 -> 21 (a bus that
+    /// gets through at 06 s2 281 is held for 11 frames, up to 5.7 deg) and hold-out 15 -> 13
+    /// (docs/RESULTS.md §9, eighteenth session, lead). Sensitive: a bus that gets through is
+    /// held too (0.8 alone: grid 39), and a larger factor holds off right switches (1.25
+    /// alone: hold-out 24, one sequence +2).
     pub track_hold: f64,
 }
 
