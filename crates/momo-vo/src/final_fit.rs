@@ -141,6 +141,20 @@ pub struct FinalFitOptions {
     /// those across it a large one at the same distance; the ratio is the point's inverse
     /// distance times the baseline whatever its direction. Default false.
     pub parallax_cap_inverse_distance: bool,
+    /// A parallax cap learnt from the sequence's own mismatches (0: off, the default; else the
+    /// share `s`, e.g. 0.4). Per camera, over the recent frames (counts decaying by
+    /// [`PARALLAX_TALLY_DECAY`] per frame): `S_k`, the support's matches, and `B_k`, the matches
+    /// of the band next to it (`inlier_sigmas · σ̂ <= |r| < 2 · inlier_sigmas · σ̂`, in front of
+    /// both cameras), by half-octave bins `k` of the parallax over the support's median in that
+    /// camera and frame ([`ParallaxTally`]). Mismatches near their epipolar line spread their
+    /// residuals over the support and the band alike (a density about flat in `|r|` near 0,
+    /// docs/RESULTS.md §9, eighteenth session), true matches hardly reach the band, so
+    /// `B_k / S_k` estimates the share of mismatches among the support's matches of bin `k`.
+    /// The support leaves out the matches from the lowest bin (at or above four times the
+    /// median) whose tail (the bin and those above) has `Σ B >= s · Σ S` upwards. Where a camera's true matches have large parallaxes
+    /// (a wide-angle rig's side cameras) the band's share stays low and nothing is capped. Not
+    /// on frames where two motions competed (as `parallax_cap_competing` is off).
+    pub learnt_parallax_cap: f64,
 }
 
 impl Default for FinalFitOptions {
@@ -171,6 +185,7 @@ impl Default for FinalFitOptions {
             parallax_cap_competing: false,
             parallax_cap_min_outside: 0.1,
             parallax_cap_inverse_distance: false,
+            learnt_parallax_cap: 0.0,
         }
     }
 }
@@ -242,6 +257,12 @@ impl FinalFitOptions {
             return Err(format!(
                 "odometry.final_fit.parallax_cap must be a number >= 0, found {}",
                 self.parallax_cap
+            ));
+        }
+        if !(self.learnt_parallax_cap.is_finite() && self.learnt_parallax_cap >= 0.0) {
+            return Err(format!(
+                "odometry.final_fit.learnt_parallax_cap must be a number >= 0, found {}",
+                self.learnt_parallax_cap
             ));
         }
         if !(0.0..=1.0).contains(&self.parallax_cap_min_outside) {
@@ -368,6 +389,93 @@ pub fn baseline_over_distance(
 /// The floor of `sin α` in [`baseline_over_distance`] (about 0.6 deg from the epipole).
 pub const MIN_EPIPOLE_SINE: f64 = 0.01;
 
+/// Decay per frame of [`ParallaxTally`]'s counts (a memory of about 100 frames).
+pub const PARALLAX_TALLY_DECAY: f64 = 0.99;
+/// Half-octave bins of [`ParallaxTally`], from four times the support's median parallax (the
+/// inliers' 99 % quantile on the simulated KITTI-like scenes, 4.3x); the last holds everything
+/// from `2^8.5` times the median up.
+pub const PARALLAX_TALLY_BINS: usize = 14;
+/// Fewest (decayed) support matches in a tail of [`ParallaxTally`]'s bins for its share to
+/// count (also a warm-up: no cap before the recent frames have seen that many).
+pub const PARALLAX_TALLY_MIN: f64 = 20.0;
+
+/// The counts of the learnt parallax cap (`learnt_parallax_cap`): per camera and half-octave
+/// bin `k` of the parallax `θ` over the support's median `m` (`2^(2 + k/2) <= θ / m <
+/// 2^(2 + (k+1)/2)`; below `4 m` no bin), the support's matches `S_k` and the band's `B_k`
+/// (within one to two `inlier_sigmas · σ̂`, in front of both cameras). One frame's counts, or
+/// the decayed sums over the recent frames ([`ParallaxTally::add`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParallaxTally {
+    /// Per camera, per bin: (support, band).
+    per_camera: Vec<[(f64, f64); PARALLAX_TALLY_BINS]>,
+}
+
+impl ParallaxTally {
+    /// The bin of a parallax `rel` times the median; `None` below four times the median (or
+    /// NaN).
+    fn bin(rel: f64) -> Option<usize> {
+        if !(rel >= 4.0) {
+            return None;
+        }
+        let k = (2.0 * rel.log2()).floor() - 4.0;
+        Some((k.max(0.0) as usize).min(PARALLAX_TALLY_BINS - 1))
+    }
+
+    /// Counts one match of camera `camera` at `rel` times the median: in the support
+    /// (`support`) or the band.
+    fn count(&mut self, camera: usize, rel: f64, support: bool) {
+        let Some(k) = Self::bin(rel) else {
+            return;
+        };
+        if self.per_camera.len() <= camera {
+            self.per_camera
+                .resize(camera + 1, [(0.0, 0.0); PARALLAX_TALLY_BINS]);
+        }
+        let c = &mut self.per_camera[camera][k];
+        if support {
+            c.0 += 1.0;
+        } else {
+            c.1 += 1.0;
+        }
+    }
+
+    /// The cap of camera `camera` in units of its support's median parallax: the lower edge
+    /// `2^(2 + k/2)` of the lowest bin `k` whose tail (bins `k` and up) has `Σ S >=
+    /// PARALLAX_TALLY_MIN` and `Σ B >= share · Σ S` (an empty bin right below a qualifying tail
+    /// qualifies too: the same sums); infinity where there is none.
+    pub fn limit(&self, camera: usize, share: f64) -> f64 {
+        let Some(bins) = self.per_camera.get(camera) else {
+            return f64::INFINITY;
+        };
+        // The tails' sums, from the top bin down.
+        let (mut s, mut b) = (0.0, 0.0);
+        let mut lowest = None;
+        for (k, (sk, bk)) in bins.iter().enumerate().rev() {
+            s += sk;
+            b += bk;
+            if s >= PARALLAX_TALLY_MIN && b >= share * s {
+                lowest = Some(k);
+            }
+        }
+        lowest.map_or(f64::INFINITY, |k| 2f64.powf(2.0 + k as f64 / 2.0))
+    }
+
+    /// Decays the sums by [`PARALLAX_TALLY_DECAY`] and adds a frame's counts.
+    pub fn add(&mut self, frame: &ParallaxTally) {
+        if self.per_camera.len() < frame.per_camera.len() {
+            self.per_camera
+                .resize(frame.per_camera.len(), [(0.0, 0.0); PARALLAX_TALLY_BINS]);
+        }
+        for (j, bins) in self.per_camera.iter_mut().enumerate() {
+            for (k, c) in bins.iter_mut().enumerate() {
+                let (s, b) = frame.per_camera.get(j).map_or((0.0, 0.0), |f| f[k]);
+                c.0 = PARALLAX_TALLY_DECAY * c.0 + s;
+                c.1 = PARALLAX_TALLY_DECAY * c.1 + b;
+            }
+        }
+    }
+}
+
 /// What the final stage needs besides the matches and the first stage's solution.
 pub struct FinalFitContext<'a> {
     /// The rig.
@@ -384,6 +492,9 @@ pub struct FinalFitContext<'a> {
     pub motion_prior: &'a MotionPrior,
     /// Two motions competed in this frame's motion separation (`parallax_cap_competing`).
     pub competing: bool,
+    /// The recent frames' counts of the learnt parallax cap (`learnt_parallax_cap`); `None`:
+    /// no learnt cap.
+    pub tally: Option<&'a ParallaxTally>,
 }
 
 /// The parallax cap (`parallax_cap`) over the matches `passing` (membership, parallax):
@@ -407,16 +518,32 @@ pub fn refit(
     obs: &FrameObservations,
     first: FrameSolution,
 ) -> FrameSolution {
+    refit_tallied(ctx, opts, obs, first).0
+}
+
+/// [`refit`], and the frame's counts of the learnt parallax cap (`learnt_parallax_cap`; at the
+/// first pass's support; `None` where it is off, on a frame where two motions competed, or
+/// where the stage did not refit) for the caller to add to its [`ParallaxTally`].
+pub fn refit_tallied(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    first: FrameSolution,
+) -> (FrameSolution, Option<ParallaxTally>) {
     // The stage metric's per-match constants of every match, computed once for every pass:
     // the residual norms on all matches and each refit on its support read them.
     let constants = ctx
         .estimator
         .match_constants(&ctx.request(obs, &first.params));
     let mut best: Option<FrameSolution> = None;
+    let mut tally = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
         match refit_once(ctx, opts, obs, &constants, from) {
-            Some((mut fin, support)) => {
+            Some((mut fin, support, frame_tally)) => {
+                if best.is_none() {
+                    tally = frame_tally;
+                }
                 fin.report.iterations += best
                     .as_ref()
                     .map_or(first.report.iterations, |b| b.report.iterations);
@@ -427,7 +554,7 @@ pub fn refit(
         }
     }
     let Some(mut fin) = best else {
-        return first;
+        return (first, None);
     };
     if opts.first_stage_covariance {
         // The covariance (and the inlier count and mask, which index all matches) of the
@@ -437,7 +564,7 @@ pub fn refit(
         fin.inliers_per_camera = first.inliers_per_camera;
         fin.inlier_mask = first.inlier_mask;
     }
-    fin
+    (fin, tally)
 }
 
 impl<'a> FinalFitContext<'a> {
@@ -466,9 +593,9 @@ fn refit_once(
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameSolution, Vec<usize>)> {
+) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>)> {
     let scale = ctx.loss.scale();
-    let (core, core_constants, sigma) = stage_support(ctx, opts, obs, constants, from)?;
+    let (core, core_constants, sigma, tally) = stage_support(ctx, opts, obs, constants, from)?;
     let req = ctx.request(obs, from);
     let cauchy;
     let loss: &dyn RobustLoss = if opts.cauchy_sigmas > 0.0 {
@@ -513,15 +640,16 @@ fn refit_once(
                 && fin.report.final_cost.is_finite() =>
         {
             let support = core.per_camera.iter().map(Vec::len).collect();
-            Some((fin, support))
+            Some((fin, support, tally))
         }
         _ => None,
     }
 }
 
-/// The final stage's support (steps 1 and 2 of the module doc, with the parallax cap) at the
+/// The final stage's support (steps 1 and 2 of the module doc, with the parallax caps) at the
 /// parameters `from`: the matches kept, their per-match constants (empty where `constants`
-/// does not cover `obs`) and the noise `σ̂`; `None` where the noise cannot be estimated or
+/// does not cover `obs`), the noise `σ̂` and, with `learnt_parallax_cap`, the frame's counts
+/// for [`ParallaxTally`] (before its cap); `None` where the noise cannot be estimated or
 /// fewer than [`MIN_SUPPORT`] matches are kept.
 fn stage_support(
     ctx: &FinalFitContext<'_>,
@@ -529,7 +657,7 @@ fn stage_support(
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameObservations, Vec<f64>, f64)> {
+) -> Option<(FrameObservations, Vec<f64>, f64, Option<ParallaxTally>)> {
     let scale = ctx.loss.scale();
     if !(scale.is_finite() && scale > 0.0) {
         return None;
@@ -602,6 +730,25 @@ fn stage_support(
         let limit = parallax_limit(passing.iter().flatten(), opts.parallax_cap, 1);
         vec![limit; passing.len()]
     };
+    // The learnt cap (`learnt_parallax_cap`): each camera's parallaxes over its support's
+    // median, the frame's counts, and the limit the recent frames' counts set.
+    let learnt = (opts.learnt_parallax_cap > 0.0 && !ctx.competing)
+        .then(|| learnt_parallaxes(ctx, obs, &norms, &motion, &passing, cut, tolerance));
+    let tally = learnt.as_ref().map(|rel| {
+        let mut t = ParallaxTally::default();
+        for (j, cam) in rel.iter().enumerate() {
+            for (r, support) in cam.iter().flatten() {
+                t.count(j, *r, *support);
+            }
+        }
+        t
+    });
+    let learnt_limits: Vec<f64> = (0..passing.len())
+        .map(|j| match (learnt.as_ref(), ctx.tally) {
+            (Some(_), Some(t)) => t.limit(j, opts.learnt_parallax_cap),
+            _ => f64::INFINITY,
+        })
+        .collect();
     let mut k = 0;
     let core = FrameObservations {
         per_camera: obs
@@ -609,10 +756,15 @@ fn stage_support(
             .iter()
             .zip(&passing)
             .zip(&limits)
-            .map(|((ms, pass), limit)| {
+            .enumerate()
+            .map(|(j, ((ms, pass), limit))| {
                 let mut kept = Vec::with_capacity(ms.len());
-                for (o, (ok, par)) in ms.iter().zip(pass) {
-                    if *ok && !(*par > *limit) {
+                for (i, (o, (ok, par))) in ms.iter().zip(pass).enumerate() {
+                    let rel = learnt
+                        .as_ref()
+                        .and_then(|l| l[j][i])
+                        .map_or(0.0, |(r, _)| r);
+                    if *ok && !(*par > *limit) && !(rel >= learnt_limits[j]) {
                         kept.push(*o);
                         if share {
                             core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
@@ -628,7 +780,54 @@ fn stage_support(
     if core.len() < MIN_SUPPORT {
         return None;
     }
-    Some((core, core_constants, sigma))
+    Some((core, core_constants, sigma, tally))
+}
+
+/// Per camera, per match of `obs`: for the support's matches (`passing`) and the band's
+/// (`cut <= |r| < 2 cut`, in front of both cameras within `tolerance`), the parallax
+/// ([`parallax`]) under `motion` over the median parallax of the camera's support, and whether
+/// the match is in the support; `None` for the others (and in a camera with fewer than
+/// [`MIN_SUPPORT`] support matches, or a zero median).
+fn learnt_parallaxes(
+    ctx: &FinalFitContext<'_>,
+    obs: &FrameObservations,
+    norms: &[Vec<f64>],
+    motion: &momo_core::Pose<f64>,
+    passing: &[Vec<(bool, f64)>],
+    cut: f64,
+    tolerance: f64,
+) -> Vec<Vec<Option<(f64, bool)>>> {
+    obs.per_camera
+        .iter()
+        .zip(norms)
+        .zip(passing)
+        .zip(ctx.rig.cameras())
+        .map(|(((ms, n), pass), cam)| {
+            let c = momo_core::camera_motion(motion, &cam.t_vehicle_camera);
+            let par: Vec<Option<(f64, bool)>> = ms
+                .iter()
+                .zip(n)
+                .zip(pass)
+                .map(|((o, r), (ok, _))| {
+                    let band =
+                        !*ok && *r >= cut && *r < 2.0 * cut && cheiral(&c, &o.f0, &o.f1, tolerance);
+                    (*ok || band).then(|| (parallax(&c, &o.f0, &o.f1), *ok))
+                })
+                .collect();
+            let mut support: Vec<f64> = par.iter().flatten().filter(|p| p.1).map(|p| p.0).collect();
+            let m = if support.len() >= MIN_SUPPORT {
+                median(&mut support).unwrap_or(0.0)
+            } else {
+                0.0
+            };
+            if !(m > 0.0) {
+                return vec![None; ms.len()];
+            }
+            par.into_iter()
+                .map(|p| p.map(|(x, s)| (x / m, s)))
+                .collect()
+        })
+        .collect()
 }
 
 /// The matches of `obs` that the final stage would refit on from the parameters `from`
@@ -644,7 +843,7 @@ pub fn support(
     from: &[f64],
 ) -> Option<FrameObservations> {
     let constants = ctx.estimator.match_constants(&ctx.request(obs, from));
-    stage_support(ctx, opts, obs, &constants, from).map(|(core, _, _)| core)
+    stage_support(ctx, opts, obs, &constants, from).map(|(core, _, _, _)| core)
 }
 
 #[cfg(test)]
@@ -700,6 +899,45 @@ mod tests {
             translation: nalgebra::Vector3::zeros(),
         };
         assert_eq!(baseline_over_distance(&still, &f, &f), 0.0);
+    }
+
+    #[test]
+    fn the_learnt_cap_is_the_lowest_tail_where_the_band_reaches_the_share() {
+        // Half-octave bins from 4x the median: 4 -> bin 0, 5.7 -> 1, 8 -> 2, 3.9 -> none.
+        assert_eq!(ParallaxTally::bin(3.9), None);
+        assert_eq!(ParallaxTally::bin(f64::NAN), None);
+        assert_eq!(ParallaxTally::bin(4.0), Some(0));
+        assert_eq!(ParallaxTally::bin(5.7), Some(1));
+        assert_eq!(ParallaxTally::bin(8.0), Some(2));
+        assert_eq!(ParallaxTally::bin(1e9), Some(PARALLAX_TALLY_BINS - 1));
+        // One frame: 30 support matches at 4.5x, 10 at 9x; band 1 at 4.5x, 5 at 9x.
+        let mut frame = ParallaxTally::default();
+        for _ in 0..30 {
+            frame.count(0, 4.5, true);
+        }
+        for _ in 0..10 {
+            frame.count(0, 9.0, true);
+        }
+        frame.count(0, 4.5, false);
+        for _ in 0..5 {
+            frame.count(0, 9.0, false);
+        }
+        // The tail from 8x holds 10 support matches: below the warm-up count, no cap yet.
+        assert_eq!(frame.limit(0, 0.4), f64::INFINITY);
+        let mut sums = ParallaxTally::default();
+        sums.add(&frame);
+        sums.add(&frame);
+        // Two frames (the first decayed): the tail from 8x holds 19.9 support matches, still
+        // no cap; a third frame puts it above 20 (29.7) with a band of 14.9 (>= 0.4 of it): the
+        // tail qualifies from 8x, and from the empty bin below it (5.7x: the same sums), so the
+        // cap is 2^2.5 = 5.66x. From 4x the share is 17.8 / 118.8 < 0.4: not lower. Another
+        // camera: none.
+        assert_eq!(sums.limit(0, 0.4), f64::INFINITY);
+        sums.add(&frame);
+        assert_eq!(sums.limit(0, 0.4), 2f64.powf(2.5));
+        assert_eq!(sums.limit(0, 0.8), f64::INFINITY);
+        assert_eq!(sums.limit(0, 0.1), 4.0);
+        assert_eq!(sums.limit(1, 0.4), f64::INFINITY);
     }
 
     #[test]
@@ -965,6 +1203,7 @@ mod tests {
                 fixed: &fixed,
                 motion_prior: &prior,
                 competing: false,
+                tally: None,
             };
             let req = ctx.request(&obs, &from);
             let constants = est.match_constants(&req);
@@ -1052,6 +1291,13 @@ mod tests {
         assert!(bad.validate().unwrap_err().contains("cheirality_sigmas"));
         let o: FinalFitOptions = toml::from_str("cauchy_sigmas = 0.0").unwrap();
         assert_eq!(o.cauchy_sigmas, 0.0);
+        let bad = FinalFitOptions {
+            learnt_parallax_cap: f64::NAN,
+            ..FinalFitOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("learnt_parallax_cap"));
+        let o: FinalFitOptions = toml::from_str("learnt_parallax_cap = 0.4").unwrap();
+        assert!(o.learnt_parallax_cap == 0.4 && o.validate().is_ok());
         assert!(!FinalFitOptions::default().one_step);
         let o: FinalFitOptions = toml::from_str("one_step = true").unwrap();
         assert!(o.one_step && o.validate().is_ok());

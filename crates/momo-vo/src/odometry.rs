@@ -218,6 +218,9 @@ pub struct Odometry {
     metric_is_angular: bool,
     /// Multi-frame evidence of the motion separation's hypothesis choice (crate::hypotheses).
     hypotheses: crate::hypotheses::HypothesisTracker,
+    /// The recent frames' counts of the final stage's learnt parallax cap
+    /// (`odometry.final_fit.learnt_parallax_cap`).
+    parallax_tally: crate::final_fit::ParallaxTally,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
 }
@@ -304,6 +307,7 @@ impl Odometry {
             first_stage: None,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
+            parallax_tally: Default::default(),
             clustering: Default::default(),
         })
     }
@@ -522,6 +526,8 @@ impl Odometry {
             fixed,
             motion_prior: &self.motion_prior,
             competing,
+            tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0)
+                .then_some(&self.parallax_tally),
         }
     }
 
@@ -1184,13 +1190,17 @@ impl Odometry {
                 self.first_stage = None;
                 if !standstill && next_stage != crate::separate::NextStage::Done {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
-                    sol = match &next_stage {
+                    let tally;
+                    (sol, tally) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
                             self.final_fit(&chosen, sol, &fixed, diag.scale, competing)
                         }
                         _ => self.final_fit(obs, sol, &fixed, diag.scale, competing),
                     };
+                    if let Some(t) = tally {
+                        self.parallax_tally.add(&t);
+                    }
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
                 // The match memory of the frame's final motion (`separate.memory_final`).
@@ -1605,7 +1615,8 @@ impl Odometry {
 
     /// The final efficient stage ([`crate::final_fit`], `odometry.final_fit`), with the arc
     /// length held where the frame holds it. `competing`: two motions competed in the frame's
-    /// motion separation.
+    /// motion separation. Also the frame's counts of the learnt parallax cap
+    /// ([`crate::final_fit::refit_tallied`]).
     fn final_fit(
         &self,
         obs: &FrameObservations,
@@ -1613,10 +1624,10 @@ impl Odometry {
         fixed: &[bool],
         scale: ScaleSource,
         competing: bool,
-    ) -> FrameSolution {
+    ) -> (FrameSolution, Option<crate::final_fit::ParallaxTally>) {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
-            return sol;
+            return (sol, None);
         }
         let mut fixed = fixed.to_vec();
         if let Some(i) = self.estimator.arc_length_index()
@@ -1625,7 +1636,7 @@ impl Odometry {
             fixed[i] = true;
         }
         let ctx = self.final_fit_context(&fixed, competing);
-        crate::final_fit::refit(&ctx, opts, obs, sol)
+        crate::final_fit::refit_tallied(&ctx, opts, obs, sol)
     }
 
     fn solve_with_restarts(
