@@ -210,7 +210,29 @@ pub struct OdometryOptions {
     /// addition to `rotation_change_sigma`. Names depend on the model (an unknown name is an
     /// error). Empty (the default): none.
     pub motion_prior_sigmas: BTreeMap<String, f64>,
+    /// The quiet-frame fast path of the motion separation (issue 19): after this many
+    /// consecutive moving frames on which no alternative motion competed, a frame whose
+    /// evidence shows one motion is separated without solving the alternatives B, C and M
+    /// (`[odometry.separate] second_motion` off for that frame: the match memory, the road
+    /// scores and the final stage run as on any frame without a competing alternative, so the
+    /// frame's estimate is bit-identical wherever the full separation would not have kept an
+    /// alternative). The frame stays watched: the full separation runs where the match memory
+    /// labels more than `quiet_other_share` of its labelled matches as another motion's, where
+    /// the first stage's residuals cluster in the image (the trust section's cell statistic
+    /// above `trust.clustering_z`, or within `trust.clustering_frames` of a frame where it
+    /// was), or where the first stage's inlier share fell below [`QUIET_SUPPORT_DROP`] of
+    /// the recent frames' best. 0 (the default): off. Measured in docs/RESULTS.md ("Speed",
+    /// eighteenth session).
+    pub quiet_frames: usize,
+    /// With `quiet_frames`: the largest share of a frame's labelled matches (match memory)
+    /// that may be remembered as another motion's on a quiet frame. Default 0.05.
+    pub quiet_other_share: f64,
 }
+
+/// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
+/// factor times the recent frames' best (the jackknife's decaying peak) runs the full
+/// separation (a support drop: a new object or a compromise motion).
+pub const QUIET_SUPPORT_DROP: f64 = 0.9;
 
 impl Default for OdometryOptions {
     fn default() -> Self {
@@ -240,6 +262,8 @@ impl Default for OdometryOptions {
             soft_prior_conflict_on_support: true,
             soft_prior_conflict_after_trusted: true,
             motion_prior_sigmas: BTreeMap::new(),
+            quiet_frames: 0,
+            quiet_other_share: 0.05,
         }
     }
 }
@@ -848,6 +872,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_sigma_max must be finite and at least 1, got {}",
                     o.soft_prior_sigma_max
+                ),
+            );
+        }
+        if !(0.0..=1.0).contains(&o.quiet_other_share) {
+            bad(
+                &["odometry.quiet_other_share"],
+                format!(
+                    "odometry.quiet_other_share must be within 0..=1, got {}",
+                    o.quiet_other_share
                 ),
             );
         }

@@ -220,6 +220,9 @@ pub struct Odometry {
     hypotheses: crate::hypotheses::HypothesisTracker,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
+    /// Consecutive moving frames whose separation kept no competing alternative (the
+    /// quiet-frame fast path, `odometry.quiet_frames`).
+    quiet_streak: usize,
 }
 
 impl Odometry {
@@ -305,6 +308,7 @@ impl Odometry {
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
             clustering: Default::default(),
+            quiet_streak: 0,
         })
     }
 
@@ -907,6 +911,7 @@ impl Odometry {
         self.soft_samples.clear();
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
+        self.quiet_streak = 0;
     }
 
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
@@ -1119,6 +1124,17 @@ impl Odometry {
                     fixed: &fixed,
                     motion_prior: Some(&self.motion_prior),
                 };
+                // The quiet-frame fast path (`odometry.quiet_frames`): no alternative solves.
+                let quiet_opts;
+                let opts = if self.quiet(obs, &sol, opts) {
+                    quiet_opts = crate::separate::SeparateOptions {
+                        second_motion: false,
+                        ..opts.clone()
+                    };
+                    &quiet_opts
+                } else {
+                    opts
+                };
                 let (sol, o, next) = crate::separate::separate(
                     &ctx,
                     opts,
@@ -1130,9 +1146,17 @@ impl Odometry {
                 );
                 next_stage = next;
                 ground_drop = o.ground_drop;
+                self.quiet_streak = if o.competing {
+                    0
+                } else {
+                    self.quiet_streak + 1
+                };
                 (Some(sol), o.competing)
             }
-            (r, _) => (r, false),
+            (r, _) => {
+                self.quiet_streak = 0;
+                (r, false)
+            }
         };
 
         // Whether this frame may centre the next frame's change-of-motion prior.
@@ -1351,6 +1375,55 @@ impl Odometry {
             motion,
             diagnostics: diag,
         }
+    }
+
+    /// Whether the separation of this frame may skip its alternative solves
+    /// ([`OdometryOptions::quiet_frames`](crate::config::OdometryOptions::quiet_frames)): the
+    /// last `quiet_frames` moving frames kept no competing alternative, no recent frame fired
+    /// the residual-clustering test, and on the first stage's solution `first` the inlier share
+    /// is at least [`QUIET_SUPPORT_DROP`](crate::config::QUIET_SUPPORT_DROP) times the recent
+    /// best, the match memory remembers at most `quiet_other_share` of the labelled matches as
+    /// another motion's, and the residual-clustering test ([`trust::clustering_fires`]) does
+    /// not fire.
+    fn quiet(
+        &self,
+        obs: &FrameObservations,
+        first: &FrameSolution,
+        opts: &crate::separate::SeparateOptions,
+    ) -> bool {
+        let o = &self.config.odometry;
+        if o.quiet_frames == 0 || self.quiet_streak < o.quiet_frames || self.clustering.active() {
+            return false;
+        }
+        let share = first.inliers() as f64 / obs.len().max(1) as f64;
+        if self
+            .inlier_share_peak
+            .is_none_or(|p| share < crate::config::QUIET_SUPPORT_DROP * p)
+        {
+            return false;
+        }
+        if opts.memory_radius > 0.0 {
+            let Some(labels) = self.hypotheses.memory.labels(obs, opts.memory_radius) else {
+                return false;
+            };
+            let (labelled, other) = labels
+                .iter()
+                .flatten()
+                .flatten()
+                .fold((0usize, 0usize), |(l, n), s| (l + 1, n + usize::from(!s)));
+            if other as f64 > o.quiet_other_share * labelled as f64 {
+                return false;
+            }
+        }
+        let t = &self.config.trust;
+        let (stat, _) = trust::residual_statistic_and_outside(
+            &self.rig,
+            &self.estimator.motion(&first.params),
+            obs,
+            (t.clustering_grid[0], t.clustering_grid[1]),
+            t.competing_threshold,
+        );
+        !trust::clustering_fires(t, stat)
     }
 
     /// The checks after a solve (`crate::trust`): a rotation no vehicle makes, no or too few
