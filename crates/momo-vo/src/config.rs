@@ -217,15 +217,19 @@ pub struct OdometryOptions {
     /// scores and the final stage run as on any frame without a competing alternative, so the
     /// frame's estimate is bit-identical wherever the full separation would not have kept an
     /// alternative). The frame stays watched: the full separation runs where the match memory
-    /// labels more than `quiet_other_share` of its labelled matches as another motion's, where
+    /// remembers another motion's matches outside the first stage's support (the share of the
+    /// labelled matches outside it remembered as other exceeds that share inside it by more
+    /// than `quiet_other_share`), where
     /// the first stage's residuals cluster in the image (the trust section's cell statistic
     /// above `trust.clustering_z`, or within `trust.clustering_frames` of a frame where it
     /// was), or where the first stage's inlier share fell below [`QUIET_SUPPORT_DROP`] of
     /// the recent frames' best. 0 (the default): off. Measured in docs/RESULTS.md ("Speed",
     /// eighteenth session).
     pub quiet_frames: usize,
-    /// With `quiet_frames`: the largest share of a frame's labelled matches (match memory)
-    /// that may be remembered as another motion's on a quiet frame. Default 0.05.
+    /// With `quiet_frames`: the largest excess of the match memory's "other" share outside the
+    /// first stage's support (the separation's threshold) over that share inside it on a
+    /// quiet frame (random mismatches are remembered as other on both sides alike, an object
+    /// moving against the support outside it). Default 0.1.
     pub quiet_other_share: f64,
 }
 
@@ -263,7 +267,7 @@ impl Default for OdometryOptions {
             soft_prior_conflict_after_trusted: true,
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
-            quiet_other_share: 0.05,
+            quiet_other_share: 0.1,
         }
     }
 }

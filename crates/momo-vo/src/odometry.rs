@@ -1402,28 +1402,24 @@ impl Odometry {
         {
             return false;
         }
-        if opts.memory_radius > 0.0 {
-            let Some(labels) = self.hypotheses.memory.labels(obs, opts.memory_radius) else {
-                return false;
-            };
-            let (labelled, other) = labels
-                .iter()
-                .flatten()
-                .flatten()
-                .fold((0usize, 0usize), |(l, n), s| (l + 1, n + usize::from(!s)));
-            if other as f64 > o.quiet_other_share * labelled as f64 {
-                return false;
-            }
-        }
         let t = &self.config.trust;
-        let (stat, _) = trust::residual_statistic_and_outside(
+        let (stat, outside) = trust::residual_statistic_and_outside(
             &self.rig,
             &self.estimator.motion(&first.params),
             obs,
             (t.clustering_grid[0], t.clustering_grid[1]),
-            t.competing_threshold,
+            opts.threshold,
         );
-        !trust::clustering_fires(t, stat)
+        if trust::clustering_fires(t, stat) {
+            return false;
+        }
+        if opts.memory_radius <= 0.0 {
+            return true;
+        }
+        let Some(labels) = self.hypotheses.memory.labels(obs, opts.memory_radius) else {
+            return false;
+        };
+        quiet_memory(&labels, &outside) <= o.quiet_other_share
     }
 
     /// The checks after a solve (`crate::trust`): a rotation no vehicle makes, no or too few
@@ -2193,6 +2189,45 @@ impl Odometry {
             diag.covariance = cov.transpose().iter().copied().collect();
         }
     }
+}
+
+/// The fewest labelled matches of a side whose own share [`quiet_memory`] takes (the
+/// separation's persistence uses the same count).
+const QUIET_MIN_LABELLED: usize = 8;
+
+/// The match memory's evidence of another motion outside a solution's support (the quiet-frame
+/// fast path, `odometry.quiet_other_share`): the share of the labelled matches outside the
+/// support (`outside`) that the memory remembers as another motion's, less that share inside
+/// it. A side with fewer than [`QUIET_MIN_LABELLED`] labelled matches
+/// takes the share of all of them (as competition over time's persistence does), so that a
+/// handful of labels shows nothing. Random mismatches are remembered as other on both sides
+/// alike (the simulator draws them anew per frame pair); an object moving against the
+/// support is remembered as other outside it.
+fn quiet_memory(labels: &[Vec<Option<bool>>], outside: &[Vec<bool>]) -> f64 {
+    // (labelled, other) inside and outside the support.
+    let (mut inside, mut out) = ((0usize, 0usize), (0usize, 0usize));
+    for (l, x) in labels.iter().zip(outside) {
+        for (l, x) in l.iter().zip(x) {
+            if let Some(s) = l {
+                let t = if *x { &mut out } else { &mut inside };
+                t.0 += 1;
+                t.1 += usize::from(!s);
+            }
+        }
+    }
+    let all = (inside.0 + out.0, inside.1 + out.1);
+    if all.0 == 0 {
+        return 0.0;
+    }
+    let share = |t: (usize, usize)| {
+        let t = if t.0 >= QUIET_MIN_LABELLED {
+            t
+        } else {
+            all
+        };
+        t.1 as f64 / t.0 as f64
+    };
+    share(out) - share(inside)
 }
 
 /// The frame's part of the one-linearisation jackknife (`Odometry::influence_frame`).
