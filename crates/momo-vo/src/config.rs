@@ -231,6 +231,13 @@ pub struct OdometryOptions {
     /// quiet frame (random mismatches are remembered as other on both sides alike, an object
     /// moving against the support outside it). Default 0.1.
     pub quiet_other_share: f64,
+    /// With `quiet_frames`: on a quiet frame the leave-one-cell-out jackknife of the
+    /// covariance runs only where the support dropped below [`QUIET_SUPPORT_DROP`] of the
+    /// recent best (`trust.jackknife_support_drop`'s trigger at that factor), the final
+    /// residuals cluster (`trust.clustering_z`) or a competing motion is found
+    /// (`trust.competing_min_fraction`), not on every frame. Default false. Measured in
+    /// docs/RESULTS.md ("Speed", eighteenth session).
+    pub quiet_jackknife: bool,
 }
 
 /// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
@@ -268,6 +275,7 @@ impl Default for OdometryOptions {
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,
+            quiet_jackknife: false,
         }
     }
 }

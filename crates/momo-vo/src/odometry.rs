@@ -1109,6 +1109,8 @@ impl Odometry {
         let mut next_stage = crate::separate::NextStage::FinalFit;
         // The chosen motion's road score dropped (`separate.ground_drop`).
         let mut ground_drop = false;
+        // The separation took the quiet-frame fast path (`odometry.quiet_frames`).
+        let mut quiet = false;
         let (result, competing) = match (
             result,
             self.config.odometry.separate.as_ref().filter(|s| s.enabled),
@@ -1126,7 +1128,8 @@ impl Odometry {
                 };
                 // The quiet-frame fast path (`odometry.quiet_frames`): no alternative solves.
                 let quiet_opts;
-                let opts = if self.quiet(obs, &sol, opts) {
+                quiet = self.quiet(obs, &sol, opts);
+                let opts = if quiet {
                     quiet_opts = crate::separate::SeparateOptions {
                         second_motion: false,
                         ..opts.clone()
@@ -1239,6 +1242,14 @@ impl Odometry {
                 // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
                 let share = sol.inliers() as f64 / matches.max(1) as f64;
                 let drop = self.config.trust.jackknife_support_drop;
+                // On a quiet frame with `odometry.quiet_jackknife` only where the support dropped
+                // (the trigger with `jackknife_support_drop < 1`), the residuals cluster or a
+                // competing motion is found.
+                let drop = if quiet && self.config.odometry.quiet_jackknife {
+                    drop.min(crate::config::QUIET_SUPPORT_DROP)
+                } else {
+                    drop
+                };
                 let mut jackknife =
                     drop >= 1.0 || self.inlier_share_peak.is_none_or(|p| share < drop * p);
                 // And on the frames where the residuals cluster in the image (a rigid object in
