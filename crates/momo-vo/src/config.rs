@@ -218,26 +218,20 @@ pub struct OdometryOptions {
     /// frame's estimate is bit-identical wherever the full separation would not have kept an
     /// alternative). The frame stays watched: the full separation runs where the match memory
     /// remembers another motion's matches outside the first stage's support (the share of the
-    /// labelled matches outside it remembered as other exceeds that share inside it by more
-    /// than `quiet_other_share`), where
+    /// labelled matches outside it remembered as other exceeds the share of all remembered
+    /// matches by more than `quiet_other_share`), where
     /// the first stage's residuals cluster in the image (the trust section's cell statistic
     /// above `trust.clustering_z`, or within `trust.clustering_frames` of a frame where it
     /// was), or where the first stage's inlier share fell below [`QUIET_SUPPORT_DROP`] of
     /// the recent frames' best. 0 (the default): off. Measured in docs/RESULTS.md ("Speed",
     /// eighteenth session).
     pub quiet_frames: usize,
-    /// With `quiet_frames`: the largest excess of the match memory's "other" share outside the
-    /// first stage's support (the separation's threshold) over that share inside it on a
-    /// quiet frame (random mismatches are remembered as other on both sides alike, an object
-    /// moving against the support outside it). Default 0.1.
+    /// With `quiet_frames`: the largest excess of the match memory's "other" share among the
+    /// matches outside the first stage's support (the separation's threshold) over its share
+    /// among all remembered matches on a quiet frame (random mismatches are remembered as
+    /// other outside the support as often as anywhere, an object moving against the support
+    /// more often). Default 0.1.
     pub quiet_other_share: f64,
-    /// With `quiet_frames`: on a quiet frame the leave-one-cell-out jackknife of the
-    /// covariance runs only where the support dropped below [`QUIET_SUPPORT_DROP`] of the
-    /// recent best (`trust.jackknife_support_drop`'s trigger at that factor), the final
-    /// residuals cluster (`trust.clustering_z`) or a competing motion is found
-    /// (`trust.competing_min_fraction`), not on every frame. Default false. Measured in
-    /// docs/RESULTS.md ("Speed", eighteenth session).
-    pub quiet_jackknife: bool,
 }
 
 /// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
@@ -275,7 +269,6 @@ impl Default for OdometryOptions {
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,
-            quiet_jackknife: false,
         }
     }
 }

@@ -223,6 +223,8 @@ pub struct Odometry {
     /// Consecutive moving frames whose separation kept no competing alternative (the
     /// quiet-frame fast path, `odometry.quiet_frames`).
     quiet_streak: usize,
+    /// Frames whose separation took the quiet-frame fast path ([`Odometry::quiet_frames_taken`]).
+    quiet_taken: usize,
 }
 
 impl Odometry {
@@ -309,6 +311,7 @@ impl Odometry {
             hypotheses: Default::default(),
             clustering: Default::default(),
             quiet_streak: 0,
+            quiet_taken: 0,
         })
     }
 
@@ -912,6 +915,13 @@ impl Odometry {
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
         self.quiet_streak = 0;
+        self.quiet_taken = 0;
+    }
+
+    /// How many frames so far took the separation's quiet-frame fast path
+    /// ([`OdometryOptions::quiet_frames`](crate::config::OdometryOptions::quiet_frames)).
+    pub fn quiet_frames_taken(&self) -> usize {
+        self.quiet_taken
     }
 
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
@@ -1109,8 +1119,6 @@ impl Odometry {
         let mut next_stage = crate::separate::NextStage::FinalFit;
         // The chosen motion's road score dropped (`separate.ground_drop`).
         let mut ground_drop = false;
-        // The separation took the quiet-frame fast path (`odometry.quiet_frames`).
-        let mut quiet = false;
         let (result, competing) = match (
             result,
             self.config.odometry.separate.as_ref().filter(|s| s.enabled),
@@ -1128,7 +1136,8 @@ impl Odometry {
                 };
                 // The quiet-frame fast path (`odometry.quiet_frames`): no alternative solves.
                 let quiet_opts;
-                quiet = self.quiet(obs, &sol, opts);
+                let quiet = self.quiet(obs, &sol, opts);
+                self.quiet_taken += usize::from(quiet);
                 let opts = if quiet {
                     quiet_opts = crate::separate::SeparateOptions {
                         second_motion: false,
@@ -1242,14 +1251,6 @@ impl Odometry {
                 // recent frames' best (or on every frame with `jackknife_support_drop >= 1`).
                 let share = sol.inliers() as f64 / matches.max(1) as f64;
                 let drop = self.config.trust.jackknife_support_drop;
-                // On a quiet frame with `odometry.quiet_jackknife` only where the support dropped
-                // (the trigger with `jackknife_support_drop < 1`), the residuals cluster or a
-                // competing motion is found.
-                let drop = if quiet && self.config.odometry.quiet_jackknife {
-                    drop.min(crate::config::QUIET_SUPPORT_DROP)
-                } else {
-                    drop
-                };
                 let mut jackknife =
                     drop >= 1.0 || self.inlier_share_peak.is_none_or(|p| share < drop * p);
                 // And on the frames where the residuals cluster in the image (a rigid object in
@@ -1427,10 +1428,13 @@ impl Odometry {
         if opts.memory_radius <= 0.0 {
             return true;
         }
-        let Some(labels) = self.hypotheses.memory.labels(obs, opts.memory_radius) else {
+        // Only the matches outside the support are looked up (the lookup is a tenth of a
+        // static frame's instructions).
+        let rest = crate::separate::subset(obs, &outside);
+        let Some(labels) = self.hypotheses.memory.labels(&rest, opts.memory_radius) else {
             return false;
         };
-        quiet_memory(&labels, &outside) <= o.quiet_other_share
+        quiet_memory(&labels, self.hypotheses.memory.other_share()) <= o.quiet_other_share
     }
 
     /// The checks after a solve (`crate::trust`): a rotation no vehicle makes, no or too few
@@ -2202,43 +2206,28 @@ impl Odometry {
     }
 }
 
-/// The fewest labelled matches of a side whose own share [`quiet_memory`] takes (the
+/// The fewest labelled matches outside the support whose share [`quiet_memory`] reads (the
 /// separation's persistence uses the same count).
 const QUIET_MIN_LABELLED: usize = 8;
 
 /// The match memory's evidence of another motion outside a solution's support (the quiet-frame
 /// fast path, `odometry.quiet_other_share`): the share of the labelled matches outside the
-/// support (`outside`) that the memory remembers as another motion's, less that share inside
-/// it. A side with fewer than [`QUIET_MIN_LABELLED`] labelled matches
-/// takes the share of all of them (as competition over time's persistence does), so that a
-/// handful of labels shows nothing. Random mismatches are remembered as other on both sides
-/// alike (the simulator draws them anew per frame pair); an object moving against the
-/// support is remembered as other outside it.
-fn quiet_memory(labels: &[Vec<Option<bool>>], outside: &[Vec<bool>]) -> f64 {
-    // (labelled, other) inside and outside the support.
-    let (mut inside, mut out) = ((0usize, 0usize), (0usize, 0usize));
-    for (l, x) in labels.iter().zip(outside) {
-        for (l, x) in l.iter().zip(x) {
-            if let Some(s) = l {
-                let t = if *x { &mut out } else { &mut inside };
-                t.0 += 1;
-                t.1 += usize::from(!s);
-            }
-        }
-    }
-    let all = (inside.0 + out.0, inside.1 + out.1);
-    if all.0 == 0 {
+/// support (`labels`, of those matches only) that the memory remembers as another motion's,
+/// less the share `remembered` of all remembered matches labelled other; 0 where fewer than
+/// [`QUIET_MIN_LABELLED`] are labelled (a handful of labels shows nothing). Random mismatches
+/// are remembered as other outside the support as often as anywhere (the simulator draws them
+/// anew per frame pair); an object moving against the support is remembered as other outside
+/// it.
+fn quiet_memory(labels: &[Vec<Option<bool>>], remembered: f64) -> f64 {
+    let (labelled, other) = labels
+        .iter()
+        .flatten()
+        .flatten()
+        .fold((0usize, 0usize), |(l, o), s| (l + 1, o + usize::from(!s)));
+    if labelled < QUIET_MIN_LABELLED {
         return 0.0;
     }
-    let share = |t: (usize, usize)| {
-        let t = if t.0 >= QUIET_MIN_LABELLED {
-            t
-        } else {
-            all
-        };
-        t.1 as f64 / t.0 as f64
-    };
-    share(out) - share(inside)
+    other as f64 / labelled as f64 - remembered
 }
 
 /// The frame's part of the one-linearisation jackknife (`Odometry::influence_frame`).
@@ -2380,6 +2369,55 @@ struct SoftDataView {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_quiet_memory_check_tells_an_object_from_random_mismatches() {
+        // The labels of 10 matches outside the support; a fifth of all remembered matches are
+        // other. Random mismatches: 2 of 10 other (no excess); an object: all 10 (excess 0.8);
+        // 7 labelled (all other): too few to show anything.
+        let random: Vec<Vec<Option<bool>>> = vec![(0..10).map(|k| Some(k % 5 != 0)).collect()];
+        assert_eq!(quiet_memory(&random, 0.2), 0.0);
+        let object: Vec<Vec<Option<bool>>> = vec![vec![Some(false); 10]];
+        assert!((quiet_memory(&object, 0.2) - 0.8).abs() < 1e-12);
+        let few: Vec<Vec<Option<bool>>> = vec![(0..10).map(|k| (k < 7).then_some(false)).collect()];
+        assert_eq!(quiet_memory(&few, 0.2), 0.0);
+        assert_eq!(quiet_memory(&[vec![None; 10]], 0.2), 0.0);
+    }
+
+    #[test]
+    fn quiet_frames_skip_the_alternatives_of_a_static_scene_with_the_same_poses() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 41,
+            seed: 3,
+            ..SimConfig::clean_pinhole()
+        };
+        let sim = simulate(&cfg).expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut params = Vec::new();
+            let mut competing = 0;
+            for k in 1..seq.num_frames() {
+                let arc = seq
+                    .arc_lengths
+                    .as_ref()
+                    .and_then(|a| a.get(k).copied().flatten());
+                let r = vo.process(&seq.frames[k], arc);
+                competing += usize::from(vo.quiet_streak == 0);
+                params.push(r.diagnostics.params);
+            }
+            (params, vo.quiet_frames_taken(), competing)
+        };
+        let (plain, none, competing) = run("");
+        let (quiet, taken, _) = run("[odometry]\nquiet_frames = 3\n");
+        assert_eq!(none, 0);
+        // No frame of the default kept an alternative, so every quiet frame is the default's.
+        assert_eq!(competing, 0);
+        assert!(taken >= 20, "{taken} quiet frames of 40");
+        assert_eq!(plain, quiet);
+    }
 
     #[test]
     fn a_learnt_jitter_widens_the_soft_prior_of_short_steps_only() {
