@@ -1428,8 +1428,14 @@ impl Odometry {
         if opts.memory_radius <= 0.0 {
             return true;
         }
+        if self.hypotheses.memory.is_empty() {
+            return false;
+        }
         // Only the matches outside the support are looked up (the lookup is a tenth of a
-        // static frame's instructions).
+        // static frame's instructions), and none where too few to show anything.
+        if outside.iter().flatten().filter(|x| **x).count() < QUIET_MIN_LABELLED {
+            return true;
+        }
         let rest = crate::separate::subset(obs, &outside);
         let Some(labels) = self.hypotheses.memory.labels(&rest, opts.memory_radius) else {
             return false;
