@@ -2426,6 +2426,20 @@ mod tests {
     }
 
     #[test]
+    fn the_fast_preset_is_the_default_with_the_quiet_frame_path() {
+        let fast = crate::Config::from_toml_str(
+            include_str!("../../../configs/fast.toml"),
+            "configs/fast.toml",
+        )
+        .expect("the preset parses");
+        let mut default = crate::Config::from_toml_str("", "default.toml").expect("parses");
+        assert!(fast.odometry.quiet_frames > 0);
+        default.odometry.quiet_frames = fast.odometry.quiet_frames;
+        default.odometry.quiet_other_share = fast.odometry.quiet_other_share;
+        assert_eq!(fast.odometry, default.odometry);
+    }
+
+    #[test]
     fn a_learnt_jitter_widens_the_soft_prior_of_short_steps_only() {
         // k = 0.5 (σ = 2 model sigmas), δ² = 0.12: at s = 0.2 m σ² = 4 + 3 = 7, at s = 10 m
         // σ² = 4.0012; no jitter or no arc length: unchanged.
