@@ -1394,9 +1394,9 @@ impl Odometry {
     /// last `quiet_frames` moving frames kept no competing alternative, no recent frame fired
     /// the residual-clustering test, and on the first stage's solution `first` the inlier share
     /// is at least [`QUIET_SUPPORT_DROP`](crate::config::QUIET_SUPPORT_DROP) times the recent
-    /// best, the match memory remembers at most `quiet_other_share` of the labelled matches as
-    /// another motion's, and the residual-clustering test ([`trust::clustering_fires`]) does
-    /// not fire.
+    /// best, the residual-clustering test ([`trust::clustering_fires`]) does not fire, and the
+    /// match memory's "other" share among the labelled matches outside the solution's support
+    /// exceeds the memory's own by at most `quiet_other_share` ([`quiet_memory`]).
     fn quiet(
         &self,
         obs: &FrameObservations,
