@@ -210,7 +210,37 @@ pub struct OdometryOptions {
     /// addition to `rotation_change_sigma`. Names depend on the model (an unknown name is an
     /// error). Empty (the default): none.
     pub motion_prior_sigmas: BTreeMap<String, f64>,
+    /// The quiet-frame fast path of the motion separation (issue 19): after this many
+    /// consecutive moving frames on which no alternative motion competed, a frame whose
+    /// evidence shows one motion is separated without solving the alternatives B, C and M
+    /// (`[odometry.separate] second_motion` off for that frame: the match memory, the road
+    /// scores and the final stage run as on any frame without a competing alternative, so the
+    /// frame's estimate is bit-identical wherever the full separation would not have kept an
+    /// alternative). The frame stays watched: the full separation runs where the match memory
+    /// remembers another motion's matches outside the first stage's support (the share of the
+    /// labelled matches outside it remembered as other exceeds the share of all remembered
+    /// matches by more than `quiet_other_share`), where the first stage's residuals cluster
+    /// in the image (the trust section's cell statistic above `trust.clustering_z`, or within
+    /// `trust.clustering_frames` of a frame where it was), or where the first stage's inlier
+    /// share fell below [`QUIET_SUPPORT_DROP`] of the recent frames' best. 0 (the default):
+    /// off; `configs/fast.toml` sets 10 (with `quiet_other_share = 0.05`). Measured in
+    /// docs/RESULTS.md ("Speed", eighteenth session): a fifth to a third of the whole process
+    /// on the four-camera rigs with the same estimates, nothing saved on one pinhole camera
+    /// (1-3 % for the checks), the moving-traffic grid's frames above 1 deg 33 -> 33 and the
+    /// hold-out's 27 -> 28 with the preset.
+    pub quiet_frames: usize,
+    /// With `quiet_frames`: the largest excess of the match memory's "other" share among the
+    /// matches outside the first stage's support (the separation's threshold) over its share
+    /// among all remembered matches on a quiet frame (random mismatches are remembered as
+    /// other outside the support as often as anywhere, an object moving against the support
+    /// more often). Default 0.1.
+    pub quiet_other_share: f64,
 }
+
+/// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
+/// factor times the recent frames' best (the jackknife's decaying peak) runs the full
+/// separation (a support drop: a new object or a compromise motion).
+pub const QUIET_SUPPORT_DROP: f64 = 0.9;
 
 impl Default for OdometryOptions {
     fn default() -> Self {
@@ -240,6 +270,8 @@ impl Default for OdometryOptions {
             soft_prior_conflict_on_support: true,
             soft_prior_conflict_after_trusted: true,
             motion_prior_sigmas: BTreeMap::new(),
+            quiet_frames: 0,
+            quiet_other_share: 0.1,
         }
     }
 }
@@ -848,6 +880,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_sigma_max must be finite and at least 1, got {}",
                     o.soft_prior_sigma_max
+                ),
+            );
+        }
+        if !(0.0..=1.0).contains(&o.quiet_other_share) {
+            bad(
+                &["odometry.quiet_other_share"],
+                format!(
+                    "odometry.quiet_other_share must be within 0..=1, got {}",
+                    o.quiet_other_share
                 ),
             );
         }

@@ -272,6 +272,17 @@ impl MatchMemory {
         self.per_camera.iter().all(Vec::is_empty)
     }
 
+    /// The share of the remembered matches labelled other (not static); 0 where nothing is
+    /// remembered.
+    pub fn other_share(&self) -> f64 {
+        let (n, other) = self
+            .per_camera
+            .iter()
+            .flatten()
+            .fold((0usize, 0usize), |(n, o), p| (n + 1, o + usize::from(!p.2)));
+        if n == 0 { 0.0 } else { other as f64 / n as f64 }
+    }
+
     /// The label (`Some(true)`: static) of each match of `obs` (per camera, per match): that of
     /// the nearest remembered match of the same camera to its first-image pixel, if one lies
     /// within `radius` pixels; `None` elsewhere. `None` overall if nothing is remembered or the

@@ -223,6 +223,11 @@ pub struct Odometry {
     parallax_tally: crate::final_fit::ParallaxTally,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
+    /// Consecutive moving frames whose separation kept no competing alternative (the
+    /// quiet-frame fast path, `odometry.quiet_frames`).
+    quiet_streak: usize,
+    /// Frames whose separation took the quiet-frame fast path ([`Odometry::quiet_frames_taken`]).
+    quiet_taken: usize,
 }
 
 impl Odometry {
@@ -309,6 +314,8 @@ impl Odometry {
             hypotheses: Default::default(),
             parallax_tally: Default::default(),
             clustering: Default::default(),
+            quiet_streak: 0,
+            quiet_taken: 0,
         })
     }
 
@@ -913,6 +920,14 @@ impl Odometry {
         self.soft_samples.clear();
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
+        self.quiet_streak = 0;
+        self.quiet_taken = 0;
+    }
+
+    /// How many frames so far took the separation's quiet-frame fast path
+    /// ([`OdometryOptions::quiet_frames`](crate::config::OdometryOptions::quiet_frames)).
+    pub fn quiet_frames_taken(&self) -> usize {
+        self.quiet_taken
     }
 
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
@@ -1125,6 +1140,19 @@ impl Odometry {
                     fixed: &fixed,
                     motion_prior: Some(&self.motion_prior),
                 };
+                // The quiet-frame fast path (`odometry.quiet_frames`): no alternative solves.
+                let quiet_opts;
+                let quiet = self.quiet(obs, &sol, opts);
+                self.quiet_taken += usize::from(quiet);
+                let opts = if quiet {
+                    quiet_opts = crate::separate::SeparateOptions {
+                        second_motion: false,
+                        ..opts.clone()
+                    };
+                    &quiet_opts
+                } else {
+                    opts
+                };
                 let (sol, o, next) = crate::separate::separate(
                     &ctx,
                     opts,
@@ -1136,9 +1164,17 @@ impl Odometry {
                 );
                 next_stage = next;
                 ground_drop = o.ground_drop;
+                self.quiet_streak = if o.competing {
+                    0
+                } else {
+                    self.quiet_streak + 1
+                };
                 (Some(sol), o.competing)
             }
-            (r, _) => (r, false),
+            (r, _) => {
+                self.quiet_streak = 0;
+                (r, false)
+            }
         };
 
         // Whether this frame may centre the next frame's change-of-motion prior.
@@ -1361,6 +1397,60 @@ impl Odometry {
             motion,
             diagnostics: diag,
         }
+    }
+
+    /// Whether the separation of this frame may skip its alternative solves
+    /// ([`OdometryOptions::quiet_frames`](crate::config::OdometryOptions::quiet_frames)): the
+    /// last `quiet_frames` moving frames kept no competing alternative, no recent frame fired
+    /// the residual-clustering test, and on the first stage's solution `first` the inlier share
+    /// is at least [`QUIET_SUPPORT_DROP`](crate::config::QUIET_SUPPORT_DROP) times the recent
+    /// best, the residual-clustering test ([`trust::clustering_fires`]) does not fire, and the
+    /// match memory's "other" share among the labelled matches outside the solution's support
+    /// exceeds the memory's own by at most `quiet_other_share` ([`quiet_memory`]).
+    fn quiet(
+        &self,
+        obs: &FrameObservations,
+        first: &FrameSolution,
+        opts: &crate::separate::SeparateOptions,
+    ) -> bool {
+        let o = &self.config.odometry;
+        if o.quiet_frames == 0 || self.quiet_streak < o.quiet_frames || self.clustering.active() {
+            return false;
+        }
+        let share = first.inliers() as f64 / obs.len().max(1) as f64;
+        if self
+            .inlier_share_peak
+            .is_none_or(|p| share < crate::config::QUIET_SUPPORT_DROP * p)
+        {
+            return false;
+        }
+        let t = &self.config.trust;
+        let (stat, outside) = trust::residual_statistic_and_outside(
+            &self.rig,
+            &self.estimator.motion(&first.params),
+            obs,
+            (t.clustering_grid[0], t.clustering_grid[1]),
+            opts.threshold,
+        );
+        if trust::clustering_fires(t, stat) {
+            return false;
+        }
+        if opts.memory_radius <= 0.0 {
+            return true;
+        }
+        if self.hypotheses.memory.is_empty() {
+            return false;
+        }
+        // Only the matches outside the support are looked up (the lookup is a tenth of a
+        // static frame's instructions), and none where too few to show anything.
+        if outside.iter().flatten().filter(|x| **x).count() < QUIET_MIN_LABELLED {
+            return true;
+        }
+        let rest = crate::separate::subset(obs, &outside);
+        let Some(labels) = self.hypotheses.memory.labels(&rest, opts.memory_radius) else {
+            return false;
+        };
+        quiet_memory(&labels, self.hypotheses.memory.other_share()) <= o.quiet_other_share
     }
 
     /// The checks after a solve (`crate::trust`): a rotation no vehicle makes, no or too few
@@ -2133,6 +2223,30 @@ impl Odometry {
     }
 }
 
+/// The fewest labelled matches outside the support whose share [`quiet_memory`] reads (the
+/// separation's persistence uses the same count).
+const QUIET_MIN_LABELLED: usize = 8;
+
+/// The match memory's evidence of another motion outside a solution's support (the quiet-frame
+/// fast path, `odometry.quiet_other_share`): the share of the labelled matches outside the
+/// support (`labels`, of those matches only) that the memory remembers as another motion's,
+/// less the share `remembered` of all remembered matches labelled other; 0 where fewer than
+/// [`QUIET_MIN_LABELLED`] are labelled (a handful of labels shows nothing). Random mismatches
+/// are remembered as other outside the support as often as anywhere (the simulator draws them
+/// anew per frame pair); an object moving against the support is remembered as other outside
+/// it.
+fn quiet_memory(labels: &[Vec<Option<bool>>], remembered: f64) -> f64 {
+    let (labelled, other) = labels
+        .iter()
+        .flatten()
+        .flatten()
+        .fold((0usize, 0usize), |(l, o), s| (l + 1, o + usize::from(!s)));
+    if labelled < QUIET_MIN_LABELLED {
+        return 0.0;
+    }
+    other as f64 / labelled as f64 - remembered
+}
+
 /// The frame's part of the one-linearisation jackknife (`Odometry::influence_frame`).
 struct InfluenceFrame {
     /// The exact robust Hessian of the frame at its solution (data and prior terms).
@@ -2272,6 +2386,69 @@ struct SoftDataView {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_quiet_memory_check_tells_an_object_from_random_mismatches() {
+        // The labels of 10 matches outside the support; a fifth of all remembered matches are
+        // other. Random mismatches: 2 of 10 other (no excess); an object: all 10 (excess 0.8);
+        // 7 labelled (all other): too few to show anything.
+        let random: Vec<Vec<Option<bool>>> = vec![(0..10).map(|k| Some(k % 5 != 0)).collect()];
+        assert_eq!(quiet_memory(&random, 0.2), 0.0);
+        let object: Vec<Vec<Option<bool>>> = vec![vec![Some(false); 10]];
+        assert!((quiet_memory(&object, 0.2) - 0.8).abs() < 1e-12);
+        let few: Vec<Vec<Option<bool>>> = vec![(0..10).map(|k| (k < 7).then_some(false)).collect()];
+        assert_eq!(quiet_memory(&few, 0.2), 0.0);
+        assert_eq!(quiet_memory(&[vec![None; 10]], 0.2), 0.0);
+    }
+
+    #[test]
+    fn quiet_frames_skip_the_alternatives_of_a_static_scene_with_the_same_poses() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 41,
+            seed: 3,
+            ..SimConfig::clean_pinhole()
+        };
+        let sim = simulate(&cfg).expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut params = Vec::new();
+            let mut competing = 0;
+            for k in 1..seq.num_frames() {
+                let arc = seq
+                    .arc_lengths
+                    .as_ref()
+                    .and_then(|a| a.get(k).copied().flatten());
+                let r = vo.process(&seq.frames[k], arc);
+                competing += usize::from(vo.quiet_streak == 0);
+                params.push(r.diagnostics.params);
+            }
+            (params, vo.quiet_frames_taken(), competing)
+        };
+        let (plain, none, competing) = run("");
+        let (quiet, taken, _) = run("[odometry]\nquiet_frames = 3\n");
+        assert_eq!(none, 0);
+        // No frame of the default kept an alternative, so every quiet frame is the default's.
+        assert_eq!(competing, 0);
+        assert!(taken >= 20, "{taken} quiet frames of 40");
+        assert_eq!(plain, quiet);
+    }
+
+    #[test]
+    fn the_fast_preset_is_the_default_with_the_quiet_frame_path() {
+        let fast = crate::Config::from_toml_str(
+            include_str!("../../../configs/fast.toml"),
+            "configs/fast.toml",
+        )
+        .expect("the preset parses");
+        let mut default = crate::Config::from_toml_str("", "default.toml").expect("parses");
+        assert!(fast.odometry.quiet_frames > 0);
+        default.odometry.quiet_frames = fast.odometry.quiet_frames;
+        default.odometry.quiet_other_share = fast.odometry.quiet_other_share;
+        assert_eq!(fast.odometry, default.odometry);
+    }
 
     #[test]
     fn a_learnt_jitter_widens_the_soft_prior_of_short_steps_only() {

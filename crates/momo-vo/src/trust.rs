@@ -1222,11 +1222,7 @@ impl ClusteringTrigger {
     /// Scores one moving frame (`statistic`: `T` and the cells used, if computed) and says
     /// whether its jackknife should run with the extra grids.
     pub fn observe(&mut self, options: &TrustOptions, statistic: Option<(f64, usize)>) -> bool {
-        if options.clustering_z > 0.0
-            && let Some((t, cells)) = statistic
-            && cells > 0
-            && t > chi_square_quantile(cells as f64, options.clustering_z)
-        {
+        if clustering_fires(options, statistic) {
             self.left = options.clustering_frames.max(1);
         }
         if self.left > 0 {
@@ -1236,6 +1232,22 @@ impl ClusteringTrigger {
             false
         }
     }
+
+    /// Whether a frame within the last `clustering_frames` fired the test (the next frame's
+    /// jackknife runs with the extra grids).
+    pub fn active(&self) -> bool {
+        self.left > 0
+    }
+}
+
+/// Whether the residual-clustering test fires on a frame's statistic `(T, cells used)`: `T`
+/// above the chi-square quantile of `clustering_z` standard normal deviations
+/// ([`chi_square_quantile`]); never where `clustering_z` is 0.
+pub fn clustering_fires(options: &TrustOptions, statistic: Option<(f64, usize)>) -> bool {
+    options.clustering_z > 0.0
+        && statistic.is_some_and(|(t, cells)| {
+            cells > 0 && t > chi_square_quantile(cells as f64, options.clustering_z)
+        })
 }
 
 /// Whether the mixture term of [`mixture_covariance`] dominates `cov` along the difference
