@@ -2387,6 +2387,51 @@ mod tests {
         }
     }
 
+    /// The default configuration's estimator and loss, a solver that counts its solves, and
+    /// the arc length held as the odometry holds it: the set-up of the tests that count the
+    /// separation's solves.
+    struct Counted {
+        config: crate::Config,
+        estimator: Box<dyn FrameEstimator>,
+        solver: Counting,
+        arc_index: usize,
+        fixed: Vec<bool>,
+    }
+
+    impl Counted {
+        fn new() -> Self {
+            let config = crate::Config::default();
+            let estimator = config.model.build(config.metric.as_ref()).expect("model");
+            let solver = Counting {
+                inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
+                    .expect("solver"),
+                calls: Default::default(),
+            };
+            let arc_index = estimator.arc_length_index().expect("arc length");
+            let mut fixed = vec![false; estimator.param_names().len()];
+            fixed[arc_index] = true;
+            Self {
+                config,
+                estimator,
+                solver,
+                arc_index,
+                fixed,
+            }
+        }
+
+        /// The solve context on `rig` (no motion prior).
+        fn ctx<'a>(&'a self, rig: &'a Rig) -> SolveContext<'a> {
+            SolveContext {
+                rig,
+                estimator: self.estimator.as_ref(),
+                loss: self.config.loss.as_ref(),
+                solver: &self.solver,
+                fixed: &self.fixed,
+                motion_prior: None,
+            }
+        }
+    }
+
     /// Simulated drives (a static pinhole scene, its outlier variant, the fisheye rig and
     /// moving traffic) with the default configuration's separation, with and without the
     /// exact pre-tests ([`retain_possible`], C and M's `distinct` bound): every frame's
@@ -2406,13 +2451,12 @@ mod tests {
         if let Some(h) = variant.hypotheses.as_mut() {
             h.track_decay = 0.7;
         }
-        let config = crate::Config::default();
-        let estimator = config.model.build(config.metric.as_ref()).expect("model");
-        let solver = Counting {
-            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
-                .expect("solver"),
-            calls: Default::default(),
-        };
+        let counted = Counted::new();
+        let (estimator, solver, arc_index) = (
+            counted.estimator.as_ref(),
+            &counted.solver,
+            counted.arc_index,
+        );
         let (mut skipped, mut competing) = (0, 0);
         for (opts, config_sim) in [&default, &variant].into_iter().flat_map(|o| {
             [
@@ -2430,17 +2474,7 @@ mod tests {
             })
             .expect("simulation");
             let rig = &sim.sequence.rig;
-            let arc_index = estimator.arc_length_index().expect("arc length");
-            let mut fixed = vec![false; estimator.param_names().len()];
-            fixed[arc_index] = true;
-            let ctx = SolveContext {
-                rig,
-                estimator: estimator.as_ref(),
-                loss: config.loss.as_ref(),
-                solver: &solver,
-                fixed: &fixed,
-                motion_prior: None,
-            };
+            let ctx = counted.ctx(rig);
             let (mut with, mut without) =
                 (HypothesisTracker::default(), HypothesisTracker::default());
             let mut previous = estimator.initial_params(sim.true_arc_lengths[1]);
@@ -2547,24 +2581,13 @@ mod tests {
             ..SimConfig::fisheye_surround()
         })
         .expect("simulation");
-        let config = crate::Config::default();
-        let estimator = config.model.build(config.metric.as_ref()).expect("model");
-        let solver = Counting {
-            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
-                .expect("solver"),
-            calls: Default::default(),
-        };
-        let arc_index = estimator.arc_length_index().expect("arc length");
-        let mut fixed = vec![false; estimator.param_names().len()];
-        fixed[arc_index] = true;
-        let ctx = SolveContext {
-            rig: &sim.sequence.rig,
-            estimator: estimator.as_ref(),
-            loss: config.loss.as_ref(),
-            solver: &solver,
-            fixed: &fixed,
-            motion_prior: None,
-        };
+        let counted = Counted::new();
+        let (estimator, solver, arc_index) = (
+            counted.estimator.as_ref(),
+            &counted.solver,
+            counted.arc_index,
+        );
+        let ctx = counted.ctx(&sim.sequence.rig);
         let every = SeparateOptions::competition_over_time();
         let one = SeparateOptions {
             candidate_one_start: true,
@@ -2620,13 +2643,12 @@ mod tests {
             candidate_by_road: false,
             ..on.clone()
         };
-        let config = crate::Config::default();
-        let estimator = config.model.build(config.metric.as_ref()).expect("model");
-        let solver = Counting {
-            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
-                .expect("solver"),
-            calls: Default::default(),
-        };
+        let counted = Counted::new();
+        let (estimator, solver, arc_index) = (
+            counted.estimator.as_ref(),
+            &counted.solver,
+            counted.arc_index,
+        );
         let sim = simulate(&SimConfig {
             frames: 120,
             seed: 2,
@@ -2634,17 +2656,7 @@ mod tests {
         })
         .expect("simulation");
         let rig = &sim.sequence.rig;
-        let arc_index = estimator.arc_length_index().expect("arc length");
-        let mut fixed = vec![false; estimator.param_names().len()];
-        fixed[arc_index] = true;
-        let ctx = SolveContext {
-            rig,
-            estimator: estimator.as_ref(),
-            loss: config.loss.as_ref(),
-            solver: &solver,
-            fixed: &fixed,
-            motion_prior: None,
-        };
+        let ctx = counted.ctx(rig);
         let mut tracker = HypothesisTracker::default();
         let mut previous = estimator.initial_params(sim.true_arc_lengths[1]);
         let mut changed = 0;
@@ -2694,24 +2706,13 @@ mod tests {
             ..SimConfig::fisheye_surround()
         })
         .expect("simulation");
-        let config = crate::Config::default();
-        let estimator = config.model.build(config.metric.as_ref()).expect("model");
-        let solver = Counting {
-            inner: serde_json::from_value(serde_json::to_value(&config.solver).expect("json"))
-                .expect("solver"),
-            calls: Default::default(),
-        };
-        let arc_index = estimator.arc_length_index().expect("arc length");
-        let mut fixed = vec![false; estimator.param_names().len()];
-        fixed[arc_index] = true;
-        let ctx = SolveContext {
-            rig: &sim.sequence.rig,
-            estimator: estimator.as_ref(),
-            loss: config.loss.as_ref(),
-            solver: &solver,
-            fixed: &fixed,
-            motion_prior: None,
-        };
+        let counted = Counted::new();
+        let (estimator, solver, arc_index) = (
+            counted.estimator.as_ref(),
+            &counted.solver,
+            counted.arc_index,
+        );
+        let ctx = counted.ctx(&sim.sequence.rig);
         let every = SeparateOptions::competition_over_time();
         let screened = SeparateOptions {
             candidate_screen: 1.0,
