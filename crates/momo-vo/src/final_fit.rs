@@ -144,8 +144,8 @@ pub struct FinalFitOptions {
     /// A parallax cap learnt from the sequence's own mismatches (0: off; else the share `s`;
     /// 0.4 by default since the eighteenth session, docs/RESULTS.md §9, lead: static scenes
     /// along KITTI above 1.15 x the bound 5 -> 3 of 66, mean eff 1.0165 -> 1.0097, the
-    /// moving-traffic grid's scores unchanged, real KITTI 00 byte-identical). Per camera, over the recent frames (counts decaying by
-    /// [`PARALLAX_TALLY_DECAY`] per frame): `S_k`, the support's matches, and `B_k`, the matches
+    /// moving-traffic grid's scores unchanged, real KITTI 00 byte-identical). Per camera, over
+    /// the recent frames (counts decaying by [`PARALLAX_TALLY_DECAY`] per frame): `S_k`, the support's matches, and `B_k`, the matches
     /// of the band next to it (`inlier_sigmas · σ̂ <= |r| < 2 · inlier_sigmas · σ̂`, in front of
     /// both cameras), by half-octave bins `k` of the parallax over the support's median in that
     /// camera and frame ([`ParallaxTally`]). Mismatches near their epipolar line spread their
@@ -153,8 +153,9 @@ pub struct FinalFitOptions {
     /// docs/RESULTS.md §9, eighteenth session), true matches hardly reach the band, so
     /// `B_k / S_k` estimates the share of mismatches among the support's matches of bin `k`.
     /// The support leaves out the matches from the lowest bin (at or above four times the
-    /// median) whose tail (the bin and those above) has `Σ B >= s · Σ S` upwards. Where a camera's true matches have large parallaxes
-    /// (a wide-angle rig's side cameras) the band's share stays low and nothing is capped. Not
+    /// median) whose tail (the bin and those above) has `Σ B >= s · Σ S`. Where a camera's
+    /// true matches have large parallaxes (a wide-angle rig's side cameras) the band's share
+    /// stays low and nothing is capped. Not
     /// on frames where two motions competed (as `parallax_cap_competing` is off).
     pub learnt_parallax_cap: f64,
 }

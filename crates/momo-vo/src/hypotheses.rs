@@ -938,13 +938,9 @@ mod tests {
         assert_eq!(t.evidence, 0.0, "the evidence restarts after a switch");
     }
 
-    /// `track_decay`: the tracks' scores add up over the run, so a frame whose alternative
-    /// scores higher alone does not switch away from the track that scored higher before; the
-    /// sums follow the tracks through a switch; without the memory's identification the run
-    /// restarts (the per-frame choice).
-    #[test]
-    fn track_evidence_sums_each_track_over_the_run() {
-        let rig = rig();
+    /// The scene of the track tests: 20 points ahead under one ego motion, and the supports of
+    /// the first 20, 6, 9 and 0 of them.
+    fn track_scene() -> (Rig, Pose<f64>, FrameObservations, [Vec<Vec<bool>>; 4]) {
         let r = momo_core::so3_exp(&Vector3::new(0.0, 0.01, 0.0));
         let ego = Pose::new(r, Vector3::new(0.0, 0.0, 1.0));
         let pts: Vec<Vector3<f64>> = (0..20)
@@ -952,7 +948,16 @@ mod tests {
             .collect();
         let obs = obs_of(&pts, &ego);
         let first = |k: usize| vec![(0..pts.len()).map(|i| i < k).collect::<Vec<bool>>()];
-        let (all, few, more, none) = (first(20), first(6), first(9), first(0));
+        (rig(), ego, obs, [first(20), first(6), first(9), first(0)])
+    }
+
+    /// `track_decay`: the tracks' scores add up over the run, so a frame whose alternative
+    /// scores higher alone does not switch away from the track that scored higher before; the
+    /// sums follow the tracks through a switch; without the memory's identification the run
+    /// restarts (the per-frame choice).
+    #[test]
+    fn track_evidence_sums_each_track_over_the_run() {
+        let (rig, ego, obs, [all, few, more, none]) = track_scene();
         let hyp = |support| Hypothesis {
             motion: ego,
             support,
@@ -1040,15 +1045,7 @@ mod tests {
     /// where the memory does not tell the tracks apart.
     #[test]
     fn track_hold_keeps_the_continued_track_against_the_other_tracks_past() {
-        let rig = rig();
-        let r = momo_core::so3_exp(&Vector3::new(0.0, 0.01, 0.0));
-        let ego = Pose::new(r, Vector3::new(0.0, 0.0, 1.0));
-        let pts: Vec<Vector3<f64>> = (0..20)
-            .map(|i| Vector3::new(-4.0 + 0.4 * i as f64, 1.5, 8.0 + i as f64))
-            .collect();
-        let obs = obs_of(&pts, &ego);
-        let first = |k: usize| vec![(0..pts.len()).map(|i| i < k).collect::<Vec<bool>>()];
-        let (all, few, more, none) = (first(20), first(6), first(9), first(0));
+        let (rig, ego, obs, [all, few, more, none]) = track_scene();
         let run = HypothesesOptions {
             ground: false,
             min_matches: 1,

@@ -920,6 +920,8 @@ impl Odometry {
         self.soft_samples.clear();
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
+        self.parallax_tally = Default::default();
+        self.clustering = Default::default();
         self.quiet_streak = 0;
         self.quiet_taken = 0;
     }
@@ -2434,6 +2436,38 @@ mod tests {
         assert_eq!(competing, 0);
         assert!(taken >= 20, "{taken} quiet frames of 40");
         assert_eq!(plain, quiet);
+    }
+
+    /// `reset` forgets every frame seen (`crate::batch` relies on it): after a reset the
+    /// driver repeats a fresh driver's estimates bit for bit, also where state learnt over
+    /// the frames acts (the learnt parallax cap's counts on 30 % mismatches, the
+    /// residual-clustering trigger).
+    #[test]
+    fn a_reset_driver_repeats_a_fresh_one() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 151,
+            seed: 23,
+            ..SimConfig::outliers()
+        })
+        .expect("the outliers scenario simulates");
+        let seq = &sim.sequence;
+        let mut vo = Odometry::new(seq.rig.clone(), crate::Config::default()).expect("builds");
+        let pass = |vo: &mut Odometry| {
+            (1..seq.num_frames())
+                .map(|k| {
+                    let arc = seq
+                        .arc_lengths
+                        .as_ref()
+                        .and_then(|a| a.get(k).copied().flatten());
+                    vo.process(&seq.frames[k], arc).diagnostics.params
+                })
+                .collect::<Vec<_>>()
+        };
+        let fresh = pass(&mut vo);
+        vo.reset(None);
+        let again = pass(&mut vo);
+        assert_eq!(fresh, again);
     }
 
     #[test]

@@ -2442,10 +2442,11 @@ mod tests {
         use momo_sim::{SimConfig, simulate};
         use std::sync::atomic::Ordering::Relaxed;
         let default = SeparateOptions::competition_over_time();
-        // The ground cue's own-share option and the run's track evidence (off by default).
+        // The default's options set explicitly (the ground cue's own share, the run's track
+        // evidence, B's local minimum with the most road), and B without the remembered-other
+        // matches (off by default).
         let mut variant = default.clone();
         variant.ground_admit_own_share = 0.05;
-        // B's local minimum with the most road and B without the remembered-other matches.
         variant.candidate_by_road = true;
         variant.candidate_forget_other = true;
         if let Some(h) = variant.hypotheses.as_mut() {
