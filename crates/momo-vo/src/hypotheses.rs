@@ -132,7 +132,10 @@ pub struct HypothesesOptions {
     pub track_hold: f64,
     /// A switch away from the continued track needs B's road to span the road's depths (0:
     /// off; needs [`HypothesesOptions::track_decay`]). Where the match memory says A continues
-    /// the previous frame's chosen track, B replaces A only if its road support (the matches of
+    /// the previous frame's chosen track, and the tracks' sums exist (a frame since the start or
+    /// a reset had two motions compete: before, the memory's track is whatever the lone solves
+    /// followed, which may have jumped onto an object, hold-out 07 s11 frame 8), B replaces A
+    /// only if its road support (the matches of
     /// [`ground_mask`]) spans a depth ratio `Z_max / Z_min` of at least this factor, `Z` the
     /// depth along the camera's optical axis of each triangulated road point
     /// ([`road_depth_span`]). The static world's road under the true motion is seen from the
@@ -874,6 +877,7 @@ impl HypothesisTracker {
             let narrow = switch
                 && opts.road_span > 0.0
                 && b_continues == Some(false)
+                && self.run.is_some()
                 && road_depth_span(rig, &b.motion, obs, b.support, opts)
                     .is_some_and(|s| s < opts.road_span);
             return Some(switch && !narrow);
@@ -1208,7 +1212,7 @@ mod tests {
             road_span: 3.4,
             ..opts.clone()
         };
-        let choose = |o: &HypothesesOptions, b: &[Vec<bool>], cont| {
+        let choose_after = |run, o: &HypothesesOptions, b: &[Vec<bool>], cont| {
             let a = Hypothesis {
                 motion: ego,
                 support: &none,
@@ -1218,11 +1222,16 @@ mod tests {
                 support: b,
             };
             HypothesisTracker {
-                run: Some((0.0, 0.0)),
+                run,
                 ..HypothesisTracker::default()
             }
             .choose(o, &rig, &obs, 1.0, true, &a, &b, cont)
         };
+        let choose = |o: &HypothesesOptions, b: &[Vec<bool>], cont| {
+            choose_after(Some((0.0, 0.0)), o, b, cont)
+        };
+        // No run yet (no frame has competed since the start): the memory's track is not held.
+        assert_eq!(choose_after(None, &held, &band, Some(false)), Some(true));
         assert_eq!(choose(&opts, &band, Some(false)), Some(true));
         assert_eq!(choose(&held, &band, Some(false)), Some(false));
         assert_eq!(choose(&held, &band, None), Some(true));
