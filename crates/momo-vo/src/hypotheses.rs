@@ -145,7 +145,12 @@ pub struct HypothesesOptions {
     /// moving-traffic grid's 16 switches of this kind (docs/RESULTS.md §9, nineteenth session,
     /// choice33) the 7 to a motion at least 0.1 deg worse than A had spans 1.7-3.0, the 9 better
     /// ones 3.8-8.4 (where the memory does not tell the tracks apart, or says B continues, right
-    /// switches with spans below 3 are common: an occluded near road). Off by default.
+    /// switches with spans below 3 are common: an occluded near road). Off in
+    /// `HypothesesOptions::default()`; 3.4 in the default separation
+    /// (`SeparateOptions::competition_over_time`, since the nineteenth session: moving-traffic
+    /// grid 17 -> 10 frames above 1 deg, hold-out 15 -> 6, no sequence with more; 3.0 and 4.0
+    /// give 10 on the grid, 6 and 7 on the hold-out). A config file's
+    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
     pub road_span: f64,
 }
 

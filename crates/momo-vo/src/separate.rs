@@ -406,8 +406,10 @@ impl SeparateOptions {
     /// frame whose chosen motion's road score drops to 0.4 of the recent median is flagged
     /// weak (`ground_drop = 0.4`; docs/RESULTS.md §9, seventeenth session, lead). Since the
     /// eighteenth session B's local minimum with the most road competes beside the least-cost one
-    /// (`candidate_by_road`; docs/RESULTS.md §9, eighteenth session, cand32 and lead). A config
-    /// file's
+    /// (`candidate_by_road`; docs/RESULTS.md §9, eighteenth session, cand32 and lead). Since the
+    /// nineteenth session a switch away from the track the memory says continues needs B's road
+    /// to span the road's depths (`hypotheses.road_span = 3.4`; docs/RESULTS.md §9, nineteenth
+    /// session, choice33). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -430,6 +432,7 @@ impl SeparateOptions {
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
+                road_span: 3.4,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
