@@ -181,9 +181,10 @@ pub struct TrustOptions {
     /// marked: halves of the image (an object spread over several cells moves the estimate
     /// only when most of it is left out). Default `[[1, 2], [2, 1]]`.
     pub clustering_grids: Vec<[usize; 2]>,
-    /// On a frame flagged `weak` / `road_score_drop` (`odometry.separate.ground_drop`: the
-    /// chosen motion's road score dropped against the recent frames', as where the estimate
-    /// follows a vehicle ahead), the reported covariance includes the road's alternatives: `c`,
+    /// On a frame whose chosen motion's road score dropped against the recent frames'
+    /// (`odometry.separate.ground_drop`, as where the estimate follows a vehicle ahead; flagged
+    /// `weak` / `road_score_drop`, or `competing_motions` where two motions competed too), the
+    /// reported covariance includes the road's alternatives: `c`,
     /// the previous frame's motion re-solved on the matches it puts on the road (the
     /// separation's continued track of the static world), and `p`, the previous frame's motion
     /// itself (the motion continued). With `w` this weight, the covariance becomes the mean

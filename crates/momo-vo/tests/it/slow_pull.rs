@@ -112,7 +112,8 @@ fn a_drop_of_the_road_score_flags_the_pulled_frames() {
 }
 
 /// The road's alternatives in the covariance (`[trust] road_alternative_weight = 1`, off by
-/// default): on the frames flagged `road_score_drop` the reported covariance `Σ + w Σ_j d_j d_jᵀ`
+/// default): on the frames whose road score dropped (flagged `road_score_drop`, or
+/// `competing_motions` where two motions competed too) the reported covariance `Σ + w Σ_j d_j d_jᵀ`
 /// covers the road's alternative (the previous motion re-solved on its road matches, where there
 /// is one) and the previous frame's motion at one standard deviation (`dᵀ Σ'⁻¹ d <= 1/w`); with
 /// `after_flag_weight = 1` too, so does an estimated frame right after a flagged one cover the
@@ -160,7 +161,10 @@ fn a_road_score_drop_frames_sigma_covers_the_road_alternative() {
             "frame {}",
             da.frame
         );
-        let road_drop = db.reason == Some(Reason::RoadScoreDrop);
+        // A frame flagged by two competing motions whose road score dropped too is widened
+        // as a `road_score_drop` frame.
+        let road_drop = db.reason == Some(Reason::RoadScoreDrop)
+            || (db.reason == Some(Reason::CompetingMotions) && da.covariance != db.covariance);
         let after_flag =
             k > 0 && db.status == FrameStatus::Estimated && flagged(&on[k - 1].diagnostics);
         if !road_drop && !after_flag {
