@@ -200,7 +200,7 @@ fn a_road_score_drop_frames_sigma_covers_the_road_alternative() {
         widened += usize::from(road_drop);
         after += usize::from(after_flag);
     }
-    // Measured: see the assertion's message.
+    // At least six of each on this drive (the counts are in the message if not).
     assert!(
         widened >= 6 && road >= 6 && after >= 6,
         "{widened} road_score_drop frames widened ({road} with a road alternative), {after} \
