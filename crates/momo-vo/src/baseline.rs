@@ -127,6 +127,7 @@ impl MotionDriver for FivePointBaseline {
             jackknife: false,
             competing: None,
             residual_clustering: f64::NAN,
+            road_alternative: None,
         };
         FrameResult {
             motion,

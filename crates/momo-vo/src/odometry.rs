@@ -118,6 +118,11 @@ pub struct FrameDiagnostics {
     /// computed).
     #[serde(default)]
     pub residual_clustering: f64,
+    /// The road's alternative that widened the covariance of a frame whose road score dropped
+    /// (`trust.road_alternative_weight`, [`trust::alternatives_covariance`]): its parameters
+    /// (all of the model's); `None` where there was none.
+    #[serde(default)]
+    pub road_alternative: Option<Vec<f64>>,
 }
 
 /// The result of one frame pair.
@@ -165,6 +170,9 @@ pub struct Odometry {
     /// The last frame pair was a standstill: its motion says nothing about the direction of
     /// travel, so the next moving frame starts straight ahead.
     after_standstill: bool,
+    /// The last frame pair was flagged `weak` by two competing motions or the road score's drop
+    /// (`trust.after_flag_weight`).
+    after_flag: bool,
     scale_observable: bool,
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
@@ -293,6 +301,7 @@ impl Odometry {
             previous,
             last_arc_length: None,
             after_standstill: false,
+            after_flag: false,
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
@@ -899,6 +908,7 @@ impl Odometry {
         };
         self.last_arc_length = None;
         self.after_standstill = false;
+        self.after_flag = false;
         self.frame = 0;
         self.inlier_ratio_average = None;
         self.inlier_share_peak = None;
@@ -1024,6 +1034,7 @@ impl Odometry {
             jackknife: false,
             competing: None,
             residual_clustering: f64::NAN,
+            road_alternative: None,
         };
 
         {
@@ -1319,8 +1330,26 @@ impl Odometry {
                     diag.constraint = Constraint::Weak;
                     diag.reason = Some(Reason::RoadScoreDrop);
                 }
+                // The road's alternatives in the covariance (`trust.road_alternative_weight`).
+                if ground_drop && !standstill {
+                    self.widen_by_road_alternative(obs, &init, &fixed, &sol, &mut diag);
+                }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;
+                }
+                // The previous motion in the covariance of an estimated frame after a flagged
+                // one (`trust.after_flag_weight`).
+                if self.after_flag
+                    && !standstill
+                    && diag.status == FrameStatus::Estimated
+                    && self.config.trust.after_flag_weight > 0.0
+                {
+                    Self::widen_by_alternatives(
+                        &[&init],
+                        self.config.trust.after_flag_weight,
+                        &sol,
+                        &mut diag,
+                    );
                 }
                 // Standstill frames score another residual (rotation only): they do not count
                 // towards the running inlier ratio of the moving frames.
@@ -1365,6 +1394,11 @@ impl Odometry {
             self.last_arc_length = Some(params[i]);
         }
         self.after_standstill = standstill;
+        self.after_flag = diag.status == FrameStatus::Weak
+            && matches!(
+                diag.reason,
+                Some(Reason::CompetingMotions | Reason::RoadScoreDrop)
+            );
         // A frame where two motions competed does not centre the next frame's prior.
         self.prior_ready = diag.status == FrameStatus::Estimated && trusted && !competing;
         let n = self.config.odometry.soft_prior_centring_frames;
@@ -1782,6 +1816,110 @@ impl Odometry {
             }
         }
         starts
+    }
+
+    /// The road's alternative of a frame whose chosen motion's road score dropped
+    /// (`odometry.separate.ground_drop`): the previous frame's motion `previous` (the frame's
+    /// start, its arc length held where odometry gives it) re-solved without the motion prior
+    /// on the matches it puts on the road ([`crate::hypotheses::ground_mask`]; the separation's
+    /// continued track of the static world). `None` without the multi-frame choice's options,
+    /// with fewer than 12 road matches, or where the solve fails.
+    fn road_alternative(
+        &self,
+        obs: &FrameObservations,
+        previous: &[f64],
+        fixed: &[bool],
+    ) -> Option<FrameSolution> {
+        let h = self
+            .config
+            .odometry
+            .separate
+            .as_ref()
+            .filter(|s| s.enabled)?
+            .hypotheses()?;
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let road = crate::hypotheses::ground_mask(
+            &self.rig,
+            &self.estimator.motion(previous),
+            obs,
+            &all,
+            h,
+        );
+        if road.iter().flatten().filter(|r| **r).count() < 12 {
+            return None;
+        }
+        let ctx = crate::separate::SolveContext {
+            rig: &self.rig,
+            estimator: self.estimator.as_ref(),
+            loss: self.config.loss.as_ref(),
+            solver: self.config.solver.as_ref(),
+            fixed,
+            motion_prior: None,
+        };
+        ctx.solve(
+            &crate::separate::subset(obs, &road),
+            previous,
+            self.config.loss.as_ref(),
+            false,
+        )
+    }
+
+    /// Widens the reported covariance of a frame whose road score dropped by its road's
+    /// alternatives (`trust.road_alternative_weight` `w`): `Σ + w (d_c d_cᵀ + d_p d_pᵀ)`, `d_c`
+    /// the road's alternative ([`Odometry::road_alternative`], where there is one) less the
+    /// estimate, `d_p` the previous frame's motion `previous` less the estimate
+    /// ([`Odometry::widen_by_alternatives`]). Nothing where the weight is 0.
+    fn widen_by_road_alternative(
+        &self,
+        obs: &FrameObservations,
+        previous: &[f64],
+        fixed: &[bool],
+        sol: &FrameSolution,
+        diag: &mut FrameDiagnostics,
+    ) {
+        let w = self.config.trust.road_alternative_weight;
+        if w <= 0.0 {
+            return;
+        }
+        let c = self.road_alternative(obs, previous, fixed);
+        let mut alternatives = vec![previous];
+        alternatives.extend(c.as_ref().map(|c| c.params.as_slice()));
+        if Self::widen_by_alternatives(&alternatives, w, sol, diag) {
+            diag.road_alternative = c.map(|c| c.params);
+        }
+    }
+
+    /// Widens the reported covariance by alternatives to the estimate (each all of the model's
+    /// parameters) with weight `w` ([`trust::alternatives_covariance`] over the free
+    /// parameters): `Σ + w Σ_j d_j d_jᵀ`; the sigmas grow by the same variances. Returns
+    /// whether it did (not where `w` is 0 or the frame has no covariance).
+    fn widen_by_alternatives(
+        alternatives: &[&[f64]],
+        w: f64,
+        sol: &FrameSolution,
+        diag: &mut FrameDiagnostics,
+    ) -> bool {
+        let k = sol.free.len();
+        if w <= 0.0 || k == 0 || diag.covariance.len() != k * k {
+            return false;
+        }
+        let free = |p: &[f64]| -> Vec<f64> {
+            sol.free
+                .iter()
+                .map(|&i| p.get(i).copied().unwrap_or(f64::NAN))
+                .collect()
+        };
+        let a = free(&sol.params);
+        let alternatives: Vec<Vec<f64>> = alternatives.iter().map(|p| free(p)).collect();
+        let alternatives: Vec<&[f64]> = alternatives.iter().map(Vec::as_slice).collect();
+        let cov = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
+        let wide = trust::alternatives_covariance(&cov, &a, &alternatives, w);
+        for (j, &i) in sol.free.iter().enumerate() {
+            let added = (wide[(j, j)] - cov[(j, j)]).max(0.0);
+            diag.param_sigmas[i] = (diag.param_sigmas[i].powi(2) + added).sqrt();
+        }
+        diag.covariance = wide.transpose().iter().copied().collect();
+        true
     }
 
     /// The calibrated covariance of the free parameters ([`trust::calibrated_covariance`]).

@@ -181,6 +181,25 @@ pub struct TrustOptions {
     /// marked: halves of the image (an object spread over several cells moves the estimate
     /// only when most of it is left out). Default `[[1, 2], [2, 1]]`.
     pub clustering_grids: Vec<[usize; 2]>,
+    /// On a frame whose chosen motion's road score dropped against the recent frames'
+    /// (`odometry.separate.ground_drop`, as where the estimate follows a vehicle ahead; flagged
+    /// `weak` / `road_score_drop`, or `competing_motions` where two motions competed too), the
+    /// reported covariance includes the road's alternatives: `c`,
+    /// the previous frame's motion re-solved on the matches it puts on the road (the
+    /// separation's continued track of the static world), and `p`, the previous frame's motion
+    /// itself (the motion continued). With `w` this weight, the covariance becomes the mean
+    /// square about the reported estimate `a` of a mixture that puts `w` on each
+    /// ([`alternatives_covariance`]): `Σ + w (d_c d_cᵀ + d_p d_pᵀ)`, `d_c = c - a`,
+    /// `d_p = p - a`. The estimate and the status are unchanged. 0: off (default).
+    pub road_alternative_weight: f64,
+    /// On an `estimated` frame that follows a frame flagged `weak` / `competing_motions` or
+    /// `road_score_drop` (two motions competed there, or the chosen one left the road), the
+    /// reported covariance includes the previous frame's motion `p` as an alternative
+    /// ([`alternatives_covariance`] with this weight `w`): `Σ + w d dᵀ`, `d = p - a`. The choice
+    /// after such a frame is uncertain (its prior is not centred on the flagged frame), and
+    /// neither estimate is trusted more. The estimate and the status are unchanged. 0: off
+    /// (default).
+    pub after_flag_weight: f64,
 }
 
 impl Default for TrustOptions {
@@ -210,6 +229,8 @@ impl Default for TrustOptions {
             clustering_z: 3.0,
             clustering_frames: 10,
             clustering_grids: vec![[1, 2], [2, 1]],
+            road_alternative_weight: 0.0,
+            after_flag_weight: 0.0,
         }
     }
 }
@@ -289,6 +310,17 @@ impl TrustOptions {
                     self.weak_prior_factor
                 ),
             ));
+        }
+        for (key, v) in [
+            (
+                "trust.road_alternative_weight",
+                self.road_alternative_weight,
+            ),
+            ("trust.after_flag_weight", self.after_flag_weight),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                out.push((vec![key], format!("{key} must be within 0..=1, got {v}")));
+            }
         }
         if !(self.clustering_z >= 0.0 && self.clustering_z.is_finite()) {
             out.push((
@@ -1078,6 +1110,33 @@ pub fn mixture_covariance(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> D
         return cov.clone();
     }
     cov + &d * d.transpose() * (w * (1.0 - w))
+}
+
+/// The mean square about the reported estimate `a` (covariance `cov`, free parameters) of a
+/// mixture that puts weight `w` on each alternative `c_j` (each with the same covariance) and
+/// the rest on `a`: the second moment about `a` is `Σ + Σ_j w d_j d_jᵀ` with `d_j = c_j - a`
+/// (for one alternative, the mixture's covariance `Σ + w (1 - w) d dᵀ` of
+/// [`mixture_covariance`] plus the squared offset of its mean, `w² d dᵀ`). The reported estimate
+/// stays `a`; each alternative lies within `1/√w` standard deviations of it (`dᵀ Σ'⁻¹ d ≤ 1/w`).
+/// An alternative whose length does not fit or that is not finite is left out; `cov` unchanged
+/// where `w` is outside `[0, 1]` or `a` does not fit it.
+pub fn alternatives_covariance(
+    cov: &DMatrix<f64>,
+    a: &[f64],
+    alternatives: &[&[f64]],
+    w: f64,
+) -> DMatrix<f64> {
+    let mut out = cov.clone();
+    if a.len() != cov.nrows() || !(0.0..=1.0).contains(&w) {
+        return out;
+    }
+    for c in alternatives.iter().filter(|c| c.len() == a.len()) {
+        let d = DVector::from_iterator(a.len(), c.iter().zip(a).map(|(c, a)| c - a));
+        if d.iter().all(|v| v.is_finite()) {
+            out += &d * d.transpose() * w;
+        }
+    }
+    out
 }
 
 /// Whether the residuals of a frame cluster in the image: the signed epipolar angle of every

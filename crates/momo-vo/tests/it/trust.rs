@@ -847,3 +847,43 @@ fn leave_cells_out_builds_the_wanted_samples_of_leave_one_cell_out() {
         }
     }
 }
+
+/// The road's alternatives in the covariance (`trust.road_alternative_weight`,
+/// [`momo_vo::trust::alternatives_covariance`]): `Σ + w Σ_j d_j d_jᵀ`, each alternative within
+/// `1/√w` standard deviations of the estimate; one alternative is the mixture's covariance of
+/// `mixture_covariance` plus the squared offset of the mixture's mean; `w = 0` and non-finite
+/// alternatives change nothing; the options out of range are rejected.
+#[test]
+fn the_road_alternatives_covariance_covers_each_alternative() {
+    use momo_vo::trust::{alternatives_covariance, mixture_covariance};
+    use nalgebra::{DMatrix, DVector};
+    let cov = DMatrix::from_row_slice(3, 3, &[4e-6, 1e-6, 0.0, 1e-6, 2e-6, 0.0, 0.0, 0.0, 1e-6]);
+    let a = [0.01, -0.002, 0.003];
+    let c = [0.02, -0.001, 0.003];
+    let p = [0.012, 0.004, -0.01];
+    for w in [0.25, 0.5, 1.0] {
+        let wide = alternatives_covariance(&cov, &a, &[&c, &p], w);
+        let inv = wide.clone().try_inverse().expect("invertible");
+        for alt in [&c, &p] {
+            let d = DVector::from_iterator(3, alt.iter().zip(&a).map(|(x, y)| x - y));
+            let m = (d.transpose() * &inv * &d)[(0, 0)];
+            assert!(m <= 1.0 / w + 1e-9, "w = {w}: d'S^-1 d = {m}");
+        }
+        let one = alternatives_covariance(&cov, &a, &[&c], w);
+        let d = DVector::from_iterator(3, c.iter().zip(&a).map(|(x, y)| x - y));
+        let expected = mixture_covariance(&cov, &a, &c, w) + &d * d.transpose() * (w * w);
+        assert!((one - expected).abs().max() < 1e-15);
+    }
+    assert_eq!(alternatives_covariance(&cov, &a, &[&c, &p], 0.0), cov);
+    let bad = [f64::NAN, 0.0, 0.0];
+    assert_eq!(alternatives_covariance(&cov, &a, &[&bad, &[0.0]], 1.0), cov);
+    for (key, v) in [
+        ("road_alternative_weight", "1.5"),
+        ("road_alternative_weight", "-0.1"),
+        ("after_flag_weight", "1.5"),
+        ("after_flag_weight", "-0.1"),
+    ] {
+        let e = config_error(&format!("[trust]\n{key} = {v}\n"));
+        assert!(e.contains(&format!("trust.{key}")), "{e}");
+    }
+}
