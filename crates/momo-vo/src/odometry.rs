@@ -542,7 +542,8 @@ impl Odometry {
             fixed,
             motion_prior: &self.motion_prior,
             competing,
-            tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0)
+            tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0
+                || self.config.odometry.final_fit.learnt_cauchy_max > 0.0)
                 .then_some(&self.parallax_tally),
         }
     }

@@ -202,3 +202,55 @@ fn the_learnt_parallax_cap_leaves_near_mismatches_out_where_the_band_says_so() {
         run_on(fisheye(), "learnt_parallax_cap = 0.0\n")
     );
 }
+
+/// Camera-0 poses (KITTI convention: x right, y down, z forward) of a drive whose direction of
+/// travel drifts upwards and sideways by centimetres per frame, as the KITTI ground truth's
+/// does (docs/RESULTS.md §9, sixteenth session): `frames` poses, steps of 0.5-0.9 m, a slow
+/// yaw, and per step a rise of 1-5 cm and a sideways shift of up to 2 cm off the heading.
+fn drifting_drive(frames: usize) -> Vec<momo_core::Pose<f64>> {
+    use nalgebra::Vector3;
+    let mut poses = Vec::with_capacity(frames);
+    let (mut p, mut yaw) = (Vector3::zeros(), 0.0_f64);
+    for k in 0..frames {
+        let kf = k as f64;
+        let r = momo_core::so3_exp(&Vector3::new(0.0, yaw, 0.0));
+        poses.push(momo_core::Pose::new(r, p));
+        let step = Vector3::new(
+            0.02 * (0.37 * kf).sin(),
+            -(0.03 + 0.02 * (0.11 * kf).sin()),
+            0.7 + 0.2 * (0.05 * kf).cos(),
+        );
+        p += r * step;
+        yaw += 0.01 * (0.04 * kf).sin();
+    }
+    poses
+}
+
+#[test]
+fn the_learnt_cauchy_scale_weighs_gaussian_pixels_closer_to_least_squares() {
+    // The learnt Cauchy scale (`learnt_cauchy_max`) on Gaussian pixel noise (the simulator's
+    // `clean_pinhole`) along a drive whose direction of travel drifts off the soft prior: the
+    // residual-tail share stays near the Gaussian's, the refit's scale widens from 2.4 σ̂ to
+    // the clamp, the data weigh more against the (biased) priors, and the median rotation
+    // error falls. Measured (200 frame pairs, seeds 1-6): -6.3 / -1.5 / -0.8 / -2.0 / -2.0 /
+    // -2.9 %. (On the built-in drive, whose motion is single-track, the same comparison is
+    // mixed: seeds 1-8 of 200 frames, 4 better and 4 worse, mean +1 %.)
+    let err = |v: &[(f64, f64)]| median(v.iter().map(|x| x.1).collect());
+    for seed in 1..=3 {
+        let cfg = || {
+            let mut c = SimConfig::clean_pinhole();
+            c.frames = 201;
+            c.seed = seed;
+            c.camera_trajectory = Some(drifting_drive(201));
+            c
+        };
+        let (off, on) = (
+            err(&run_on(cfg(), "")),
+            err(&run_on(cfg(), "learnt_cauchy_max = 6.0\n")),
+        );
+        assert!(
+            on < 0.995 * off,
+            "seed {seed}: median rotation error {on} with the learnt scale, {off} without"
+        );
+    }
+}
