@@ -111,12 +111,12 @@ fn a_drop_of_the_road_score_flags_the_pulled_frames() {
     }
 }
 
-/// The road's alternatives in the covariance (`[trust] road_alternative_weight = 1`, off by
-/// default): on the frames whose road score dropped (flagged `road_score_drop`, or
+/// The road's alternatives in the covariance (`[trust] road_alternative_weight = 1`, the
+/// default, against 0): on the frames whose road score dropped (flagged `road_score_drop`, or
 /// `competing_motions` where two motions competed too) the reported covariance `Σ + w Σ_j d_j d_jᵀ`
 /// covers the road's alternative (the previous motion re-solved on its road matches, where there
 /// is one) and the previous frame's motion at one standard deviation (`dᵀ Σ'⁻¹ d <= 1/w`); with
-/// `after_flag_weight = 1` too, so does an estimated frame right after a flagged one cover the
+/// `after_flag_weight = 1` (default) too, so does an estimated frame right after a flagged one cover the
 /// previous frame's motion. Every other frame's covariance, every pose and every status stay as
 /// without them. Built-in drive, moving traffic, seed 2, 300 frames, the current defaults.
 #[test]
@@ -130,8 +130,8 @@ fn a_road_score_drop_frames_sigma_covers_the_road_alternative() {
             .map(|k| vo.process(&seq.frames[k], seq.arc_lengths.as_ref().and_then(|a| a[k])))
             .collect::<Vec<_>>()
     };
-    let off = results("");
-    let on = results("[trust]\nroad_alternative_weight = 1.0\nafter_flag_weight = 1.0\n");
+    let off = results("[trust]\nroad_alternative_weight = 0.0\nafter_flag_weight = 0.0\n");
+    let on = results("");
     // The Mahalanobis distance of `c` from the frame's estimate under its reported covariance.
     let distance = |d: &momo_vo::FrameDiagnostics, c: &[f64]| -> f64 {
         let k = d.free.len();
