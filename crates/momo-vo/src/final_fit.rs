@@ -498,6 +498,20 @@ pub struct FinalFitContext<'a> {
     /// The recent frames' counts of the learnt parallax cap (`learnt_parallax_cap`); `None`:
     /// no learnt cap.
     pub tally: Option<&'a ParallaxTally>,
+    /// The stage metric's per-match constants of the matches the stage is given
+    /// ([`frame_constants`], or those of a subset's kept matches in order), where the caller
+    /// has them already (issue 19: computed once per frame); `None`: computed here.
+    pub constants: Option<&'a [f64]>,
+}
+
+/// The stage metric's per-match constants of `obs` ([`FrameEstimator::match_constants`]: a
+/// function of each match and its camera alone, not of `from`).
+pub fn frame_constants(
+    ctx: &FinalFitContext<'_>,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> Vec<f64> {
+    ctx.estimator.match_constants(&ctx.request(obs, from))
 }
 
 /// The parallax cap (`parallax_cap`) over the matches `passing` (membership, parallax):
@@ -535,14 +549,19 @@ pub fn refit_tallied(
 ) -> (FrameSolution, Option<ParallaxTally>) {
     // The stage metric's per-match constants of every match, computed once for every pass:
     // the residual norms on all matches and each refit on its support read them.
-    let constants = ctx
-        .estimator
-        .match_constants(&ctx.request(obs, &first.params));
+    let owned;
+    let constants = match ctx.constants {
+        Some(c) => c,
+        None => {
+            owned = frame_constants(ctx, obs, &first.params);
+            &owned[..]
+        }
+    };
     let mut best: Option<FrameSolution> = None;
     let mut tally = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
-        match refit_once(ctx, opts, obs, &constants, from) {
+        match refit_once(ctx, opts, obs, constants, from) {
             Some((mut fin, support, frame_tally)) => {
                 if best.is_none() {
                     tally = frame_tally;
@@ -845,8 +864,15 @@ pub fn support(
     obs: &FrameObservations,
     from: &[f64],
 ) -> Option<FrameObservations> {
-    let constants = ctx.estimator.match_constants(&ctx.request(obs, from));
-    stage_support(ctx, opts, obs, &constants, from).map(|(core, _, _, _)| core)
+    let owned;
+    let constants = match ctx.constants {
+        Some(c) => c,
+        None => {
+            owned = frame_constants(ctx, obs, from);
+            &owned[..]
+        }
+    };
+    stage_support(ctx, opts, obs, constants, from).map(|(core, _, _, _)| core)
 }
 
 #[cfg(test)]
@@ -1207,6 +1233,7 @@ mod tests {
                 motion_prior: &prior,
                 competing: false,
                 tally: None,
+                constants: None,
             };
             let req = ctx.request(&obs, &from);
             let constants = est.match_constants(&req);

@@ -221,6 +221,12 @@ pub struct Odometry {
     /// The recent frames' counts of the final stage's learnt parallax cap
     /// (`odometry.final_fit.learnt_parallax_cap`).
     parallax_tally: crate::final_fit::ParallaxTally,
+    /// The final stage metric's per-match constants of the current frame's (deduplicated)
+    /// matches ([`crate::final_fit::frame_constants`]), once computed in the frame: the soft
+    /// prior's conflict test on the stage's support and the stage itself read the same ones
+    /// (issue 19: a function of the camera and the match alone, so bit for bit those each would
+    /// compute). Cleared at the start of every frame.
+    frame_constants: Option<Vec<f64>>,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
     /// Consecutive moving frames whose separation kept no competing alternative (the
@@ -313,6 +319,7 @@ impl Odometry {
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
             parallax_tally: Default::default(),
+            frame_constants: None,
             clustering: Default::default(),
             quiet_streak: 0,
             quiet_taken: 0,
@@ -454,6 +461,7 @@ impl Odometry {
         let mut sol = sol;
         for _ in 0..2 {
             let tested = if on_support {
+                self.compute_frame_constants(obs, &sol.params, fixed);
                 match self.support_solution(obs, &sol, fixed) {
                     Some(s) => s,
                     None => return sol,
@@ -509,10 +517,29 @@ impl Odometry {
         sol: &FrameSolution,
         fixed: &[bool],
     ) -> Option<FrameSolution> {
-        let ctx = self.final_fit_context(fixed, false);
+        let mut ctx = self.final_fit_context(fixed, false);
+        ctx.constants = self.frame_constants.as_deref();
         let core =
             crate::final_fit::support(&ctx, &self.config.odometry.final_fit, obs, &sol.params)?;
         self.solve_once(&core, &sol.params, fixed, false)
+    }
+
+    /// Computes [`Odometry::frame_constants`] of the frame's matches `obs` unless the frame
+    /// already has them (`from` and `fixed`: the request's parameters, which the constants do
+    /// not depend on).
+    fn compute_frame_constants(&mut self, obs: &FrameObservations, from: &[f64], fixed: &[bool]) {
+        if self.frame_constants.is_none() {
+            let ctx = self.final_fit_context(fixed, false);
+            let constants = crate::final_fit::frame_constants(&ctx, obs, from);
+            self.frame_constants = Some(constants);
+        }
+    }
+
+    /// The final stage's estimator (the model's own where the stage has no metric of its own).
+    fn final_fit_estimator(&self) -> &dyn FrameEstimator {
+        self.final_estimator
+            .as_deref()
+            .unwrap_or(self.estimator.as_ref())
     }
 
     /// The final efficient stage's context: the final stage's estimator (the model's own where
@@ -533,6 +560,7 @@ impl Odometry {
             fixed,
             motion_prior: &self.motion_prior,
             competing,
+            constants: None,
             tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0)
                 .then_some(&self.parallax_tally),
         }
@@ -940,6 +968,7 @@ impl Odometry {
         let (unique, repeated) = trust::deduped(obs);
         let obs = &*unique;
         self.frame += 1;
+        self.frame_constants = None;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();
         let arc_length =
@@ -1232,9 +1261,28 @@ impl Odometry {
                     (sol, tally) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
-                            self.final_fit(&chosen, sol, &fixed, diag.scale, competing)
+                            // The kept matches' constants, where the frame has them already.
+                            let m = self.final_fit_estimator().match_constant_count();
+                            let constants = self
+                                .frame_constants
+                                .as_deref()
+                                .and_then(|c| subset_constants(c, m, mask));
+                            self.final_fit(
+                                &chosen,
+                                sol,
+                                &fixed,
+                                diag.scale,
+                                competing,
+                                constants.as_deref(),
+                            )
                         }
-                        _ => self.final_fit(obs, sol, &fixed, diag.scale, competing),
+                        _ => {
+                            if self.config.odometry.final_fit.enabled {
+                                self.compute_frame_constants(obs, &sol.params, &fixed);
+                            }
+                            let constants = self.frame_constants.as_deref();
+                            self.final_fit(obs, sol, &fixed, diag.scale, competing, constants)
+                        }
                     };
                     if let Some(t) = tally {
                         self.parallax_tally.add(&t);
@@ -1716,6 +1764,7 @@ impl Odometry {
         fixed: &[bool],
         scale: ScaleSource,
         competing: bool,
+        constants: Option<&[f64]>,
     ) -> (FrameSolution, Option<crate::final_fit::ParallaxTally>) {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
@@ -1727,7 +1776,8 @@ impl Odometry {
         {
             fixed[i] = true;
         }
-        let ctx = self.final_fit_context(&fixed, competing);
+        let mut ctx = self.final_fit_context(&fixed, competing);
+        ctx.constants = constants;
         crate::final_fit::refit_tallied(&ctx, opts, obs, sol)
     }
 
@@ -2383,6 +2433,24 @@ struct SoftDataView {
     q_d: nalgebra::DVector<f64>,
     /// The data's covariance of the residuals.
     v: nalgebra::DMatrix<f64>,
+}
+
+/// The per-match constants (`m` per match, camera by camera) of the matches `mask` keeps, in
+/// order: those of `crate::separate::subset(obs, mask)` where `constants` are `obs`'s. `None`
+/// where `constants` do not cover the mask's matches (or there are none per match).
+fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<Vec<f64>> {
+    let n: usize = mask.iter().map(Vec::len).sum();
+    if m == 0 || constants.len() != m * n {
+        return None;
+    }
+    Some(
+        mask.iter()
+            .flatten()
+            .zip(constants.chunks_exact(m))
+            .filter(|(k, _)| **k)
+            .flat_map(|(_, c)| c.iter().copied())
+            .collect(),
+    )
 }
 
 #[cfg(test)]
