@@ -502,6 +502,32 @@ pub struct FinalFitContext<'a> {
     /// ([`frame_constants`], or those of a subset's kept matches in order), where the caller
     /// has them already (issue 19: computed once per frame); `None`: computed here.
     pub constants: Option<&'a [f64]>,
+    /// The stage's support found earlier in the frame on the same matches ([`support_at`]):
+    /// the first pass reuses it where it starts from the same parameters (bit for bit) and
+    /// `competing` is the same (issue 19; the support is a function of the matches, the
+    /// parameters, the options and the counts of the learnt cap alone). `None`: found here.
+    pub stage: Option<&'a StageSupport>,
+}
+
+/// The stage's support at a point ([`support_at`]), with the point it was found at.
+#[derive(Clone, Debug)]
+pub struct StageSupport {
+    /// The parameters it was found at.
+    from: Vec<f64>,
+    /// [`FinalFitContext::competing`] when it was found.
+    competing: bool,
+    /// [`stage_support`]'s result.
+    found: Option<Kept>,
+}
+
+/// [`stage_support`]'s result: the matches kept, their constants, `σ̂`, the learnt cap's counts.
+type Kept = (FrameObservations, Vec<f64>, f64, Option<ParallaxTally>);
+
+impl StageSupport {
+    /// The matches kept ([`support`]); `None` where the stage would not refit.
+    pub fn core(&self) -> Option<&FrameObservations> {
+        self.found.as_ref().map(|k| &k.0)
+    }
 }
 
 /// The stage metric's per-match constants of `obs` ([`FrameEstimator::match_constants`]: a
@@ -617,7 +643,13 @@ fn refit_once(
     from: &[f64],
 ) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>)> {
     let scale = ctx.loss.scale();
-    let (core, core_constants, sigma, tally) = stage_support(ctx, opts, obs, constants, from)?;
+    let (core, core_constants, sigma, tally) = match ctx
+        .stage
+        .filter(|s| s.competing == ctx.competing && s.from == from)
+    {
+        Some(s) => s.found.clone()?,
+        None => stage_support(ctx, opts, obs, constants, from)?,
+    };
     let req = ctx.request(obs, from);
     let cauchy;
     let loss: &dyn RobustLoss = if opts.cauchy_sigmas > 0.0 {
@@ -864,6 +896,18 @@ pub fn support(
     obs: &FrameObservations,
     from: &[f64],
 ) -> Option<FrameObservations> {
+    support_at(ctx, opts, obs, from)
+        .found
+        .map(|(core, _, _, _)| core)
+}
+
+/// [`support`], kept for the stage itself ([`FinalFitContext::stage`]).
+pub fn support_at(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> StageSupport {
     let owned;
     let constants = match ctx.constants {
         Some(c) => c,
@@ -872,7 +916,11 @@ pub fn support(
             &owned[..]
         }
     };
-    stage_support(ctx, opts, obs, constants, from).map(|(core, _, _, _)| core)
+    StageSupport {
+        from: from.to_vec(),
+        competing: ctx.competing,
+        found: stage_support(ctx, opts, obs, constants, from),
+    }
 }
 
 #[cfg(test)]
@@ -1234,6 +1282,7 @@ mod tests {
                 competing: false,
                 tally: None,
                 constants: None,
+                stage: None,
             };
             let req = ctx.request(&obs, &from);
             let constants = est.match_constants(&req);

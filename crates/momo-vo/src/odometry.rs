@@ -227,6 +227,11 @@ pub struct Odometry {
     /// (issue 19: a function of the camera and the match alone, so bit for bit those each would
     /// compute). Cleared at the start of every frame.
     frame_constants: Option<Vec<f64>>,
+    /// The final stage's support last found in the current frame on all its (deduplicated)
+    /// matches ([`crate::final_fit::support_at`], by the soft prior's conflict test on the
+    /// support): the stage reuses it where it starts from the same parameters. Cleared at the
+    /// start of every frame.
+    frame_stage: Option<crate::final_fit::StageSupport>,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
     /// Consecutive moving frames whose separation kept no competing alternative (the
@@ -320,6 +325,7 @@ impl Odometry {
             hypotheses: Default::default(),
             parallax_tally: Default::default(),
             frame_constants: None,
+            frame_stage: None,
             clustering: Default::default(),
             quiet_streak: 0,
             quiet_taken: 0,
@@ -462,7 +468,9 @@ impl Odometry {
         for _ in 0..2 {
             let tested = if on_support {
                 self.compute_frame_constants(obs, &sol.params, fixed);
-                match self.support_solution(obs, &sol, fixed) {
+                let (solved, stage) = self.support_solution(obs, &sol, fixed);
+                self.frame_stage = Some(stage);
+                match solved {
                     Some(s) => s,
                     None => return sol,
                 }
@@ -511,17 +519,21 @@ impl Odometry {
     /// of the soft prior's conflict test without the mismatches and a moving object's matches
     /// that the first stage's robust loss only down-weights. `None` where the stage would not
     /// refit or the solve fails.
+    /// Also the support found, for the final stage ([`Odometry::frame_stage`]).
     fn support_solution(
         &self,
         obs: &FrameObservations,
         sol: &FrameSolution,
         fixed: &[bool],
-    ) -> Option<FrameSolution> {
+    ) -> (Option<FrameSolution>, crate::final_fit::StageSupport) {
         let mut ctx = self.final_fit_context(fixed, false);
         ctx.constants = self.frame_constants.as_deref();
-        let core =
-            crate::final_fit::support(&ctx, &self.config.odometry.final_fit, obs, &sol.params)?;
-        self.solve_once(&core, &sol.params, fixed, false)
+        let stage =
+            crate::final_fit::support_at(&ctx, &self.config.odometry.final_fit, obs, &sol.params);
+        let solved = stage
+            .core()
+            .and_then(|core| self.solve_once(core, &sol.params, fixed, false));
+        (solved, stage)
     }
 
     /// Computes [`Odometry::frame_constants`] of the frame's matches `obs` unless the frame
@@ -561,6 +573,7 @@ impl Odometry {
             motion_prior: &self.motion_prior,
             competing,
             constants: None,
+            stage: None,
             tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0)
                 .then_some(&self.parallax_tally),
         }
@@ -969,6 +982,7 @@ impl Odometry {
         let obs = &*unique;
         self.frame += 1;
         self.frame_constants = None;
+        self.frame_stage = None;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();
         let arc_length =
@@ -1274,6 +1288,7 @@ impl Odometry {
                                 diag.scale,
                                 competing,
                                 constants.as_deref(),
+                                None,
                             )
                         }
                         _ => {
@@ -1281,7 +1296,10 @@ impl Odometry {
                                 self.compute_frame_constants(obs, &sol.params, &fixed);
                             }
                             let constants = self.frame_constants.as_deref();
-                            self.final_fit(obs, sol, &fixed, diag.scale, competing, constants)
+                            let stage = self.frame_stage.as_ref();
+                            self.final_fit(
+                                obs, sol, &fixed, diag.scale, competing, constants, stage,
+                            )
                         }
                     };
                     if let Some(t) = tally {
@@ -1765,6 +1783,7 @@ impl Odometry {
         scale: ScaleSource,
         competing: bool,
         constants: Option<&[f64]>,
+        stage: Option<&crate::final_fit::StageSupport>,
     ) -> (FrameSolution, Option<crate::final_fit::ParallaxTally>) {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
@@ -1778,6 +1797,7 @@ impl Odometry {
         }
         let mut ctx = self.final_fit_context(&fixed, competing);
         ctx.constants = constants;
+        ctx.stage = stage;
         crate::final_fit::refit_tallied(&ctx, opts, obs, sol)
     }
 
