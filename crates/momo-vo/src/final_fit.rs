@@ -1293,6 +1293,40 @@ mod tests {
             let own = refit_once(&ctx, &opts, &obs, &[], &from);
             proptest::prop_assert!(shared.is_some());
             proptest::prop_assert_eq!(format!("{shared:?}"), format!("{own:?}"));
+            // The stage given the frame's constants and a support found earlier
+            // (`FinalFitContext::constants`, `stage`): bit for bit the stage that finds both
+            // itself, whether the support was found at the stage's start (reused) or elsewhere
+            // (not used).
+            let first = est.solve(&req).unwrap();
+            let plain = format!("{:?}", refit_tallied(&ctx, &opts, &obs, first.clone()));
+            let at_start = support_at(&ctx, &opts, &obs, &first.params);
+            let elsewhere = support_at(&ctx, &opts, &obs, &from);
+            for stage in [&at_start, &elsewhere] {
+                let given = FinalFitContext {
+                    constants: Some(&constants),
+                    stage: Some(stage),
+                    ..ctx
+                };
+                let reused = refit_tallied(&given, &opts, &obs, first.clone());
+                proptest::prop_assert_eq!(&format!("{reused:?}"), &plain);
+            }
+            // A support marked as found at the start is what the stage reads (here: none, so
+            // the stage keeps the first solution), unless found while `competing` differed.
+            let unrefined = format!("{:?}", (first.clone(), None::<ParallaxTally>));
+            proptest::prop_assert_ne!(&unrefined, &plain);
+            for (competing, expected) in [(false, &unrefined), (true, &plain)] {
+                let none = StageSupport {
+                    from: first.params.clone(),
+                    competing,
+                    found: None,
+                };
+                let given = FinalFitContext {
+                    stage: Some(&none),
+                    ..ctx
+                };
+                let out = refit_tallied(&given, &opts, &obs, first.clone());
+                proptest::prop_assert_eq!(&format!("{out:?}"), expected);
+            }
             // The estimator's methods: norms, and a solve on every match but each third.
             let norms = est.residual_norms(&req, &from).unwrap();
             let with = est.residual_norms_with_constants(&req, &from, &constants).unwrap();

@@ -2477,6 +2477,20 @@ fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<V
 mod tests {
     use super::*;
 
+    /// The kept matches' constants: the masked rows (`m` per match, camera by camera) in order;
+    /// none where the constants do not cover the mask.
+    #[test]
+    fn subset_constants_keep_the_masked_rows_in_order() {
+        let c: Vec<f64> = (0..12).map(f64::from).collect();
+        let mask = vec![vec![true, false, false, true], vec![false, true]];
+        assert_eq!(
+            subset_constants(&c, 2, &mask),
+            Some(vec![0.0, 1.0, 6.0, 7.0, 10.0, 11.0])
+        );
+        assert_eq!(subset_constants(&c[1..], 2, &mask), None);
+        assert_eq!(subset_constants(&c, 0, &mask), None);
+    }
+
     #[test]
     fn the_quiet_memory_check_tells_an_object_from_random_mismatches() {
         // The labels of 10 matches outside the support; a fifth of all remembered matches are
