@@ -962,6 +962,8 @@ impl Odometry {
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
         self.parallax_tally = Default::default();
+        self.frame_constants = None;
+        self.frame_stage = None;
         self.clustering = Default::default();
         self.quiet_streak = 0;
         self.quiet_taken = 0;
