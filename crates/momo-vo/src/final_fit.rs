@@ -617,6 +617,46 @@ pub struct FinalFitContext<'a> {
     /// The recent frames' counts of the learnt parallax cap (`learnt_parallax_cap`); `None`:
     /// no learnt cap.
     pub tally: Option<&'a ParallaxTally>,
+    /// The stage metric's per-match constants of the matches the stage is given
+    /// ([`frame_constants`], or those of a subset's kept matches in order), where the caller
+    /// has them already (issue 19: computed once per frame); `None`: computed here.
+    pub constants: Option<&'a [f64]>,
+    /// The stage's support found earlier in the frame on the same matches ([`support_at`]):
+    /// the first pass reuses it where it starts from the same parameters (bit for bit) and
+    /// `competing` is the same (issue 19; the support is a function of the matches, the
+    /// parameters, the options and the counts of the learnt cap alone). `None`: found here.
+    pub stage: Option<&'a StageSupport>,
+}
+
+/// The stage's support at a point ([`support_at`]), with the point it was found at.
+#[derive(Clone, Debug)]
+pub struct StageSupport {
+    /// The parameters it was found at.
+    from: Vec<f64>,
+    /// [`FinalFitContext::competing`] when it was found.
+    competing: bool,
+    /// [`stage_support`]'s result.
+    found: Option<Kept>,
+}
+
+/// [`stage_support`]'s result: the matches kept, their constants, `σ̂`, the learnt cap's counts.
+type Kept = (FrameObservations, Vec<f64>, f64, Option<ParallaxTally>);
+
+impl StageSupport {
+    /// The matches kept ([`support`]); `None` where the stage would not refit.
+    pub fn core(&self) -> Option<&FrameObservations> {
+        self.found.as_ref().map(|k| &k.0)
+    }
+}
+
+/// The stage metric's per-match constants of `obs` ([`FrameEstimator::match_constants`]: a
+/// function of each match and its camera alone, not of `from`).
+pub fn frame_constants(
+    ctx: &FinalFitContext<'_>,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> Vec<f64> {
+    ctx.estimator.match_constants(&ctx.request(obs, from))
 }
 
 /// The parallax cap (`parallax_cap`) over the matches `passing` (membership, parallax):
@@ -654,14 +694,19 @@ pub fn refit_tallied(
 ) -> (FrameSolution, Option<ParallaxTally>) {
     // The stage metric's per-match constants of every match, computed once for every pass:
     // the residual norms on all matches and each refit on its support read them.
-    let constants = ctx
-        .estimator
-        .match_constants(&ctx.request(obs, &first.params));
+    let owned;
+    let constants = match ctx.constants {
+        Some(c) => c,
+        None => {
+            owned = frame_constants(ctx, obs, &first.params);
+            &owned[..]
+        }
+    };
     let mut best: Option<FrameSolution> = None;
     let mut tally = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
-        match refit_once(ctx, opts, obs, &constants, from) {
+        match refit_once(ctx, opts, obs, constants, from) {
             Some((mut fin, support, frame_tally)) => {
                 if best.is_none() {
                     tally = frame_tally;
@@ -717,7 +762,13 @@ fn refit_once(
     from: &[f64],
 ) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>)> {
     let scale = ctx.loss.scale();
-    let (core, core_constants, sigma, tally) = stage_support(ctx, opts, obs, constants, from)?;
+    let (core, core_constants, sigma, tally) = match ctx
+        .stage
+        .filter(|s| s.competing == ctx.competing && s.from == from)
+    {
+        Some(s) => s.found.clone()?,
+        None => stage_support(ctx, opts, obs, constants, from)?,
+    };
     let req = ctx.request(obs, from);
     let cauchy;
     // The learnt scale (`learnt_cauchy_max`) from the recent frames' residual tails.
@@ -983,8 +1034,31 @@ pub fn support(
     obs: &FrameObservations,
     from: &[f64],
 ) -> Option<FrameObservations> {
-    let constants = ctx.estimator.match_constants(&ctx.request(obs, from));
-    stage_support(ctx, opts, obs, &constants, from).map(|(core, _, _, _)| core)
+    support_at(ctx, opts, obs, from)
+        .found
+        .map(|(core, _, _, _)| core)
+}
+
+/// [`support`], kept for the stage itself ([`FinalFitContext::stage`]).
+pub fn support_at(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> StageSupport {
+    let owned;
+    let constants = match ctx.constants {
+        Some(c) => c,
+        None => {
+            owned = frame_constants(ctx, obs, from);
+            &owned[..]
+        }
+    };
+    StageSupport {
+        from: from.to_vec(),
+        competing: ctx.competing,
+        found: stage_support(ctx, opts, obs, constants, from),
+    }
 }
 
 #[cfg(test)]
@@ -1407,6 +1481,8 @@ mod tests {
                 motion_prior: &prior,
                 competing: false,
                 tally: None,
+                constants: None,
+                stage: None,
             };
             let req = ctx.request(&obs, &from);
             let constants = est.match_constants(&req);
@@ -1417,6 +1493,40 @@ mod tests {
             let own = refit_once(&ctx, &opts, &obs, &[], &from);
             proptest::prop_assert!(shared.is_some());
             proptest::prop_assert_eq!(format!("{shared:?}"), format!("{own:?}"));
+            // The stage given the frame's constants and a support found earlier
+            // (`FinalFitContext::constants`, `stage`): bit for bit the stage that finds both
+            // itself, whether the support was found at the stage's start (reused) or elsewhere
+            // (not used).
+            let first = est.solve(&req).unwrap();
+            let plain = format!("{:?}", refit_tallied(&ctx, &opts, &obs, first.clone()));
+            let at_start = support_at(&ctx, &opts, &obs, &first.params);
+            let elsewhere = support_at(&ctx, &opts, &obs, &from);
+            for stage in [&at_start, &elsewhere] {
+                let given = FinalFitContext {
+                    constants: Some(&constants),
+                    stage: Some(stage),
+                    ..ctx
+                };
+                let reused = refit_tallied(&given, &opts, &obs, first.clone());
+                proptest::prop_assert_eq!(&format!("{reused:?}"), &plain);
+            }
+            // A support marked as found at the start is what the stage reads (here: none, so
+            // the stage keeps the first solution), unless found while `competing` differed.
+            let unrefined = format!("{:?}", (first.clone(), None::<ParallaxTally>));
+            proptest::prop_assert_ne!(&unrefined, &plain);
+            for (competing, expected) in [(false, &unrefined), (true, &plain)] {
+                let none = StageSupport {
+                    from: first.params.clone(),
+                    competing,
+                    found: None,
+                };
+                let given = FinalFitContext {
+                    stage: Some(&none),
+                    ..ctx
+                };
+                let out = refit_tallied(&given, &opts, &obs, first.clone());
+                proptest::prop_assert_eq!(&format!("{out:?}"), expected);
+            }
             // The estimator's methods: norms, and a solve on every match but each third.
             let norms = est.residual_norms(&req, &from).unwrap();
             let with = est.residual_norms_with_constants(&req, &from, &constants).unwrap();

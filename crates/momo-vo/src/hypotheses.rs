@@ -343,7 +343,22 @@ impl MatchMemory {
 /// The cell of a pixel in the match memory's grid of `radius`-pixel cells (the float-to-integer
 /// cast saturates: far-off pixels share the extreme cells).
 fn cell_key(x: f64, y: f64, radius: f64) -> (i64, i64) {
-    ((x / radius).floor() as i64, (y / radius).floor() as i64)
+    (floor_i64(x / radius), floor_i64(y / radius))
+}
+
+/// `q.floor() as i64` without the library call `floor` (the baseline x86-64 target has no
+/// rounding instruction; issue 19): the cast truncates toward zero and saturates (NaN: 0), one
+/// less where that rounded a negative non-integer up. Where the cast saturates at `i64::MIN`
+/// (`q < -2^63`) the subtraction saturates too; wherever the cast is exact, `t as f64` is too
+/// (`|t| < 2^53`, or `q` an integer), so the comparison is exact.
+#[inline]
+fn floor_i64(q: f64) -> i64 {
+    let t = q as i64;
+    if (t as f64) > q {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
 }
 
 /// Cells larger than this (and than [`DENSE_CELLS_PER_POINT`] per remembered match) over the
@@ -375,6 +390,9 @@ struct CellGrid {
     keys: Vec<(i64, i64)>,
     /// Whether the sparse fallback holds the matches.
     sparse: bool,
+    /// Scratch of [`CellGrid::fill`]: each finite remembered match's cell and index, its cell
+    /// computed once.
+    points: Vec<((i64, i64), u32)>,
 }
 
 impl CellGrid {
@@ -386,12 +404,16 @@ impl CellGrid {
         self.cols = 0;
         self.rows = 0;
         self.sparse = false;
-        let finite = |p: &(f64, f64, bool)| p.0.is_finite() && p.1.is_finite();
+        self.points.clear();
+        self.points.extend(
+            prev.iter()
+                .enumerate()
+                .filter(|(_, p)| p.0.is_finite() && p.1.is_finite())
+                .map(|(i, p)| (cell_key(p.0, p.1, radius), i as u32)),
+        );
         let mut bounds: Option<((i64, i64), (i64, i64))> = None;
-        let mut n = 0u64;
-        for p in prev.iter().filter(|p| finite(p)) {
-            let k = cell_key(p.0, p.1, radius);
-            n += 1;
+        let n = self.points.len() as u64;
+        for &(k, _) in &self.points {
             bounds = Some(match bounds {
                 None => (k, k),
                 Some((lo, hi)) => (
@@ -408,15 +430,9 @@ impl CellGrid {
         if prev.len() >= u32::MAX as usize || cols.saturating_mul(rows) > u128::from(limit) {
             // Sparse: sort by cell, then index (the same order within a cell).
             self.sparse = true;
-            let mut sorted: Vec<((i64, i64), u32)> = prev
-                .iter()
-                .enumerate()
-                .filter(|(_, p)| finite(p))
-                .map(|(i, p)| (cell_key(p.0, p.1, radius), i as u32))
-                .collect();
-            sorted.sort_unstable();
-            self.keys.extend(sorted.iter().map(|e| e.0));
-            self.order.extend(sorted.iter().map(|e| e.1));
+            self.points.sort_unstable();
+            self.keys.extend(self.points.iter().map(|e| e.0));
+            self.order.extend(self.points.iter().map(|e| e.1));
             return;
         }
         // Dense: counting sort of the indices by cell.
@@ -428,17 +444,17 @@ impl CellGrid {
         let cell = |k: (i64, i64), rows: u64| -> usize {
             ((k.0.wrapping_sub(lo.0) as u64) * rows + (k.1.wrapping_sub(lo.1) as u64)) as usize
         };
-        for p in prev.iter().filter(|p| finite(p)) {
-            self.start[cell(cell_key(p.0, p.1, radius), self.rows) + 1] += 1;
+        for &(k, _) in &self.points {
+            self.start[cell(k, self.rows) + 1] += 1;
         }
         for c in 0..cells {
             self.start[c + 1] += self.start[c];
         }
         self.order.resize(n as usize, 0);
         // `start[c]` is advanced as cell `c` fills; shifted back afterwards.
-        for (i, p) in prev.iter().enumerate().filter(|(_, p)| finite(p)) {
-            let c = cell(cell_key(p.0, p.1, radius), self.rows);
-            self.order[self.start[c] as usize] = i as u32;
+        for &(k, i) in &self.points {
+            let c = cell(k, self.rows);
+            self.order[self.start[c] as usize] = i;
             self.start[c] += 1;
         }
         for c in (1..=cells).rev() {
@@ -473,18 +489,55 @@ impl CellGrid {
         }
         let (kx, ky) = cell_key(x, y, radius);
         let mut best: Option<(f64, bool)> = None;
+        let mut visit = |ids: &[u32]| {
+            for &i in ids {
+                let p = prev[i as usize];
+                let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
+                if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, p.2));
+                }
+            }
+        };
         for dx in -1..=1_i64 {
-            for dy in -1..=1_i64 {
-                for &i in self.cell((kx.wrapping_add(dx), ky.wrapping_add(dy))) {
-                    let p = prev[i as usize];
-                    let d = (p.0 - x).powi(2) + (p.1 - y).powi(2);
-                    if d <= radius * radius && best.is_none_or(|(bd, _)| d < bd) {
-                        best = Some((d, p.2));
+            let cx = kx.wrapping_add(dx);
+            match self.column_run(cx, ky) {
+                // The three cells of the column in one run of `order`, in the same order.
+                Some(ids) => visit(ids),
+                None => {
+                    for dy in -1..=1_i64 {
+                        visit(self.cell((cx, ky.wrapping_add(dy))));
                     }
                 }
             }
         }
         best.map(|(_, s)| s)
+    }
+
+    /// Dense grid only, rows `ky - 1 ..= ky + 1` not wrapping around `i64`: the remembered
+    /// indices of the cells `(cx, ky - 1)`, `(cx, ky)`, `(cx, ky + 1)` as one slice of `order`
+    /// (cells are numbered column-major, so a column's consecutive rows are consecutive ranges:
+    /// the slice visits them in the order of three [`CellGrid::cell`] calls); `None` where the
+    /// cells must be looked up one by one (sparse grid, wrapping rows).
+    #[inline]
+    fn column_run(&self, cx: i64, ky: i64) -> Option<&[u32]> {
+        if self.sparse || ky == i64::MIN || ky == i64::MAX {
+            return None;
+        }
+        // In range of the dense box: `rows` and `cols` are at most `u32::MAX`-ish (the grid
+        // holds at most `DENSE_CELLS_PER_POINT` cells per match), so these fit in `i128`.
+        let dx = i128::from(cx) - i128::from(self.min.0);
+        if dx < 0 || dx >= i128::from(self.cols) {
+            return Some(&[]);
+        }
+        let rows = i128::from(self.rows);
+        let lo = (i128::from(ky) - 1 - i128::from(self.min.1)).max(0);
+        let hi = (i128::from(ky) + 2 - i128::from(self.min.1)).min(rows);
+        if lo >= hi {
+            return Some(&[]);
+        }
+        let base = dx as usize * self.rows as usize;
+        let (a, b) = (base + lo as usize, base + hi as usize);
+        Some(&self.order[self.start[a] as usize..self.start[b] as usize])
     }
 }
 

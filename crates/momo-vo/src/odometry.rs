@@ -229,6 +229,17 @@ pub struct Odometry {
     /// The recent frames' counts of the final stage's learnt parallax cap
     /// (`odometry.final_fit.learnt_parallax_cap`).
     parallax_tally: crate::final_fit::ParallaxTally,
+    /// The final stage metric's per-match constants of the current frame's (deduplicated)
+    /// matches ([`crate::final_fit::frame_constants`]), once computed in the frame: the soft
+    /// prior's conflict test on the stage's support and the stage itself read the same ones
+    /// (issue 19: a function of the camera and the match alone, so bit for bit those each would
+    /// compute). Cleared at the start of every frame.
+    frame_constants: Option<Vec<f64>>,
+    /// The final stage's support last found in the current frame on all its (deduplicated)
+    /// matches ([`crate::final_fit::support_at`], by the soft prior's conflict test on the
+    /// support): the stage reuses it where it starts from the same parameters. Cleared at the
+    /// start of every frame.
+    frame_stage: Option<crate::final_fit::StageSupport>,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
     /// Consecutive moving frames whose separation kept no competing alternative (the
@@ -322,6 +333,8 @@ impl Odometry {
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
             parallax_tally: Default::default(),
+            frame_constants: None,
+            frame_stage: None,
             clustering: Default::default(),
             quiet_streak: 0,
             quiet_taken: 0,
@@ -463,7 +476,10 @@ impl Odometry {
         let mut sol = sol;
         for _ in 0..2 {
             let tested = if on_support {
-                match self.support_solution(obs, &sol, fixed) {
+                self.compute_frame_constants(obs, &sol.params, fixed);
+                let (solved, stage) = self.support_solution(obs, &sol, fixed);
+                self.frame_stage = Some(stage);
+                match solved {
                     Some(s) => s,
                     None => return sol,
                 }
@@ -512,16 +528,39 @@ impl Odometry {
     /// of the soft prior's conflict test without the mismatches and a moving object's matches
     /// that the first stage's robust loss only down-weights. `None` where the stage would not
     /// refit or the solve fails.
+    /// Also the support found, for the final stage ([`Odometry::frame_stage`]).
     fn support_solution(
         &self,
         obs: &FrameObservations,
         sol: &FrameSolution,
         fixed: &[bool],
-    ) -> Option<FrameSolution> {
-        let ctx = self.final_fit_context(fixed, false);
-        let core =
-            crate::final_fit::support(&ctx, &self.config.odometry.final_fit, obs, &sol.params)?;
-        self.solve_once(&core, &sol.params, fixed, false)
+    ) -> (Option<FrameSolution>, crate::final_fit::StageSupport) {
+        let mut ctx = self.final_fit_context(fixed, false);
+        ctx.constants = self.frame_constants.as_deref();
+        let stage =
+            crate::final_fit::support_at(&ctx, &self.config.odometry.final_fit, obs, &sol.params);
+        let solved = stage
+            .core()
+            .and_then(|core| self.solve_once(core, &sol.params, fixed, false));
+        (solved, stage)
+    }
+
+    /// Computes [`Odometry::frame_constants`] of the frame's matches `obs` unless the frame
+    /// already has them (`from` and `fixed`: the request's parameters, which the constants do
+    /// not depend on).
+    fn compute_frame_constants(&mut self, obs: &FrameObservations, from: &[f64], fixed: &[bool]) {
+        if self.frame_constants.is_none() {
+            let ctx = self.final_fit_context(fixed, false);
+            let constants = crate::final_fit::frame_constants(&ctx, obs, from);
+            self.frame_constants = Some(constants);
+        }
+    }
+
+    /// The final stage's estimator (the model's own where the stage has no metric of its own).
+    fn final_fit_estimator(&self) -> &dyn FrameEstimator {
+        self.final_estimator
+            .as_deref()
+            .unwrap_or(self.estimator.as_ref())
     }
 
     /// The final efficient stage's context: the final stage's estimator (the model's own where
@@ -542,6 +581,8 @@ impl Odometry {
             fixed,
             motion_prior: &self.motion_prior,
             competing,
+            constants: None,
+            stage: None,
             tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0
                 || self.config.odometry.final_fit.learnt_cauchy_max > 0.0)
                 .then_some(&self.parallax_tally),
@@ -932,6 +973,8 @@ impl Odometry {
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
         self.parallax_tally = Default::default();
+        self.frame_constants = None;
+        self.frame_stage = None;
         self.clustering = Default::default();
         self.quiet_streak = 0;
         self.quiet_taken = 0;
@@ -951,6 +994,8 @@ impl Odometry {
         let (unique, repeated) = trust::deduped(obs);
         let obs = &*unique;
         self.frame += 1;
+        self.frame_constants = None;
+        self.frame_stage = None;
         let arc_index = self.estimator.arc_length_index();
         let n_params = self.estimator.param_names().len();
         let arc_length =
@@ -1244,9 +1289,32 @@ impl Odometry {
                     (sol, tally) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
-                            self.final_fit(&chosen, sol, &fixed, diag.scale, competing)
+                            // The kept matches' constants, where the frame has them already.
+                            let m = self.final_fit_estimator().match_constant_count();
+                            let constants = self
+                                .frame_constants
+                                .as_deref()
+                                .and_then(|c| subset_constants(c, m, mask));
+                            self.final_fit(
+                                &chosen,
+                                sol,
+                                &fixed,
+                                diag.scale,
+                                competing,
+                                constants.as_deref(),
+                                None,
+                            )
                         }
-                        _ => self.final_fit(obs, sol, &fixed, diag.scale, competing),
+                        _ => {
+                            if self.config.odometry.final_fit.enabled {
+                                self.compute_frame_constants(obs, &sol.params, &fixed);
+                            }
+                            let constants = self.frame_constants.as_deref();
+                            let stage = self.frame_stage.as_ref();
+                            self.final_fit(
+                                obs, sol, &fixed, diag.scale, competing, constants, stage,
+                            )
+                        }
                     };
                     if let Some(t) = tally {
                         self.parallax_tally.add(&t);
@@ -1751,6 +1819,8 @@ impl Odometry {
         fixed: &[bool],
         scale: ScaleSource,
         competing: bool,
+        constants: Option<&[f64]>,
+        stage: Option<&crate::final_fit::StageSupport>,
     ) -> (FrameSolution, Option<crate::final_fit::ParallaxTally>) {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
@@ -1762,7 +1832,9 @@ impl Odometry {
         {
             fixed[i] = true;
         }
-        let ctx = self.final_fit_context(&fixed, competing);
+        let mut ctx = self.final_fit_context(&fixed, competing);
+        ctx.constants = constants;
+        ctx.stage = stage;
         crate::final_fit::refit_tallied(&ctx, opts, obs, sol)
     }
 
@@ -2524,9 +2596,41 @@ struct SoftDataView {
     v: nalgebra::DMatrix<f64>,
 }
 
+/// The per-match constants (`m` per match, camera by camera) of the matches `mask` keeps, in
+/// order: those of `crate::separate::subset(obs, mask)` where `constants` are `obs`'s. `None`
+/// where `constants` do not cover the mask's matches (or there are none per match).
+fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<Vec<f64>> {
+    let n: usize = mask.iter().map(Vec::len).sum();
+    if m == 0 || constants.len() != m * n {
+        return None;
+    }
+    Some(
+        mask.iter()
+            .flatten()
+            .zip(constants.chunks_exact(m))
+            .filter(|(k, _)| **k)
+            .flat_map(|(_, c)| c.iter().copied())
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The kept matches' constants: the masked rows (`m` per match, camera by camera) in order;
+    /// none where the constants do not cover the mask.
+    #[test]
+    fn subset_constants_keep_the_masked_rows_in_order() {
+        let c: Vec<f64> = (0..12).map(f64::from).collect();
+        let mask = vec![vec![true, false, false, true], vec![false, true]];
+        assert_eq!(
+            subset_constants(&c, 2, &mask),
+            Some(vec![0.0, 1.0, 6.0, 7.0, 10.0, 11.0])
+        );
+        assert_eq!(subset_constants(&c[1..], 2, &mask), None);
+        assert_eq!(subset_constants(&c, 0, &mask), None);
+    }
 
     #[test]
     fn the_quiet_memory_check_tells_an_object_from_random_mismatches() {
