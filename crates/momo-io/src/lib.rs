@@ -142,6 +142,12 @@ impl Sequence {
     pub fn num_matches(&self) -> usize {
         self.frames.iter().map(FrameObservations::len).sum()
     }
+
+    /// The odometry arc length of frame pair `(k-1, k)`: `None` without `odometry.csv`, without
+    /// a row for `k`, or past the end.
+    pub fn arc_length(&self, k: usize) -> Option<f64> {
+        self.arc_lengths.as_ref()?.get(k).copied().flatten()
+    }
 }
 
 /// A whole sequence in memory with sparse frame numbers: only the frame pairs that have matches

@@ -121,10 +121,7 @@ fn main() {
             });
             let mut nees_seed = Vec::new();
             for k in 1..seq.num_frames() {
-                let arc = seq
-                    .arc_lengths
-                    .as_ref()
-                    .and_then(|a| a.get(k).copied().flatten());
+                let arc = seq.arc_length(k);
                 let r = vo.process(&seq.frames[k], arc);
                 let nees_classical = classical.as_mut().and_then(|c| {
                     let rc = c.process(&seq.frames[k], arc);

@@ -2662,10 +2662,7 @@ mod tests {
             let mut params = Vec::new();
             let mut competing = 0;
             for k in 1..seq.num_frames() {
-                let arc = seq
-                    .arc_lengths
-                    .as_ref()
-                    .and_then(|a| a.get(k).copied().flatten());
+                let arc = seq.arc_length(k);
                 let r = vo.process(&seq.frames[k], arc);
                 competing += usize::from(vo.quiet_streak == 0);
                 params.push(r.diagnostics.params);
@@ -2699,10 +2696,7 @@ mod tests {
         let pass = |vo: &mut Odometry| {
             (1..seq.num_frames())
                 .map(|k| {
-                    let arc = seq
-                        .arc_lengths
-                        .as_ref()
-                        .and_then(|a| a.get(k).copied().flatten());
+                    let arc = seq.arc_length(k);
                     vo.process(&seq.frames[k], arc).diagnostics.params
                 })
                 .collect::<Vec<_>>()
@@ -2766,10 +2760,7 @@ mod tests {
             // Per frame: the jitter in use and the frame's soft-prior factors.
             let mut out = Vec::new();
             for k in 1..seq.num_frames() {
-                let arc = seq
-                    .arc_lengths
-                    .as_ref()
-                    .and_then(|a| a.get(k).copied().flatten());
+                let arc = seq.arc_length(k);
                 let jitter = vo.soft_arc_jitter.clone();
                 vo.process(&seq.frames[k], arc);
                 out.push((jitter, vo.motion_prior.soft_inv_scale.clone(), arc));

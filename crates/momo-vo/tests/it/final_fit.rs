@@ -32,10 +32,7 @@ fn run_on(cfg: SimConfig, final_fit: &str) -> Vec<(f64, f64)> {
     let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
     let mut out = Vec::new();
     for k in 1..seq.num_frames() {
-        let arc = seq
-            .arc_lengths
-            .as_ref()
-            .and_then(|a| a.get(k).copied().flatten());
+        let arc = seq.arc_length(k);
         let r = vo.process(&seq.frames[k], arc);
         let inliers = sim.labels[k]
             .iter()
