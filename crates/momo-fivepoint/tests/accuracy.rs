@@ -55,7 +55,11 @@ fn conditioning(c: &Pose<f64>, f0: &[Vector3<f64>; 5], f1: &[Vector3<f64>; 5]) -
         std::array::from_fn(|k| (f1[k].transpose() * e * f0[k])[0])
     };
     let t = c.translation.normalize();
-    let a = if t.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let a = if t.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
     let u = t.cross(&a).normalize();
     let v = t.cross(&u);
     let h = 1e-6;
@@ -85,7 +89,10 @@ fn solve_exact(c: &Pose<f64>, points: &[Vector3<f64>]) -> (Vec<Matrix3<f64>>, f6
     let (f0, f1) = bearings(c, points);
     let solutions = solve_five_point(&f0, &f1);
     let truth = essential(c);
-    let best = solutions.iter().map(|e| e_distance(e, &truth)).fold(f64::INFINITY, f64::min);
+    let best = solutions
+        .iter()
+        .map(|e| e_distance(e, &truth))
+        .fold(f64::INFINITY, f64::min);
     (solutions, best, conditioning(c, &f0, &f1))
 }
 
@@ -141,7 +148,11 @@ fn minimal_solver_miss_rate_on_general_motions() {
         let points: Vec<Vector3<f64>> = (0..5)
             .map(|_| {
                 let z = rng.random_range(2.0..30.0);
-                Vector3::new(rng.random_range(-1.0..1.0) * z, rng.random_range(-0.7..0.7) * z, z)
+                Vector3::new(
+                    rng.random_range(-1.0..1.0) * z,
+                    rng.random_range(-0.7..0.7) * z,
+                    z,
+                )
             })
             .collect();
         let (_, best, _) = solve_exact(&Pose::new(so3_exp(&w), t), &points);
