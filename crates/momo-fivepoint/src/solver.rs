@@ -266,8 +266,7 @@ pub fn solve_five_point(f0: &[Vector3<f64>; 5], f1: &[Vector3<f64>; 5]) -> Vec<M
         let x = lambda.re;
         // The cheap eigenvector first; where polishing from it does not reach an essential
         // matrix, the eigenvector from the SVD of `A - x I` (see `y_z_by_svd`).
-        let tries: [fn(&SMatrix<f64, 10, 10>, f64) -> Option<(f64, f64)>; 2] =
-            [y_z_of_root, y_z_by_svd];
+        let tries: [EigenvectorYZ; 2] = [y_z_of_root, y_z_by_svd];
         for y_z in tries {
             let Some((y, z)) = y_z(&a, x) else {
                 continue;
@@ -283,6 +282,9 @@ pub fn solve_five_point(f0: &[Vector3<f64>; 5], f1: &[Vector3<f64>; 5]) -> Vec<M
     }
     out
 }
+
+/// A way to read `(y, z)` of the action matrix's eigenvector for an eigenvalue `x`.
+type EigenvectorYZ = fn(&SMatrix<f64, 10, 10>, f64) -> Option<(f64, f64)>;
 
 /// Whether a unit-norm `E` satisfies the essential-matrix constraints: `det E = 0` (within
 /// 1e-9) and the cubic constraints `2 E Eᵀ E − tr(E Eᵀ) E = 0` (within 1e-8). A nearly real
