@@ -4,10 +4,7 @@
 
 use crate::atomic::{AtomicFile, put};
 use crate::error::{IoError, IoErrorKind};
-use crate::text::{
-    Exact, LineReader, PlainField, is_blank, parse_f64, parse_header, parse_index, plain_row,
-    split_row,
-};
+use crate::text::{Exact, LineReader, is_blank, parse_f64, parse_header, parse_index, split_row};
 use momo_core::{Camera, CameraModel, CrossObservation, FrameObservations, Observation, Rig};
 use nalgebra::{Vector2, Vector3};
 use std::fs::File;
@@ -77,21 +74,67 @@ type RowFields = (
     Result<Option<usize>, IoErrorKind>,
 );
 
-/// The fields of a row of plain numbers ([`plain_row`]) as [`MatchReader::parse_fields`] reads
-/// them, or `None` where one of them is not read by the one pass (a sign or a point in an
-/// index, a mantissa whose rounding the exact comparisons do not settle).
-fn plain_fields(f: &[PlainField], c: &[usize; 7]) -> Option<RowFields> {
-    let camera_to = match f.get(c[6]) {
-        Some(t) => Some(t.index()?),
-        None => None,
-    };
+/// The fields of a row of `N` plain numbers read in one pass from its bytes, as
+/// [`MatchReader::parse_fields`] reads them, or `None` for any row that it leaves to them.
+///
+/// The row must be `N` fields separated by single commas, nothing before the first or after the
+/// last. A field at a position of `index_at` (frame, camera, `camera_to`) must be 1 to 19 ASCII
+/// digits: its value is `usize::from_str` of it, as [`parse_index`] reads it. Any other field
+/// must be a decimal that `fast_float2::parse_partial` reads whole to a finite `f64` (no
+/// whitespace: it skips none): that reading is correctly rounded, as `str::parse` (the same
+/// algorithm, Lemire's fast_float) and the exact plain-decimal path of [`parse_f64`] are, and
+/// its syntax (`[+-]digits[.digits][e[+-]digits]`, a point with digits on either side, `inf`,
+/// `nan`) is a part of `str::parse`'s, so the value is the same bits (test
+/// `fast_float_reads_as_std_parse`). Non-finite values, empty fields and anything else go to
+/// the field parsers, which raise the errors.
+fn fast_fields<const N: usize>(
+    b: &[u8],
+    c: &[usize; 7],
+    index_at: &[bool; 7],
+) -> Option<RowFields> {
+    let mut index = [0usize; 7];
+    let mut value = [0.0f64; 7];
+    let mut i = 0;
+    for (p, &is_index) in index_at.iter().enumerate().take(N) {
+        if p > 0 {
+            if b.get(i) != Some(&b',') {
+                return None;
+            }
+            i += 1;
+        }
+        let rest = b.get(i..)?;
+        if is_index {
+            let n = rest.iter().take_while(|d| d.is_ascii_digit()).count();
+            if n == 0 || n > 19 {
+                return None;
+            }
+            // At most 19 digits: below 10^19 < 2^64.
+            let w = rest
+                .get(..n)?
+                .iter()
+                .fold(0u64, |w, d| w * 10 + u64::from(d - b'0'));
+            index[p] = usize::try_from(w).ok()?;
+            i += n;
+        } else {
+            let (v, n) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
+            if !v.is_finite() {
+                return None;
+            }
+            value[p] = v;
+            i += n;
+        }
+    }
+    if i != b.len() {
+        return None;
+    }
+    let camera_to = (c[6] != usize::MAX).then(|| index[c[6]]);
     Some((
-        f.get(c[0])?.index()?,
-        f.get(c[1])?.index()?,
-        f.get(c[2])?.value()?,
-        f.get(c[3])?.value()?,
-        f.get(c[4])?.value()?,
-        f.get(c[5])?.value()?,
+        index[c[0]],
+        index[c[1]],
+        value[c[2]],
+        value[c[3]],
+        value[c[4]],
+        value[c[5]],
         Ok(camera_to),
     ))
 }
@@ -121,6 +164,8 @@ pub struct MatchReader<R> {
     /// Positions of the columns of [`MATCH_COLUMNS_CROSS`]; `camera_to` is `usize::MAX` when
     /// the file has no such column.
     columns: [usize; 7],
+    /// The positions that hold an index (frame, camera, `camera_to`), for [`fast_fields`].
+    index_at: [bool; 7],
     next_frame: usize,
     current: FrameObservations,
     pending: Option<Row>,
@@ -175,11 +220,18 @@ impl<R: BufRead> MatchReader<R> {
             .iter()
             .map(|c| (c.model, pixel_margin(&c.model)))
             .collect();
+        let mut index_at = [false; 7];
+        for &k in [columns[0], columns[1], columns[6]].iter() {
+            if let Some(at) = index_at.get_mut(k) {
+                *at = true;
+            }
+        }
         Ok(Self {
             lines,
             path,
             cameras,
             columns,
+            index_at,
             next_frame: 1,
             current: FrameObservations::new(rig.len()),
             pending: None,
@@ -204,23 +256,44 @@ impl<R: BufRead> MatchReader<R> {
         &self.path
     }
 
-    fn parse_row(
-        line: &str,
+    /// A line's row, `None` for a blank line.
+    fn parse_line(
+        line: &[u8],
         c: &[usize; 7],
+        index_at: &[bool; 7],
+        cameras: &[(Camera, f64)],
+        last_row_frame: usize,
+    ) -> Result<Option<Row>, IoErrorKind> {
+        // (A line that starts with a digit is not blank.)
+        if !line.first().is_some_and(u8::is_ascii_digit)
+            && is_blank(std::str::from_utf8(line).map_err(|_| IoErrorKind::InvalidUtf8)?)
+        {
+            return Ok(None);
+        }
+        Self::parse_row(line, c, index_at, cameras, last_row_frame).map(Some)
+    }
+
+    fn parse_row(
+        line: &[u8],
+        c: &[usize; 7],
+        index_at: &[bool; 7],
         cameras: &[(Camera, f64)],
         last_row_frame: usize,
     ) -> Result<Row, IoErrorKind> {
         let with_to = c[6] != usize::MAX;
-        // A row of plain numbers in one pass (most rows); any other row, and any value the
-        // one pass does not read exactly as the field parsers do, through them.
+        // A row of plain numbers in one pass from its bytes (most rows); any other row through
+        // the UTF-8 check, the split and the field parsers (a row the one pass reads is ASCII).
         let fast = if with_to {
-            plain_row::<7>(line).and_then(|f| plain_fields(&f, c))
+            fast_fields::<7>(line, c, index_at)
         } else {
-            plain_row::<6>(line).and_then(|f| plain_fields(&f, c))
+            fast_fields::<6>(line, c, index_at)
         };
         let (frame, camera, u0, v0, u1, v1, camera_to) = match fast {
             Some(v) => v,
-            None => Self::parse_fields(line, c, with_to)?,
+            None => {
+                let line = std::str::from_utf8(line).map_err(|_| IoErrorKind::InvalidUtf8)?;
+                Self::parse_fields(line, c, with_to)?
+            }
         };
         if frame == 0 {
             return Err(IoErrorKind::FrameZero);
@@ -301,20 +374,25 @@ impl<R: BufRead> MatchReader<R> {
     /// The next row, `None` at the end of the file.
     fn read_row(&mut self) -> Result<Option<Row>, IoError> {
         loop {
-            let line = match self.lines.next_line() {
-                Ok(Some(l)) => l,
+            let row = match self.lines.next_line_bytes() {
+                Ok(Some(line)) => Self::parse_line(
+                    line,
+                    &self.columns,
+                    &self.index_at,
+                    &self.cameras,
+                    self.last_row_frame,
+                ),
                 Ok(None) => return Ok(None),
-                Err(k) => return Err(IoError::at(&self.path, self.lines.line(), k)),
+                Err(k) => Err(k),
             };
-            // (A line that starts with a digit is not blank.)
-            if !line.as_bytes().first().is_some_and(u8::is_ascii_digit) && is_blank(line) {
-                continue;
+            match row.map_err(|k| IoError::at(&self.path, self.lines.line(), k))? {
+                None => continue,
+                Some(row) => {
+                    self.last_row_frame = row.frame;
+                    self.rows += 1;
+                    return Ok(Some(row));
+                }
             }
-            let row = Self::parse_row(line, &self.columns, &self.cameras, self.last_row_frame)
-                .map_err(|k| IoError::at(&self.path, self.lines.line(), k))?;
-            self.last_row_frame = row.frame;
-            self.rows += 1;
-            return Ok(Some(row));
         }
     }
 
@@ -502,4 +580,176 @@ pub(crate) fn stage_matches(
         w.push(k, obs)?;
     }
     Ok(w.file)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The positions of a header's indices, as [`MatchReader::new`] finds them.
+    fn index_at(c: &[usize; 7]) -> [bool; 7] {
+        let mut at = [false; 7];
+        for k in [c[0], c[1], c[6]] {
+            if let Some(a) = at.get_mut(k) {
+                *a = true;
+            }
+        }
+        at
+    }
+
+    /// The columns of `frame,camera,u0,v0,u1,v1[,camera_to]` and of a permuted header
+    /// (`v1,camera,u0,frame,u1,v0[,camera_to]`).
+    const ORDERS: [[usize; 7]; 4] = [
+        [0, 1, 2, 3, 4, 5, usize::MAX],
+        [0, 1, 2, 3, 4, 5, 6],
+        [3, 1, 2, 5, 4, 0, usize::MAX],
+        [3, 1, 2, 5, 4, 0, 6],
+    ];
+
+    /// Bitwise equality of two rows' fields (errors compared by their text).
+    fn same(a: &RowFields, b: &RowFields) -> bool {
+        let bits = |r: &RowFields| [r.2, r.3, r.4, r.5].map(f64::to_bits);
+        let to = |r: &RowFields| match &r.6 {
+            Ok(t) => Ok(*t),
+            Err(e) => Err(e.to_string()),
+        };
+        (a.0, a.1) == (b.0, b.1) && bits(a) == bits(b) && to(a) == to(b)
+    }
+
+    /// Where [`fast_fields`] reads `line` with the columns `c`, the split and the field parsers
+    /// read it to the same fields, bit for bit. Returns whether it did.
+    fn check_fast(
+        line: &str,
+        c: &[usize; 7],
+    ) -> Result<bool, proptest::test_runner::TestCaseError> {
+        let with_to = c[6] != usize::MAX;
+        let fast = if with_to {
+            fast_fields::<7>(line.as_bytes(), c, &index_at(c))
+        } else {
+            fast_fields::<6>(line.as_bytes(), c, &index_at(c))
+        };
+        let Some(fast) = fast else {
+            return Ok(false);
+        };
+        let slow = MatchReader::<&[u8]>::parse_fields(line, c, with_to);
+        proptest::prop_assert!(
+            slow.as_ref().is_ok_and(|s| same(&fast, s)),
+            "{:?}: fast {:?}, field parsers {:?}",
+            line,
+            fast,
+            slow.map_err(|e| e.to_string())
+        );
+        Ok(true)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(3000))]
+        /// `fast_float2` reads a text whole to a finite value only where `str::parse` reads it
+        /// to the same bits: decimals of any length (past 19 digits and near halfway between
+        /// two `f64`s it takes its slow, exact path), exponents, signs, `inf` / `nan` spellings.
+        #[test]
+        fn fast_float_reads_as_std_parse(
+            text in "[+-]?[0-9]{0,30}(\\.[0-9]{0,30})?([eE][+-]?[0-9]{0,4})?|[0-9.eE+infatyINFATY-]{0,30}",
+        ) {
+            if let Ok((v, n)) = fast_float2::parse_partial::<f64, _>(text.as_bytes()) {
+                if n == text.len() && v.is_finite() {
+                    proptest::prop_assert_eq!(
+                        text.parse::<f64>().ok().map(f64::to_bits),
+                        Some(v.to_bits()),
+                        "{}", text
+                    );
+                }
+            }
+        }
+
+        /// Rows of pixels as `momo` and numpy write them (shortest round-trip prints,
+        /// 17-digit mantissas, integers, signs, exponents), in both column orders, with and
+        /// without `camera_to`: the one pass reads them as the field parsers do, and takes every
+        /// row of plain decimals; anything spliced in anywhere is read alike or left to them.
+        #[test]
+        fn fast_rows_read_as_the_field_parsers(
+            frame in 0u64..100_000,
+            camera in 0u64..8,
+            pixels in proptest::collection::vec(-2000.0f64..3000.0, 4),
+            style in 0usize..8,
+            junk in "[ ,0-9.eE+-]{0,6}|[\u{a0}\t\r\u{2003}é]|inf|NaN",
+            at in 0usize..90,
+        ) {
+            let px = |v: f64| match style {
+                0 => format!("{v}"),
+                1 => format!("{v:.3}"),
+                2 => format!("{}", v.round()),
+                3 => format!("{:.0}", v),
+                4 => format!("+{}", v.abs()),
+                5 => format!("{:.17}", v),
+                6 => format!("{v:e}"),
+                _ => format!("{:.25}", v / 7.0),
+            };
+            let row = format!(
+                "{frame},{camera},{},{},{},{}",
+                px(pixels[0]), px(pixels[1]), px(pixels[2]), px(pixels[3])
+            );
+            for c in &ORDERS {
+                let line = if c[6] == usize::MAX { row.clone() } else { format!("{row},{camera}") };
+                let took = check_fast(&line, c)?;
+                // Frame and camera sit where the order puts indices: the permuted order reads
+                // pixels there, which the one pass takes as indices only if they are digits.
+                if c[0] == 0 {
+                    proptest::prop_assert!(took, "{}", line);
+                }
+                let at = at.min(line.len());
+                check_fast(&format!("{}{junk}{}", &line[..at], &line[at..]), c)?;
+            }
+            check_fast(&format!("{row},"), &ORDERS[1])?;
+        }
+
+        /// Any short text over the rows' bytes.
+        #[test]
+        fn fast_rows_of_any_bytes(line in "[ ,0-9.eE+-]{0,40}") {
+            for c in &ORDERS {
+                check_fast(&line, c)?;
+            }
+        }
+    }
+
+    #[test]
+    fn fast_rows_leave_the_rest_to_the_field_parsers() {
+        let c = &ORDERS[0];
+        for line in [
+            "1, 0,1,2,3,4",
+            "1,0,1,2,3,4 ",
+            "1,0,1,2,3,4\r",
+            "1,0,,2,3,4",
+            "1,0,1,2,3",
+            "1,0,1,2,3,4,",
+            "1,0,1,2,3,4,5",
+            "+1,0,1,2,3,4",
+            "1.0,0,1,2,3,4",
+            "1,0,inf,2,3,4",
+            "1,0,nan,2,3,4",
+            "1,0,1e999,2,3,4",
+            "1,0,1e,2,3,4",
+            "1,0,0x10,2,3,4",
+            "12345678901234567890,0,1,2,3,4",
+            ",1,0,1,2,3,4",
+        ] {
+            assert!(
+                fast_fields::<6>(line.as_bytes(), c, &index_at(c)).is_none(),
+                "{line}"
+            );
+        }
+        // Exponents, signs, bare points and long mantissas are read, as `str::parse` reads them.
+        let line = "7,1,1.5e2,-0.0,.5,123456789012345678901234.5";
+        let f = fast_fields::<6>(line.as_bytes(), c, &index_at(c)).expect("one pass");
+        assert_eq!((f.0, f.1), (7, 1));
+        assert_eq!(
+            [f.2, f.3, f.4, f.5].map(f64::to_bits),
+            [150.0, -0.0, 0.5, 123456789012345678901234.5].map(f64::to_bits)
+        );
+        // `camera_to` where the file has the column, in the permuted order too.
+        let c = &ORDERS[3];
+        let f = fast_fields::<7>(b"4,2,1,9,3,5,1", c, &index_at(c)).expect("one pass");
+        assert_eq!((f.0, f.1, f.2, f.3, f.4, f.5), (9, 2, 1.0, 5.0, 3.0, 4.0));
+        assert!(matches!(f.6, Ok(Some(1))));
+    }
 }

@@ -15,6 +15,9 @@ pub(crate) struct LineReader<R> {
     buf: Vec<u8>,
     line: usize,
     limit: usize,
+    /// Bytes of `inner`'s buffer that the line returned last still borrows: consumed at the
+    /// start of the next call ([`next_line_bytes`](Self::next_line_bytes)).
+    pending: usize,
 }
 
 impl<R: BufRead> LineReader<R> {
@@ -28,6 +31,7 @@ impl<R: BufRead> LineReader<R> {
             buf: Vec::new(),
             line: 0,
             limit,
+            pending: 0,
         }
     }
 
@@ -39,6 +43,55 @@ impl<R: BufRead> LineReader<R> {
     /// The next line without its terminator (`\n` or `\r\n`), `None` at the end of the input.
     /// On error, [`line`](Self::line) is the line that failed.
     pub(crate) fn next_line(&mut self) -> Result<Option<&str>, IoErrorKind> {
+        let first = self.line == 0;
+        let Some(bytes) = self.next_line_bytes()? else {
+            return Ok(None);
+        };
+        let mut s = std::str::from_utf8(bytes).map_err(|_| IoErrorKind::InvalidUtf8)?;
+        if first {
+            s = s.strip_prefix('\u{feff}').unwrap_or(s);
+        }
+        Ok(Some(s))
+    }
+
+    /// [`next_line`](Self::next_line) as bytes, before the UTF-8 check and without stripping
+    /// a byte-order mark (the caller checks what it does not read as ASCII: `matches.csv`'s
+    /// rows of plain numbers need no check). A line that lies whole in `inner`'s buffer is
+    /// returned in place (consumed at the next call), any other is gathered into a buffer of
+    /// its own.
+    pub(crate) fn next_line_bytes(&mut self) -> Result<Option<&[u8]>, IoErrorKind> {
+        if self.pending > 0 {
+            self.inner.consume(std::mem::take(&mut self.pending));
+        }
+        // The line's end in what the reader holds (not there, or an interrupted read: the
+        // loop below gathers the line).
+        let found = match self.inner.fill_buf() {
+            Ok(available) => memchr::memchr(b'\n', available).filter(|&i| i <= self.limit),
+            Err(e) if e.kind() == ErrorKind::Interrupted => None,
+            Err(e) => {
+                self.line += 1;
+                return Err(IoErrorKind::Io(e));
+            }
+        };
+        if let Some(i) = found {
+            // `fill_buf` on a non-empty buffer returns it again without reading (`BufRead`'s
+            // contract; a reader that broke it gets an error, not a wrong line).
+            self.line += 1;
+            let available = self.inner.fill_buf().map_err(IoErrorKind::Io)?;
+            let mut line = available
+                .get(..i)
+                .filter(|_| available.get(i) == Some(&b'\n'))
+                .ok_or_else(|| {
+                    IoErrorKind::Io(std::io::Error::other(
+                        "the reader's buffer changed between two calls of fill_buf",
+                    ))
+                })?;
+            self.pending = i + 1;
+            if let [rest @ .., b'\r'] = line {
+                line = rest;
+            }
+            return Ok(Some(line));
+        }
         self.buf.clear();
         let mut got_bytes = false;
         loop {
@@ -77,11 +130,7 @@ impl<R: BufRead> LineReader<R> {
         if self.buf.last() == Some(&b'\r') {
             self.buf.pop();
         }
-        let mut s = std::str::from_utf8(&self.buf).map_err(|_| IoErrorKind::InvalidUtf8)?;
-        if self.line == 1 {
-            s = s.strip_prefix('\u{feff}').unwrap_or(s);
-        }
-        Ok(Some(s))
+        Ok(Some(&self.buf))
     }
 }
 
@@ -241,7 +290,8 @@ pub(crate) struct PlainField {
 
 impl PlainField {
     /// The field as [`parse_index`] reads it, where it is a plain unsigned integer (no sign, no
-    /// point): `usize::from_str` of it.
+    /// point): `usize::from_str` of it (the tests' reading of whole rows).
+    #[cfg(test)]
     pub fn index(&self) -> Option<usize> {
         if self.signed || self.fraction.is_some() {
             return None;
@@ -259,8 +309,9 @@ impl PlainField {
 /// A CSV row of exactly `N` plain numbers (`[+-]digits[.digits]`, at least one digit before the
 /// point and one after it, at most 19 digits in all, separated by single commas, no whitespace)
 /// scanned in one pass, or `None` for any other row (the caller then takes [`split_row`] and
-/// the field parsers, which read these rows to the same values: the reading of `matches.csv`,
-/// issue 19, thirteenth session).
+/// the field parsers, which read these rows to the same values). [`parse_f64`]'s scanner of
+/// plain decimals (one field); `matches.csv`'s rows were read through it from the thirteenth
+/// session (issue 19) to the nineteenth, and are now read by `fast_fields` (matches.rs).
 pub(crate) fn plain_row<const N: usize>(line: &str) -> Option<[PlainField; N]> {
     let b = line.as_bytes();
     let mut out = [PlainField::default(); N];

@@ -746,3 +746,106 @@ fn kitti_ground_truth_files_pass() {
         assert!((poses[0].translation).norm() < 1e-6);
     }
 }
+
+/// Rows next to the one-pass reading of plain numbers (`fast_fields`, issue 19, twentieth
+/// session) fail as they did before it (the messages of main b340264's `momo run` on the same
+/// rows): the one pass leaves each of them to the split and the field parsers, which name the
+/// line and the reason.
+#[test]
+fn malformed_rows_near_the_one_pass_fail_as_before() {
+    let h = "frame,camera,u0,v0,u1,v1\n";
+    let cases: [(&[u8], &str); 16] = [
+        (b"1,0,1e999,2,3,4", "2: `u0` is not finite (inf)"),
+        (b"1,0,-inf,2,3,4", "2: `u0` is not finite (-inf)"),
+        (b"1,0,1.5,2,3", "2: expected 6 fields, found 5"),
+        (b"1,0,1,2,3,4,5", "2: expected 6 fields, found 7"),
+        (b"1,0,,2,3,4", "2: `u0`: cannot parse `` as a number"),
+        (
+            b"1,0,1.5e,2,3,4",
+            "2: `u0`: cannot parse `1.5e` as a number",
+        ),
+        (
+            b"1,0,0x1p3,2,3,4",
+            "2: `u0`: cannot parse `0x1p3` as a number",
+        ),
+        (b"1,0,1,2,3,4 x", "2: `v1`: cannot parse `4 x` as a number"),
+        (b"1,0,1\xff,2,3,4", "2: invalid UTF-8"),
+        (b"1 ,0,1,2,3,4\n\xc3\x28", "3: invalid UTF-8"),
+        (
+            b"1,x,1,2,3,4",
+            "2: `camera`: cannot parse `x` as a non-negative integer",
+        ),
+        (
+            b"1.5,0,1,2,3,4",
+            "2: `frame`: cannot parse `1.5` as a non-negative integer",
+        ),
+        (
+            b"-1,0,1,2,3,4",
+            "2: `frame`: cannot parse `-1` as a non-negative integer",
+        ),
+        (b"0,0,1,2,3,4", "2: frame must be >= 1, found 0"),
+        (
+            b"1,2,1,2,3,4",
+            "2: unknown camera id 2 (the rig has 1 camera(s))",
+        ),
+        (
+            b"1,0,1,2,3,4\n2,0, 1,2,3,4\n1,0,1,2,3,4",
+            "4: frame 1 after frame 2: rows must be ordered by non-decreasing frame",
+        ),
+    ];
+    for (row, expected) in cases {
+        let mut text = h.as_bytes().to_vec();
+        text.extend_from_slice(row);
+        text.push(b'\n');
+        let e = MatchReader::new(&text[..], &kitti_rig(), "seq/matches.csv")
+            .unwrap()
+            .collect::<Result<Vec<_>, _>>()
+            .expect_err("must be rejected");
+        assert_eq!(
+            e.to_string(),
+            format!("seq/matches.csv:{expected}"),
+            "{}",
+            String::from_utf8_lossy(row)
+        );
+    }
+    // The same rows read whole through a reader whose buffer holds 7 bytes (every line
+    // gathered across refills, not read in place).
+    let text = format!("{h}1,0,612.3125,201.75,615.0,203.5\n1,0,1e999,2,3,4\n");
+    let small = std::io::BufReader::with_capacity(7, text.as_bytes());
+    let e = MatchReader::new(small, &kitti_rig(), "seq/matches.csv")
+        .unwrap()
+        .collect::<Result<Vec<_>, _>>()
+        .expect_err("must be rejected");
+    assert_eq!(e.to_string(), "seq/matches.csv:3: `u0` is not finite (inf)");
+}
+
+/// Lines read in place from the reader's buffer and lines gathered across refills (a line
+/// longer than the buffer, or cut by its end) give the same frames.
+#[test]
+fn lines_in_place_and_gathered_read_alike() {
+    let mut text = String::from("frame,camera,u0,v0,u1,v1\r\n");
+    for k in 1..40 {
+        for j in 0..3 {
+            let v = 100.0 + f64::from(k * 7 + j) / 3.0;
+            text.push_str(&format!(
+                "{k},0,{v},{},{},{}\n",
+                v + 0.5,
+                v - 1.25,
+                v * 0.75
+            ));
+        }
+        if k % 5 == 0 {
+            text.push_str("\n  \r\n");
+        }
+    }
+    let whole = read_matches(&kitti_rig(), &text);
+    for capacity in [7, 64, 100, 1000] {
+        let r = std::io::BufReader::with_capacity(capacity, text.as_bytes());
+        let frames: Vec<_> = MatchReader::new(r, &kitti_rig(), "m.csv")
+            .unwrap()
+            .collect::<Result<_, _>>()
+            .unwrap();
+        assert_eq!(frames, whole, "capacity {capacity}");
+    }
+    assert_eq!(whole.len(), 39);
+}
