@@ -1122,6 +1122,34 @@ fn separate_with(
             road_t = Some((t, sup_t));
         }
     }
+    // Vehicle-model plausibility (`hypotheses.tilt_replace`): where A rolls or pitches more
+    // than an alternative by `tilt_margin`, the alternative with the highest road score among
+    // those (a positive one: the static world's motion puts matches on the road) replaces A
+    // whatever competition over time says. Only where an alternative could be kept at all
+    // (`retain_possible`, also without the pre-tests: the outcome does not depend on them).
+    let tilt_margin = opts.hypotheses().map_or(0.0, |h| h.tilt_margin);
+    let mut tilted_a: Option<Candidate> = None;
+    if tilt_margin > 0.0
+        && let Some(h) = opts.hypotheses()
+        && h.tilt_replace
+        && !alternatives.is_empty()
+        && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
+    {
+        let tilt_a = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
+        tilted_a = alternatives
+            .iter()
+            .filter_map(|alt| {
+                let m = ctx.estimator.motion(&alt.0.params);
+                let t = crate::hypotheses::tilt(&m);
+                (t.is_finite() && t < tilt_a - tilt_margin)
+                    .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
+            })
+            .filter(|(s, _)| *s > 0)
+            // The first of equal scores (`max_by_key` keeps the last).
+            .rev()
+            .max_by_key(|(s, _)| *s)
+            .map(|(_, alt)| alt.clone());
+    }
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
@@ -1179,7 +1207,7 @@ fn separate_with(
     {
         alternatives.push((t.clone(), sup_t.clone()));
     }
-    outcome.competing = !alternatives.is_empty();
+    outcome.competing = !alternatives.is_empty() || tilted_a.is_some();
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
         opts.min_cell_ratio <= 0.0
@@ -1189,7 +1217,7 @@ fn separate_with(
     // The support of the motion not chosen (for `final_exclusive`).
     let mut other: Option<Vec<Vec<bool>>> = None;
     if let Some(h) = opts.hypotheses()
-        && !alternatives.is_empty()
+        && (!alternatives.is_empty() || tilted_a.is_some())
     {
         // The alternative with the most ground (or parallax) support against A, over frames.
         let metric = arc_length.is_some();
@@ -1203,7 +1231,15 @@ fn separate_with(
             })
             .collect();
         scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
-        let (score_b, best) = scored.swap_remove(0);
+        // `tilt_replace`: A tilted beyond an alternative is replaced by it.
+        let forced = tilted_a.is_some();
+        let (score_b, best) = match tilted_a {
+            Some(alt) => {
+                let m = ctx.estimator.motion(&alt.0.params);
+                (score(h, ctx.rig, &m, obs, &alt.1), alt)
+            }
+            None => scored.swap_remove(0),
+        };
         let a = Hypothesis {
             motion: motion_a,
             support: &chosen.1,
@@ -1245,7 +1281,11 @@ fn separate_with(
                 let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
                 memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
             });
-        if (ground_choice || vote) && spread_ok(&best.1, &chosen.1) {
+        // `tilt_margin`: a B that rolls or pitches more than A by the margin does not replace A.
+        let tilted_b = tilt_margin > 0.0
+            && crate::hypotheses::tilt(&b.motion)
+                > crate::hypotheses::tilt(&a.motion) + tilt_margin;
+        if (forced || ((ground_choice || vote) && !tilted_b)) && spread_ok(&best.1, &chosen.1) {
             outcome.switched = true;
             other = Some(std::mem::replace(&mut chosen, best).1);
         } else {
@@ -2455,6 +2495,12 @@ mod tests {
         if let Some(h) = variant.hypotheses.as_mut() {
             h.track_decay = 0.7;
         }
+        // The vehicle-model plausibility of the choice (off by default).
+        let mut tilted = default.clone();
+        if let Some(h) = tilted.hypotheses.as_mut() {
+            h.tilt_margin = 0.01;
+            h.tilt_replace = true;
+        }
         let counted = Counted::new();
         let (estimator, solver, arc_index) = (
             counted.estimator.as_ref(),
@@ -2462,7 +2508,7 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant].into_iter().flat_map(|o| {
+        for (opts, config_sim) in [&default, &variant, &tilted].into_iter().flat_map(|o| {
             [
                 SimConfig::clean_pinhole(),
                 SimConfig::outliers(),
