@@ -409,7 +409,9 @@ impl SeparateOptions {
     /// (`candidate_by_road`; docs/RESULTS.md §9, eighteenth session, cand32 and lead). Since the
     /// nineteenth session a switch away from the track the memory says continues needs B's road
     /// to span the road's depths (`hypotheses.road_span = 3.4`; docs/RESULTS.md §9, nineteenth
-    /// session, choice33). A config file's
+    /// session, choice33). Since the twentieth session an alternative that rolls or pitches more
+    /// than 0.01 rad beyond A does not replace A (`hypotheses.tilt_margin = 0.01`, vehicle-model
+    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -433,6 +435,7 @@ impl SeparateOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
                 road_span: 3.4,
+                tilt_margin: 0.01,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
