@@ -889,11 +889,14 @@ fn separate_with(
         Some(s) if opts.threshold_sigmas > 0.0 => opts.threshold_sigmas * s,
         _ => opts.threshold,
     };
+    // An alternative's support: the matches whose epipolar angle is below `threshold`
+    // (`x < t` is `!(x >= t)`: the angles are never NaN), without the two `asin` of a match
+    // whose one-sided sines both lie clearly on one side of `sin(t)` ([`angle_at_least`]).
     let support = |params: &[f64]| -> Vec<Vec<bool>> {
-        epipolar_angles(ctx.rig, &ctx.estimator.motion(params), obs)
-            .into_iter()
-            .map(|a| a.into_iter().map(|x| x < threshold).collect())
-            .collect()
+        let at_least = angle_at_least(threshold);
+        per_match_sines(ctx.rig, &ctx.estimator.motion(params), obs, |s| {
+            !at_least(s)
+        })
     };
     // The matches an alternative may count as its own: far from A (`distinct_sigmas`) or all.
     let own: Option<Vec<Vec<bool>>> = match sigma {
@@ -2103,6 +2106,16 @@ mod tests {
                     .map(|c| c.iter().map(|x| *x >= t).collect())
                     .collect();
                 assert_eq!(mask, want, "threshold {t}");
+                // The alternatives' support (`separate_with`) is its negation: `x < t`.
+                let below: Vec<Vec<bool>> = angles
+                    .iter()
+                    .map(|c| c.iter().map(|x| *x < t).collect())
+                    .collect();
+                let negated: Vec<Vec<bool>> = mask
+                    .iter()
+                    .map(|c| c.iter().map(|x| !x).collect())
+                    .collect();
+                assert_eq!(negated, below, "threshold {t}");
             }
         }
     }
