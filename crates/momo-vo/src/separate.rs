@@ -329,6 +329,19 @@ pub struct SeparateOptions {
     /// 12 remain): the previous frame's object is left out of B's fit, so that B does not
     /// converge to it again. B's support is still scored on all matches. Off by default.
     pub candidate_forget_other: bool,
+    /// B's starts are solved on at most this many (`K`) of the matches outside A's support (0: all
+    /// of them): a spread subsample, the `i`-th of the `m` matches B is fitted to (in the frame's
+    /// order, camera by camera) kept where `i K mod m < K`, K evenly spaced ones. B's solutions
+    /// (their costs, hence which one is least, and their supports on all matches, hence the road
+    /// scores of [`SeparateOptions::candidate_by_road`]) are those of the subsample; the least-cost
+    /// B and the local minimum with the most road, where they go on to the tests, are then solved
+    /// again on all the matches outside A's support, each started from its subsample solution
+    /// (which stands where that solve fails), and tested again. A linearisation of B's solves costs
+    /// about `K / m` of one on all of them, plus the rig's per-camera set-up. Off by default: it
+    /// changes which local minimum B is where the subsample's costs rank the starts otherwise, and
+    /// the final B's digits everywhere; measured in docs/RESULTS.md ("Speed", twentieth session,
+    /// rig34).
+    pub candidate_subsample: usize,
 }
 
 impl Default for SeparateOptions {
@@ -381,6 +394,7 @@ impl Default for SeparateOptions {
             ground_drop_min: 8,
             candidate_by_road: false,
             candidate_forget_other: false,
+            candidate_subsample: 0,
         }
     }
 }
@@ -539,6 +553,11 @@ impl SeparateOptions {
         }
         if !(0.0..=1.0).contains(&self.candidate_screen) {
             return Err("odometry.separate.candidate_screen must be in [0, 1]".into());
+        }
+        if (1..12).contains(&self.candidate_subsample) {
+            return Err(
+                "odometry.separate.candidate_subsample must be 0 (off) or at least 12".into(),
+            );
         }
         if !(0.0..=1.0).contains(&self.memory_vote) {
             return Err("odometry.separate.memory_vote must be in [0, 1]".into());
@@ -967,6 +986,18 @@ fn separate_with(
             None => rest_mask,
         };
         let rest = subset(obs, &rest_mask);
+        // `candidate_subsample`: B's starts are solved on a spread subsample of `rest`.
+        let sub = (opts.candidate_subsample > 0 && count(&rest_mask) > opts.candidate_subsample)
+            .then(|| subset(obs, &spread_subsample(&rest_mask, opts.candidate_subsample)));
+        let b_obs = sub.as_ref().unwrap_or(&rest);
+        // A B of the subsample re-solved on all of `rest` from its solution (the subsample's
+        // solution where that fails); B itself without the subsample.
+        let refit = |b: FrameSolution| -> FrameSolution {
+            if sub.is_none() {
+                return b;
+            }
+            cctx.solve(&rest, &b.params, ctx.loss, false).unwrap_or(b)
+        };
         // B's support where it passes the tests.
         let tested = |b: &FrameSolution| -> Option<Vec<Vec<bool>>> {
             let sup_b = support(&b.params);
@@ -981,11 +1012,11 @@ fn separate_with(
             && let Some(i) = starts
                 .iter()
                 .enumerate()
-                .filter_map(|(i, s)| ctx.cost(&rest, s, ctx.loss).map(|c| (i, c)))
+                .filter_map(|(i, s)| ctx.cost(b_obs, s, ctx.loss).map(|c| (i, c)))
                 .min_by(|x, y| x.1.total_cmp(&y.1))
                 .map(|(i, _)| i)
         {
-            let sol = cctx.solve(&rest, &starts[i], ctx.loss, false);
+            let sol = cctx.solve(b_obs, &starts[i], ctx.loss, false);
             // `candidate_screen`: a B far from being kept ends the search.
             let far = screen
                 && sol.as_ref().is_some_and(|b| {
@@ -1003,10 +1034,10 @@ fn separate_with(
             if far {
                 done = true;
             } else if opts.candidate_one_start
-                && let Some(b) = &sol
-                && let Some(sup_b) = tested(b)
+                && let Some(b) = sol.clone().map(&refit)
+                && let Some(sup_b) = tested(&b)
             {
-                alternatives.push((b.clone(), sup_b));
+                alternatives.push((b, sup_b));
                 done = true;
             } else {
                 first_try = Some((i, sol));
@@ -1018,7 +1049,7 @@ fn separate_with(
             for (i, s) in starts.iter().enumerate() {
                 let sol = match &mut first_try {
                     Some((j, sol)) if *j == i => sol.take(),
-                    _ => cctx.solve(&rest, s, ctx.loss, false),
+                    _ => cctx.solve(b_obs, s, ctx.loss, false),
                 };
                 sols.extend(sol);
             }
@@ -1030,7 +1061,7 @@ fn separate_with(
             }
             // `candidate_by_road`: the other local minima, for their road scores.
             let by_road = opts.hypotheses().filter(|_| opts.candidate_by_road);
-            let best = best_i.map(|i| sols.remove(i));
+            let best = best_i.map(|i| refit(sols.remove(i)));
             let others = if by_road.is_some() { sols } else { Vec::new() };
             let road_score = |b: &FrameSolution, sup: &[Vec<bool>]| -> usize {
                 by_road.map_or(0, |h| {
@@ -1064,7 +1095,15 @@ fn separate_with(
                 }
             }
             if let Some((_, c)) = road_best {
-                alternatives.push(c);
+                if sub.is_none() {
+                    alternatives.push(c);
+                } else {
+                    // Re-solved on all of `rest`, and tested again.
+                    let b = refit(c.0);
+                    if let Some(sup_b) = tested(&b) {
+                        alternatives.push((b, sup_b));
+                    }
+                }
             }
         }
     }
@@ -1459,6 +1498,25 @@ fn separate_with(
         }
     }
     (sol, outcome, NextStage::Done)
+}
+
+/// `k` of the `m` matches of `mask` (all of them where `m <= k`), evenly spaced in the frame's
+/// order (camera by camera): the `i`-th match of `mask` (from 0) is kept where `i k mod m < k`
+/// ([`SeparateOptions::candidate_subsample`]).
+fn spread_subsample(mask: &[Vec<bool>], k: usize) -> Vec<Vec<bool>> {
+    let m = count(mask);
+    let mut i = 0usize;
+    mask.iter()
+        .map(|c| {
+            c.iter()
+                .map(|&r| {
+                    let keep = r && (m <= k || (i * k) % m < k);
+                    i += usize::from(r);
+                    keep
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// The solver of the alternatives B, C and M: the frame's `solver` with
@@ -2752,6 +2810,125 @@ mod tests {
             previous = a.0.params;
         }
         assert!(changed > 0, "the option changed no frame");
+    }
+
+    /// The spread subsample keeps `k` of the mask's `m` matches (all where `m <= k`), none
+    /// outside the mask, with gaps of at most `ceil(m / k)` between kept ones in the frame's
+    /// order.
+    #[test]
+    fn spread_subsample_keeps_k_evenly_spaced_matches_of_the_mask() {
+        for (sizes, k) in [
+            (vec![7, 0, 13, 5], 4),
+            (vec![100, 60, 1], 48),
+            (vec![3, 4], 12),
+        ] {
+            let mask: Vec<Vec<bool>> = sizes
+                .iter()
+                .enumerate()
+                .map(|(c, &n)| (0..n).map(|i| (i + c) % 3 != 1).collect())
+                .collect();
+            let m = count(&mask);
+            let sub = spread_subsample(&mask, k);
+            assert_eq!(count(&sub), m.min(k), "{sizes:?} {k}");
+            let (mut last, mut i, mut gap) = (None::<usize>, 0usize, 0usize);
+            for (c, s) in mask.iter().zip(&sub) {
+                for (&r, &kept) in c.iter().zip(s) {
+                    assert!(r || !kept, "kept outside the mask");
+                    if r {
+                        if kept {
+                            gap = gap.max(last.map_or(i, |l| i - l));
+                            last = Some(i);
+                        }
+                        i += 1;
+                    }
+                }
+            }
+            assert!(gap <= m.div_ceil(k), "{sizes:?} {k}: gap {gap}");
+        }
+    }
+
+    /// `candidate_subsample`: larger than every set of matches outside A's support, the
+    /// separation is the default's bit for bit with the same solves; at 48 on the fisheye rig
+    /// (about 150 matches outside A's support) B is solved from every start on the subsample
+    /// and the least-cost B re-solved on all of them: at most two more solves per frame.
+    #[test]
+    fn subsample_is_the_default_where_it_keeps_every_match() {
+        use momo_sim::{SimConfig, simulate};
+        use std::sync::atomic::Ordering::Relaxed;
+        let o: SeparateOptions = toml::from_str("candidate_subsample = 48").expect("toml");
+        assert!(o.validate().is_ok() && o.candidate_subsample == 48);
+        let bad: SeparateOptions = toml::from_str("candidate_subsample = 5").expect("toml");
+        assert!(bad.validate().unwrap_err().contains("candidate_subsample"));
+        let sim = simulate(&SimConfig {
+            frames: 8,
+            seed: 1,
+            ..SimConfig::fisheye_surround()
+        })
+        .expect("simulation");
+        let counted = Counted::new();
+        let (estimator, solver) = (counted.estimator.as_ref(), &counted.solver);
+        let ctx = counted.ctx(&sim.sequence.rig);
+        let every = SeparateOptions::competition_over_time();
+        let all = SeparateOptions {
+            candidate_subsample: 100_000,
+            ..every.clone()
+        };
+        let sub = SeparateOptions {
+            candidate_subsample: 48,
+            ..every.clone()
+        };
+        let mut trackers = [
+            HypothesisTracker::default(),
+            HypothesisTracker::default(),
+            HypothesisTracker::default(),
+        ];
+        let (mut frames, mut calls) = (0, [0usize; 3]);
+        for (k, obs) in sim.sequence.frames.iter().enumerate().skip(1) {
+            let arc = sim.true_arc_lengths[k];
+            let straight = estimator.initial_params(arc);
+            let starts = vec![straight.clone()];
+            let Some(first) = ctx.solve(obs, &straight, ctx.loss, false) else {
+                continue;
+            };
+            frames += 1;
+            let mut out = Vec::new();
+            for (i, opts) in [&every, &all, &sub].into_iter().enumerate() {
+                let c0 = solver.calls.load(Relaxed);
+                out.push(separate(
+                    &ctx,
+                    opts,
+                    obs,
+                    first.clone(),
+                    &starts,
+                    &mut trackers[i],
+                    Some(arc),
+                ));
+                calls[i] += solver.calls.load(Relaxed) - c0;
+            }
+            assert_eq!(
+                out[1]
+                    .0
+                    .params
+                    .iter()
+                    .map(|p| p.to_bits())
+                    .collect::<Vec<_>>(),
+                out[0]
+                    .0
+                    .params
+                    .iter()
+                    .map(|p| p.to_bits())
+                    .collect::<Vec<_>>(),
+                "frame {k}"
+            );
+            assert_eq!((out[1].1, &out[1].2), (out[0].1, &out[0].2), "frame {k}");
+            assert_eq!(trackers[1], trackers[0], "frame {k}");
+        }
+        assert!(frames >= 5, "{frames} frames");
+        assert_eq!(calls[1], calls[0]);
+        assert!(
+            calls[2] > calls[0] && calls[2] <= calls[0] + 2 * frames,
+            "{calls:?} over {frames} frames"
+        );
     }
 
     /// `candidate_screen` on the static fisheye rig (B fitted every frame from 6 starts and
