@@ -1265,8 +1265,6 @@ mod tests {
         assert_eq!(o.track_hold, 1.0);
     }
 
-    /// A KITTI pinhole at the KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above
-    /// the road, looking forward; the rig and the mount.
     /// [`HypothesesOptions::road_span`]: where A continues the chosen track, a B whose road
     /// points lie at about one depth (10-12 m) does not replace it; a B whose road spans 5-30 m
     /// does, and so does the narrow one where the memory does not say A continues.
@@ -1363,6 +1361,9 @@ mod tests {
         };
         assert!(bad.validate().unwrap_err().contains("tilt_margin"));
     }
+
+    /// A KITTI pinhole at the KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above
+    /// the road, looking forward; the rig and the mount.
     fn kitti_mono() -> (Rig, Pose<f64>) {
         let p_vc = Pose::new(
             Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
