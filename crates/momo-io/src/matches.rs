@@ -675,16 +675,7 @@ mod tests {
             junk in "[ ,0-9.eE+-]{0,6}|[\u{a0}\t\r\u{2003}é]|inf|NaN",
             at in 0usize..90,
         ) {
-            let px = |v: f64| match style {
-                0 => format!("{v}"),
-                1 => format!("{v:.3}"),
-                2 => format!("{}", v.round()),
-                3 => format!("{:.0}", v),
-                4 => format!("+{}", v.abs()),
-                5 => format!("{:.17}", v),
-                6 => format!("{v:e}"),
-                _ => format!("{:.25}", v / 7.0),
-            };
+            let px = |v: f64| crate::text::tests::pixel_text(v, style);
             let row = format!(
                 "{frame},{camera},{},{},{},{}",
                 px(pixels[0]), px(pixels[1]), px(pixels[2]), px(pixels[3])

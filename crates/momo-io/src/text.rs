@@ -485,8 +485,24 @@ pub(crate) fn is_blank(line: &str) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A pixel coordinate written as `momo` and numpy write them, in one of eight styles:
+    /// shortest round-trip, three decimals, a rounded integer (two ways), an explicit sign,
+    /// 17 decimals, an exponent, 25 decimals of a seventh. The parsers' property tests share it.
+    pub(crate) fn pixel_text(v: f64, style: usize) -> String {
+        match style {
+            0 => format!("{v}"),
+            1 => format!("{v:.3}"),
+            2 => format!("{}", v.round()),
+            3 => format!("{:.0}", v),
+            4 => format!("+{}", v.abs()),
+            5 => format!("{:.17}", v),
+            6 => format!("{v:e}"),
+            _ => format!("{:.25}", v / 7.0),
+        }
+    }
 
     #[test]
     fn lines_are_bounded_and_counted() {
@@ -632,14 +648,7 @@ mod tests {
             junk in "[ ,0-9.eE+-]{0,6}",
             at in 0usize..80,
         ) {
-            let px = |v: f64| match style {
-                0 => format!("{v}"),
-                1 => format!("{v:.3}"),
-                2 => format!("{}", v.round()),
-                3 => format!("{:.0}", v),
-                4 => format!("+{}", v.abs()),
-                _ => format!("{:.17}", v),
-            };
+            let px = |v: f64| pixel_text(v, style);
             let line = format!(
                 "{frame},{camera},{},{},{},{}",
                 px(pixels[0]), px(pixels[1]), px(pixels[2]), px(pixels[3])
