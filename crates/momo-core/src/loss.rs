@@ -27,9 +27,7 @@ pub trait RobustLoss: Debug + Send + Sync {
 
     /// [`evaluate`](Self::evaluate) of four squared norms at once (the lanes of the fused
     /// linearisation, `Problem`): one call instead of four. Each entry must equal
-    /// `evaluate(s[l])` bit for bit. The default loops over the lanes; it is instantiated for
-    /// each implementing type, so through a `dyn RobustLoss` the four calls are static (one
-    /// virtual call per four lanes) and an override is needed only for a vectorised formula.
+    /// `evaluate(s[l])` bit for bit; the default loops. Override it to save the virtual calls.
     fn evaluate_lanes(&self, s: &[f64; 4]) -> [[f64; 3]; 4] {
         s.map(|v| self.evaluate(v))
     }

@@ -100,6 +100,14 @@ impl RobustLoss for Cauchy {
         [d1, -d1 * d1 / b2]
     }
 
+    fn evaluate_lanes(&self, s: &[f64; 4]) -> [[f64; 3]; 4] {
+        s.map(|v| Self::evaluate(self, v))
+    }
+
+    fn weights_lanes(&self, s: &[f64; 4]) -> [[f64; 2]; 4] {
+        s.map(|v| Self::weights(self, v))
+    }
+
     fn scale(&self) -> f64 {
         self.scale
     }
@@ -154,6 +162,14 @@ impl RobustLoss for Huber {
             let d1 = b / r;
             [2.0 * b * r - b * b, d1, -0.5 * d1 / s]
         }
+    }
+
+    fn evaluate_lanes(&self, s: &[f64; 4]) -> [[f64; 3]; 4] {
+        s.map(|v| Self::evaluate(self, v))
+    }
+
+    fn weights_lanes(&self, s: &[f64; 4]) -> [[f64; 2]; 4] {
+        s.map(|v| Self::weights(self, v))
     }
 
     fn scale(&self) -> f64 {
@@ -211,6 +227,14 @@ impl RobustLoss for Tukey {
         } else {
             [b2 / 3.0, 0.0, 0.0]
         }
+    }
+
+    fn evaluate_lanes(&self, s: &[f64; 4]) -> [[f64; 3]; 4] {
+        s.map(|v| Self::evaluate(self, v))
+    }
+
+    fn weights_lanes(&self, s: &[f64; 4]) -> [[f64; 2]; 4] {
+        s.map(|v| Self::weights(self, v))
     }
 
     fn scale(&self) -> f64 {
