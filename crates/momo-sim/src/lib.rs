@@ -68,4 +68,6 @@ pub use sim::{
     SimError, Simulation, camera_poses_from_vehicle_poses, simulate,
     vehicle_poses_from_camera_poses,
 };
-pub use traffic::{Traffic, TrafficConfig, TrafficObject, generate_traffic};
+pub use traffic::{
+    Traffic, TrafficConfig, TrafficObject, generate_traffic, generate_traffic_along,
+};

@@ -19,7 +19,7 @@
 
 use crate::drive::{Drive, DriveConfig, generate_drive};
 use crate::rigs::RigPreset;
-use crate::traffic::{CameraTraffic, TrafficConfig, generate_traffic};
+use crate::traffic::{CameraTraffic, TrafficConfig, generate_traffic_along};
 use momo_core::{CameraModel, FrameObservations, Observation, Pose, Rig, RigCamera, camera_motion};
 use momo_io::{IoError, MAX_FRAME, Sequence, write_sequence};
 use nalgebra::{Vector2, Vector3};
@@ -753,19 +753,32 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     cfg.validate(&rig)?;
     let n_cams = rig.len();
     let p0 = rig.cameras()[0].t_vehicle_camera;
-    let drive = match &cfg.camera_trajectory {
-        Some(t) => drive_along(&t[..cfg.frames.min(t.len())], &p0, cfg.drive.frame_rate),
-        None => generate_drive(&cfg.drive, cfg.frames, cfg.stops, cfg.seed),
+    // A trajectory longer than the simulated frames continues the traffic's path beyond the
+    // last frame (objects ahead follow its curve); the frames' own poses are the same.
+    let (drive, later_poses) = match &cfg.camera_trajectory {
+        Some(t) => {
+            let mut drive = drive_along(t, &p0, cfg.drive.frame_rate);
+            let n = cfg.frames.min(t.len());
+            let later = drive.poses.split_off(n);
+            drive.arc_lengths.truncate(n);
+            drive.speeds.truncate(n);
+            (drive, later)
+        }
+        None => (
+            generate_drive(&cfg.drive, cfg.frames, cfg.stops, cfg.seed),
+            Vec::new(),
+        ),
     };
     let n_frames = drive.poses.len();
     let vehicle_motions: Vec<Pose<f64>> = (0..n_frames).map(|k| drive.motion(k)).collect();
     let traffic = cfg.traffic.as_ref().map(|t| {
         (
             t,
-            generate_traffic(
+            generate_traffic_along(
                 t,
                 &drive.poses,
                 &drive.arc_lengths,
+                &later_poses,
                 cfg.drive.frame_rate,
                 cfg.seed,
             ),

@@ -4,8 +4,11 @@
 //! Every object is a box (length, width, height) whose pose in the world follows the ego
 //! vehicle's own path: an object at path position `s` with lateral offset `y` and heading offset
 //! `ψ` has the world pose `Γ(s) · Trans(0, y, 0) · Rot_z(ψ)`, `Γ(s)` the ego pose interpolated at
-//! arc length `s` (extrapolated straight beyond the drive's ends). So a lead vehicle at a gap `g`
-//! turns with the road through curves. Events (drawn from the seed over the whole drive):
+//! arc length `s`. Beyond the last frame the path continues along the trajectory's later poses
+//! where there are any ([`generate_traffic_along`]: a drive along a longer ground truth, e.g. the
+//! KITTI poses after the simulated frames) and is extrapolated straight beyond those (and
+//! before the first frame). So a lead vehicle at a gap `g` turns with the road through curves,
+//! up to the last frame too. Events (drawn from the seed over the whole drive):
 //! - **lead vehicles** in the ego lane at 5 to 40 m with a slowly varying gap and lateral drift
 //!   (up to 1.5 m), car, van or truck, present most of the time;
 //! - **a bus filling half the image**: a bus 2.5 to 5 m ahead (stop-and-go);
@@ -70,13 +73,13 @@ pub struct Traffic {
     pub poses: Vec<Vec<Option<Pose<f64>>>>,
 }
 
-/// The ego path: poses and cumulative arc lengths.
-struct Path<'a> {
-    poses: &'a [Pose<f64>],
+/// The ego path: poses and cumulative arc lengths (the drive's frames, then the later poses).
+struct Path {
+    poses: Vec<Pose<f64>>,
     cum: Vec<f64>,
 }
 
-impl Path<'_> {
+impl Path {
     /// Ego pose at arc length `s` (interpolated; extrapolated along the end poses' x axes).
     fn at(&self, s: f64) -> Pose<f64> {
         let n = self.poses.len();
@@ -141,7 +144,8 @@ const TRUCK: [f64; 3] = [12.0, 2.5, 3.6];
 const BUS: [f64; 3] = [12.0, 2.55, 3.2];
 
 /// Generates the traffic of a drive (`vehicle_poses`, `arc_lengths[k]` the distance travelled
-/// from frame k-1 to k) with a frame rate (Hz), deterministically from `seed`.
+/// from frame k-1 to k) with a frame rate (Hz), deterministically from `seed`. The path is
+/// extrapolated straight beyond the last frame ([`generate_traffic_along`] continues it).
 pub fn generate_traffic(
     cfg: &TrafficConfig,
     vehicle_poses: &[Pose<f64>],
@@ -149,8 +153,25 @@ pub fn generate_traffic(
     frame_rate: f64,
     seed: u64,
 ) -> Traffic {
+    generate_traffic_along(cfg, vehicle_poses, arc_lengths, &[], frame_rate, seed)
+}
+
+/// [`generate_traffic`] on a path that continues after the last frame along `later_poses` (the
+/// vehicle poses the trajectory reaches after the drive's frames, in the same world frame; their
+/// arc lengths are the distances between consecutive positions). Objects ahead of the ego
+/// vehicle near the end of the drive then follow the road's curve instead of a straight line;
+/// the objects, their schedule and every frame whose objects stay within the drive's own path
+/// are the same as [`generate_traffic`]'s.
+pub fn generate_traffic_along(
+    cfg: &TrafficConfig,
+    vehicle_poses: &[Pose<f64>],
+    arc_lengths: &[f64],
+    later_poses: &[Pose<f64>],
+    frame_rate: f64,
+    seed: u64,
+) -> Traffic {
     let n = vehicle_poses.len();
-    let mut cum = Vec::with_capacity(n);
+    let mut cum = Vec::with_capacity(n + later_poses.len());
     let mut acc = 0.0;
     for k in 0..n {
         if k > 0 {
@@ -158,10 +179,19 @@ pub fn generate_traffic(
         }
         cum.push(acc);
     }
-    let path = Path {
-        poses: vehicle_poses,
-        cum,
-    };
+    let mut poses = vehicle_poses.to_vec();
+    if n > 0 {
+        for p in later_poses {
+            let step = (p.translation - poses[poses.len() - 1].translation).norm();
+            // A pose that does not move on would make the arc length non-increasing.
+            if step > 1e-9 {
+                acc += step;
+                cum.push(acc);
+                poses.push(*p);
+            }
+        }
+    }
+    let path = Path { poses, cum };
     let dt = 1.0 / frame_rate.max(1e-3);
     let mut rng = StdRng::seed_from_u64(seed ^ 0x7A11_C0DE_5EED);
     let mut objects: Vec<TrafficObject> = Vec::new();

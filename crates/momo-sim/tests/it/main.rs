@@ -4,3 +4,4 @@
 mod bound;
 mod scenarios;
 mod sim;
+mod traffic;
