@@ -186,7 +186,12 @@ pub struct HypothesesOptions {
     /// by many σ more than it did, while a lead vehicle or a bus that fills the image turns
     /// it at once (at start-up no competing motion has been seen, and the right alternative's
     /// matches are remembered static: competition over time rejects it as A's noise tail).
-    /// Off by default (measured in docs/RESULTS.md §9, twenty-first session, yaw35).
+    /// Off in `HypothesesOptions::default()`; the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets 7 since the twenty-first session (7 σ =
+    /// 0.8 deg at `σ = 0.002`; moving-traffic grid 7 -> 6 frames above 1 deg, seeds 11-15 6 ->
+    /// 4, no sequence with more; the static scenes, the built-in drive and real KITTI 00
+    /// byte-identical; docs/RESULTS.md §9, twenty-first session, yaw35). A config file's
+    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
     pub yaw_jump: f64,
 }
 

@@ -425,7 +425,10 @@ impl SeparateOptions {
     /// to span the road's depths (`hypotheses.road_span = 3.4`; docs/RESULTS.md §9, nineteenth
     /// session, choice33). Since the twentieth session an alternative that rolls or pitches more
     /// than 0.01 rad beyond A does not replace A (`hypotheses.tilt_margin = 0.01`, vehicle-model
-    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). A config file's
+    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). Since the
+    /// twenty-first session an A that jumps more than 7 σ of the rotation prior away from the
+    /// trusted previous motion's yaw is replaced by an alternative within 3.5 σ of it
+    /// (`hypotheses.yaw_jump = 7`; docs/RESULTS.md §9, twenty-first session, yaw35). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -450,6 +453,7 @@ impl SeparateOptions {
                 track_decay: 0.7,
                 road_span: 3.4,
                 tilt_margin: 0.01,
+                yaw_jump: 7.0,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
