@@ -2786,11 +2786,13 @@ mod tests {
         let got = yaw_jump_replacement(&ctx, &h, obs, &jumped, &[far.clone(), near.clone()]);
         assert_eq!(params(got), Some(near.0.params.clone()));
         // The prior off (the previous frame not trusted or competing): nothing.
-        assert!(yaw_jump_replacement(&plain, &h, obs, &jumped, &[near.clone()]).is_none());
+        assert!(
+            yaw_jump_replacement(&plain, &h, obs, &jumped, std::slice::from_ref(&near)).is_none()
+        );
         // A within k σ (5 σ): nothing.
-        assert!(yaw_jump_replacement(&ctx, &h, obs, &far, &[near.clone()]).is_none());
+        assert!(yaw_jump_replacement(&ctx, &h, obs, &far, std::slice::from_ref(&near)).is_none());
         // Only an alternative beyond k σ / 2, or one without road score: nothing.
-        assert!(yaw_jump_replacement(&ctx, &h, obs, &jumped, &[far.clone()]).is_none());
+        assert!(yaw_jump_replacement(&ctx, &h, obs, &jumped, std::slice::from_ref(&far)).is_none());
         let roadless = turned(0.0, &none);
         assert!(yaw_jump_replacement(&ctx, &h, obs, &jumped, &[roadless]).is_none());
         // A wider k (25 σ) no longer counts the 20 σ as a jump.
