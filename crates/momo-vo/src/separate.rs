@@ -2633,8 +2633,8 @@ mod tests {
             h.tilt_margin = 0.01;
             h.tilt_replace = true;
         }
-        // The odometry consistency of the yaw (off by default; with the rotation prior at the
-        // previous frame's motion below).
+        // The odometry consistency of the yaw at a low k, with the rotation prior at the
+        // previous frame's motion below (the other variants have no prior: it never acts).
         let mut jumped = default.clone();
         if let Some(h) = jumped.hypotheses.as_mut() {
             h.yaw_jump = 3.0;
