@@ -174,6 +174,25 @@ pub struct HypothesesOptions {
     /// and the tracks' sums say. Off by default (measured in docs/RESULTS.md §9, twentieth
     /// session, frames34).
     pub tilt_replace: bool,
+    /// Odometry consistency of the yaw (in standard deviations of the rotation prior; 0: off;
+    /// twenty-first session, yaw35): where the motion prior is active (the previous frame was
+    /// estimated, trusted and had no competing motion: `odometry.rotation_change_sigma`, the
+    /// prior `ω ~ N(ω_prev, σ² I)` on the rotation vector `ω = log R` of the vehicle motion),
+    /// A's yaw `ω_z` lies more than `k σ` from the prior's centre (a jump of A onto another
+    /// motion: `|ω_z(A) − ω_z,prev| / σ > k`) and an alternative formed this frame (before
+    /// competition over time, where one could be kept at all) lies within `k σ / 2` of it,
+    /// the one with the highest positive road score among those replaces A, whatever
+    /// competition over time and the tracks' sums say. A trusted frame's successor cannot turn
+    /// by many σ more than it did, while a lead vehicle or a bus that fills the image turns
+    /// it at once (at start-up no competing motion has been seen, and the right alternative's
+    /// matches are remembered static: competition over time rejects it as A's noise tail).
+    /// Off in `HypothesesOptions::default()`; the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets 7 since the twenty-first session (7 σ =
+    /// 0.8 deg at `σ = 0.002`; moving-traffic grid 7 -> 6 frames above 1 deg, seeds 11-15 6 ->
+    /// 4, no sequence with more; the static scenes, the built-in drive and real KITTI 00
+    /// byte-identical; docs/RESULTS.md §9, twenty-first session, yaw35). A config file's
+    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
+    pub yaw_jump: f64,
 }
 
 impl Default for HypothesesOptions {
@@ -197,6 +216,7 @@ impl Default for HypothesesOptions {
             road_span: 0.0,
             tilt_margin: 0.0,
             tilt_replace: false,
+            yaw_jump: 0.0,
         }
     }
 }
@@ -253,6 +273,11 @@ impl HypothesesOptions {
         if !(self.tilt_margin.is_finite() && self.tilt_margin >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.tilt_margin must be a finite number >= 0".into(),
+            );
+        }
+        if !(self.yaw_jump.is_finite() && self.yaw_jump >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.yaw_jump must be a finite number >= 0".into(),
             );
         }
         if !(self.track_hold.is_finite() && self.track_hold >= 0.0) {

@@ -425,7 +425,10 @@ impl SeparateOptions {
     /// to span the road's depths (`hypotheses.road_span = 3.4`; docs/RESULTS.md §9, nineteenth
     /// session, choice33). Since the twentieth session an alternative that rolls or pitches more
     /// than 0.01 rad beyond A does not replace A (`hypotheses.tilt_margin = 0.01`, vehicle-model
-    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). A config file's
+    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). Since the
+    /// twenty-first session an A that jumps more than 7 σ of the rotation prior away from the
+    /// trusted previous motion's yaw is replaced by an alternative within 3.5 σ of it
+    /// (`hypotheses.yaw_jump = 7`; docs/RESULTS.md §9, twenty-first session, yaw35). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -450,6 +453,7 @@ impl SeparateOptions {
                 track_decay: 0.7,
                 road_span: 3.4,
                 tilt_margin: 0.01,
+                yaw_jump: 7.0,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -1173,6 +1177,8 @@ fn separate_with(
     // whatever competition over time says. Only where an alternative could be kept at all
     // (`retain_possible`, also without the pre-tests: the outcome does not depend on them).
     let tilt_margin = opts.hypotheses().map_or(0.0, |h| h.tilt_margin);
+    // The alternative that replaces A whatever competition over time says (`tilt_replace`,
+    // `yaw_jump`).
     let mut tilted_a: Option<Candidate> = None;
     if tilt_margin > 0.0
         && let Some(h) = opts.hypotheses()
@@ -1194,6 +1200,17 @@ fn separate_with(
             .rev()
             .max_by_key(|(s, _)| *s)
             .map(|(_, alt)| alt.clone());
+    }
+    // Odometry consistency of the yaw (`hypotheses.yaw_jump`): A jumped away from the trusted
+    // previous motion while an alternative continues it. Only where an alternative could be
+    // kept at all, as `tilt_replace`.
+    if tilted_a.is_none()
+        && let Some(h) = opts.hypotheses()
+        && h.yaw_jump > 0.0
+        && !alternatives.is_empty()
+        && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
+    {
+        tilted_a = yaw_jump_replacement(ctx, h, obs, &chosen, &alternatives);
     }
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
@@ -1276,7 +1293,8 @@ fn separate_with(
             })
             .collect();
         scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
-        // `tilt_replace`: A tilted beyond an alternative is replaced by it.
+        // `tilt_replace` / `yaw_jump`: A tilted beyond an alternative, or jumped away from the
+        // trusted previous motion, is replaced by it.
         let forced = tilted_a.is_some();
         let (score_b, best) = match tilted_a {
             Some(alt) => {
@@ -1498,6 +1516,46 @@ fn separate_with(
         }
     }
     (sol, outcome, NextStage::Done)
+}
+
+/// The alternative that replaces A by the odometry consistency of the yaw
+/// ([`HypothesesOptions::yaw_jump`] `= k`): with the rotation prior active (`σ = 1 /
+/// rotation_inv_sigma`, centre `c` the trusted previous frame's rotation vector), where A's yaw
+/// deviates by `|ω_z(A) − c_z| > k σ`, the alternative with the highest positive road score
+/// ([`score`]; the first of equal ones) among those with `|ω_z(X) − c_z| <= k σ / 2`. None
+/// where the prior is off or no alternative qualifies.
+fn yaw_jump_replacement(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    obs: &FrameObservations,
+    chosen: &Candidate,
+    alternatives: &[Candidate],
+) -> Option<Candidate> {
+    let prior = ctx
+        .motion_prior
+        .filter(|p| p.rotation_inv_sigma > 0.0 && p.rotation_inv_sigma.is_finite())?;
+    let k = h.yaw_jump;
+    // The yaw's deviation from the prior's centre, in the prior's standard deviations.
+    let deviation = |params: &[f64]| -> f64 {
+        let w = momo_core::so3_log(&ctx.estimator.motion(params).rotation);
+        (w.z - prior.rotation_center[2]).abs() * prior.rotation_inv_sigma
+    };
+    // `!(x <= k)`: a NaN deviation counts as a jump of A and disqualifies an alternative.
+    if deviation(&chosen.0.params) <= k {
+        return None;
+    }
+    alternatives
+        .iter()
+        .filter(|alt| deviation(&alt.0.params) <= 0.5 * k)
+        .map(|alt| {
+            let m = ctx.estimator.motion(&alt.0.params);
+            (score(h, ctx.rig, &m, obs, &alt.1), alt)
+        })
+        .filter(|(s, _)| *s > 0)
+        // The first of equal scores (`max_by_key` keeps the last).
+        .rev()
+        .max_by_key(|(s, _)| *s)
+        .map(|(_, alt)| alt.clone())
 }
 
 /// `k` of the `m` matches of `mask` (all of them where `m <= k`), evenly spaced in the frame's
@@ -2575,6 +2633,12 @@ mod tests {
             h.tilt_margin = 0.01;
             h.tilt_replace = true;
         }
+        // The odometry consistency of the yaw at a low k, with the rotation prior at the
+        // previous frame's motion below (the other variants have no prior: it never acts).
+        let mut jumped = default.clone();
+        if let Some(h) = jumped.hypotheses.as_mut() {
+            h.yaw_jump = 3.0;
+        }
         let counted = Counted::new();
         let (estimator, solver, arc_index) = (
             counted.estimator.as_ref(),
@@ -2582,15 +2646,18 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant, &tilted].into_iter().flat_map(|o| {
-            [
-                SimConfig::clean_pinhole(),
-                SimConfig::outliers(),
-                SimConfig::fisheye_surround(),
-                SimConfig::moving_traffic(),
-            ]
-            .map(move |c| (o, c))
-        }) {
+        for (opts, config_sim) in [&default, &variant, &tilted, &jumped]
+            .into_iter()
+            .flat_map(|o| {
+                [
+                    SimConfig::clean_pinhole(),
+                    SimConfig::outliers(),
+                    SimConfig::fisheye_surround(),
+                    SimConfig::moving_traffic(),
+                ]
+                .map(move |c| (o, c))
+            })
+        {
             let sim = simulate(&SimConfig {
                 frames: 30,
                 seed: 2,
@@ -2608,6 +2675,13 @@ mod tests {
                 let starts = vec![previous.clone(), estimator.initial_params(arc)];
                 let Some(first) = ctx.solve(obs, &starts[1], ctx.loss, false) else {
                     continue;
+                };
+                // `yaw_jump`: the rotation prior at the previous frame's motion.
+                let w = momo_core::so3_log(&estimator.motion(&previous).rotation);
+                let prior = MotionPrior::rotation([w.x, w.y, w.z], 0.002);
+                let ctx = SolveContext {
+                    motion_prior: std::ptr::eq(opts, &jumped).then_some(&prior),
+                    ..counted.ctx(rig)
                 };
                 let c0 = solver.calls.load(Relaxed);
                 let old = separate_with(
@@ -2648,6 +2722,96 @@ mod tests {
             "no competing frame: the kept path is not exercised"
         );
     }
+    /// `yaw_jump`: with the rotation prior active, an A whose yaw lies more than `k σ` from
+    /// the prior's centre is replaced by the alternative with the highest positive road score
+    /// within `k σ / 2` of it; nothing where the prior is off, A stays within `k σ`, no
+    /// alternative lies within `k σ / 2` or its road score is 0. The option parses, validates
+    /// and is off by default.
+    #[test]
+    fn yaw_jump_replaces_an_a_that_jumped_away_from_the_trusted_previous_motion() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 3,
+            seed: 1,
+            ..SimConfig::clean_pinhole()
+        })
+        .expect("simulation");
+        let counted = Counted::new();
+        let rig = &sim.sequence.rig;
+        let estimator = counted.estimator.as_ref();
+        let obs = &sim.sequence.frames[1];
+        let plain = counted.ctx(rig);
+        let start = estimator.initial_params(sim.true_arc_lengths[1]);
+        let sol = plain.solve(obs, &start, plain.loss, false).expect("solve");
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let none: Vec<Vec<bool>> = obs
+            .per_camera
+            .iter()
+            .map(|m| vec![false; m.len()])
+            .collect();
+        let yaw_index = estimator
+            .param_names()
+            .iter()
+            .position(|n| *n == "rot_z")
+            .expect("rot_z");
+        // The frame's solution turned by `d` radians of yaw, with `support`.
+        let turned = |d: f64, support: &[Vec<bool>]| -> Candidate {
+            let mut s = sol.clone();
+            s.params[yaw_index] += d;
+            (s, support.to_vec())
+        };
+        let yaw_of = |c: &Candidate| momo_core::so3_log(&estimator.motion(&c.0.params).rotation).z;
+        let sigma = 0.002;
+        let w = momo_core::so3_log(&estimator.motion(&sol.params).rotation);
+        let prior = MotionPrior::rotation([w.x, w.y, w.z], sigma);
+        let ctx = SolveContext {
+            motion_prior: Some(&prior),
+            ..counted.ctx(rig)
+        };
+        let h = HypothesesOptions {
+            yaw_jump: 7.0,
+            ..HypothesesOptions::default()
+        };
+        let (jumped, near, far) = (
+            turned(20.0 * sigma, &all),
+            turned(0.0, &all),
+            turned(5.0 * sigma, &all),
+        );
+        assert!(((yaw_of(&jumped) - w.z) / sigma - 20.0).abs() < 0.5);
+        assert!(((yaw_of(&far) - w.z) / sigma - 5.0).abs() < 0.5);
+        assert!(score(&h, rig, &estimator.motion(&near.0.params), obs, &all) > 0);
+        let params = |c: Option<Candidate>| c.map(|c| c.0.params);
+        // A jumped by 20 σ, the alternative continues the prior: it replaces A (the one within
+        // k σ / 2, not the one 5 σ away).
+        let got = yaw_jump_replacement(&ctx, &h, obs, &jumped, &[far.clone(), near.clone()]);
+        assert_eq!(params(got), Some(near.0.params.clone()));
+        // The prior off (the previous frame not trusted or competing): nothing.
+        assert!(
+            yaw_jump_replacement(&plain, &h, obs, &jumped, std::slice::from_ref(&near)).is_none()
+        );
+        // A within k σ (5 σ): nothing.
+        assert!(yaw_jump_replacement(&ctx, &h, obs, &far, std::slice::from_ref(&near)).is_none());
+        // Only an alternative beyond k σ / 2, or one without road score: nothing.
+        assert!(yaw_jump_replacement(&ctx, &h, obs, &jumped, std::slice::from_ref(&far)).is_none());
+        let roadless = turned(0.0, &none);
+        assert!(yaw_jump_replacement(&ctx, &h, obs, &jumped, &[roadless]).is_none());
+        // A wider k (25 σ) no longer counts the 20 σ as a jump.
+        let wide = HypothesesOptions {
+            yaw_jump: 25.0,
+            ..h.clone()
+        };
+        assert!(yaw_jump_replacement(&ctx, &wide, obs, &jumped, &[near]).is_none());
+        assert_eq!(HypothesesOptions::default().yaw_jump, 0.0);
+        let o: HypothesesOptions = toml::from_str("yaw_jump = 7.0").expect("parses");
+        assert_eq!(o.yaw_jump, 7.0);
+        assert!(o.validate().is_ok());
+        let bad = HypothesesOptions {
+            yaw_jump: f64::NAN,
+            ..HypothesesOptions::default()
+        };
+        assert!(bad.validate().expect_err("NaN").contains("yaw_jump"));
+    }
+
     /// The alternatives' solver: the frame's Levenberg-Marquardt with the capped iterations
     /// and the looser function tolerance, none where the options are off or change nothing;
     /// the options parse and validate.
