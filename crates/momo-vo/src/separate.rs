@@ -1181,19 +1181,22 @@ fn separate_with(
         && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
     {
         let tilt_a = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
-        tilted_a = alternatives
-            .iter()
-            .filter_map(|alt| {
-                let m = ctx.estimator.motion(&alt.0.params);
-                let t = crate::hypotheses::tilt(&m);
-                (t.is_finite() && t < tilt_a - tilt_margin)
-                    .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
-            })
-            .filter(|(s, _)| *s > 0)
-            // The first of equal scores (`max_by_key` keeps the last).
-            .rev()
-            .max_by_key(|(s, _)| *s)
-            .map(|(_, alt)| alt.clone());
+        // `tilt_reference_frames`: A's tilt also jumps from the recent frames'.
+        if h.tilt_reference_frames == 0 || tracker.tilt_jumps(h, tilt_a) {
+            tilted_a = alternatives
+                .iter()
+                .filter_map(|alt| {
+                    let m = ctx.estimator.motion(&alt.0.params);
+                    let t = crate::hypotheses::tilt(&m);
+                    (t.is_finite() && t < tilt_a - tilt_margin)
+                        .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
+                })
+                .filter(|(s, _)| *s > 0)
+                // The first of equal scores (`max_by_key` keeps the last).
+                .rev()
+                .max_by_key(|(s, _)| *s)
+                .map(|(_, alt)| alt.clone());
+        }
     }
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
@@ -1276,6 +1279,70 @@ fn separate_with(
             })
             .collect();
         scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
+        let a = Hypothesis {
+            motion: motion_a,
+            support: &chosen.1,
+        };
+        // The ordinary choice: whether `best` (road score `score_b`) replaces A by the tracks'
+        // sums or the memory's vote (`tracker` keeps the choice's state).
+        let ordinary = |tracker: &mut HypothesisTracker, score_b: usize, best: &Candidate| {
+            let b = Hypothesis {
+                motion: ctx.estimator.motion(&best.0.params),
+                support: &best.1,
+            };
+            // Which of A and B continues the previous frame's chosen track (`track_decay`).
+            let b_continues = labels
+                .as_ref()
+                .filter(|_| h.track_decay > 0.0)
+                .and_then(|l| {
+                    let fa = static_share(l, &chosen.1, h.track_min_labelled)?;
+                    let fb = static_share(l, &best.1, h.track_min_labelled)?;
+                    // The chosen track's support is remembered mostly static, the other's
+                    // mostly other: two motions of the static world (one a purer subset of the
+                    // other), or two fits of a static scene's noise, are not two tracks.
+                    let split = |hi: f64, lo: f64| {
+                        hi - lo >= h.track_identity
+                            && hi >= TRACK_SPLIT_SHARE
+                            && lo < TRACK_SPLIT_SHARE
+                    };
+                    if split(fa, fb) {
+                        Some(false)
+                    } else if split(fb, fa) {
+                        Some(true)
+                    } else {
+                        None
+                    }
+                });
+            let ground_choice =
+                tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b, b_continues) == Some(true);
+            // The memory's vote where the ground scores are not decisive (`memory_vote`).
+            let vote = !ground_choice
+                && opts.memory_vote > 0.0
+                && arc.is_finite()
+                && arc >= h.min_arc_length
+                && (metric || !h.ground)
+                && labels.as_ref().is_some_and(|l| {
+                    let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
+                    memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
+                });
+            // `tilt_margin`: a B that rolls or pitches more than A by the margin does not
+            // replace A.
+            let tilted_b = tilt_margin > 0.0
+                && crate::hypotheses::tilt(&b.motion)
+                    > crate::hypotheses::tilt(&a.motion) + tilt_margin;
+            (ground_choice || vote) && !tilted_b
+        };
+        // `tilt_reference_frames`: the ordinary choice's switch to an alternative whose tilt
+        // does not jump from the recent frames' stands (decided on a copy of the state).
+        let tilted_a = tilted_a.filter(|_| {
+            h.tilt_reference_frames == 0
+                || scored.first().is_none_or(|(s, best)| {
+                    let tilt_b = crate::hypotheses::tilt(&ctx.estimator.motion(&best.0.params));
+                    tracker.tilt_jumps(h, tilt_b)
+                        || !spread_ok(&best.1, &chosen.1)
+                        || !ordinary(&mut tracker.clone(), *s, best)
+                })
+        });
         // `tilt_replace`: A tilted beyond an alternative is replaced by it.
         let forced = tilted_a.is_some();
         let (score_b, best) = match tilted_a {
@@ -1285,52 +1352,8 @@ fn separate_with(
             }
             None => scored.swap_remove(0),
         };
-        let a = Hypothesis {
-            motion: motion_a,
-            support: &chosen.1,
-        };
-        let b = Hypothesis {
-            motion: ctx.estimator.motion(&best.0.params),
-            support: &best.1,
-        };
-        // Which of A and B continues the previous frame's chosen track (`track_decay`).
-        let b_continues = labels
-            .as_ref()
-            .filter(|_| h.track_decay > 0.0)
-            .and_then(|l| {
-                let fa = static_share(l, &chosen.1, h.track_min_labelled)?;
-                let fb = static_share(l, &best.1, h.track_min_labelled)?;
-                // The chosen track's support is remembered mostly static, the other's mostly
-                // other: two motions of the static world (one a purer subset of the other),
-                // or two fits of a static scene's noise, are not two tracks.
-                let split = |hi: f64, lo: f64| {
-                    hi - lo >= h.track_identity && hi >= TRACK_SPLIT_SHARE && lo < TRACK_SPLIT_SHARE
-                };
-                if split(fa, fb) {
-                    Some(false)
-                } else if split(fb, fa) {
-                    Some(true)
-                } else {
-                    None
-                }
-            });
-        let ground_choice =
-            tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b, b_continues) == Some(true);
-        // The memory's vote where the ground scores are not decisive (`memory_vote`).
-        let vote = !ground_choice
-            && opts.memory_vote > 0.0
-            && arc.is_finite()
-            && arc >= h.min_arc_length
-            && (metric || !h.ground)
-            && labels.as_ref().is_some_and(|l| {
-                let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
-                memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
-            });
-        // `tilt_margin`: a B that rolls or pitches more than A by the margin does not replace A.
-        let tilted_b = tilt_margin > 0.0
-            && crate::hypotheses::tilt(&b.motion)
-                > crate::hypotheses::tilt(&a.motion) + tilt_margin;
-        if (forced || ((ground_choice || vote) && !tilted_b)) && spread_ok(&best.1, &chosen.1) {
+        let switch = ordinary(tracker, score_b, &best);
+        if (forced || switch) && spread_ok(&best.1, &chosen.1) {
             outcome.switched = true;
             other = Some(std::mem::replace(&mut chosen, best).1);
         } else {
@@ -1376,6 +1399,10 @@ fn separate_with(
     }
     if opts.memory_radius > 0.0 {
         tracker.memory = MatchMemory::record(obs, &chosen.1);
+    }
+    if let Some(h) = opts.hypotheses() {
+        let t = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
+        tracker.record_tilt(h, t);
     }
     if opts.ground_drop > 0.0
         && let Some(h) = opts.hypotheses()
@@ -2575,6 +2602,13 @@ mod tests {
             h.tilt_margin = 0.01;
             h.tilt_replace = true;
         }
+        // The converse gated by the recent frames' tilts (off by default).
+        let mut gated = tilted.clone();
+        if let Some(h) = gated.hypotheses.as_mut() {
+            h.tilt_reference_frames = 3;
+            h.tilt_reference = crate::hypotheses::TiltReference::Minimum;
+            h.tilt_reference_margin = 0.005;
+        }
         let counted = Counted::new();
         let (estimator, solver, arc_index) = (
             counted.estimator.as_ref(),
@@ -2582,15 +2616,18 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant, &tilted].into_iter().flat_map(|o| {
-            [
-                SimConfig::clean_pinhole(),
-                SimConfig::outliers(),
-                SimConfig::fisheye_surround(),
-                SimConfig::moving_traffic(),
-            ]
-            .map(move |c| (o, c))
-        }) {
+        for (opts, config_sim) in [&default, &variant, &tilted, &gated]
+            .into_iter()
+            .flat_map(|o| {
+                [
+                    SimConfig::clean_pinhole(),
+                    SimConfig::outliers(),
+                    SimConfig::fisheye_surround(),
+                    SimConfig::moving_traffic(),
+                ]
+                .map(move |c| (o, c))
+            })
+        {
             let sim = simulate(&SimConfig {
                 frames: 30,
                 seed: 2,
