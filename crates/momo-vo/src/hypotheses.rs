@@ -171,8 +171,11 @@ pub struct HypothesesOptions {
     /// alternative's by more than the margin (among the alternatives formed this frame,
     /// before competition over time, where one could be kept at all), the one with the
     /// highest positive road score among those replaces A, whatever competition over time
-    /// and the tracks' sums say. Off by default (measured in docs/RESULTS.md §9, twentieth
-    /// session, frames34).
+    /// and the tracks' sums say. Off in `HypothesesOptions::default()` (measured in
+    /// docs/RESULTS.md §9, twentieth session, frames34); the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets it since the twenty-first session, gated
+    /// by [`HypothesesOptions::tilt_reference_frames`] `= 1`. A config file's
+    /// `[odometry.separate.hypotheses]` section gets false unless it writes it.
     pub tilt_replace: bool,
     /// The gate of [`HypothesesOptions::tilt_replace`] by the run's recent history (frames;
     /// 0: off, the converse as without it; twenty-first session, tilt35): A is replaced only
@@ -183,8 +186,14 @@ pub struct HypothesesOptions {
     /// change smoothly from frame to frame (a road's grade and camber vary over tens of
     /// metres), so a true tilt rises from the previous frames' tilts while a fit to an object's
     /// motion or to the noise jumps away from them. Before `K` frames have been recorded the
-    /// reference is over those there are; with none the gate does not open. Off by default
-    /// (measured in docs/RESULTS.md §9, twenty-first session, tilt35).
+    /// reference is over those there are; with none the gate does not open. Off in
+    /// `HypothesesOptions::default()`; the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets `K = 1` (the previous frame) with
+    /// `tilt_reference_margin = 0.01` since the twenty-first session (moving-traffic grid 7 -> 4
+    /// frames above 1 deg; seeds 11-15, the static scenes along KITTI, the built-in drive and
+    /// real KITTI 00 byte-identical; seeds 16-20 one frame changed, 0.68 -> 0.21 deg;
+    /// docs/RESULTS.md §9, twenty-first session, tilt35). A config file's
+    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
     pub tilt_reference_frames: usize,
     /// The margin (radians) by which A's tilt must exceed the history's reference tilt for
     /// [`HypothesesOptions::tilt_reference_frames`] to let the converse replace A.

@@ -425,7 +425,10 @@ impl SeparateOptions {
     /// to span the road's depths (`hypotheses.road_span = 3.4`; docs/RESULTS.md §9, nineteenth
     /// session, choice33). Since the twentieth session an alternative that rolls or pitches more
     /// than 0.01 rad beyond A does not replace A (`hypotheses.tilt_margin = 0.01`, vehicle-model
-    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). A config file's
+    /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). Since the
+    /// twenty-first session the converse too, where A's tilt jumps by 0.01 rad from the
+    /// previous frame's (`hypotheses.tilt_replace`, `tilt_reference_frames = 1`,
+    /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35). A config file's
     /// `[odometry.separate]` section starts from it: the fields it omits keep these values
     /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
     /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
@@ -450,6 +453,9 @@ impl SeparateOptions {
                 track_decay: 0.7,
                 road_span: 3.4,
                 tilt_margin: 0.01,
+                tilt_replace: true,
+                tilt_reference_frames: 1,
+                tilt_reference_margin: 0.01,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -2596,14 +2602,15 @@ mod tests {
         if let Some(h) = variant.hypotheses.as_mut() {
             h.track_decay = 0.7;
         }
-        // The vehicle-model plausibility of the choice (off by default).
+        // The converse of the vehicle-model plausibility without the history's gate.
         let mut tilted = default.clone();
         if let Some(h) = tilted.hypotheses.as_mut() {
             h.tilt_margin = 0.01;
             h.tilt_replace = true;
+            h.tilt_reference_frames = 0;
         }
-        // The converse gated by the recent frames' tilts (off by default).
-        let mut gated = tilted.clone();
+        // The history's gate by the minimum of the last three frames' tilts.
+        let mut gated = default.clone();
         if let Some(h) = gated.hypotheses.as_mut() {
             h.tilt_reference_frames = 3;
             h.tilt_reference = crate::hypotheses::TiltReference::Minimum;
