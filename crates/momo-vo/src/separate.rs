@@ -428,10 +428,10 @@ impl SeparateOptions {
     /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). Since the
     /// twenty-first session the converse too, where A's tilt jumps by 0.01 rad from the
     /// previous frame's (`hypotheses.tilt_replace`, `tilt_reference_frames = 1`,
-    /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35). A config file's
-    /// `[odometry.separate]` section starts from it: the fields it omits keep these values
-    /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
-    /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
+    /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35). A
+    /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
+    /// these values (since the eleventh session; before, they took
+    /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
     pub fn competition_over_time() -> Self {
         Self {
             final_robust: true,
