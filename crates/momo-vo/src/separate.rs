@@ -431,7 +431,8 @@ impl SeparateOptions {
     /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
-    /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
+    /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
+    /// (tenth session, sep25).
     pub fn competition_over_time() -> Self {
         Self {
             final_robust: true,
