@@ -171,8 +171,11 @@ pub struct HypothesesOptions {
     /// alternative's by more than the margin (among the alternatives formed this frame,
     /// before competition over time, where one could be kept at all), the one with the
     /// highest positive road score among those replaces A, whatever competition over time
-    /// and the tracks' sums say. Off by default (measured in docs/RESULTS.md §9, twentieth
-    /// session, frames34).
+    /// and the tracks' sums say. Off in `HypothesesOptions::default()` (measured in
+    /// docs/RESULTS.md §9, twentieth session, frames34); the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets it since the twenty-first session, gated
+    /// by [`HypothesesOptions::tilt_reference_frames`] `= 1`. A config file's
+    /// `[odometry.separate.hypotheses]` section gets false unless it writes it.
     pub tilt_replace: bool,
     /// Odometry consistency of the yaw (in standard deviations of the rotation prior; 0: off;
     /// twenty-first session, yaw35): where the motion prior is active (the previous frame was
@@ -193,6 +196,42 @@ pub struct HypothesesOptions {
     /// byte-identical; docs/RESULTS.md §9, twenty-first session, yaw35). A config file's
     /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
     pub yaw_jump: f64,
+    /// The gate of [`HypothesesOptions::tilt_replace`] by the run's recent history (frames;
+    /// 0: off, the converse as without it; twenty-first session, tilt35): A is replaced only
+    /// where its tilt also exceeds a reference tilt of the last `K` frames' chosen motions
+    /// ([`HypothesisTracker::tilt_reference`], [`HypothesesOptions::tilt_reference`]) by
+    /// [`HypothesesOptions::tilt_reference_margin`], and never where the ordinary choice
+    /// switched to an alternative that passes the same test. A car's roll and pitch rates
+    /// change smoothly from frame to frame (a road's grade and camber vary over tens of
+    /// metres), so a true tilt rises from the previous frames' tilts while a fit to an object's
+    /// motion or to the noise jumps away from them. Before `K` frames have been recorded the
+    /// reference is over those there are; with none the gate does not open. Off in
+    /// `HypothesesOptions::default()`; the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets `K = 1` (the previous frame) with
+    /// `tilt_reference_margin = 0.01` since the twenty-first session (moving-traffic grid 7 -> 4
+    /// frames above 1 deg; seeds 11-15, the static scenes along KITTI, the built-in drive and
+    /// real KITTI 00 byte-identical; seeds 16-20 one frame changed, 0.68 -> 0.21 deg;
+    /// docs/RESULTS.md §9, twenty-first session, tilt35). A config file's
+    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
+    pub tilt_reference_frames: usize,
+    /// The margin (radians) by which A's tilt must exceed the history's reference tilt for
+    /// [`HypothesesOptions::tilt_reference_frames`] to let the converse replace A.
+    pub tilt_reference_margin: f64,
+    /// The statistic of the recent tilts ([`HypothesesOptions::tilt_reference_frames`]):
+    /// their median (`"median"`, default; `K = 1`: the previous frame's) or their minimum
+    /// (`"minimum"`).
+    pub tilt_reference: TiltReference,
+}
+
+/// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TiltReference {
+    /// The median of the last frames' tilts (the mean of the middle two for an even count).
+    #[default]
+    Median,
+    /// The least of the last frames' tilts.
+    Minimum,
 }
 
 impl Default for HypothesesOptions {
@@ -217,6 +256,9 @@ impl Default for HypothesesOptions {
             tilt_margin: 0.0,
             tilt_replace: false,
             yaw_jump: 0.0,
+            tilt_reference_frames: 0,
+            tilt_reference_margin: 0.0,
+            tilt_reference: TiltReference::Median,
         }
     }
 }
@@ -280,6 +322,17 @@ impl HypothesesOptions {
                 "odometry.separate.hypotheses.yaw_jump must be a finite number >= 0".into(),
             );
         }
+        if !(self.tilt_reference_margin.is_finite() && self.tilt_reference_margin >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.tilt_reference_margin must be a finite number >= 0"
+                    .into(),
+            );
+        }
+        if self.tilt_reference_frames > 1000 {
+            return Err(
+                "odometry.separate.hypotheses.tilt_reference_frames must be at most 1000".into(),
+            );
+        }
         if !(self.track_hold.is_finite() && self.track_hold >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.track_hold must be a finite number >= 0".into(),
@@ -316,6 +369,9 @@ pub struct HypothesisTracker {
     /// The recent frames' chosen motions' road scores (`odometry.separate.ground_drop`,
     /// [`crate::ground_drop`]).
     pub ground_scores: std::collections::VecDeque<usize>,
+    /// The recent frames' chosen motions' tilts, newest last
+    /// ([`HypothesesOptions::tilt_reference_frames`]).
+    tilts: std::collections::VecDeque<f64>,
 }
 
 /// Per-match memory across frames by image position (issue 14): the second-image pixels
@@ -935,6 +991,50 @@ impl HypothesisTracker {
         self.memory = MatchMemory::default();
         self.road_track = None;
         self.ground_scores.clear();
+        self.tilts.clear();
+    }
+
+    /// Records a frame's chosen motion's [`tilt`], keeping the last
+    /// [`HypothesesOptions::tilt_reference_frames`] (nothing where that is 0; a non-finite
+    /// tilt is not recorded).
+    pub fn record_tilt(&mut self, opts: &HypothesesOptions, tilt: f64) {
+        let k = opts.tilt_reference_frames;
+        if k == 0 || !tilt.is_finite() {
+            return;
+        }
+        self.tilts.push_back(tilt);
+        while self.tilts.len() > k {
+            self.tilts.pop_front();
+        }
+    }
+
+    /// The reference tilt of the recorded frames ([`HypothesesOptions::tilt_reference`]):
+    /// their median or their minimum; `None` before any frame was recorded.
+    pub fn tilt_reference(&self, opts: &HypothesesOptions) -> Option<f64> {
+        if self.tilts.is_empty() {
+            return None;
+        }
+        let mut t: Vec<f64> = self.tilts.iter().copied().collect();
+        t.sort_by(f64::total_cmp);
+        Some(match opts.tilt_reference {
+            TiltReference::Minimum => t[0],
+            TiltReference::Median => {
+                let m = t.len() / 2;
+                if t.len() % 2 == 1 {
+                    t[m]
+                } else {
+                    0.5 * (t[m - 1] + t[m])
+                }
+            }
+        })
+    }
+
+    /// Whether a motion of tilt `tilt` rises more than
+    /// [`HypothesesOptions::tilt_reference_margin`] above the recent frames' reference tilt
+    /// ([`HypothesisTracker::tilt_reference`]); false before any frame was recorded.
+    pub fn tilt_jumps(&self, opts: &HypothesesOptions, tilt: f64) -> bool {
+        self.tilt_reference(opts)
+            .is_some_and(|r| tilt > r + opts.tilt_reference_margin)
     }
 
     /// The frame's choice after [`HypothesisTracker::choose`] (`switched`: B replaced A, by
@@ -1385,6 +1485,92 @@ mod tests {
             ..HypothesesOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("tilt_margin"));
+    }
+
+    /// [`HypothesisTracker::tilt_jumps`] (`tilt_reference_frames`): a tilt that rises from the
+    /// recent frames' (a road's grade) does not jump, one far above their median or minimum
+    /// does; the window keeps the last `K` frames; without a recorded frame nothing jumps.
+    #[test]
+    fn a_tilt_jumps_only_from_the_recent_frames_reference() {
+        let d = 1f64.to_radians();
+        let opts = |k, how| HypothesesOptions {
+            tilt_reference_frames: k,
+            tilt_reference_margin: 0.01,
+            tilt_reference: how,
+            ..HypothesesOptions::default()
+        };
+        let (med3, min3, prev) = (
+            opts(3, TiltReference::Median),
+            opts(3, TiltReference::Minimum),
+            opts(1, TiltReference::Median),
+        );
+        let run = |o: &HypothesesOptions, tilts: &[f64]| {
+            let mut t = HypothesisTracker::default();
+            for &x in tilts {
+                t.record_tilt(o, x * d);
+            }
+            t
+        };
+        // Nothing recorded: no reference, nothing jumps; off (K = 0) records nothing.
+        assert_eq!(HypothesisTracker::default().tilt_reference(&med3), None);
+        assert!(!HypothesisTracker::default().tilt_jumps(&med3, 10.0 * d));
+        assert_eq!(
+            run(&HypothesesOptions::default(), &[0.2]).tilt_reference(&med3),
+            None
+        );
+        // A true pitch rising smoothly (the static scene of 00 s3 118: 0.35 -> 0.89 deg) does
+        // not jump from the previous frame (0.57 deg margin); A jumping from 0.16 to 1.41 does.
+        let smooth = run(&prev, &[0.1, 0.2, 0.35]);
+        assert!((smooth.tilt_reference(&prev).unwrap() - 0.35 * d).abs() < 1e-12);
+        assert!(!smooth.tilt_jumps(&prev, 0.89 * d));
+        assert!(run(&prev, &[0.2, 0.16]).tilt_jumps(&prev, 1.41 * d));
+        // A previous frame already tilted (0.95 deg) hides the jump from it, not from the
+        // median of the last three or their minimum.
+        let tilted = run(&med3, &[0.9, 0.2, 0.3, 0.95]);
+        assert!(!run(&prev, &[0.2, 0.3, 0.95]).tilt_jumps(&prev, 1.40 * d));
+        assert!((tilted.tilt_reference(&med3).unwrap() - 0.3 * d).abs() < 1e-12);
+        assert!(tilted.tilt_jumps(&med3, 1.40 * d));
+        assert!(!tilted.tilt_jumps(&med3, 0.8 * d));
+        let tilted = run(&min3, &[0.9, 0.2, 0.3, 0.95]);
+        assert!((tilted.tilt_reference(&min3).unwrap() - 0.2 * d).abs() < 1e-12);
+        assert!(tilted.tilt_jumps(&min3, 0.8 * d));
+        // An even count: the mean of the middle two; a non-finite tilt is not recorded.
+        let four = run(
+            &opts(4, TiltReference::Median),
+            &[0.1, f64::NAN, 0.4, 0.2, 0.3],
+        );
+        assert!(
+            (four
+                .tilt_reference(&opts(4, TiltReference::Median))
+                .unwrap()
+                - 0.25 * d)
+                .abs()
+                < 1e-12
+        );
+        let mut reset = tilted.clone();
+        reset.reset();
+        assert_eq!(reset.tilt_reference(&min3), None);
+        // The options parse and validate.
+        let o: HypothesesOptions = toml::from_str(
+            "tilt_replace = true\ntilt_reference_frames = 3\ntilt_reference = \"minimum\"\n\
+             tilt_reference_margin = 0.01",
+        )
+        .unwrap();
+        assert_eq!(
+            (o.tilt_reference_frames, o.tilt_reference),
+            (3, TiltReference::Minimum)
+        );
+        assert!(o.validate().is_ok());
+        let bad = HypothesesOptions {
+            tilt_reference_margin: f64::INFINITY,
+            ..o.clone()
+        };
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .contains("tilt_reference_margin")
+        );
+        assert!(toml::from_str::<HypothesesOptions>("tilt_reference = \"mean\"").is_err());
     }
 
     /// A KITTI pinhole at the KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above

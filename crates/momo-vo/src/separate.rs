@@ -426,12 +426,16 @@ impl SeparateOptions {
     /// session, choice33). Since the twentieth session an alternative that rolls or pitches more
     /// than 0.01 rad beyond A does not replace A (`hypotheses.tilt_margin = 0.01`, vehicle-model
     /// plausibility; docs/RESULTS.md §9, twentieth session, frames34 and lead). Since the
-    /// twenty-first session an A that jumps more than 7 σ of the rotation prior away from the
-    /// trusted previous motion's yaw is replaced by an alternative within 3.5 σ of it
-    /// (`hypotheses.yaw_jump = 7`; docs/RESULTS.md §9, twenty-first session, yaw35). A config file's
-    /// `[odometry.separate]` section starts from it: the fields it omits keep these values
-    /// (since the eleventh session; before, they took [`SeparateOptions::default`], the bare
-    /// separation). Measured in docs/RESULTS.md §9 (tenth session, sep25).
+    /// twenty-first session the converse too, where A's tilt jumps by 0.01 rad from the
+    /// previous frame's (`hypotheses.tilt_replace`, `tilt_reference_frames = 1`,
+    /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35), and an
+    /// A that jumps more than 7 σ of the rotation prior away from the trusted previous motion's
+    /// yaw is replaced by an alternative within 3.5 σ of it (`hypotheses.yaw_jump = 7`;
+    /// docs/RESULTS.md §9, twenty-first session, yaw35). A
+    /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
+    /// these values (since the eleventh session; before, they took
+    /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
+    /// (tenth session, sep25).
     pub fn competition_over_time() -> Self {
         Self {
             final_robust: true,
@@ -454,6 +458,9 @@ impl SeparateOptions {
                 road_span: 3.4,
                 tilt_margin: 0.01,
                 yaw_jump: 7.0,
+                tilt_replace: true,
+                tilt_reference_frames: 1,
+                tilt_reference_margin: 0.01,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -1177,40 +1184,39 @@ fn separate_with(
     // whatever competition over time says. Only where an alternative could be kept at all
     // (`retain_possible`, also without the pre-tests: the outcome does not depend on them).
     let tilt_margin = opts.hypotheses().map_or(0.0, |h| h.tilt_margin);
-    // The alternative that replaces A whatever competition over time says (`tilt_replace`,
-    // `yaw_jump`).
+    // The alternatives that replace A whatever competition over time says: `tilt_replace`
+    // (`tilted_a`) and `yaw_jump` (`jumped_a`; odometry consistency of the yaw: A jumped away
+    // from the trusted previous motion while an alternative continues it).
     let mut tilted_a: Option<Candidate> = None;
-    if tilt_margin > 0.0
-        && let Some(h) = opts.hypotheses()
-        && h.tilt_replace
+    let mut jumped_a: Option<Candidate> = None;
+    if let Some(h) = opts.hypotheses()
+        && ((tilt_margin > 0.0 && h.tilt_replace) || h.yaw_jump > 0.0)
         && !alternatives.is_empty()
         && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
     {
         let tilt_a = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
-        tilted_a = alternatives
-            .iter()
-            .filter_map(|alt| {
-                let m = ctx.estimator.motion(&alt.0.params);
-                let t = crate::hypotheses::tilt(&m);
-                (t.is_finite() && t < tilt_a - tilt_margin)
-                    .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
-            })
-            .filter(|(s, _)| *s > 0)
-            // The first of equal scores (`max_by_key` keeps the last).
-            .rev()
-            .max_by_key(|(s, _)| *s)
-            .map(|(_, alt)| alt.clone());
-    }
-    // Odometry consistency of the yaw (`hypotheses.yaw_jump`): A jumped away from the trusted
-    // previous motion while an alternative continues it. Only where an alternative could be
-    // kept at all, as `tilt_replace`.
-    if tilted_a.is_none()
-        && let Some(h) = opts.hypotheses()
-        && h.yaw_jump > 0.0
-        && !alternatives.is_empty()
-        && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
-    {
-        tilted_a = yaw_jump_replacement(ctx, h, obs, &chosen, &alternatives);
+        // `tilt_reference_frames`: A's tilt also jumps from the recent frames'.
+        if tilt_margin > 0.0
+            && h.tilt_replace
+            && (h.tilt_reference_frames == 0 || tracker.tilt_jumps(h, tilt_a))
+        {
+            tilted_a = alternatives
+                .iter()
+                .filter_map(|alt| {
+                    let m = ctx.estimator.motion(&alt.0.params);
+                    let t = crate::hypotheses::tilt(&m);
+                    (t.is_finite() && t < tilt_a - tilt_margin)
+                        .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
+                })
+                .filter(|(s, _)| *s > 0)
+                // The first of equal scores (`max_by_key` keeps the last).
+                .rev()
+                .max_by_key(|(s, _)| *s)
+                .map(|(_, alt)| alt.clone());
+        }
+        if h.yaw_jump > 0.0 {
+            jumped_a = yaw_jump_replacement(ctx, h, obs, &chosen, &alternatives);
+        }
     }
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
@@ -1269,7 +1275,7 @@ fn separate_with(
     {
         alternatives.push((t.clone(), sup_t.clone()));
     }
-    outcome.competing = !alternatives.is_empty() || tilted_a.is_some();
+    outcome.competing = !alternatives.is_empty() || tilted_a.is_some() || jumped_a.is_some();
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
         opts.min_cell_ratio <= 0.0
@@ -1279,7 +1285,7 @@ fn separate_with(
     // The support of the motion not chosen (for `final_exclusive`).
     let mut other: Option<Vec<Vec<bool>>> = None;
     if let Some(h) = opts.hypotheses()
-        && (!alternatives.is_empty() || tilted_a.is_some())
+        && (!alternatives.is_empty() || tilted_a.is_some() || jumped_a.is_some())
     {
         // The alternative with the most ground (or parallax) support against A, over frames.
         let metric = arc_length.is_some();
@@ -1293,62 +1299,83 @@ fn separate_with(
             })
             .collect();
         scored.sort_by_key(|(s, _)| std::cmp::Reverse(*s));
-        // `tilt_replace` / `yaw_jump`: A tilted beyond an alternative, or jumped away from the
-        // trusted previous motion, is replaced by it.
-        let forced = tilted_a.is_some();
-        let (score_b, best) = match tilted_a {
+        let a = Hypothesis {
+            motion: motion_a,
+            support: &chosen.1,
+        };
+        // The ordinary choice: whether `best` (road score `score_b`) replaces A by the tracks'
+        // sums or the memory's vote (`tracker` keeps the choice's state).
+        let ordinary = |tracker: &mut HypothesisTracker, score_b: usize, best: &Candidate| {
+            let b = Hypothesis {
+                motion: ctx.estimator.motion(&best.0.params),
+                support: &best.1,
+            };
+            // Which of A and B continues the previous frame's chosen track (`track_decay`).
+            let b_continues = labels
+                .as_ref()
+                .filter(|_| h.track_decay > 0.0)
+                .and_then(|l| {
+                    let fa = static_share(l, &chosen.1, h.track_min_labelled)?;
+                    let fb = static_share(l, &best.1, h.track_min_labelled)?;
+                    // The chosen track's support is remembered mostly static, the other's
+                    // mostly other: two motions of the static world (one a purer subset of the
+                    // other), or two fits of a static scene's noise, are not two tracks.
+                    let split = |hi: f64, lo: f64| {
+                        hi - lo >= h.track_identity
+                            && hi >= TRACK_SPLIT_SHARE
+                            && lo < TRACK_SPLIT_SHARE
+                    };
+                    if split(fa, fb) {
+                        Some(false)
+                    } else if split(fb, fa) {
+                        Some(true)
+                    } else {
+                        None
+                    }
+                });
+            let ground_choice =
+                tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b, b_continues) == Some(true);
+            // The memory's vote where the ground scores are not decisive (`memory_vote`).
+            let vote = !ground_choice
+                && opts.memory_vote > 0.0
+                && arc.is_finite()
+                && arc >= h.min_arc_length
+                && (metric || !h.ground)
+                && labels.as_ref().is_some_and(|l| {
+                    let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
+                    memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
+                });
+            // `tilt_margin`: a B that rolls or pitches more than A by the margin does not
+            // replace A.
+            let tilted_b = tilt_margin > 0.0
+                && crate::hypotheses::tilt(&b.motion)
+                    > crate::hypotheses::tilt(&a.motion) + tilt_margin;
+            (ground_choice || vote) && !tilted_b
+        };
+        // `tilt_reference_frames`: the ordinary choice's switch to an alternative whose tilt
+        // does not jump from the recent frames' stands (decided on a copy of the state).
+        let tilted_a = tilted_a.filter(|_| {
+            h.tilt_reference_frames == 0
+                || scored.first().is_none_or(|(s, best)| {
+                    let tilt_b = crate::hypotheses::tilt(&ctx.estimator.motion(&best.0.params));
+                    tracker.tilt_jumps(h, tilt_b)
+                        || !spread_ok(&best.1, &chosen.1)
+                        || !ordinary(&mut tracker.clone(), *s, best)
+                })
+        });
+        // `tilt_replace` / `yaw_jump`: A tilted beyond an alternative (first), or jumped away
+        // from the trusted previous motion, is replaced by it.
+        let forced_alt = tilted_a.or(jumped_a);
+        let forced = forced_alt.is_some();
+        let (score_b, best) = match forced_alt {
             Some(alt) => {
                 let m = ctx.estimator.motion(&alt.0.params);
                 (score(h, ctx.rig, &m, obs, &alt.1), alt)
             }
             None => scored.swap_remove(0),
         };
-        let a = Hypothesis {
-            motion: motion_a,
-            support: &chosen.1,
-        };
-        let b = Hypothesis {
-            motion: ctx.estimator.motion(&best.0.params),
-            support: &best.1,
-        };
-        // Which of A and B continues the previous frame's chosen track (`track_decay`).
-        let b_continues = labels
-            .as_ref()
-            .filter(|_| h.track_decay > 0.0)
-            .and_then(|l| {
-                let fa = static_share(l, &chosen.1, h.track_min_labelled)?;
-                let fb = static_share(l, &best.1, h.track_min_labelled)?;
-                // The chosen track's support is remembered mostly static, the other's mostly
-                // other: two motions of the static world (one a purer subset of the other),
-                // or two fits of a static scene's noise, are not two tracks.
-                let split = |hi: f64, lo: f64| {
-                    hi - lo >= h.track_identity && hi >= TRACK_SPLIT_SHARE && lo < TRACK_SPLIT_SHARE
-                };
-                if split(fa, fb) {
-                    Some(false)
-                } else if split(fb, fa) {
-                    Some(true)
-                } else {
-                    None
-                }
-            });
-        let ground_choice =
-            tracker.choose(h, ctx.rig, obs, arc, metric, &a, &b, b_continues) == Some(true);
-        // The memory's vote where the ground scores are not decisive (`memory_vote`).
-        let vote = !ground_choice
-            && opts.memory_vote > 0.0
-            && arc.is_finite()
-            && arc >= h.min_arc_length
-            && (metric || !h.ground)
-            && labels.as_ref().is_some_and(|l| {
-                let score_a = score(h, ctx.rig, &a.motion, obs, a.support);
-                memory_vote(opts, l, (score_a, &chosen.1), (score_b, &best.1))
-            });
-        // `tilt_margin`: a B that rolls or pitches more than A by the margin does not replace A.
-        let tilted_b = tilt_margin > 0.0
-            && crate::hypotheses::tilt(&b.motion)
-                > crate::hypotheses::tilt(&a.motion) + tilt_margin;
-        if (forced || ((ground_choice || vote) && !tilted_b)) && spread_ok(&best.1, &chosen.1) {
+        let switch = ordinary(tracker, score_b, &best);
+        if (forced || switch) && spread_ok(&best.1, &chosen.1) {
             outcome.switched = true;
             other = Some(std::mem::replace(&mut chosen, best).1);
         } else {
@@ -1394,6 +1421,10 @@ fn separate_with(
     }
     if opts.memory_radius > 0.0 {
         tracker.memory = MatchMemory::record(obs, &chosen.1);
+    }
+    if let Some(h) = opts.hypotheses() {
+        let t = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
+        tracker.record_tilt(h, t);
     }
     if opts.ground_drop > 0.0
         && let Some(h) = opts.hypotheses()
@@ -2627,11 +2658,19 @@ mod tests {
         if let Some(h) = variant.hypotheses.as_mut() {
             h.track_decay = 0.7;
         }
-        // The vehicle-model plausibility of the choice (off by default).
+        // The converse of the vehicle-model plausibility without the history's gate.
         let mut tilted = default.clone();
         if let Some(h) = tilted.hypotheses.as_mut() {
             h.tilt_margin = 0.01;
             h.tilt_replace = true;
+            h.tilt_reference_frames = 0;
+        }
+        // The history's gate by the minimum of the last three frames' tilts.
+        let mut gated = default.clone();
+        if let Some(h) = gated.hypotheses.as_mut() {
+            h.tilt_reference_frames = 3;
+            h.tilt_reference = crate::hypotheses::TiltReference::Minimum;
+            h.tilt_reference_margin = 0.005;
         }
         // The odometry consistency of the yaw at a low k, with the rotation prior at the
         // previous frame's motion below (the other variants have no prior: it never acts).
@@ -2646,7 +2685,7 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant, &tilted, &jumped]
+        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &jumped]
             .into_iter()
             .flat_map(|o| {
                 [
