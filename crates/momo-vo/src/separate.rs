@@ -264,6 +264,19 @@ pub struct SeparateOptions {
     /// `function_tolerance`, which a larger value replaces): see
     /// [`SeparateOptions::candidate_max_iterations`]. Off by default.
     pub candidate_function_tolerance: f64,
+    /// The longest step lengthening of the alternatives' solves (B, C and M; 0: the solver's
+    /// [`max_step_extrapolation`](momo_solvers::LevenbergMarquardt::max_step_extrapolation),
+    /// which a larger value replaces; at least 1 otherwise): after an accepted step `s` the
+    /// next trial is `t δ`, `t = κ_m / κ` clamped to `[1, this]`, with `κ_m = sᵀHs` the Gauss-
+    /// Newton model's curvature along `s` and `κ = 2 (c' − c − gᵀs)` the cost's own (the
+    /// minimum along `δ` of a quadratic with the measured curvature). B is a robust fit of
+    /// the matches outside A's support, on a static scene their noise tail, where the Cauchy
+    /// loss is flat and the iteratively re-weighted steps converge linearly (20-26 iterations
+    /// per start on the rigs, docs/RESULTS.md "Speed", twentieth session, rig34): the model
+    /// overestimates the curvature and a lengthened step covers several of them. Off by
+    /// default: it moves B's iterates, hence which local minimum is of least cost in some
+    /// frames; measured in docs/RESULTS.md ("Speed", twenty-first session, rigB35).
+    pub candidate_max_step_extrapolation: f64,
     /// The memory's vote in the multi-frame choice (0: off; needs
     /// [`SeparateOptions::memory_radius`] and [`SeparateOptions::hypotheses`]): where the
     /// ground scores of A and the best alternative B ([`crate::hypotheses::score`], `s_A`,
@@ -386,6 +399,7 @@ impl Default for SeparateOptions {
             candidate_screen: 0.0,
             candidate_max_iterations: 0,
             candidate_function_tolerance: 0.0,
+            candidate_max_step_extrapolation: 0.0,
             memory_vote: 0.0,
             memory_vote_ground: 1.5,
             memory_vote_min: 20,
@@ -559,6 +573,15 @@ impl SeparateOptions {
         {
             return Err(
                 "odometry.separate.candidate_function_tolerance must be a non-negative number"
+                    .into(),
+            );
+        }
+        if !(self.candidate_max_step_extrapolation == 0.0
+            || (self.candidate_max_step_extrapolation.is_finite()
+                && self.candidate_max_step_extrapolation >= 1.0))
+        {
+            return Err(
+                "odometry.separate.candidate_max_step_extrapolation must be 0 (off) or a finite number of at least 1"
                     .into(),
             );
         }
@@ -1609,13 +1632,17 @@ fn spread_subsample(mask: &[Vec<bool>], k: usize) -> Vec<Vec<bool>> {
 }
 
 /// The solver of the alternatives B, C and M: the frame's `solver` with
-/// [`SeparateOptions::candidate_max_iterations`] and
-/// [`SeparateOptions::candidate_function_tolerance`] applied to its `max_iterations` and
-/// `function_tolerance` (where its configuration has them; e.g. Levenberg-Marquardt's);
-/// `None` where neither option is set or nothing changes (the frame's solver then solves
-/// them).
+/// [`SeparateOptions::candidate_max_iterations`],
+/// [`SeparateOptions::candidate_function_tolerance`] and
+/// [`SeparateOptions::candidate_max_step_extrapolation`] applied to its `max_iterations`,
+/// `function_tolerance` and `max_step_extrapolation` (where its configuration has them; e.g.
+/// Levenberg-Marquardt's); `None` where no option is set or nothing changes (the frame's
+/// solver then solves them).
 fn candidate_solver(solver: &dyn Solver, opts: &SeparateOptions) -> Option<Box<dyn Solver>> {
-    if opts.candidate_max_iterations == 0 && !(opts.candidate_function_tolerance > 0.0) {
+    if opts.candidate_max_iterations == 0
+        && !(opts.candidate_function_tolerance > 0.0)
+        && !(opts.candidate_max_step_extrapolation > 0.0)
+    {
         return None;
     }
     let mut v = serde_json::to_value(solver).ok()?;
@@ -1635,6 +1662,13 @@ fn candidate_solver(solver: &dyn Solver, opts: &SeparateOptions) -> Option<Box<d
             .is_some_and(|f| f < opts.candidate_function_tolerance)
     {
         *f = opts.candidate_function_tolerance.into();
+        changed = true;
+    }
+    if opts.candidate_max_step_extrapolation > 0.0
+        && let Some(t) = o.get_mut("max_step_extrapolation")
+        && t.as_f64() != Some(opts.candidate_max_step_extrapolation)
+    {
+        *t = opts.candidate_max_step_extrapolation.into();
         changed = true;
     }
     if !changed {
@@ -2894,6 +2928,37 @@ mod tests {
                 .unwrap_err()
                 .contains("candidate_function_tolerance")
         );
+        // `candidate_max_step_extrapolation`: the lengthening alone, the rest the solver's.
+        let ext: SeparateOptions =
+            toml::from_str("candidate_max_step_extrapolation = 2.0").expect("toml");
+        assert!(ext.validate().is_ok());
+        let c = json(
+            candidate_solver(solver, &ext)
+                .expect("a candidate solver")
+                .as_ref(),
+        );
+        assert_eq!(c["max_step_extrapolation"], 2.0);
+        assert_ne!(base["max_step_extrapolation"], 2.0);
+        for key in ["max_iterations", "function_tolerance", "initial_lambda"] {
+            assert_eq!(c[key], base[key], "{key}");
+        }
+        // The solver's own value changes nothing; below 1 (but 0) or not finite is an error.
+        let own: SeparateOptions = toml::from_str(&format!(
+            "candidate_max_step_extrapolation = {}",
+            base["max_step_extrapolation"]
+        ))
+        .expect("toml");
+        assert!(candidate_solver(solver, &own).is_none());
+        for v in ["0.5", "inf", "-1.0"] {
+            let bad: SeparateOptions =
+                toml::from_str(&format!("candidate_max_step_extrapolation = {v}")).expect("toml");
+            assert!(
+                bad.validate()
+                    .unwrap_err()
+                    .contains("candidate_max_step_extrapolation"),
+                "{v}"
+            );
+        }
     }
 
     /// `candidate_one_start` on the static fisheye rig (B fitted every frame, 6 starts): far
