@@ -237,6 +237,19 @@ pub struct OdometryOptions {
     /// soft prior (> 0; default 2: for `K = 10` frames of Gaussian innovations at the prior's
     /// width, the mean of ten χ²₁ exceeds 2 with probability 3 %).
     pub soft_prior_consistency_limit: f64,
+    /// With `soft_prior_consistency_frames`: the widening stops for the rest of the sequence
+    /// at the first frame flagged `weak` by `competing_motions` or `road_score_drop`, instead
+    /// of waiting [`CONSISTENCY_QUIET_FRAMES`](crate::odometry::CONSISTENCY_QUIET_FRAMES)
+    /// frames after each. Where the separation has once seen a second motion, a later stretch
+    /// of unflagged frames is no evidence that no object is followed: on the moving-traffic
+    /// hold-out (seeds 11-15) the widening acted only in 08 s11's frames 238-271, its one
+    /// stretch of 100 unflagged frames, and the estimates it moved changed the separation's
+    /// later choices (frames 379 and 396 above 1 deg; docs/RESULTS.md §9, twentieth session,
+    /// static34). With the gate the hold-out keeps main's 6 frames and the grid its 7; on the
+    /// 66 static sequences along KITTI (never flagged by the default) only clean 08 s3 changes,
+    /// where the widening itself led to a `road_score_drop` flag at frame 28 (1.117 -> 1.152 x
+    /// the bound; docs/RESULTS.md §9, twenty-first session, static35). Default false.
+    pub soft_prior_consistency_never_after_flag: bool,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -306,6 +319,7 @@ impl Default for OdometryOptions {
             soft_prior_consistency_residuals: Vec::new(),
             soft_prior_consistency_median: false,
             soft_prior_consistency_limit: 2.0,
+            soft_prior_consistency_never_after_flag: false,
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,

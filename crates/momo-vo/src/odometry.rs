@@ -600,7 +600,8 @@ impl Odometry {
             constants: None,
             stage: None,
             tally: (self.config.odometry.final_fit.learnt_parallax_cap > 0.0
-                || self.config.odometry.final_fit.learnt_cauchy_max > 0.0)
+                || self.config.odometry.final_fit.learnt_cauchy_max > 0.0
+                || self.config.odometry.final_fit.learnt_least_squares_share > 0.0)
                 .then_some(&self.parallax_tally),
         }
     }
@@ -1107,6 +1108,7 @@ impl Odometry {
             let fast = arc_index
                 .is_none_or(|i| init[i].abs() >= self.config.odometry.prior_min_arc_length);
             let use_prior = self.prior_ready && fast;
+            let consistency = consistency_acts(self.since_competing, &self.config.odometry);
             let prior = &mut self.motion_prior;
             if use_prior && !self.param_inv_sigma.is_empty() {
                 prior.center.clone_from(&init);
@@ -1127,7 +1129,7 @@ impl Odometry {
             if let Some(i) = arc_index {
                 arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
             }
-            if self.since_competing >= CONSISTENCY_QUIET_FRAMES {
+            if consistency {
                 consistency_widened_inv_scale(
                     &mut prior.soft_inv_scale,
                     &self.soft_samples,
@@ -1494,6 +1496,9 @@ impl Odometry {
             );
         // A frame where two motions competed does not centre the next frame's prior.
         self.prior_ready = diag.status == FrameStatus::Estimated && trusted && !competing;
+        if self.after_flag {
+            self.parallax_tally.mark_flagged();
+        }
         self.since_competing = if self.after_flag {
             0
         } else {
@@ -2555,6 +2560,17 @@ fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
     }
 }
 
+/// Whether the soft prior's consistency widening (`odometry.soft_prior_consistency_frames`)
+/// may act on a frame `since_competing` frames after the last one flagged `competing_motions` /
+/// `road_score_drop` (`usize::MAX` before any; it counts up from 0 after one and saturates, so
+/// it does not return to `usize::MAX` within any sequence): none within the last
+/// [`CONSISTENCY_QUIET_FRAMES`], and with `odometry.soft_prior_consistency_never_after_flag`
+/// none since the start.
+fn consistency_acts(since_competing: usize, opts: &crate::config::OdometryOptions) -> bool {
+    since_competing >= CONSISTENCY_QUIET_FRAMES
+        && !(opts.soft_prior_consistency_never_after_flag && since_competing != usize::MAX)
+}
+
 /// The soft prior widened where the recent frames' data keep disagreeing with it
 /// (`odometry.soft_prior_consistency_frames = K`, `odometry.soft_prior_consistency_limit = T`):
 /// for each residual `r` of `odometry.soft_prior_consistency_residuals` (all where empty), over
@@ -2717,6 +2733,26 @@ fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<V
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_consistency_widening_waits_after_a_flagged_frame_or_stops_at_the_first() {
+        let mut opts = crate::config::OdometryOptions {
+            soft_prior_consistency_frames: 10,
+            ..Default::default()
+        };
+        // Before any flagged frame: on; within CONSISTENCY_QUIET_FRAMES after one: off; after
+        // that many: on again, unless `soft_prior_consistency_never_after_flag`.
+        assert!(consistency_acts(usize::MAX, &opts));
+        assert!(!consistency_acts(0, &opts));
+        assert!(!consistency_acts(CONSISTENCY_QUIET_FRAMES - 1, &opts));
+        assert!(consistency_acts(CONSISTENCY_QUIET_FRAMES, &opts));
+        assert!(consistency_acts(usize::MAX - 1, &opts));
+        opts.soft_prior_consistency_never_after_flag = true;
+        assert!(consistency_acts(usize::MAX, &opts));
+        assert!(!consistency_acts(0, &opts));
+        assert!(!consistency_acts(CONSISTENCY_QUIET_FRAMES, &opts));
+        assert!(!consistency_acts(usize::MAX - 1, &opts));
+    }
 
     #[test]
     fn the_consistency_widening_yields_only_where_the_recent_innovations_disagree() {
