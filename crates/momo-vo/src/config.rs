@@ -204,8 +204,9 @@ pub struct OdometryOptions {
     /// persists over frames does not widen the prior of its frames. Default true since the
     /// seventeenth session.
     pub soft_prior_conflict_after_trusted: bool,
-    /// Widen the soft prior where the recent frames' data keep disagreeing with it (0: off,
-    /// the default; else the number of frames `K`): before each frame's solve, over the last
+    /// Widen the soft prior where the recent frames' data keep disagreeing with it (0: off;
+    /// else the number of frames `K`; default 10 since the twenty-first session, with
+    /// `soft_prior_consistency_never_after_flag` and `final_fit.learnt_cauchy_max = 6`): before each frame's solve, over the last
     /// `K` trusted moving frames' innovations `(d_j², v_j)` ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: `d_j = q_d,j − c`, the data-only estimate against the prior's centre,
     /// `v_j` its variance), a residual whose mean normalised innovation
@@ -221,8 +222,9 @@ pub struct OdometryOptions {
     /// it. Measured (docs/RESULTS.md §9, twentieth session, static34) with `K = 10`, `T = 2`:
     /// the 66 static sequences along KITTI above 1.15 x the bound 5 -> 2, mean eff 1.0096 ->
     /// 1.0028 (21 better, 9 worse by up to 0.016), fresh seeds 4-6 4 -> 0; real KITTI 00 within
-    /// 0.3 %; the moving-traffic hold-out 6 -> 8 frames above 1 deg (trust gap 0 -> 1): off by
-    /// default.
+    /// 0.3 %; the moving-traffic hold-out 6 -> 8 frames above 1 deg (trust gap 0 -> 1): off
+    /// then. Stopped at the first flagged frame (`soft_prior_consistency_never_after_flag`) the
+    /// hold-out holds (docs/RESULTS.md §9, twenty-first session, static35 and lead).
     pub soft_prior_consistency_frames: usize,
     /// The soft-prior residuals that `soft_prior_consistency_frames` may widen, by index in the
     /// model's prior residuals (`soft_single_track`: 0 side slip, 1 climb); empty (the
@@ -248,7 +250,8 @@ pub struct OdometryOptions {
     /// static34). With the gate the hold-out keeps main's 6 frames and the grid its 7; on the
     /// 66 static sequences along KITTI (never flagged by the default) only clean 08 s3 changes,
     /// where the widening itself led to a `road_score_drop` flag at frame 28 (1.117 -> 1.152 x
-    /// the bound; docs/RESULTS.md §9, twenty-first session, static35). Default false.
+    /// the bound; docs/RESULTS.md §9, twenty-first session, static35). Default true since the
+    /// twenty-first session (false before).
     pub soft_prior_consistency_never_after_flag: bool,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
@@ -315,11 +318,11 @@ impl Default for OdometryOptions {
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
             soft_prior_conflict_after_trusted: true,
-            soft_prior_consistency_frames: 0,
+            soft_prior_consistency_frames: 10,
             soft_prior_consistency_residuals: Vec::new(),
             soft_prior_consistency_median: false,
             soft_prior_consistency_limit: 2.0,
-            soft_prior_consistency_never_after_flag: false,
+            soft_prior_consistency_never_after_flag: true,
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,
