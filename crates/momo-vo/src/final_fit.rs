@@ -1537,14 +1537,20 @@ mod tests {
             let (sol, _, _) = refit_once(&ctx, opts, &obs, &[], &from).expect("refits");
             format!("{:?}", sol.params)
         };
-        let cauchy = FinalFitOptions::default();
+        // The refit's Cauchy loss without the learnt scale (the default's before the
+        // twenty-first session).
+        let cauchy = FinalFitOptions {
+            learnt_cauchy_max: 0.0,
+            learnt_never_after_flag: false,
+            ..Default::default()
+        };
         let plain = FinalFitOptions {
             cauchy_sigmas: 0.0,
-            ..Default::default()
+            ..cauchy.clone()
         };
         let chosen = FinalFitOptions {
             learnt_least_squares_share: 0.065,
-            ..Default::default()
+            ..cauchy.clone()
         };
         let (ls, ca) = (solve(None, false, &plain), solve(None, false, &cauchy));
         assert_ne!(ls, ca, "the case must tell the two losses apart");
@@ -1556,7 +1562,7 @@ mod tests {
         // At the threshold itself: least squares; off (0): Cauchy.
         let at = FinalFitOptions {
             learnt_least_squares_share: 0.05,
-            ..Default::default()
+            ..cauchy.clone()
         };
         assert_eq!(solve(Some(&light), false, &at), ls);
         assert_eq!(solve(Some(&light), false, &cauchy), ca);

@@ -2738,6 +2738,7 @@ mod tests {
     fn the_consistency_widening_waits_after_a_flagged_frame_or_stops_at_the_first() {
         let mut opts = crate::config::OdometryOptions {
             soft_prior_consistency_frames: 10,
+            soft_prior_consistency_never_after_flag: false,
             ..Default::default()
         };
         // Before any flagged frame: on; within CONSISTENCY_QUIET_FRAMES after one: off; after
