@@ -30,25 +30,13 @@ pub const GROUND_DROP_MIN_FRAMES: usize = 5;
 pub fn observe(history: &mut VecDeque<usize>, score: usize, ratio: f64, min: usize) -> bool {
     let dropped = ratio > 0.0
         && history.len() >= GROUND_DROP_MIN_FRAMES
-        && median(history).is_some_and(|m| m >= min as f64 && score as f64 <= ratio * m);
+        && crate::stats::median(history.iter().map(|&s| s as f64))
+            .is_some_and(|m| m >= min as f64 && score as f64 <= ratio * m);
     history.push_back(score);
     while history.len() > GROUND_DROP_WINDOW {
         history.pop_front();
     }
     dropped
-}
-
-/// The median of the scores (the mean of the two middle ones for an even count); `None` if
-/// there are none.
-fn median(history: &VecDeque<usize>) -> Option<f64> {
-    let mut v: Vec<usize> = history.iter().copied().collect();
-    v.sort_unstable();
-    let n = v.len();
-    match n {
-        0 => None,
-        _ if n % 2 == 1 => Some(v[n / 2] as f64),
-        _ => Some((v[n / 2 - 1] + v[n / 2]) as f64 / 2.0),
-    }
 }
 
 #[cfg(test)]
@@ -93,12 +81,5 @@ mod tests {
             };
             assert_eq!(o.validate().is_ok(), ok, "ground_drop = {q}");
         }
-    }
-
-    #[test]
-    fn median_of_even_and_odd_counts() {
-        assert_eq!(median(&VecDeque::new()), None);
-        assert_eq!(median(&VecDeque::from(vec![3, 1, 2])), Some(2.0));
-        assert_eq!(median(&VecDeque::from(vec![4, 1, 2, 3])), Some(2.5));
     }
 }

@@ -1011,22 +1011,11 @@ impl HypothesisTracker {
     /// The reference tilt of the recorded frames ([`HypothesesOptions::tilt_reference`]):
     /// their median or their minimum; `None` before any frame was recorded.
     pub fn tilt_reference(&self, opts: &HypothesesOptions) -> Option<f64> {
-        if self.tilts.is_empty() {
-            return None;
+        let tilts = self.tilts.iter().copied();
+        match opts.tilt_reference {
+            TiltReference::Minimum => crate::stats::minimum(tilts),
+            TiltReference::Median => crate::stats::median(tilts),
         }
-        let mut t: Vec<f64> = self.tilts.iter().copied().collect();
-        t.sort_by(f64::total_cmp);
-        Some(match opts.tilt_reference {
-            TiltReference::Minimum => t[0],
-            TiltReference::Median => {
-                let m = t.len() / 2;
-                if t.len() % 2 == 1 {
-                    t[m]
-                } else {
-                    0.5 * (t[m - 1] + t[m])
-                }
-            }
-        })
     }
 
     /// Whether a motion of tilt `tilt` rises more than

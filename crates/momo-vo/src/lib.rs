@@ -31,6 +31,7 @@ pub mod odometry;
 pub mod pipeline;
 mod road_track;
 pub mod separate;
+mod stats;
 pub mod stereo_scale;
 pub mod trust;
 
