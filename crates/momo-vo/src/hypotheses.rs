@@ -228,10 +228,11 @@ pub struct HypothesesOptions {
     /// alternative whose yaw lies more than `m` from the reference does not happen where A's lies
     /// within `m` of it, unless the ground cue is decisive (the alternative's road score is at
     /// least `odometry.separate.ground_admit_min` and `ground_admit` times A's: an A that drifted
-    /// onto an object by a few tenths of a degree per frame carries the history with it); (2) with [`HypothesesOptions::yaw_history_replace`], where A's yaw lies
-    /// more than `m` from it, the alternative with the highest positive road score among those
-    /// formed this frame (before competition over time, where one could be kept at all) within
-    /// `m` of it replaces A. A car's yaw rate changes smoothly (`Δω_z = v Δκ Δt` with the
+    /// onto an object by a few tenths of a degree per frame carries the history with it); (2)
+    /// with [`HypothesesOptions::yaw_history_replace`], where A's yaw lies more than `m` from
+    /// it, the alternative with the highest positive road score among those formed this frame
+    /// (before competition over time, where one could be kept at all) within `m` of it replaces
+    /// A. A car's yaw rate changes smoothly (`Δω_z = v Δκ Δt` with the
     /// curvature `κ` of a road varying over tens of metres: along KITTI 00-10's ground truth
     /// the per-frame yaw changes by at most a few tenths of a degree from one frame to the
     /// next), while a lead car that follows the ego through a curve at a constant gap looks

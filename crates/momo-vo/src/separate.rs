@@ -2801,6 +2801,14 @@ mod tests {
         if let Some(h) = jumped.hypotheses.as_mut() {
             h.yaw_jump = 3.0;
         }
+        // The odometry consistency of the yaw over the recent frames at a low margin (0.3 deg),
+        // with the replacement.
+        let mut turned = default.clone();
+        if let Some(h) = turned.hypotheses.as_mut() {
+            h.yaw_history_frames = 3;
+            h.yaw_history_margin = 0.005;
+            h.yaw_history_replace = true;
+        }
         let counted = Counted::new();
         let (estimator, solver, arc_index) = (
             counted.estimator.as_ref(),
@@ -2808,7 +2816,7 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &jumped]
+        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &jumped, &turned]
             .into_iter()
             .flat_map(|o| {
                 [
