@@ -238,7 +238,14 @@ pub struct HypothesesOptions {
     /// next), while a lead car that follows the ego through a curve at a constant gap looks
     /// almost like a motion without rotation: a switch onto it, or an A locked onto it, jumps
     /// by the whole turn. Before any frame was recorded the rule does not act. Off in
-    /// `HypothesesOptions::default()` and in the default configuration.
+    /// `HypothesesOptions::default()`; the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets `K = 1` (the previous frame), `m =
+    /// 0.01745` (1 deg) with the replacement since the twenty-second session (moving-traffic
+    /// grid 6 -> 3 frames above 1 deg, seeds 11-15 4 -> 4 and 16-20 9 -> 8 with no sequence
+    /// with more, development seeds 21-30 14 -> 10; the static scenes along KITTI, the built-in
+    /// drive and real KITTI 00 byte-identical; docs/RESULTS.md §9, twenty-second session,
+    /// curve36). A config file's `[odometry.separate.hypotheses]` section gets 0 unless it
+    /// writes it.
     pub yaw_history_frames: usize,
     /// The margin `m` (radians) of [`HypothesesOptions::yaw_history_frames`].
     pub yaw_history_margin: f64,

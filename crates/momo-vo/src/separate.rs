@@ -445,7 +445,12 @@ impl SeparateOptions {
     /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35), and an
     /// A that jumps more than 7 σ of the rotation prior away from the trusted previous motion's
     /// yaw is replaced by an alternative within 3.5 σ of it (`hypotheses.yaw_jump = 7`;
-    /// docs/RESULTS.md §9, twenty-first session, yaw35). A
+    /// docs/RESULTS.md §9, twenty-first session, yaw35). Since the twenty-second session the
+    /// yaw is also held to the previous frame's chosen yaw whether that frame competed or not:
+    /// a switch that jumps by more than 1 deg from it, where A does not, needs a decisive ground
+    /// cue, and an A that jumped is replaced by an alternative within 1 deg of it
+    /// (`hypotheses.yaw_history_frames = 1`, `yaw_history_margin = 0.01745`,
+    /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -475,6 +480,9 @@ impl SeparateOptions {
                 tilt_replace: true,
                 tilt_reference_frames: 1,
                 tilt_reference_margin: 0.01,
+                yaw_history_frames: 1,
+                yaw_history_margin: 0.01745,
+                yaw_history_replace: true,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
