@@ -445,7 +445,12 @@ impl SeparateOptions {
     /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35), and an
     /// A that jumps more than 7 σ of the rotation prior away from the trusted previous motion's
     /// yaw is replaced by an alternative within 3.5 σ of it (`hypotheses.yaw_jump = 7`;
-    /// docs/RESULTS.md §9, twenty-first session, yaw35). A
+    /// docs/RESULTS.md §9, twenty-first session, yaw35). Since the twenty-second session the
+    /// yaw is also held to the previous frame's chosen yaw whether that frame competed or not:
+    /// a switch that jumps by more than 1 deg from it, where A does not, needs a decisive ground
+    /// cue, and an A that jumped is replaced by an alternative within 1 deg of it
+    /// (`hypotheses.yaw_history_frames = 1`, `yaw_history_margin = 0.01745`,
+    /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -475,6 +480,9 @@ impl SeparateOptions {
                 tilt_replace: true,
                 tilt_reference_frames: 1,
                 tilt_reference_margin: 0.01,
+                yaw_history_frames: 1,
+                yaw_history_margin: 0.01745,
+                yaw_history_replace: true,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -1212,8 +1220,13 @@ fn separate_with(
     // from the trusted previous motion while an alternative continues it).
     let mut tilted_a: Option<Candidate> = None;
     let mut jumped_a: Option<Candidate> = None;
+    // `yaw_history_replace` (`turned_a`): A's yaw jumped from the recent frames' while an
+    // alternative continues them.
+    let mut turned_a: Option<Candidate> = None;
     if let Some(h) = opts.hypotheses()
-        && ((tilt_margin > 0.0 && h.tilt_replace) || h.yaw_jump > 0.0)
+        && ((tilt_margin > 0.0 && h.tilt_replace)
+            || h.yaw_jump > 0.0
+            || (h.yaw_history_frames > 0 && h.yaw_history_replace))
         && !alternatives.is_empty()
         && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
     {
@@ -1239,6 +1252,9 @@ fn separate_with(
         }
         if h.yaw_jump > 0.0 {
             jumped_a = yaw_jump_replacement(ctx, h, obs, &chosen, &alternatives);
+        }
+        if h.yaw_history_replace {
+            turned_a = yaw_history_replacement(ctx, h, tracker, obs, &chosen, &alternatives);
         }
     }
     // Competition over time (`persistence`): an alternative whose split from A the memory
@@ -1298,7 +1314,8 @@ fn separate_with(
     {
         alternatives.push((t.clone(), sup_t.clone()));
     }
-    outcome.competing = !alternatives.is_empty() || tilted_a.is_some() || jumped_a.is_some();
+    outcome.competing =
+        !alternatives.is_empty() || tilted_a.is_some() || jumped_a.is_some() || turned_a.is_some();
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
         opts.min_cell_ratio <= 0.0
@@ -1308,7 +1325,10 @@ fn separate_with(
     // The support of the motion not chosen (for `final_exclusive`).
     let mut other: Option<Vec<Vec<bool>>> = None;
     if let Some(h) = opts.hypotheses()
-        && (!alternatives.is_empty() || tilted_a.is_some() || jumped_a.is_some())
+        && (!alternatives.is_empty()
+            || tilted_a.is_some()
+            || jumped_a.is_some()
+            || turned_a.is_some())
     {
         // The alternative with the most ground (or parallax) support against A, over frames.
         let metric = arc_length.is_some();
@@ -1388,7 +1408,7 @@ fn separate_with(
         });
         // `tilt_replace` / `yaw_jump`: A tilted beyond an alternative (first), or jumped away
         // from the trusted previous motion, is replaced by it.
-        let forced_alt = tilted_a.or(jumped_a);
+        let forced_alt = tilted_a.or(jumped_a).or(turned_a);
         let forced = forced_alt.is_some();
         let (score_b, best) = match forced_alt {
             Some(alt) => {
@@ -1398,6 +1418,18 @@ fn separate_with(
             None => scored.swap_remove(0),
         };
         let switch = ordinary(tracker, score_b, &best);
+        // `yaw_history_frames`: the ordinary choice does not switch to a yaw jump away from
+        // the recent frames' where A continues them.
+        let switch = switch
+            && !yaw_history_vetoes(
+                ctx,
+                h,
+                tracker,
+                (&chosen, &best),
+                (opts.ground_admit_min, opts.ground_admit),
+                || score(h, ctx.rig, &a.motion, obs, &chosen.1),
+                score_b,
+            );
         if (forced || switch) && spread_ok(&best.1, &chosen.1) {
             outcome.switched = true;
             other = Some(std::mem::replace(&mut chosen, best).1);
@@ -1448,6 +1480,8 @@ fn separate_with(
     if let Some(h) = opts.hypotheses() {
         let t = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
         tracker.record_tilt(h, t);
+        let yaw = momo_core::so3_log(&ctx.estimator.motion(&chosen.0.params).rotation).z;
+        tracker.record_yaw(h, yaw);
     }
     if opts.ground_drop > 0.0
         && let Some(h) = opts.hypotheses()
@@ -1601,6 +1635,69 @@ fn yaw_jump_replacement(
     alternatives
         .iter()
         .filter(|alt| deviation(&alt.0.params) <= 0.5 * k)
+        .map(|alt| {
+            let m = ctx.estimator.motion(&alt.0.params);
+            (score(h, ctx.rig, &m, obs, &alt.1), alt)
+        })
+        .filter(|(s, _)| *s > 0)
+        // The first of equal scores (`max_by_key` keeps the last).
+        .rev()
+        .max_by_key(|(s, _)| *s)
+        .map(|(_, alt)| alt.clone())
+}
+
+/// The yaw `ω_z` of a candidate's motion (`ω = log R`, vehicle frame).
+fn yaw_of(ctx: &SolveContext<'_>, params: &[f64]) -> f64 {
+    momo_core::so3_log(&ctx.estimator.motion(params).rotation).z
+}
+
+/// Whether [`HypothesesOptions::yaw_history_frames`] stops the ordinary choice's switch from
+/// A (`chosen`) to `best`: `|ω_z(B) − r| > m` while `|ω_z(A) − r| <= m`, `r` the recent frames'
+/// reference yaw ([`HypothesisTracker::yaw_reference`]), `m`
+/// [`HypothesesOptions::yaw_history_margin`], unless the ground cue is decisive: B's road score
+/// `s_B` ([`score`]) is at least `ground = (min, ratio)` ([`SeparateOptions::ground_admit_min`],
+/// [`SeparateOptions::ground_admit`]): `s_B >= min` and `s_B >= ratio · s_A` (`score_a`, computed
+/// only if asked). A that drifted onto an object a few tenths of a degree per frame carries
+/// the history with it; the static world's road then outweighs it. False with the rule off
+/// or before any frame was recorded.
+fn yaw_history_vetoes(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    tracker: &HypothesisTracker,
+    (chosen, best): (&Candidate, &Candidate),
+    (min, ratio): (usize, f64),
+    score_a: impl FnOnce() -> usize,
+    score_b: usize,
+) -> bool {
+    h.yaw_history_frames > 0
+        && tracker.yaw_jumps(h, yaw_of(ctx, &best.0.params))
+        && !tracker.yaw_jumps(h, yaw_of(ctx, &chosen.0.params))
+        && !(score_b >= min && score_b as f64 >= ratio * score_a() as f64)
+}
+
+/// The alternative that replaces A by the odometry consistency of the yaw over the recent
+/// frames ([`HypothesesOptions::yaw_history_replace`]): where `|ω_z(A) − r| > m` (`r`, `m` as
+/// in [`yaw_history_vetoes`]), the alternative with the highest positive road score
+/// ([`score`]; the first of equal ones) among those with `|ω_z(X) − r| <= m`. None with the
+/// rule or `yaw_history_replace` off, before any frame was recorded, or where no alternative
+/// qualifies.
+fn yaw_history_replacement(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    tracker: &HypothesisTracker,
+    obs: &FrameObservations,
+    chosen: &Candidate,
+    alternatives: &[Candidate],
+) -> Option<Candidate> {
+    if !(h.yaw_history_replace
+        && h.yaw_history_frames > 0
+        && tracker.yaw_jumps(h, yaw_of(ctx, &chosen.0.params)))
+    {
+        return None;
+    }
+    alternatives
+        .iter()
+        .filter(|alt| !tracker.yaw_jumps(h, yaw_of(ctx, &alt.0.params)))
         .map(|alt| {
             let m = ctx.estimator.motion(&alt.0.params);
             (score(h, ctx.rig, &m, obs, &alt.1), alt)
@@ -2712,6 +2809,14 @@ mod tests {
         if let Some(h) = jumped.hypotheses.as_mut() {
             h.yaw_jump = 3.0;
         }
+        // The odometry consistency of the yaw over the recent frames at a low margin (0.3 deg),
+        // with the replacement.
+        let mut turned = default.clone();
+        if let Some(h) = turned.hypotheses.as_mut() {
+            h.yaw_history_frames = 3;
+            h.yaw_history_margin = 0.005;
+            h.yaw_history_replace = true;
+        }
         let counted = Counted::new();
         let (estimator, solver, arc_index) = (
             counted.estimator.as_ref(),
@@ -2719,7 +2824,7 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &jumped]
+        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &jumped, &turned]
             .into_iter()
             .flat_map(|o| {
                 [
@@ -2883,6 +2988,140 @@ mod tests {
             ..HypothesesOptions::default()
         };
         assert!(bad.validate().expect_err("NaN").contains("yaw_jump"));
+    }
+
+    /// `yaw_history_frames`: against the median yaw of the recent frames' chosen motions, the
+    /// ordinary choice's switch to a B that jumps by more than the margin is stopped where A
+    /// continues the history; with `yaw_history_replace`, an A that jumped is replaced by the
+    /// best-scoring alternative within the margin. Nothing before a frame was recorded or with
+    /// the rule off (the default).
+    #[test]
+    fn yaw_history_stops_and_replaces_a_jump_away_from_the_recent_frames_yaw() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 3,
+            seed: 1,
+            ..SimConfig::clean_pinhole()
+        })
+        .expect("simulation");
+        let counted = Counted::new();
+        let rig = &sim.sequence.rig;
+        let estimator = counted.estimator.as_ref();
+        let obs = &sim.sequence.frames[1];
+        let ctx = counted.ctx(rig);
+        let start = estimator.initial_params(sim.true_arc_lengths[1]);
+        let sol = ctx.solve(obs, &start, ctx.loss, false).expect("solve");
+        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+        let none: Vec<Vec<bool>> = obs
+            .per_camera
+            .iter()
+            .map(|m| vec![false; m.len()])
+            .collect();
+        let yaw_index = estimator
+            .param_names()
+            .iter()
+            .position(|n| *n == "rot_z")
+            .expect("rot_z");
+        let turned = |d: f64, support: &[Vec<bool>]| -> Candidate {
+            let mut s = sol.clone();
+            s.params[yaw_index] += d;
+            (s, support.to_vec())
+        };
+        let w = yaw_of(&ctx, &sol.params);
+        let margin = 0.5_f64.to_radians();
+        let h = HypothesesOptions {
+            yaw_history_frames: 3,
+            yaw_history_margin: margin,
+            yaw_history_replace: true,
+            ..HypothesesOptions::default()
+        };
+        // A lead car through a curve: 2.5 deg less turn than the static world.
+        let (stat, car, near) = (
+            turned(0.0, &all),
+            turned(-2.5_f64.to_radians(), &all),
+            turned(0.3_f64.to_radians(), &all),
+        );
+        assert!((yaw_of(&ctx, &car.0.params) - w + 2.5_f64.to_radians()).abs() < 0.1 * margin);
+        assert!(score(&h, rig, &estimator.motion(&stat.0.params), obs, &all) > 0);
+        let params = |c: Option<Candidate>| c.map(|c| c.0.params);
+        // The veto with the default's ground cue (12, 2) and road scores `(s_A, s_B)`.
+        let veto = |h: &HypothesesOptions,
+                    t: &HypothesisTracker,
+                    a: &Candidate,
+                    b: &Candidate,
+                    (sa, sb): (usize, usize)| {
+            yaw_history_vetoes(&ctx, h, t, (a, b), (12, 2.0), || sa, sb)
+        };
+        let mut tracker = HypothesisTracker::default();
+        // Nothing recorded yet: the rule does not act.
+        assert!(!veto(&h, &tracker, &stat, &car, (7, 11)));
+        assert!(yaw_history_replacement(&ctx, &h, &tracker, obs, &car, &[stat.clone()]).is_none());
+        // The history: the static world's yaw twice and one frame on the car (the median
+        // holds the static world's).
+        for y in [w, w - 2.5_f64.to_radians(), w] {
+            tracker.record_yaw(&h, y);
+        }
+        assert!((tracker.yaw_reference().expect("recorded") - w).abs() < 1e-12);
+        // The switch from the static A to the car is stopped; not the switch to a B within
+        // the margin, nor one from an A that itself jumped.
+        assert!(veto(&h, &tracker, &stat, &car, (7, 11)));
+        assert!(!veto(&h, &tracker, &stat, &near, (7, 11)));
+        assert!(!veto(&h, &tracker, &car, &stat, (7, 11)));
+        // A decisive ground cue for B (at least 12 and twice A's road score) is not stopped.
+        assert!(!veto(&h, &tracker, &stat, &car, (6, 12)));
+        assert!(veto(&h, &tracker, &stat, &car, (7, 12)));
+        assert!(veto(&h, &tracker, &stat, &car, (0, 11)));
+        // An A on the car is replaced by the alternative within the margin with road score.
+        let got =
+            yaw_history_replacement(&ctx, &h, &tracker, obs, &car, &[car.clone(), near.clone()]);
+        assert_eq!(params(got), Some(near.0.params.clone()));
+        assert!(yaw_history_replacement(&ctx, &h, &tracker, obs, &stat, &[near.clone()]).is_none());
+        let roadless = turned(0.0, &none);
+        assert!(yaw_history_replacement(&ctx, &h, &tracker, obs, &car, &[roadless]).is_none());
+        // Without `yaw_history_replace` nothing replaces A; a wider margin (3 deg) sees no jump.
+        let no_replace = HypothesesOptions {
+            yaw_history_replace: false,
+            ..h.clone()
+        };
+        assert!(
+            yaw_history_replacement(&ctx, &no_replace, &tracker, obs, &car, &[near.clone()])
+                .is_none()
+        );
+        let wide = HypothesesOptions {
+            yaw_history_margin: 3.0_f64.to_radians(),
+            ..h.clone()
+        };
+        assert!(!veto(&wide, &tracker, &stat, &car, (7, 11)));
+        assert!(
+            yaw_history_replacement(&ctx, &wide, &tracker, obs, &car, &[near.clone()]).is_none()
+        );
+        // Only the last K frames count: two more frames on the car move the median onto it.
+        for _ in 0..2 {
+            tracker.record_yaw(&h, w - 2.5_f64.to_radians());
+        }
+        assert!(!veto(&h, &tracker, &stat, &car, (7, 11)));
+        // Off (the default): nothing recorded, nothing stopped.
+        let off = HypothesesOptions::default();
+        assert_eq!(off.yaw_history_frames, 0);
+        let mut idle = HypothesisTracker::default();
+        idle.record_yaw(&off, w);
+        assert!(idle.yaw_reference().is_none());
+        assert!(!veto(&off, &tracker, &stat, &car, (7, 11)));
+        let o: HypothesesOptions = toml::from_str(
+            "yaw_history_frames = 3\nyaw_history_margin = 0.0175\nyaw_history_replace = true",
+        )
+        .expect("parses");
+        assert_eq!((o.yaw_history_frames, o.yaw_history_replace), (3, true));
+        assert!(o.validate().is_ok());
+        let bad = HypothesesOptions {
+            yaw_history_margin: f64::NAN,
+            ..HypothesesOptions::default()
+        };
+        assert!(
+            bad.validate()
+                .expect_err("NaN")
+                .contains("yaw_history_margin")
+        );
     }
 
     /// The alternatives' solver: the frame's Levenberg-Marquardt with the capped iterations
