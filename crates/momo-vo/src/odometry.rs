@@ -226,6 +226,10 @@ pub struct Odometry {
     /// ([`seeded_arc_jitter`]), then the learnt ones of `odometry.soft_prior_arc_learning`
     /// (empty without it).
     soft_arc_jitter: Vec<f64>,
+    /// The recent trusted moving frames' data-only estimates of the soft-prior residuals and
+    /// their variances `(q_d,r, v_r)`, newest last (at most `odometry.soft_prior_trend_frames`;
+    /// empty where it is off): the level that [`trend_shifted_center`] moves the centre to.
+    soft_levels: std::collections::VecDeque<Vec<(f64, f64)>>,
     /// This frame's first-stage solution where the final efficient stage replaced it (`None`
     /// otherwise): the soft prior's data view ([`Odometry::soft_data_view`]) needs the solution
     /// whose normal matrix and prior weighting it inverts; the refit weighs the priors in units
@@ -344,6 +348,7 @@ impl Odometry {
             soft_inv_scale,
             soft_samples: Default::default(),
             soft_arc_jitter,
+            soft_levels: Default::default(),
             first_stage: None,
             metric_is_angular: config_metric_is_angular,
             hypotheses: Default::default(),
@@ -708,6 +713,23 @@ impl Odometry {
             .then_some(out)
     }
 
+    /// This frame's data-only estimates of the soft-prior residuals and their variances
+    /// `(q_d,r, v_r)` ([`Odometry::soft_prior_sigma`] has the notation), if the data determine
+    /// every residual: the samples of `odometry.soft_prior_trend_frames`
+    /// ([`trend_shifted_center`]). `view` as in [`Odometry::soft_innovation`].
+    fn soft_level(&self, sol: &FrameSolution, view: &SoftView) -> Option<Vec<(f64, f64)>> {
+        let view = view
+            .get_or_init(|| self.soft_data_view(sol))
+            .as_ref()
+            .filter(|v| v.centred)?;
+        let out: Vec<(f64, f64)> = (0..view.c.len())
+            .map(|r| (view.q_d[r], view.v[(r, r)]))
+            .collect();
+        out.iter()
+            .all(|(q, v)| q.is_finite() && v.is_finite() && *v >= 0.0)
+            .then_some(out)
+    }
+
     /// The shift `b` of the free parameters that the soft prior causes
     /// ([`Odometry::soft_prior_sigma`] has the notation), if some prior residual's innovation
     /// exceeds `trust.prior_conflict_chi2`: `d_r² / (σ_r² + v_r)` with `σ_r` the prior's
@@ -987,6 +1009,7 @@ impl Odometry {
             Vec::new()
         };
         self.soft_samples.clear();
+        self.soft_levels.clear();
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
         self.parallax_tally = Default::default();
@@ -1135,6 +1158,12 @@ impl Odometry {
                     &self.soft_samples,
                     &self.config.odometry,
                 );
+                trend_shifted_center(
+                    &mut prior.soft_center,
+                    &prior.soft_inv_scale,
+                    &self.soft_levels,
+                    &self.config.odometry,
+                );
             }
         }
         let enough = matches >= self.config.odometry.min_matches.max(1);
@@ -1266,6 +1295,8 @@ impl Odometry {
         let mut trusted = false;
         // Its soft-prior innovations (odometry.soft_prior_sigma_learning).
         let mut soft_sample = None;
+        // Its data-only level of the soft-prior residuals (odometry.soft_prior_trend_frames).
+        let mut soft_level = None;
         let params = match result {
             Some(sol) => {
                 if standstill {
@@ -1405,6 +1436,10 @@ impl Odometry {
                 if !standstill && !self.soft_inv_scale.is_empty() {
                     soft_sample =
                         self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol), &soft_view);
+                    if self.config.odometry.soft_prior_trend_frames > 0 {
+                        soft_level =
+                            self.soft_level(self.first_stage.as_ref().unwrap_or(&sol), &soft_view);
+                    }
                 }
                 if !standstill {
                     self.inlier_share_peak = Some(match self.inlier_share_peak {
@@ -1512,6 +1547,12 @@ impl Odometry {
             let q = self.estimator.prior_residuals(&params);
             for (c, q) in self.soft_center.iter_mut().zip(q) {
                 *c += alpha * (q - *c);
+            }
+            if let Some(level) = soft_level {
+                self.soft_levels.push_back(level);
+                while self.soft_levels.len() > self.config.odometry.soft_prior_trend_frames {
+                    self.soft_levels.pop_front();
+                }
             }
             if let Some(sample) = soft_sample {
                 let arc = arc_index.map_or(f64::NAN, |i| params[i].abs());
@@ -2642,6 +2683,54 @@ fn consistency_widened_inv_scale(
     }
 }
 
+/// The soft prior's centre moved to the recent frames' data-only level where they agree on
+/// one away from it (`odometry.soft_prior_trend_frames = m`, `odometry.soft_prior_trend_z =
+/// z`): per residual `r`, over the last `m` samples `(q_d,j, v_j)` of `levels` (units of the
+/// model's sigma), the offset `δ = (1/m) Σ_j q_d,j − c_r` of their mean from the centre has,
+/// for independent frames whose true slip spreads by the frame's width `σ_r = 1 / k_r`
+/// around the level and whose data add `v_j`, the variance `e² = Σ_j (σ_r² + v_j) / m²`;
+/// the centre moves by `sign(δ) · max(0, |δ| − z e)` (soft thresholding: nothing where the
+/// offset is within `z` standard errors, continuous beyond). Unchanged with fewer than `m`
+/// samples, `m = 0`, or where a residual's width or samples are not finite.
+fn trend_shifted_center(
+    center: &mut [f64],
+    inv_scale: &[f64],
+    levels: &std::collections::VecDeque<Vec<(f64, f64)>>,
+    opts: &crate::config::OdometryOptions,
+) {
+    let m = opts.soft_prior_trend_frames;
+    if m == 0 || levels.len() < m {
+        return;
+    }
+    for (r, c) in center.iter_mut().enumerate() {
+        let Some(&k) = inv_scale.get(r) else {
+            continue;
+        };
+        if !(k > 0.0 && k.is_finite()) {
+            continue;
+        }
+        let s2 = 1.0 / (k * k);
+        let (mut sum, mut var) = (0.0, 0.0);
+        let mut n = 0usize;
+        for f in levels.iter().rev().take(m) {
+            if let Some(&(q, v)) = f.get(r) {
+                sum += q;
+                var += s2 + v.max(0.0);
+                n += 1;
+            }
+        }
+        if n < m {
+            continue;
+        }
+        let delta = sum / m as f64 - *c;
+        let e = var.sqrt() / m as f64;
+        let excess = delta.abs() - opts.soft_prior_trend_z * e;
+        if delta.is_finite() && e.is_finite() && excess > 0.0 {
+            *c += excess.copysign(delta);
+        }
+    }
+}
+
 /// The soft prior's displacement jitters `δ_r² = L²` (units of the model's sigma squared times
 /// metres squared) before any learning, for `n` soft-prior residuals: `L` is
 /// `odometry.soft_prior_arc_jitter`, the arc length at which a step's prior is √2 times as
@@ -2753,6 +2842,69 @@ mod tests {
         assert!(!consistency_acts(0, &opts));
         assert!(!consistency_acts(CONSISTENCY_QUIET_FRAMES, &opts));
         assert!(!consistency_acts(usize::MAX - 1, &opts));
+    }
+
+    #[test]
+    fn the_trend_moves_the_centre_only_by_the_level_beyond_z_standard_errors() {
+        // Two residuals at the model's width (k = 1), centre 0, ten frames of data-only
+        // levels (q_d, v) in units of the model's sigma; z = 2.
+        let mut opts = crate::config::OdometryOptions {
+            soft_prior_trend_frames: 10,
+            soft_prior_trend_z: 2.0,
+            ..Default::default()
+        };
+        let levels = |f: &dyn Fn(usize) -> [(f64, f64); 2]| {
+            (0..12)
+                .map(|j| f(j).to_vec())
+                .collect::<std::collections::VecDeque<_>>()
+        };
+        // Residual 0 scatters around the centre (mean 0.5 < 2 e = 2 √(10 · 2) / 10 = 0.894),
+        // residual 1 sits at 3 with v = 3: e = √(10 · 4) / 10 = 0.632, the centre moves by
+        // 3 − 2 · 0.632 = 1.735.
+        let l = levels(&|j| [(if j % 2 == 0 { 1.5 } else { -0.5 }, 1.0), (3.0, 3.0)]);
+        let mut c = vec![0.0, 0.0];
+        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        assert_eq!(c[0], 0.0);
+        let e = (40.0f64).sqrt() / 10.0;
+        assert!((c[1] - (3.0 - 2.0 * e)).abs() < 1e-12, "{c:?}");
+        // Below the centre: moved down, symmetric.
+        let l = levels(&|_| [(0.0, 1.0), (-3.0, 3.0)]);
+        let mut c = vec![0.0, 0.0];
+        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        assert!((c[1] + (3.0 - 2.0 * e)).abs() < 1e-12, "{c:?}");
+        // Relative to the centre: a centre already at the level stays.
+        let l = levels(&|_| [(0.0, 1.0), (3.0, 3.0)]);
+        let mut c = vec![0.0, 3.0];
+        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        assert_eq!(c, vec![0.0, 3.0]);
+        // The newest ten frames only: two old frames far off before ten at the centre.
+        let l = levels(&|j| {
+            if j < 2 {
+                [(50.0, 0.0); 2]
+            } else {
+                [(0.0, 1.0); 2]
+            }
+        });
+        let mut c = vec![0.0, 0.0];
+        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        assert_eq!(c, vec![0.0, 0.0]);
+        // A wider prior (k = 0.5: σ² = 4) widens the standard error: e = √(10 · 7) / 10, so the
+        // same level moves the centre less.
+        let l = levels(&|_| [(0.0, 1.0), (3.0, 3.0)]);
+        let mut c = vec![0.0, 0.0];
+        trend_shifted_center(&mut c, &[1.0, 0.5], &l, &opts);
+        assert!(
+            (c[1] - (3.0 - 2.0 * (70.0f64).sqrt() / 10.0)).abs() < 1e-12,
+            "{c:?}"
+        );
+        // Fewer than m samples, or off: unchanged.
+        let short: std::collections::VecDeque<_> = l.iter().take(9).cloned().collect();
+        let mut c = vec![0.0, 0.0];
+        trend_shifted_center(&mut c, &[1.0, 1.0], &short, &opts);
+        assert_eq!(c, vec![0.0, 0.0]);
+        opts.soft_prior_trend_frames = 0;
+        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        assert_eq!(c, vec![0.0, 0.0]);
     }
 
     #[test]
