@@ -744,6 +744,10 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         let mut k_match = 0;
         let mut last = self.record_norms(x);
         let weights_only = known_cost.is_some();
+        // The kernel's derivatives transposed into lanes: rows `0..k_in` are written in full
+        // by every full chunk; a partial chunk zeroes its unused lanes first (they weigh zero),
+        // so the array is cleared once per linearisation instead of once per chunk.
+        let mut dr = [[0.0; LANES]; MAX_KERNEL_INPUTS];
         for (j, cam) in self.rig.cameras().iter().enumerate() {
             let Some(obs) = self.obs.per_camera.get(j) else {
                 continue;
@@ -755,8 +759,12 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
             for chunk in obs.chunks(LANES) {
                 // The kernel per match, its derivatives transposed into lanes; unused lanes
-                // stay zero (and weigh zero).
-                let mut dr = [[0.0; LANES]; MAX_KERNEL_INPUTS];
+                // are zero (and weigh zero).
+                if chunk.len() < LANES {
+                    for row in &mut dr[..k_in] {
+                        row[chunk.len()..].fill(0.0);
+                    }
+                }
                 // Per lane: the row's weight √ρ' (1 − α) and the weighted residual.
                 let mut wj = [0.0; LANES];
                 let mut wr = [0.0; LANES];

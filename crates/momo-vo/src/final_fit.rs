@@ -383,8 +383,18 @@ pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Opti
     let lo = opts.min_scale_ratio * scale;
     let hi = opts.max_scale_ratio * scale;
     let mut cut = opts.start_scales * scale;
-    let mut sorted: Vec<f64> = norms.iter().copied().filter(|r| r.is_finite()).collect();
-    sorted.sort_unstable_by(f64::total_cmp);
+    // Sorted by `f64::total_cmp` as the integers that order compares (issue 19: an integer
+    // sort; the key is an involution of the bits, so the values come back unchanged).
+    let mut keys: Vec<i64> = norms
+        .iter()
+        .filter(|r| r.is_finite())
+        .map(|r| total_order_key(*r))
+        .collect();
+    keys.sort_unstable();
+    let sorted: Vec<f64> = keys
+        .iter()
+        .map(|k| f64::from_bits(total_order_key_inverse(*k)))
+        .collect();
     let mut sigma = None;
     for _ in 0..3 {
         let inside = &sorted[..sorted.partition_point(|r| *r < cut)];
@@ -396,6 +406,21 @@ pub fn estimate_sigma(norms: &[f64], scale: f64, opts: &FinalFitOptions) -> Opti
         cut = opts.inlier_sigmas * s;
     }
     sigma
+}
+
+/// The integer whose order is `f64::total_cmp`'s on the bits of `x` (the transform the
+/// standard library's `total_cmp` compares: negative values' magnitude bits flipped).
+#[inline]
+fn total_order_key(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ ((((b >> 63) as u64) >> 1) as i64)
+}
+
+/// The bits of the `f64` whose [`total_order_key`] is `k` (the transform is its own inverse:
+/// it keeps the sign bit that selects it).
+#[inline]
+fn total_order_key_inverse(k: i64) -> u64 {
+    (k ^ ((((k >> 63) as u64) >> 1) as i64)) as u64
 }
 
 /// Whether a match's point lies in front of both cameras, within `tolerance` (radians of
@@ -829,12 +854,21 @@ fn refit_once(
     from: &[f64],
 ) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>)> {
     let scale = ctx.loss.scale();
+    // The support found at the start is read in place (no copy of its matches and constants).
+    let found;
     let (core, core_constants, sigma, tally) = match ctx
         .stage
         .filter(|s| s.competing == ctx.competing && s.from == from)
     {
-        Some(s) => s.found.clone()?,
-        None => stage_support(ctx, opts, obs, constants, from)?,
+        Some(s) => {
+            let (core, constants, sigma, tally) = s.found.as_ref()?;
+            (core, &constants[..], *sigma, tally.clone())
+        }
+        None => {
+            let (core, constants, sigma, tally) = stage_support(ctx, opts, obs, constants, from)?;
+            found = (core, constants);
+            (&found.0, &found.1[..], sigma, tally)
+        }
     };
     let req = ctx.request(obs, from);
     let cauchy;
@@ -882,13 +916,13 @@ fn refit_once(
         ctx.solver
     };
     let req = SolveRequest {
-        observations: &core,
+        observations: core,
         loss,
         motion_prior: Some(&prior),
         solver,
         ..req
     };
-    match ctx.estimator.solve_with_constants(&req, &core_constants) {
+    match ctx.estimator.solve_with_constants(&req, core_constants) {
         Ok(fin)
             if fin.report.termination != Termination::NumericalFailure
                 && fin.params.iter().all(|p| p.is_finite())
@@ -1324,6 +1358,45 @@ mod tests {
             estimate_sigma(&[1.0; 5], 0.001, &FinalFitOptions::default()),
             None
         );
+    }
+
+    /// The integer key of `estimate_sigma`'s sort orders as `f64::total_cmp` and gives the
+    /// bits back (random bits of every sign and exponent, zeros of both signs, infinities,
+    /// NaNs, subnormals).
+    #[test]
+    fn the_total_order_key_orders_as_total_cmp_and_inverts() {
+        let mut x: u64 = 987_654_321;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut values: Vec<f64> = vec![
+            0.0,
+            -0.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            f64::from_bits(1),
+            -f64::from_bits(1),
+            f64::MAX,
+            f64::MIN,
+        ];
+        values.extend((0..4000).map(|_| f64::from_bits(next())));
+        for a in &values {
+            assert_eq!(total_order_key_inverse(total_order_key(*a)), a.to_bits());
+            for b in values.iter().step_by(7) {
+                assert_eq!(
+                    total_order_key(*a).cmp(&total_order_key(*b)),
+                    a.total_cmp(b),
+                    "{a:e} {b:e}"
+                );
+            }
+        }
     }
 
     /// `estimate_sigma` by one sort against the three selections it replaces (each trimmed

@@ -1959,12 +1959,85 @@ pub fn cell_capped(
     factor: f64,
 ) -> Vec<Vec<bool>> {
     use momo_core::CameraModel;
+    let cells = grid.0 * grid.1;
+    let mut out = Vec::with_capacity(mask.len());
+    // Scratch shared by the cameras (issue 19: no vector per cell): each member's (cell,
+    // index) in index order, and a counting sort of the members by cell (`start[c]..start[c
+    // + 1]` of `order` is cell `c`'s, in index order, as a vector per cell would hold them).
+    let mut start = vec![0_usize; cells + 1];
+    let mut members: Vec<(usize, usize)> = Vec::new();
+    let mut order: Vec<usize> = Vec::new();
+    let mut next: Vec<usize> = Vec::new();
+    let mut counts: Vec<usize> = Vec::new();
+    for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
+        let size = cam.model.size();
+        start.fill(0);
+        members.clear();
+        for (i, (o, _)) in m.iter().zip(k).enumerate().filter(|(_, (_, k))| **k) {
+            // The cell shared with the covariance's jackknife (a NaN pixel: cell 0).
+            let c = crate::trust::cell_of((o.px0.x, o.px0.y), size, grid);
+            start[c + 1] += 1;
+            members.push((c, i));
+        }
+        counts.clear();
+        counts.extend(start[1..].iter().copied().filter(|c| *c > 0));
+        let mut keep = k.clone();
+        if !counts.is_empty() {
+            counts.sort_unstable();
+            let median = counts[counts.len() / 2] as f64;
+            let cap = ((factor * median).ceil() as usize).max(CELL_CAP_MIN);
+            let hash = |o: &momo_core::Observation| {
+                let mut x = o.px0.x.to_bits() ^ o.px0.y.to_bits().rotate_left(21);
+                x ^= o.px1.x.to_bits().rotate_left(42) ^ o.px1.y.to_bits().rotate_left(11);
+                // splitmix64's finaliser.
+                x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+                x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+                x ^ (x >> 31)
+            };
+            if counts.last().is_some_and(|n| *n > cap) {
+                for c in 0..cells {
+                    start[c + 1] += start[c];
+                }
+                order.clear();
+                order.resize(members.len(), 0);
+                next.clear();
+                next.extend_from_slice(&start[..cells]);
+                for &(c, i) in &members {
+                    order[next[c]] = i;
+                    next[c] += 1;
+                }
+                for c in 0..cells {
+                    let cell = &mut order[start[c]..start[c + 1]];
+                    if cell.len() > cap {
+                        cell.sort_by_key(|i| (hash(&m[*i]), *i));
+                        for i in &cell[cap..] {
+                            keep[*i] = false;
+                        }
+                    }
+                }
+            }
+        }
+        out.push(keep);
+    }
+    out
+}
+
+/// [`cell_capped`] as it was written first (a vector per cell): the reference of the test
+/// `cell_capped_matches_the_vector_per_cell_reference`.
+#[cfg(test)]
+fn cell_capped_reference(
+    rig: &Rig,
+    obs: &FrameObservations,
+    mask: &[Vec<bool>],
+    grid: (usize, usize),
+    factor: f64,
+) -> Vec<Vec<bool>> {
+    use momo_core::CameraModel;
     let mut out = Vec::with_capacity(mask.len());
     for ((cam, m), k) in rig.cameras().iter().zip(&obs.per_camera).zip(mask) {
         let size = cam.model.size();
         let mut members: Vec<Vec<usize>> = vec![Vec::new(); grid.0 * grid.1];
         for (i, (o, _)) in m.iter().zip(k).enumerate().filter(|(_, (_, k))| **k) {
-            // The cell shared with the covariance's jackknife (a NaN pixel: cell 0).
             members[crate::trust::cell_of((o.px0.x, o.px0.y), size, grid)].push(i);
         }
         let mut counts: Vec<usize> = members.iter().map(Vec::len).filter(|c| *c > 0).collect();
@@ -1976,7 +2049,6 @@ pub fn cell_capped(
             let hash = |o: &momo_core::Observation| {
                 let mut x = o.px0.x.to_bits() ^ o.px0.y.to_bits().rotate_left(21);
                 x ^= o.px1.x.to_bits().rotate_left(42) ^ o.px1.y.to_bits().rotate_left(11);
-                // splitmix64's finaliser.
                 x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
                 x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
                 x ^ (x >> 31)
@@ -2170,6 +2242,58 @@ mod tests {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
         }
+    }
+
+    /// The counting sort of [`cell_capped`] keeps exactly the matches of the vector per cell
+    /// it replaced (issue 19): random pixels clustered in a few cells or spread (pixels
+    /// outside the image and NaN pixels included), random masks, grids and factors, one
+    /// camera and the four-camera fisheye rig.
+    #[test]
+    fn cell_capped_matches_the_vector_per_cell_reference() {
+        use momo_core::{CameraModel, Observation};
+        use nalgebra::Vector2;
+        use proptest::prelude::*;
+        let rigs = [
+            momo_testing::canned::pinhole_rig(),
+            momo_testing::canned::fisheye_rig(),
+        ];
+        let pixel = prop_oneof![
+            4 => (0.0..1.0_f64, 0.0..1.0_f64),
+            4 => (0.40..0.45_f64, 0.5..0.56_f64),
+            1 => (-0.5..1.5_f64, -0.5..1.5_f64),
+            1 => Just((f64::NAN, 0.5)),
+        ];
+        let case = (
+            0..2_usize,
+            proptest::collection::vec((pixel, any::<bool>(), 0..4_usize), 0..300),
+            (1..20_usize, 1..12_usize),
+            prop_oneof![Just(1.0), Just(2.0), 0.5..4.0_f64],
+        );
+        proptest!(ProptestConfig::with_cases(256), |((r, pts, grid, factor) in case)| {
+            let rig = &rigs[r];
+            let n_cam = rig.len();
+            let mut per_camera = vec![Vec::new(); n_cam];
+            let mut mask = vec![Vec::new(); n_cam];
+            for ((u, v), keep, cam) in pts {
+                let j = cam % n_cam;
+                let model = &rig.cameras()[j].model;
+                let (w, h) = model.size();
+                let px = Vector2::new(u * w, v * h);
+                // Observation::new needs pixels that unproject; others take a valid pixel's
+                // bearings with the raw pixel (cell_of reads px0 alone).
+                let mut o = Observation::new(model, Vector2::new(0.5 * w, 0.5 * h), Vector2::new(0.5 * w + 1.0, 0.5 * h))
+                    .expect("the centre unprojects");
+                o.px0 = px;
+                o.px1 = Vector2::new(px.x + 1.0, px.y - 0.5);
+                per_camera[j].push(o);
+                mask[j].push(keep);
+            }
+            let obs = FrameObservations { per_camera, cross_camera: Vec::new() };
+            prop_assert_eq!(
+                cell_capped(rig, &obs, &mask, grid, factor),
+                cell_capped_reference(rig, &obs, &mask, grid, factor)
+            );
+        });
     }
 
     /// `cell_cap`: a compact cluster of matches is cut to the cap, a spread-out scene (one
