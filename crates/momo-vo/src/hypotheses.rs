@@ -240,8 +240,13 @@ pub struct HypothesesOptions {
     /// the previous frame's tilt is itself the wrong one, which the minimum over a few frames
     /// looks past. Where A keeps its road the one-frame reference stays (a static scene's true
     /// tilt jumps 0.78 deg above the minimum of three frames: docs/RESULTS.md §9,
-    /// twenty-first session, tilt35). Off (0; measured in docs/RESULTS.md §9,
-    /// twenty-second session, grid36).
+    /// twenty-first session, tilt35). Off in `HypothesesOptions::default()`; the default
+    /// configuration (`SeparateOptions::competition_over_time`) sets `K' = 3` since the
+    /// twenty-second session (moving-traffic grid 6 -> 5 frames above 1 deg; seeds 11-15, the
+    /// development seeds 21-50, the static scenes along KITTI, the built-in drive and real
+    /// KITTI 00 byte-identical; seeds 16-20 one frame changed, 0.99 -> 0.21 deg; docs/RESULTS.md
+    /// §9, twenty-second session, grid36). A config file's `[odometry.separate.hypotheses]`
+    /// section gets 0 unless it writes it.
     pub tilt_weak_road_frames: usize,
 }
 
@@ -1689,11 +1694,19 @@ mod tests {
         assert!(HypothesisTracker::converse_qualifies(&rl, 0, Some(9)));
         assert!(!HypothesisTracker::converse_qualifies(&rl, 0, Some(10)));
         assert!(!HypothesisTracker::converse_qualifies(&rl, 0, None));
-        // Off by default; parse and validate.
+        // Off in `HypothesesOptions::default()`, `K' = 3` in the default configuration;
+        // parse and validate.
         let d0 = HypothesesOptions::default();
         assert_eq!(
             (d0.tilt_replace_roadless, d0.tilt_weak_road_frames),
             (false, 0)
+        );
+        let dc = crate::separate::SeparateOptions::competition_over_time()
+            .hypotheses
+            .expect("the default choice");
+        assert_eq!(
+            (dc.tilt_replace_roadless, dc.tilt_weak_road_frames),
+            (false, 3)
         );
         let o: HypothesesOptions =
             toml::from_str("tilt_replace_roadless = true\ntilt_weak_road_frames = 3").unwrap();

@@ -445,7 +445,10 @@ impl SeparateOptions {
     /// `tilt_reference_margin = 0.01`; docs/RESULTS.md §9, twenty-first session, tilt35), and an
     /// A that jumps more than 7 σ of the rotation prior away from the trusted previous motion's
     /// yaw is replaced by an alternative within 3.5 σ of it (`hypotheses.yaw_jump = 7`;
-    /// docs/RESULTS.md §9, twenty-first session, yaw35). A
+    /// docs/RESULTS.md §9, twenty-first session, yaw35). Since the twenty-second session the
+    /// converse's gate measures the jump from the minimum of the last three frames' tilts
+    /// where A's road score is below `min_matches` (`hypotheses.tilt_weak_road_frames = 3`;
+    /// docs/RESULTS.md §9, twenty-second session, grid36). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -475,6 +478,7 @@ impl SeparateOptions {
                 tilt_replace: true,
                 tilt_reference_frames: 1,
                 tilt_reference_margin: 0.01,
+                tilt_weak_road_frames: 3,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
