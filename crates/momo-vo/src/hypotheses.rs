@@ -256,6 +256,33 @@ pub struct HypothesesOptions {
     /// their median (`"median"`, default; `K = 1`: the previous frame's) or their minimum
     /// (`"minimum"`).
     pub tilt_reference: TiltReference,
+    /// With [`HypothesesOptions::tilt_replace`]: a flatter alternative also qualifies for the
+    /// converse without a positive road score where the ground cue does not apply between A
+    /// and it — their road scores sum below [`HypothesesOptions::min_matches`], the same test
+    /// by which [`HypothesisTracker::choose`] leaves a frame to the other rules (twenty-second
+    /// session, grid36). The positive road score stands for "the static world's motion puts
+    /// matches on the road"; where A too has lost the road the scores cannot tell the static
+    /// world from an object, and the vehicle model (A's tilt jumped, the alternative's did not)
+    /// decides. An alternative with a positive score still comes first (the highest score
+    /// wins; the first of equal scores). Off (`false`; measured in docs/RESULTS.md §9,
+    /// twenty-second session, grid36).
+    pub tilt_replace_roadless: bool,
+    /// With [`HypothesesOptions::tilt_reference_frames`]: where A's road score is below
+    /// [`HypothesesOptions::min_matches`] (the road does not vouch for A's tilt), the
+    /// reference of the gate is the minimum of the last `K'` frames' recorded tilts instead
+    /// (frames; 0: off; twenty-second session, grid36). A true tilt (a road's grade or camber)
+    /// keeps the road under the motion; a fit to an object loses it, and after one such frame
+    /// the previous frame's tilt is itself the wrong one, which the minimum over a few frames
+    /// looks past. Where A keeps its road the one-frame reference stays (a static scene's true
+    /// tilt jumps 0.78 deg above the minimum of three frames: docs/RESULTS.md §9,
+    /// twenty-first session, tilt35). Off in `HypothesesOptions::default()`; the default
+    /// configuration (`SeparateOptions::competition_over_time`) sets `K' = 3` since the
+    /// twenty-second session (moving-traffic grid 6 -> 5 frames above 1 deg; seeds 11-15, the
+    /// development seeds 21-50, the static scenes along KITTI, the built-in drive and real
+    /// KITTI 00 byte-identical; seeds 16-20 one frame changed, 0.99 -> 0.21 deg; docs/RESULTS.md
+    /// §9, twenty-second session, grid36). A config file's `[odometry.separate.hypotheses]`
+    /// section gets 0 unless it writes it.
+    pub tilt_weak_road_frames: usize,
 }
 
 /// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
@@ -297,6 +324,8 @@ impl Default for HypothesesOptions {
             yaw_history_frames: 0,
             yaw_history_margin: 0.0,
             yaw_history_replace: false,
+            tilt_replace_roadless: false,
+            tilt_weak_road_frames: 0,
         }
     }
 }
@@ -370,6 +399,11 @@ impl HypothesesOptions {
             return Err(
                 "odometry.separate.hypotheses.tilt_reference_margin must be a finite number >= 0"
                     .into(),
+            );
+        }
+        if self.tilt_weak_road_frames > 1000 {
+            return Err(
+                "odometry.separate.hypotheses.tilt_weak_road_frames must be at most 1000".into(),
             );
         }
         if self.tilt_reference_frames > 1000 {
@@ -1046,7 +1080,7 @@ impl HypothesisTracker {
     /// [`HypothesesOptions::tilt_reference_frames`] (nothing where that is 0; a non-finite
     /// tilt is not recorded).
     pub fn record_tilt(&mut self, opts: &HypothesesOptions, tilt: f64) {
-        let k = opts.tilt_reference_frames;
+        let k = opts.tilt_reference_frames.max(opts.tilt_weak_road_frames);
         if k == 0 || !tilt.is_finite() {
             return;
         }
@@ -1059,7 +1093,9 @@ impl HypothesisTracker {
     /// The reference tilt of the recorded frames ([`HypothesesOptions::tilt_reference`]):
     /// their median or their minimum; `None` before any frame was recorded.
     pub fn tilt_reference(&self, opts: &HypothesesOptions) -> Option<f64> {
-        let tilts = self.tilts.iter().copied();
+        // The last `K` of the recorded tilts (more are kept for `tilt_weak_road_frames`).
+        let k = opts.tilt_reference_frames.min(self.tilts.len());
+        let tilts = self.tilts.iter().skip(self.tilts.len() - k).copied();
         match opts.tilt_reference {
             TiltReference::Minimum => crate::stats::minimum(tilts),
             TiltReference::Median => crate::stats::median(tilts),
@@ -1084,17 +1120,7 @@ impl HypothesisTracker {
     /// their median (the mean of the middle two for an even count); `None` before any frame
     /// was recorded.
     pub fn yaw_reference(&self) -> Option<f64> {
-        if self.yaws.is_empty() {
-            return None;
-        }
-        let mut y: Vec<f64> = self.yaws.iter().copied().collect();
-        y.sort_by(f64::total_cmp);
-        let m = y.len() / 2;
-        Some(if y.len() % 2 == 1 {
-            y[m]
-        } else {
-            0.5 * (y[m - 1] + y[m])
-        })
+        crate::stats::median(self.yaws.iter().copied())
     }
 
     /// Whether a motion of yaw `yaw` lies more than [`HypothesesOptions::yaw_history_margin`]
@@ -1112,6 +1138,35 @@ impl HypothesisTracker {
     /// ([`HypothesisTracker::tilt_reference`]); false before any frame was recorded.
     pub fn tilt_jumps(&self, opts: &HypothesesOptions, tilt: f64) -> bool {
         self.tilt_reference(opts)
+            .is_some_and(|r| tilt > r + opts.tilt_reference_margin)
+    }
+
+    /// Whether an alternative flatter than A by [`HypothesesOptions::tilt_margin`], with road
+    /// score `score` ([`score`]), may replace A in the converse
+    /// ([`HypothesesOptions::tilt_replace`]): a positive road score (the static world's motion
+    /// puts matches on the road), or, with [`HypothesesOptions::tilt_replace_roadless`], A's
+    /// road score `score_a` and `score` summing below [`HypothesesOptions::min_matches`] (the
+    /// ground cue does not apply, as in [`HypothesisTracker::choose`]; `None`: not computed).
+    pub fn converse_qualifies(
+        opts: &HypothesesOptions,
+        score: usize,
+        score_a: Option<usize>,
+    ) -> bool {
+        score > 0
+            || (opts.tilt_replace_roadless
+                && score_a.is_some_and(|sa| sa + score < opts.min_matches.max(1)))
+    }
+
+    /// [`HypothesisTracker::tilt_jumps`], where A's road is `weak` (its road score below
+    /// [`HypothesesOptions::min_matches`]) against the minimum of the last
+    /// [`HypothesesOptions::tilt_weak_road_frames`] recorded tilts instead (where that is
+    /// set; false before any frame was recorded).
+    pub fn tilt_jumps_given_road(&self, opts: &HypothesesOptions, tilt: f64, weak: bool) -> bool {
+        let k = opts.tilt_weak_road_frames.min(self.tilts.len());
+        if !(weak && opts.tilt_weak_road_frames > 0) {
+            return self.tilt_jumps(opts, tilt);
+        }
+        crate::stats::minimum(self.tilts.iter().skip(self.tilts.len() - k).copied())
             .is_some_and(|r| tilt > r + opts.tilt_reference_margin)
     }
 
@@ -1649,6 +1704,85 @@ mod tests {
                 .contains("tilt_reference_margin")
         );
         assert!(toml::from_str::<HypothesesOptions>("tilt_reference = \"mean\"").is_err());
+    }
+
+    /// [`HypothesesOptions::tilt_weak_road_frames`]: where A's road is weak the gate's
+    /// reference is the minimum of the last `K'` tilts (08 s9 77: the previous frame already
+    /// tilted 0.97 deg, two frames before 0.21), elsewhere the previous frame's; the tracker
+    /// keeps `max(K, K')` tilts and the one-frame reference reads only the last.
+    #[test]
+    fn a_weak_road_measures_the_jump_from_the_minimum_of_more_frames() {
+        let d = 1f64.to_radians();
+        let opts = |k2| HypothesesOptions {
+            tilt_reference_frames: 1,
+            tilt_reference_margin: 0.01,
+            tilt_weak_road_frames: k2,
+            ..HypothesesOptions::default()
+        };
+        let (off, on) = (opts(0), opts(3));
+        let run = |o: &HypothesesOptions, tilts: &[f64]| {
+            let mut t = HypothesisTracker::default();
+            for &x in tilts {
+                t.record_tilt(o, x * d);
+            }
+            t
+        };
+        let t = run(&on, &[0.5, 0.21, 0.54, 0.97]);
+        assert_eq!(t.tilts.len(), 3);
+        assert_eq!(run(&off, &[0.5, 0.21, 0.54, 0.97]).tilts.len(), 1);
+        // The one-frame reference is the last tilt whatever is kept.
+        assert!((t.tilt_reference(&on).unwrap() - 0.97 * d).abs() < 1e-12);
+        // A at 1.41 deg: no jump from 0.97 (0.57 deg margin), a jump from the minimum 0.21
+        // where A's road is weak; with a strong road or the option off the previous frame.
+        assert!(!t.tilt_jumps_given_road(&on, 1.41 * d, false));
+        assert!(t.tilt_jumps_given_road(&on, 1.41 * d, true));
+        assert!(!run(&off, &[0.5, 0.21, 0.54, 0.97]).tilt_jumps_given_road(&off, 1.41 * d, true));
+        // Not above the minimum by the margin: no jump.
+        assert!(!t.tilt_jumps_given_road(&on, 0.7 * d, true));
+        // Nothing recorded: nothing jumps.
+        assert!(!HypothesisTracker::default().tilt_jumps_given_road(&on, 10.0 * d, true));
+        // The converse's qualification: a positive road score always; without road only with
+        // `tilt_replace_roadless` where A's and its scores sum below `min_matches` (10).
+        let rl = HypothesesOptions {
+            tilt_replace_roadless: true,
+            ..on.clone()
+        };
+        assert!(HypothesisTracker::converse_qualifies(&on, 1, None));
+        assert!(!HypothesisTracker::converse_qualifies(&on, 0, Some(2)));
+        assert!(HypothesisTracker::converse_qualifies(&rl, 0, Some(2)));
+        assert!(HypothesisTracker::converse_qualifies(&rl, 0, Some(9)));
+        assert!(!HypothesisTracker::converse_qualifies(&rl, 0, Some(10)));
+        assert!(!HypothesisTracker::converse_qualifies(&rl, 0, None));
+        // Off in `HypothesesOptions::default()`, `K' = 3` in the default configuration;
+        // parse and validate.
+        let d0 = HypothesesOptions::default();
+        assert_eq!(
+            (d0.tilt_replace_roadless, d0.tilt_weak_road_frames),
+            (false, 0)
+        );
+        let dc = crate::separate::SeparateOptions::competition_over_time()
+            .hypotheses
+            .expect("the default choice");
+        assert_eq!(
+            (dc.tilt_replace_roadless, dc.tilt_weak_road_frames),
+            (false, 3)
+        );
+        let o: HypothesesOptions =
+            toml::from_str("tilt_replace_roadless = true\ntilt_weak_road_frames = 3").unwrap();
+        assert_eq!(
+            (o.tilt_replace_roadless, o.tilt_weak_road_frames),
+            (true, 3)
+        );
+        assert!(o.validate().is_ok());
+        let bad = HypothesesOptions {
+            tilt_weak_road_frames: 1001,
+            ..o
+        };
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .contains("tilt_weak_road_frames")
+        );
     }
 
     /// A KITTI pinhole at the KITTI mount: camera 1 m ahead of the motion centre, 1.65 m above

@@ -450,7 +450,10 @@ impl SeparateOptions {
     /// a switch that jumps by more than 1 deg from it, where A does not, needs a decisive ground
     /// cue, and an A that jumped is replaced by an alternative within 1 deg of it
     /// (`hypotheses.yaw_history_frames = 1`, `yaw_history_margin = 0.01745`,
-    /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36). A
+    /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36), and the
+    /// converse's gate measures the jump from the minimum of the last three frames' tilts
+    /// where A's road score is below `min_matches` (`hypotheses.tilt_weak_road_frames = 3`;
+    /// docs/RESULTS.md §9, twenty-second session, grid36). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -483,6 +486,7 @@ impl SeparateOptions {
                 yaw_history_frames: 1,
                 yaw_history_margin: 0.01745,
                 yaw_history_replace: true,
+                tilt_weak_road_frames: 3,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -1223,6 +1227,9 @@ fn separate_with(
     // `yaw_history_replace` (`turned_a`): A's yaw jumped from the recent frames' while an
     // alternative continues them.
     let mut turned_a: Option<Candidate> = None;
+    // `tilt_weak_road_frames`: A's road score is below `min_matches` (the gate's reference is
+    // then the minimum over more frames).
+    let mut weak_road_a = false;
     if let Some(h) = opts.hypotheses()
         && ((tilt_margin > 0.0 && h.tilt_replace)
             || h.yaw_jump > 0.0
@@ -1230,11 +1237,19 @@ fn separate_with(
         && !alternatives.is_empty()
         && (pretests || retain_possible(ctx, opts, obs, labels.as_deref(), &chosen, rest_n))
     {
-        let tilt_a = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
+        let motion_a = ctx.estimator.motion(&chosen.0.params);
+        let tilt_a = crate::hypotheses::tilt(&motion_a);
+        // A's road score, where `tilt_weak_road_frames` or `tilt_replace_roadless` asks.
+        let score_a = (tilt_margin > 0.0
+            && h.tilt_replace
+            && (h.tilt_weak_road_frames > 0 || h.tilt_replace_roadless))
+            .then(|| score(h, ctx.rig, &motion_a, obs, &chosen.1));
+        weak_road_a = score_a.is_some_and(|s| s < h.min_matches);
         // `tilt_reference_frames`: A's tilt also jumps from the recent frames'.
         if tilt_margin > 0.0
             && h.tilt_replace
-            && (h.tilt_reference_frames == 0 || tracker.tilt_jumps(h, tilt_a))
+            && (h.tilt_reference_frames == 0
+                || tracker.tilt_jumps_given_road(h, tilt_a, weak_road_a))
         {
             tilted_a = alternatives
                 .iter()
@@ -1244,7 +1259,9 @@ fn separate_with(
                     (t.is_finite() && t < tilt_a - tilt_margin)
                         .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
                 })
-                .filter(|(s, _)| *s > 0)
+                // `tilt_replace_roadless`: also without road where the ground cue does not
+                // apply between A and it.
+                .filter(|(s, _)| HypothesisTracker::converse_qualifies(h, *s, score_a))
                 // The first of equal scores (`max_by_key` keeps the last).
                 .rev()
                 .max_by_key(|(s, _)| *s)
@@ -1401,7 +1418,7 @@ fn separate_with(
             h.tilt_reference_frames == 0
                 || scored.first().is_none_or(|(s, best)| {
                     let tilt_b = crate::hypotheses::tilt(&ctx.estimator.motion(&best.0.params));
-                    tracker.tilt_jumps(h, tilt_b)
+                    tracker.tilt_jumps_given_road(h, tilt_b, weak_road_a)
                         || !spread_ok(&best.1, &chosen.1)
                         || !ordinary(&mut tracker.clone(), *s, best)
                 })
@@ -2927,6 +2944,13 @@ mod tests {
             h.tilt_reference = crate::hypotheses::TiltReference::Minimum;
             h.tilt_reference_margin = 0.005;
         }
+        // The converse without road where the ground cue does not apply, the weak road's
+        // reference over three frames.
+        let mut weak = default.clone();
+        if let Some(h) = weak.hypotheses.as_mut() {
+            h.tilt_replace_roadless = true;
+            h.tilt_weak_road_frames = 3;
+        }
         // The odometry consistency of the yaw at a low k, with the rotation prior at the
         // previous frame's motion below (the other variants have no prior: it never acts).
         let mut jumped = default.clone();
@@ -2948,7 +2972,7 @@ mod tests {
             counted.arc_index,
         );
         let (mut skipped, mut competing) = (0, 0);
-        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &jumped, &turned]
+        for (opts, config_sim) in [&default, &variant, &tilted, &gated, &weak, &jumped, &turned]
             .into_iter()
             .flat_map(|o| {
                 [
