@@ -3203,7 +3203,10 @@ mod tests {
         let mut tracker = HypothesisTracker::default();
         // Nothing recorded yet: the rule does not act.
         assert!(!veto(&h, &tracker, &stat, &car, (7, 11)));
-        assert!(yaw_history_replacement(&ctx, &h, &tracker, obs, &car, &[stat.clone()]).is_none());
+        assert!(
+            yaw_history_replacement(&ctx, &h, &tracker, obs, &car, std::slice::from_ref(&stat))
+                .is_none()
+        );
         // The history: the static world's yaw twice and one frame on the car (the median
         // holds the static world's).
         for y in [w, w - 2.5_f64.to_radians(), w] {
@@ -3223,7 +3226,10 @@ mod tests {
         let got =
             yaw_history_replacement(&ctx, &h, &tracker, obs, &car, &[car.clone(), near.clone()]);
         assert_eq!(params(got), Some(near.0.params.clone()));
-        assert!(yaw_history_replacement(&ctx, &h, &tracker, obs, &stat, &[near.clone()]).is_none());
+        assert!(
+            yaw_history_replacement(&ctx, &h, &tracker, obs, &stat, std::slice::from_ref(&near))
+                .is_none()
+        );
         let roadless = turned(0.0, &none);
         assert!(yaw_history_replacement(&ctx, &h, &tracker, obs, &car, &[roadless]).is_none());
         // Without `yaw_history_replace` nothing replaces A; a wider margin (3 deg) sees no jump.
@@ -3232,8 +3238,15 @@ mod tests {
             ..h.clone()
         };
         assert!(
-            yaw_history_replacement(&ctx, &no_replace, &tracker, obs, &car, &[near.clone()])
-                .is_none()
+            yaw_history_replacement(
+                &ctx,
+                &no_replace,
+                &tracker,
+                obs,
+                &car,
+                std::slice::from_ref(&near)
+            )
+            .is_none()
         );
         let wide = HypothesesOptions {
             yaw_history_margin: 3.0_f64.to_radians(),
@@ -3241,7 +3254,15 @@ mod tests {
         };
         assert!(!veto(&wide, &tracker, &stat, &car, (7, 11)));
         assert!(
-            yaw_history_replacement(&ctx, &wide, &tracker, obs, &car, &[near.clone()]).is_none()
+            yaw_history_replacement(
+                &ctx,
+                &wide,
+                &tracker,
+                obs,
+                &car,
+                std::slice::from_ref(&near)
+            )
+            .is_none()
         );
         // Only the last K frames count: two more frames on the car move the median onto it.
         for _ in 0..2 {
