@@ -1963,6 +1963,17 @@ fn score_bound(opts: &HypothesesOptions, rig: &Rig, obs: &FrameObservations) -> 
 /// The fewest matches [`cell_capped`] keeps in a cell.
 pub const CELL_CAP_MIN: usize = 2;
 
+/// The order in which an over-full cell keeps its matches ([`cell_capped`]): a hash of the
+/// match's four pixel coordinates' bits (splitmix64's finaliser), so the kept ones do not depend
+/// on the matches' order in the file.
+fn cell_cap_hash(o: &momo_core::Observation) -> u64 {
+    let mut x = o.px0.x.to_bits() ^ o.px0.y.to_bits().rotate_left(21);
+    x ^= o.px1.x.to_bits().rotate_left(42) ^ o.px1.y.to_bits().rotate_left(11);
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
 /// `mask` with at most `max(CELL_CAP_MIN, ceil(factor · m))` matches per image cell (frame k-1
 /// pixels, `grid` per camera), `m` the median count of the camera's cells that hold a match of
 /// `mask`: a cell above the cap keeps the matches that come first in the order of a hash of
@@ -2003,14 +2014,7 @@ pub fn cell_capped(
             counts.sort_unstable();
             let median = counts[counts.len() / 2] as f64;
             let cap = ((factor * median).ceil() as usize).max(CELL_CAP_MIN);
-            let hash = |o: &momo_core::Observation| {
-                let mut x = o.px0.x.to_bits() ^ o.px0.y.to_bits().rotate_left(21);
-                x ^= o.px1.x.to_bits().rotate_left(42) ^ o.px1.y.to_bits().rotate_left(11);
-                // splitmix64's finaliser.
-                x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-                x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-                x ^ (x >> 31)
-            };
+            let hash = cell_cap_hash;
             if counts.last().is_some_and(|n| *n > cap) {
                 for c in 0..cells {
                     start[c + 1] += start[c];
@@ -2063,13 +2067,7 @@ fn cell_capped_reference(
             counts.sort_unstable();
             let median = counts[counts.len() / 2] as f64;
             let cap = ((factor * median).ceil() as usize).max(CELL_CAP_MIN);
-            let hash = |o: &momo_core::Observation| {
-                let mut x = o.px0.x.to_bits() ^ o.px0.y.to_bits().rotate_left(21);
-                x ^= o.px1.x.to_bits().rotate_left(42) ^ o.px1.y.to_bits().rotate_left(11);
-                x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-                x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-                x ^ (x >> 31)
-            };
+            let hash = cell_cap_hash;
             for cell in members.iter_mut().filter(|c| c.len() > cap) {
                 cell.sort_by_key(|i| (hash(&m[*i]), *i));
                 for i in &cell[cap..] {
@@ -2864,6 +2862,68 @@ mod tests {
             self.inner.solve(problem, x0)
         }
     }
+    /// One clean pinhole frame (seed 1, frame 1) solved with the default's estimator, for the
+    /// yaw rules' tests: its solution, supports and the solution turned in yaw.
+    struct TurnedFrame {
+        sim: momo_sim::Simulation,
+        counted: Counted,
+        sol: FrameSolution,
+        yaw_index: usize,
+    }
+
+    impl TurnedFrame {
+        fn new() -> Self {
+            use momo_sim::{SimConfig, simulate};
+            let sim = simulate(&SimConfig {
+                frames: 3,
+                seed: 1,
+                ..SimConfig::clean_pinhole()
+            })
+            .expect("simulation");
+            let counted = Counted::new();
+            let estimator = counted.estimator.as_ref();
+            let ctx = counted.ctx(&sim.sequence.rig);
+            let start = estimator.initial_params(sim.true_arc_lengths[1]);
+            let sol = ctx
+                .solve(&sim.sequence.frames[1], &start, ctx.loss, false)
+                .expect("solve");
+            let yaw_index = estimator
+                .param_names()
+                .iter()
+                .position(|n| *n == "rot_z")
+                .expect("rot_z");
+            Self {
+                sim,
+                counted,
+                sol,
+                yaw_index,
+            }
+        }
+
+        fn rig(&self) -> &Rig {
+            &self.sim.sequence.rig
+        }
+
+        fn obs(&self) -> &FrameObservations {
+            &self.sim.sequence.frames[1]
+        }
+
+        /// Every match in (`on`) or out of the support.
+        fn support(&self, on: bool) -> Vec<Vec<bool>> {
+            self.obs()
+                .per_camera
+                .iter()
+                .map(|m| vec![on; m.len()])
+                .collect()
+        }
+
+        /// The frame's solution turned by `d` radians of yaw, with `support`.
+        fn turned(&self, d: f64, support: &[Vec<bool>]) -> Candidate {
+            let mut s = self.sol.clone();
+            s.params[self.yaw_index] += d;
+            (s, support.to_vec())
+        }
+    }
 
     /// The default configuration's estimator and loss, a solver that counts its solves, and
     /// the arc length held as the odometry holds it: the set-up of the tests that count the
@@ -3055,44 +3115,19 @@ mod tests {
     /// and is off by default.
     #[test]
     fn yaw_jump_replaces_an_a_that_jumped_away_from_the_trusted_previous_motion() {
-        use momo_sim::{SimConfig, simulate};
-        let sim = simulate(&SimConfig {
-            frames: 3,
-            seed: 1,
-            ..SimConfig::clean_pinhole()
-        })
-        .expect("simulation");
-        let counted = Counted::new();
-        let rig = &sim.sequence.rig;
-        let estimator = counted.estimator.as_ref();
-        let obs = &sim.sequence.frames[1];
-        let plain = counted.ctx(rig);
-        let start = estimator.initial_params(sim.true_arc_lengths[1]);
-        let sol = plain.solve(obs, &start, plain.loss, false).expect("solve");
-        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
-        let none: Vec<Vec<bool>> = obs
-            .per_camera
-            .iter()
-            .map(|m| vec![false; m.len()])
-            .collect();
-        let yaw_index = estimator
-            .param_names()
-            .iter()
-            .position(|n| *n == "rot_z")
-            .expect("rot_z");
-        // The frame's solution turned by `d` radians of yaw, with `support`.
-        let turned = |d: f64, support: &[Vec<bool>]| -> Candidate {
-            let mut s = sol.clone();
-            s.params[yaw_index] += d;
-            (s, support.to_vec())
-        };
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let plain = f.counted.ctx(rig);
+        let (all, none) = (f.support(true), f.support(false));
+        let turned = |d: f64, support: &[Vec<bool>]| f.turned(d, support);
         let yaw_of = |c: &Candidate| momo_core::so3_log(&estimator.motion(&c.0.params).rotation).z;
         let sigma = 0.002;
         let w = momo_core::so3_log(&estimator.motion(&sol.params).rotation);
         let prior = MotionPrior::rotation([w.x, w.y, w.z], sigma);
         let ctx = SolveContext {
             motion_prior: Some(&prior),
-            ..counted.ctx(rig)
+            ..f.counted.ctx(rig)
         };
         let h = HypothesesOptions {
             yaw_jump: 7.0,
@@ -3145,36 +3180,12 @@ mod tests {
     /// the rule off (the default).
     #[test]
     fn yaw_history_stops_and_replaces_a_jump_away_from_the_recent_frames_yaw() {
-        use momo_sim::{SimConfig, simulate};
-        let sim = simulate(&SimConfig {
-            frames: 3,
-            seed: 1,
-            ..SimConfig::clean_pinhole()
-        })
-        .expect("simulation");
-        let counted = Counted::new();
-        let rig = &sim.sequence.rig;
-        let estimator = counted.estimator.as_ref();
-        let obs = &sim.sequence.frames[1];
-        let ctx = counted.ctx(rig);
-        let start = estimator.initial_params(sim.true_arc_lengths[1]);
-        let sol = ctx.solve(obs, &start, ctx.loss, false).expect("solve");
-        let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
-        let none: Vec<Vec<bool>> = obs
-            .per_camera
-            .iter()
-            .map(|m| vec![false; m.len()])
-            .collect();
-        let yaw_index = estimator
-            .param_names()
-            .iter()
-            .position(|n| *n == "rot_z")
-            .expect("rot_z");
-        let turned = |d: f64, support: &[Vec<bool>]| -> Candidate {
-            let mut s = sol.clone();
-            s.params[yaw_index] += d;
-            (s, support.to_vec())
-        };
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let (all, none) = (f.support(true), f.support(false));
+        let turned = |d: f64, support: &[Vec<bool>]| f.turned(d, support);
         let w = yaw_of(&ctx, &sol.params);
         let margin = 0.5_f64.to_radians();
         let h = HypothesesOptions {
