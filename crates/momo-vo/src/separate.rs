@@ -1251,7 +1251,7 @@ fn separate_with(
             && (h.tilt_reference_frames == 0
                 || tracker.tilt_jumps_given_road(h, tilt_a, weak_road_a))
         {
-            tilted_a = alternatives
+            let qualified = alternatives
                 .iter()
                 .filter_map(|alt| {
                     let m = ctx.estimator.motion(&alt.0.params);
@@ -1261,11 +1261,8 @@ fn separate_with(
                 })
                 // `tilt_replace_roadless`: also without road where the ground cue does not
                 // apply between A and it.
-                .filter(|(s, _)| HypothesisTracker::converse_qualifies(h, *s, score_a))
-                // The first of equal scores (`max_by_key` keeps the last).
-                .rev()
-                .max_by_key(|(s, _)| *s)
-                .map(|(_, alt)| alt.clone());
+                .filter(|(s, _)| HypothesisTracker::converse_qualifies(h, *s, score_a));
+            tilted_a = first_highest(qualified);
         }
         if h.yaw_jump > 0.0 {
             jumped_a = yaw_jump_replacement(ctx, h, obs, &chosen, &alternatives);
@@ -1641,26 +1638,38 @@ fn yaw_jump_replacement(
         .filter(|p| p.rotation_inv_sigma > 0.0 && p.rotation_inv_sigma.is_finite())?;
     let k = h.yaw_jump;
     // The yaw's deviation from the prior's centre, in the prior's standard deviations.
-    let deviation = |params: &[f64]| -> f64 {
-        let w = momo_core::so3_log(&ctx.estimator.motion(params).rotation);
-        (w.z - prior.rotation_center[2]).abs() * prior.rotation_inv_sigma
+    let deviation = |params: &[f64]| {
+        (yaw_of(ctx, params) - prior.rotation_center[2]).abs() * prior.rotation_inv_sigma
     };
     // `!(x <= k)`: a NaN deviation counts as a jump of A and disqualifies an alternative.
     if deviation(&chosen.0.params) <= k {
         return None;
     }
-    alternatives
+    let qualified = alternatives
         .iter()
         .filter(|alt| deviation(&alt.0.params) <= 0.5 * k)
-        .map(|alt| {
-            let m = ctx.estimator.motion(&alt.0.params);
-            (score(h, ctx.rig, &m, obs, &alt.1), alt)
-        })
-        .filter(|(s, _)| *s > 0)
-        // The first of equal scores (`max_by_key` keeps the last).
-        .rev()
-        .max_by_key(|(s, _)| *s)
-        .map(|(_, alt)| alt.clone())
+        .map(|alt| (road_score(ctx, h, obs, alt), alt))
+        .filter(|(s, _)| *s > 0);
+    first_highest(qualified)
+}
+
+/// The road score ([`score`]) of a candidate's motion over its support.
+fn road_score(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    obs: &FrameObservations,
+    c: &Candidate,
+) -> usize {
+    score(h, ctx.rig, &ctx.estimator.motion(&c.0.params), obs, &c.1)
+}
+
+/// The candidate of the highest score among `scored`, the first of equal ones: the rules that
+/// replace A (the tilt's converse, `yaw_jump`, `yaw_history_replace`) pick their alternative so.
+fn first_highest<'a>(
+    scored: impl DoubleEndedIterator<Item = (usize, &'a Candidate)>,
+) -> Option<Candidate> {
+    // `max_by_key` keeps the last of equal keys: over the reversed order, the first.
+    scored.rev().max_by_key(|(s, _)| *s).map(|(_, c)| c.clone())
 }
 
 /// The yaw `ω_z` of a candidate's motion (`ω = log R`, vehicle frame).
@@ -1712,18 +1721,12 @@ fn yaw_history_replacement(
     {
         return None;
     }
-    alternatives
+    let qualified = alternatives
         .iter()
         .filter(|alt| !tracker.yaw_jumps(h, yaw_of(ctx, &alt.0.params)))
-        .map(|alt| {
-            let m = ctx.estimator.motion(&alt.0.params);
-            (score(h, ctx.rig, &m, obs, &alt.1), alt)
-        })
-        .filter(|(s, _)| *s > 0)
-        // The first of equal scores (`max_by_key` keeps the last).
-        .rev()
-        .max_by_key(|(s, _)| *s)
-        .map(|(_, alt)| alt.clone())
+        .map(|alt| (road_score(ctx, h, obs, alt), alt))
+        .filter(|(s, _)| *s > 0);
+    first_highest(qualified)
 }
 
 /// `k` of the `m` matches of `mask` (all of them where `m <= k`), evenly spaced in the frame's
