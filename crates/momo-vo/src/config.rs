@@ -281,6 +281,19 @@ pub struct OdometryOptions {
     /// The threshold `z` of `soft_prior_trend_frames` in standard errors of the recent level
     /// (> 0; default 2).
     pub soft_prior_trend_z: f64,
+    /// With `soft_prior_trend_frames`: move the centre by the Kalman gain of the two estimates
+    /// of the current level instead of soft thresholding — the centre, whose departure from
+    /// the level has the variance `P` (by moments, `E δ² = P + e²`), and the recent mean with
+    /// `e²`: `c + g δ`, `g = max(0, 1 − z² e² / δ²)` (positive-part James–Stein shrinkage
+    /// towards the centre; `z` as in `soft_prior_trend_z`, the same threshold `|δ| = z e`
+    /// below which nothing moves, and beyond it a larger move than the soft threshold's `g =
+    /// 1 − z e / |δ|`). Default false.
+    pub soft_prior_trend_blend: bool,
+    /// With `soft_prior_trend_frames`: the moved centre's own uncertainty widens the soft
+    /// prior, `σ_r² ← σ_r² + g e²` (the level's posterior variance for the gain `g` in use),
+    /// so a trend measured on noisy frames pulls the frame less than one measured on clean
+    /// frames. Default false.
+    pub soft_prior_trend_widen: bool,
     /// The per-parameter motion prior: for each named model parameter, the standard deviation
     /// of its change from one frame to the next (radians or metres per frame), as a Gaussian
     /// cost term centred on the previous frame's parameters ([`momo_core::MotionPrior`]), in
@@ -352,6 +365,8 @@ impl Default for OdometryOptions {
             soft_prior_consistency_limit: 2.0,
             soft_prior_trend_frames: 0,
             soft_prior_trend_z: 2.0,
+            soft_prior_trend_blend: false,
+            soft_prior_trend_widen: false,
             soft_prior_consistency_never_after_flag: true,
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,

@@ -1160,7 +1160,7 @@ impl Odometry {
                 );
                 trend_shifted_center(
                     &mut prior.soft_center,
-                    &prior.soft_inv_scale,
+                    &mut prior.soft_inv_scale,
                     &self.soft_levels,
                     &self.config.odometry,
                 );
@@ -2688,13 +2688,28 @@ fn consistency_widened_inv_scale(
 /// z`): per residual `r`, over the last `m` samples `(q_d,j, v_j)` of `levels` (units of the
 /// model's sigma), the offset `δ = (1/m) Σ_j q_d,j − c_r` of their mean from the centre has,
 /// for independent frames whose true slip spreads by the frame's width `σ_r = 1 / k_r`
-/// around the level and whose data add `v_j`, the variance `e² = Σ_j (σ_r² + v_j) / m²`;
-/// the centre moves by `sign(δ) · max(0, |δ| − z e)` (soft thresholding: nothing where the
-/// offset is within `z` standard errors, continuous beyond). Unchanged with fewer than `m`
-/// samples, `m = 0`, or where a residual's width or samples are not finite.
+/// around the level and whose data add `v_j`, the variance `e² = Σ_j (σ_r² + v_j) / m²`.
+/// The centre moves by the gain `g ∈ [0, 1)` times the offset, `c_r + g δ`:
+///
+/// - soft thresholding (the default): `g = max(0, 1 − z e / |δ|)`, i.e. by `sign(δ) ·
+///   max(0, |δ| − z e)` (nothing where the offset is within `z` standard errors, continuous
+///   beyond);
+/// - `odometry.soft_prior_trend_blend`: `g = max(0, 1 − z² e² / δ²)`. For `z = 1` this is
+///   the Kalman gain `P̂ / (P̂ + e²)` of the two estimates of the current level — the centre,
+///   whose departure from the level has the variance `P`, estimated by moments from `E δ² =
+///   P + e²` as `P̂ = δ² − e²`, and the recent mean with `e²` — i.e. positive-part
+///   James–Stein shrinkage of the recent mean towards the centre (Efron & Morris 1973); `z >
+///   1` shrinks more. Same threshold `|δ| = z e`, a larger move than the soft threshold's
+///   beyond it.
+///
+/// With `odometry.soft_prior_trend_widen` the moved centre's own uncertainty joins the
+/// prior's width: the blend's posterior variance `g e²` of the level (for either gain) is added
+/// to `σ_r²`, `k_r ← 1 / √(σ_r² + g e²)`, so a noisy trend (large `e`) pulls the frame less.
+/// Unchanged with fewer than `m` samples, `m = 0`, or where a residual's width or samples are
+/// not finite.
 fn trend_shifted_center(
     center: &mut [f64],
-    inv_scale: &[f64],
+    inv_scale: &mut [f64],
     levels: &std::collections::VecDeque<Vec<(f64, f64)>>,
     opts: &crate::config::OdometryOptions,
 ) {
@@ -2702,14 +2717,15 @@ fn trend_shifted_center(
     if m == 0 || levels.len() < m {
         return;
     }
+    let z = opts.soft_prior_trend_z;
     for (r, c) in center.iter_mut().enumerate() {
-        let Some(&k) = inv_scale.get(r) else {
+        let Some(k) = inv_scale.get_mut(r) else {
             continue;
         };
-        if !(k > 0.0 && k.is_finite()) {
+        if !(*k > 0.0 && k.is_finite()) {
             continue;
         }
-        let s2 = 1.0 / (k * k);
+        let s2 = 1.0 / (*k * *k);
         let (mut sum, mut var) = (0.0, 0.0);
         let mut n = 0usize;
         for f in levels.iter().rev().take(m) {
@@ -2724,9 +2740,19 @@ fn trend_shifted_center(
         }
         let delta = sum / m as f64 - *c;
         let e = var.sqrt() / m as f64;
-        let excess = delta.abs() - opts.soft_prior_trend_z * e;
-        if delta.is_finite() && e.is_finite() && excess > 0.0 {
-            *c += excess.copysign(delta);
+        if !(delta.is_finite() && e.is_finite() && delta != 0.0) {
+            continue;
+        }
+        let gain = if opts.soft_prior_trend_blend {
+            1.0 - (z * e / delta).powi(2)
+        } else {
+            1.0 - z * e / delta.abs()
+        };
+        if gain > 0.0 {
+            *c += gain * delta;
+            if opts.soft_prior_trend_widen {
+                *k = 1.0 / (s2 + gain * e * e).sqrt();
+            }
         }
     }
 }
@@ -2863,19 +2889,19 @@ mod tests {
         // 3 − 2 · 0.632 = 1.735.
         let l = levels(&|j| [(if j % 2 == 0 { 1.5 } else { -0.5 }, 1.0), (3.0, 3.0)]);
         let mut c = vec![0.0, 0.0];
-        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 1.0], &l, &opts);
         assert_eq!(c[0], 0.0);
         let e = (40.0f64).sqrt() / 10.0;
         assert!((c[1] - (3.0 - 2.0 * e)).abs() < 1e-12, "{c:?}");
         // Below the centre: moved down, symmetric.
         let l = levels(&|_| [(0.0, 1.0), (-3.0, 3.0)]);
         let mut c = vec![0.0, 0.0];
-        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 1.0], &l, &opts);
         assert!((c[1] + (3.0 - 2.0 * e)).abs() < 1e-12, "{c:?}");
         // Relative to the centre: a centre already at the level stays.
         let l = levels(&|_| [(0.0, 1.0), (3.0, 3.0)]);
         let mut c = vec![0.0, 3.0];
-        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 1.0], &l, &opts);
         assert_eq!(c, vec![0.0, 3.0]);
         // The newest ten frames only: two old frames far off before ten at the centre.
         let l = levels(&|j| {
@@ -2886,13 +2912,13 @@ mod tests {
             }
         });
         let mut c = vec![0.0, 0.0];
-        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 1.0], &l, &opts);
         assert_eq!(c, vec![0.0, 0.0]);
         // A wider prior (k = 0.5: σ² = 4) widens the standard error: e = √(10 · 7) / 10, so the
         // same level moves the centre less.
         let l = levels(&|_| [(0.0, 1.0), (3.0, 3.0)]);
         let mut c = vec![0.0, 0.0];
-        trend_shifted_center(&mut c, &[1.0, 0.5], &l, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 0.5], &l, &opts);
         assert!(
             (c[1] - (3.0 - 2.0 * (70.0f64).sqrt() / 10.0)).abs() < 1e-12,
             "{c:?}"
@@ -2900,11 +2926,61 @@ mod tests {
         // Fewer than m samples, or off: unchanged.
         let short: std::collections::VecDeque<_> = l.iter().take(9).cloned().collect();
         let mut c = vec![0.0, 0.0];
-        trend_shifted_center(&mut c, &[1.0, 1.0], &short, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 1.0], &short, &opts);
         assert_eq!(c, vec![0.0, 0.0]);
         opts.soft_prior_trend_frames = 0;
-        trend_shifted_center(&mut c, &[1.0, 1.0], &l, &opts);
+        trend_shifted_center(&mut c, &mut [1.0, 1.0], &l, &opts);
         assert_eq!(c, vec![0.0, 0.0]);
+    }
+
+    #[test]
+    fn the_trend_blend_shrinks_by_the_level_variance_and_widening_adds_its_posterior_variance() {
+        // Ten frames at the model's width (k = 1), centre 0. Residual 0 alternates 1.5 / -0.5
+        // with v = 1 (δ = 0.5, e² = 10 · 2 / 100 = 0.2); residual 1 sits at 3 with v = 3
+        // (δ = 3, e² = 10 · 4 / 100 = 0.4).
+        let levels: std::collections::VecDeque<Vec<(f64, f64)>> = (0..10)
+            .map(|j| vec![(if j % 2 == 0 { 1.5 } else { -0.5 }, 1.0), (3.0, 3.0)])
+            .collect();
+        let mut opts = crate::config::OdometryOptions {
+            soft_prior_trend_frames: 10,
+            soft_prior_trend_z: 1.0,
+            soft_prior_trend_blend: true,
+            ..Default::default()
+        };
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        // Blend, z = 1: g = 1 − e² / δ², 0.2 for residual 0 and 1 − 0.4 / 9 for residual 1;
+        // the widths stay without widening.
+        let (mut c, mut k) = (vec![0.0, 0.0], vec![1.0, 1.0]);
+        trend_shifted_center(&mut c, &mut k, &levels, &opts);
+        let g = [1.0 - 0.2 / 0.25, 1.0 - 0.4 / 9.0];
+        assert!(close(c[0], g[0] * 0.5) && close(c[1], g[1] * 3.0), "{c:?}");
+        assert_eq!(k, vec![1.0, 1.0]);
+        // The blend moves further than the soft threshold beyond the threshold (same z).
+        opts.soft_prior_trend_blend = false;
+        let (mut cs, mut ks) = (vec![0.0, 0.0], vec![1.0, 1.0]);
+        trend_shifted_center(&mut cs, &mut ks, &levels, &opts);
+        let gs = 1.0 - 0.4f64.sqrt() / 3.0;
+        assert!(close(cs[1], gs * 3.0) && cs[1] < c[1], "{cs:?}");
+        // Widening: σ² = 1 + g e² where the centre moved, for either gain.
+        opts.soft_prior_trend_widen = true;
+        let (mut cs, mut ks) = (vec![0.0, 0.0], vec![1.0, 1.0]);
+        trend_shifted_center(&mut cs, &mut ks, &levels, &opts);
+        assert!(close(cs[1], gs * 3.0), "{cs:?}");
+        assert!(close(ks[1], 1.0 / (1.0 + gs * 0.4).sqrt()), "{ks:?}");
+        opts.soft_prior_trend_blend = true;
+        let (mut c, mut k) = (vec![0.0, 0.0], vec![1.0, 1.0]);
+        trend_shifted_center(&mut c, &mut k, &levels, &opts);
+        assert!(close(c[0], g[0] * 0.5) && close(c[1], g[1] * 3.0), "{c:?}");
+        assert!(close(k[0], 1.0 / (1.0 + g[0] * 0.2).sqrt()), "{k:?}");
+        assert!(close(k[1], 1.0 / (1.0 + g[1] * 0.4).sqrt()), "{k:?}");
+        // z = 2: residual 0 (δ² = 0.25 < 4 e² = 0.8) neither moves nor widens.
+        opts.soft_prior_trend_z = 2.0;
+        let (mut c, mut k) = (vec![0.0, 0.0], vec![1.0, 1.0]);
+        trend_shifted_center(&mut c, &mut k, &levels, &opts);
+        assert_eq!((c[0], k[0]), (0.0, 1.0));
+        let g1 = 1.0 - 4.0 * 0.4 / 9.0;
+        assert!(close(c[1], g1 * 3.0), "{c:?}");
+        assert!(close(k[1], 1.0 / (1.0 + g1 * 0.4).sqrt()), "{k:?}");
     }
 
     #[test]
