@@ -283,6 +283,41 @@ pub struct HypothesesOptions {
     /// §9, twenty-second session, grid36). A config file's `[odometry.separate.hypotheses]`
     /// section gets 0 unless it writes it.
     pub tilt_weak_road_frames: usize,
+    /// The motion prior's prediction where no formed motion continues the yaw (radians; 0:
+    /// off; twenty-third session, tail37). With [`HypothesesOptions::yaw_history_frames`]:
+    /// where A's yaw `ω_z(A)` lies more than this margin `J` from the recent frames' reference
+    /// `r` ([`HypothesisTracker::yaw_reference`]), A's road score is below
+    /// [`HypothesesOptions::min_matches`] (the road does not vouch for it) and none of the
+    /// rules that replace A (the tilt's converse, [`HypothesesOptions::yaw_jump`],
+    /// [`HypothesesOptions::yaw_history_replace`]) found an alternative, the previous frame's
+    /// motion (the constant-velocity prediction `M_t = M_{t-1}`, the first start) is re-solved
+    /// on the matches it explains (epipolar angle below the separation's threshold; at least
+    /// 12) and, where the re-solved motion's yaw lies within
+    /// [`HypothesesOptions::yaw_history_margin`] of `r`, it replaces A. A car's yaw rate
+    /// changes by a few tenths of a degree from one frame to the next (`Δω_z = v Δκ Δt`); an
+    /// A that jumps by degrees with no road under it is an object filling the view (a lead
+    /// car whose static background is hidden), and where no fitted alternative continues the
+    /// run the prediction's own support is the static world's. Off in
+    /// `HypothesesOptions::default()`; the default configuration
+    /// (`SeparateOptions::competition_over_time`) sets `J = 0.01745` (1 deg) with
+    /// [`HypothesesOptions::yaw_history_predict_hold`] since the twenty-third session
+    /// (development seeds 21-30 10 -> 6 frames above 1 deg, seeds 16-20 8 -> 7, the grid and
+    /// seeds 11-15 unchanged in count, no frame of any set worse by more than 0.02 deg; the
+    /// static scenes along KITTI, the built-in drive and real KITTI 00 byte-identical;
+    /// docs/RESULTS.md §9, twenty-third session, tail37). A config file's
+    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
+    pub yaw_history_predict: f64,
+    /// With [`HypothesesOptions::yaw_history_predict`]: where the re-solve is not possible
+    /// (fewer than 12 matches explained by the prediction), fails or jumps too, the prediction
+    /// itself (the previous frame's motion, unsolved) replaces A. Off (`false`) in
+    /// `HypothesesOptions::default()`, on in the default configuration since the twenty-third
+    /// session (with `yaw_history_predict`).
+    pub yaw_history_predict_hold: bool,
+    /// With [`HypothesesOptions::yaw_history_predict`]: the prediction is also formed where
+    /// A's tilt jumps from the recent frames' (the gate of the tilt's converse,
+    /// [`HypothesisTracker::tilt_jumps_given_road`] with A's road weak) instead of its yaw,
+    /// and it replaces A only where its own tilt does not jump either. Off (`false`).
+    pub tilt_predict: bool,
 }
 
 /// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
@@ -326,6 +361,9 @@ impl Default for HypothesesOptions {
             yaw_history_replace: false,
             tilt_replace_roadless: false,
             tilt_weak_road_frames: 0,
+            yaw_history_predict: 0.0,
+            yaw_history_predict_hold: false,
+            tilt_predict: false,
         }
     }
 }
@@ -387,6 +425,12 @@ impl HypothesesOptions {
         if !(self.yaw_jump.is_finite() && self.yaw_jump >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.yaw_jump must be a finite number >= 0".into(),
+            );
+        }
+        if !(self.yaw_history_predict.is_finite() && self.yaw_history_predict >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.yaw_history_predict must be a finite number >= 0"
+                    .into(),
             );
         }
         if !(self.yaw_history_margin.is_finite() && self.yaw_history_margin >= 0.0) {

@@ -453,7 +453,11 @@ impl SeparateOptions {
     /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36), and the
     /// converse's gate measures the jump from the minimum of the last three frames' tilts
     /// where A's road score is below `min_matches` (`hypotheses.tilt_weak_road_frames = 3`;
-    /// docs/RESULTS.md §9, twenty-second session, grid36). A
+    /// docs/RESULTS.md §9, twenty-second session, grid36). Since the twenty-third session an
+    /// A whose yaw jumps more than 1 deg from the previous frame's without road, where no rule
+    /// found an alternative, is replaced by the previous motion re-solved on its support, or
+    /// held where that is not possible (`hypotheses.yaw_history_predict = 0.01745`,
+    /// `yaw_history_predict_hold`; docs/RESULTS.md §9, twenty-third session, tail37). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -487,6 +491,8 @@ impl SeparateOptions {
                 yaw_history_margin: 0.01745,
                 yaw_history_replace: true,
                 tilt_weak_road_frames: 3,
+                yaw_history_predict: 0.01745,
+                yaw_history_predict_hold: true,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -1271,6 +1277,15 @@ fn separate_with(
             turned_a = yaw_history_replacement(ctx, h, tracker, obs, &chosen, &alternatives);
         }
     }
+    // `yaw_history_predict` (`predicted_a`): A's yaw jumped from the recent frames' without
+    // road while no rule found an alternative; the previous motion re-solved on its support.
+    let predicted_a = (tilted_a.is_none() && jumped_a.is_none() && turned_a.is_none())
+        .then(|| {
+            let previous = starts.first()?;
+            let h = opts.hypotheses()?;
+            yaw_history_prediction(ctx, h, tracker, obs, &chosen, previous, &support)
+        })
+        .flatten();
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
@@ -1328,8 +1343,11 @@ fn separate_with(
     {
         alternatives.push((t.clone(), sup_t.clone()));
     }
-    outcome.competing =
-        !alternatives.is_empty() || tilted_a.is_some() || jumped_a.is_some() || turned_a.is_some();
+    outcome.competing = !alternatives.is_empty()
+        || tilted_a.is_some()
+        || jumped_a.is_some()
+        || turned_a.is_some()
+        || predicted_a.is_some();
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
         opts.min_cell_ratio <= 0.0
@@ -1342,7 +1360,8 @@ fn separate_with(
         && (!alternatives.is_empty()
             || tilted_a.is_some()
             || jumped_a.is_some()
-            || turned_a.is_some())
+            || turned_a.is_some()
+            || predicted_a.is_some())
     {
         // The alternative with the most ground (or parallax) support against A, over frames.
         let metric = arc_length.is_some();
@@ -1422,7 +1441,7 @@ fn separate_with(
         });
         // `tilt_replace` / `yaw_jump`: A tilted beyond an alternative (first), or jumped away
         // from the trusted previous motion, is replaced by it.
-        let forced_alt = tilted_a.or(jumped_a).or(turned_a);
+        let forced_alt = tilted_a.or(jumped_a).or(turned_a).or(predicted_a);
         let forced = forced_alt.is_some();
         let (score_b, best) = match forced_alt {
             Some(alt) => {
@@ -1727,6 +1746,72 @@ fn yaw_history_replacement(
         .map(|alt| (road_score(ctx, h, obs, alt), alt))
         .filter(|(s, _)| *s > 0);
     first_highest(qualified)
+}
+
+/// The previous frame's motion re-solved on its support where A's yaw jumped without road
+/// ([`HypothesesOptions::yaw_history_predict`] `= J`): where `|ω_z(A) − r| > J` (`r` the
+/// recent frames' reference yaw, [`HypothesisTracker::yaw_reference`]; a NaN yaw counts as a
+/// jump) and A's road score ([`score`]) is below [`HypothesesOptions::min_matches`], the
+/// previous motion `previous` (the constant-velocity prediction) is re-solved, without the
+/// rotation prior, on the matches it explains (`support`, at least 12 of them); the result
+/// with its own support, where its yaw lies within
+/// [`HypothesesOptions::yaw_history_margin`] of `r`; with
+/// [`HypothesesOptions::yaw_history_predict_hold`] the prediction itself where that is not
+/// possible. With [`HypothesesOptions::tilt_predict`] A also qualifies where its tilt jumps
+/// ([`HypothesisTracker::tilt_jumps_given_road`], the road weak) and the re-solved motion
+/// must not jump in tilt either. None with the rule off, before any frame was recorded, or
+/// where A does not qualify and nothing is held.
+fn yaw_history_prediction(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    tracker: &HypothesisTracker,
+    obs: &FrameObservations,
+    chosen: &Candidate,
+    previous: &[f64],
+    support: &dyn Fn(&[f64]) -> Vec<Vec<bool>>,
+) -> Option<Candidate> {
+    if !(h.yaw_history_predict > 0.0 && h.yaw_history_frames > 0) {
+        return None;
+    }
+    let r = tracker.yaw_reference()?;
+    // `tilt_predict`: the tilt's jump from the recent frames' (A's road is weak here).
+    let tilt_jumps = |params: &[f64]| {
+        h.tilt_predict
+            && tracker.tilt_jumps_given_road(
+                h,
+                crate::hypotheses::tilt(&ctx.estimator.motion(params)),
+                true,
+            )
+    };
+    // `!(x <= J)`: a NaN yaw counts as a jump.
+    if ((yaw_of(ctx, &chosen.0.params) - r).abs() <= h.yaw_history_predict
+        && !tilt_jumps(&chosen.0.params))
+        || road_score(ctx, h, obs, chosen) >= h.min_matches
+    {
+        return None;
+    }
+    let sup_p = support(previous);
+    let solved = (count(&sup_p) >= 12)
+        .then(|| ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false))
+        .flatten()
+        .filter(|p| !tracker.yaw_jumps(h, yaw_of(ctx, &p.params)) && !tilt_jumps(&p.params));
+    if let Some(p) = solved {
+        let sup = support(&p.params);
+        return Some((p, sup));
+    }
+    if !h.yaw_history_predict_hold {
+        return None;
+    }
+    // The prediction itself: A's solution moved to the previous motion (A's normal matrix
+    // stays, the final stage refits it on the prediction's support).
+    let mut p = chosen.0.clone();
+    p.params = previous.to_vec();
+    for (k, &i) in p.free.iter().enumerate() {
+        if let (Some(x), Some(v)) = (p.report.x.get_mut(k), previous.get(i)) {
+            *x = *v;
+        }
+    }
+    Some((p, sup_p))
 }
 
 /// `k` of the `m` matches of `mask` (all of them where `m <= k`), evenly spaced in the frame's
@@ -3304,6 +3389,145 @@ mod tests {
             bad.validate()
                 .expect_err("NaN")
                 .contains("yaw_history_margin")
+        );
+    }
+
+    /// `yaw_history_predict`: an A that jumped by degrees from the recent frames' yaw without
+    /// road, where no rule found an alternative, is replaced by the previous motion re-solved
+    /// on the matches it explains (its yaw continues the history), or with
+    /// `yaw_history_predict_hold` by the prediction itself where the re-solve is not possible;
+    /// nothing where A does not jump, has road, or the rule is off; the options parse and
+    /// validate.
+    #[test]
+    fn yaw_history_predict_replaces_a_roadless_jump_by_the_previous_motion() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let w = yaw_of(&ctx, &sol.params);
+        let deg = 1.0_f64.to_radians();
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            yaw_history_predict: deg,
+            ..HypothesesOptions::default()
+        };
+        let support = |p: &[f64]| -> Vec<Vec<bool>> {
+            epipolar_angles(rig, &estimator.motion(p), obs)
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        };
+        // A on an object: 5 deg less turn, no road under its (empty) support.
+        let car = f.turned(-5.0 * deg, &none);
+        let previous = f.turned(0.2 * deg, &none).0.params;
+        let mut tracker = HypothesisTracker::default();
+        let predict = |h: &HypothesesOptions, t: &HypothesisTracker, a: &Candidate, p: &[f64]| {
+            yaw_history_prediction(&ctx, h, t, obs, a, p, &support)
+        };
+        // Nothing recorded yet: the rule does not act.
+        assert!(predict(&h, &tracker, &car, &previous).is_none());
+        tracker.record_yaw(&h, w);
+        // The previous motion re-solved on the matches it explains: the static world's.
+        let (p, sup_p) = predict(&h, &tracker, &car, &previous).expect("replaced");
+        assert!((yaw_of(&ctx, &p.params) - w).abs() < 0.1 * deg);
+        assert!(count(&sup_p) >= 12);
+        // An A within the margin, or with its road score at least `min_matches` (0 here), or
+        // the rule off: nothing.
+        let near = f.turned(-0.5 * deg, &none);
+        assert!(predict(&h, &tracker, &near, &previous).is_none());
+        let roaded = HypothesesOptions {
+            min_matches: 0,
+            ..h.clone()
+        };
+        assert!(predict(&roaded, &tracker, &car, &previous).is_none());
+        let off = HypothesesOptions {
+            yaw_history_predict: 0.0,
+            ..h.clone()
+        };
+        assert!(predict(&off, &tracker, &car, &previous).is_none());
+        // A prediction that explains none of the matches: no re-solve; held as it is only with
+        // `yaw_history_predict_hold`.
+        let lost = f.turned(20.0 * deg, &none).0.params;
+        assert!(count(&support(&lost)) < 12);
+        assert!(predict(&h, &tracker, &car, &lost).is_none());
+        let hold = HypothesesOptions {
+            yaw_history_predict_hold: true,
+            ..h.clone()
+        };
+        let (held, _) = predict(&hold, &tracker, &car, &lost).expect("held");
+        assert_eq!(held.params, lost);
+        // `tilt_predict`: an A whose yaw continues the history but whose tilt jumped (1.5 deg
+        // of roll against the recorded flat frame) is replaced too, only with the option.
+        let roll = estimator
+            .param_names()
+            .iter()
+            .position(|n| *n == "rot_x")
+            .expect("rot_x");
+        let mut rolled = f.turned(0.0, &none);
+        rolled.0.params[roll] += 1.5 * deg;
+        let tilting = HypothesesOptions {
+            tilt_reference_frames: 1,
+            tilt_reference_margin: 0.01,
+            ..h.clone()
+        };
+        let mut t2 = HypothesisTracker::default();
+        t2.record_yaw(&tilting, w);
+        t2.record_tilt(
+            &tilting,
+            crate::hypotheses::tilt(&estimator.motion(&sol.params)),
+        );
+        assert!(predict(&tilting, &t2, &rolled, &previous).is_none());
+        let tilt_on = HypothesesOptions {
+            tilt_predict: true,
+            ..tilting.clone()
+        };
+        let (p, _) = predict(&tilt_on, &t2, &rolled, &previous).expect("replaced");
+        let tilt_p = crate::hypotheses::tilt(&estimator.motion(&p.params));
+        assert!(!t2.tilt_jumps_given_road(&tilt_on, tilt_p, true));
+        // The options parse and validate.
+        let o: HypothesesOptions = toml::from_str(
+            "yaw_history_predict = 0.01745\nyaw_history_predict_hold = true\ntilt_predict = true",
+        )
+        .expect("parses");
+        assert_eq!(
+            (
+                o.yaw_history_predict,
+                o.yaw_history_predict_hold,
+                o.tilt_predict
+            ),
+            (0.01745, true, true)
+        );
+        assert!(o.validate().is_ok());
+        let d = HypothesesOptions::default();
+        assert_eq!(
+            (
+                d.yaw_history_predict,
+                d.yaw_history_predict_hold,
+                d.tilt_predict
+            ),
+            (0.0, false, false)
+        );
+        // On in the default configuration (1 deg with the hold), `tilt_predict` off.
+        let dc = SeparateOptions::competition_over_time();
+        let dc = dc.hypotheses().expect("hypotheses");
+        assert_eq!(
+            (
+                dc.yaw_history_predict,
+                dc.yaw_history_predict_hold,
+                dc.tilt_predict
+            ),
+            (0.01745, true, false)
+        );
+        let bad = HypothesesOptions {
+            yaw_history_predict: -1.0,
+            ..HypothesesOptions::default()
+        };
+        assert!(
+            bad.validate()
+                .expect_err("negative")
+                .contains("yaw_history_predict")
         );
     }
 
