@@ -297,8 +297,11 @@ pub struct HypothesesOptions {
     /// changes by a few tenths of a degree from one frame to the next (`Δω_z = v Δκ Δt`); an
     /// A that jumps by degrees with no road under it is an object filling the view (a lead
     /// car whose static background is hidden), and where no fitted alternative continues the
-    /// run the prediction's own support is the static world's. Off (`0`; measured in
-    /// docs/RESULTS.md §9, twenty-third session, tail37).
+    /// run the prediction's own support is the static world's. The test of A's road does not
+    /// tell an object from a scene without road: there every yaw jump beyond `J` is replaced
+    /// (with `J = 1 deg` and the hold eight of `momo-vo`'s integration tests fail, e.g. a sharp
+    /// turn after straight driving). Off (`0`; measured in docs/RESULTS.md §9, twenty-third
+    /// session, tail37).
     pub yaw_history_predict: f64,
     /// With [`HypothesesOptions::yaw_history_predict`]: where the re-solve is not possible
     /// (fewer than 12 matches explained by the prediction), fails or jumps too, the prediction
