@@ -297,21 +297,15 @@ pub struct HypothesesOptions {
     /// changes by a few tenths of a degree from one frame to the next (`Δω_z = v Δκ Δt`); an
     /// A that jumps by degrees with no road under it is an object filling the view (a lead
     /// car whose static background is hidden), and where no fitted alternative continues the
-    /// run the prediction's own support is the static world's. Off in
-    /// `HypothesesOptions::default()`; the default configuration
-    /// (`SeparateOptions::competition_over_time`) sets `J = 0.01745` (1 deg) with
-    /// [`HypothesesOptions::yaw_history_predict_hold`] since the twenty-third session
-    /// (development seeds 21-30 10 -> 6 frames above 1 deg, seeds 16-20 8 -> 7, the grid and
-    /// seeds 11-15 unchanged in count, no frame of any set worse by more than 0.02 deg; the
-    /// static scenes along KITTI, the built-in drive and real KITTI 00 byte-identical;
-    /// docs/RESULTS.md §9, twenty-third session, tail37). A config file's
-    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
+    /// run the prediction's own support is the static world's. The test of A's road does not
+    /// tell an object from a scene without road: there every yaw jump beyond `J` is replaced
+    /// (with `J = 1 deg` and the hold eight of `momo-vo`'s integration tests fail, e.g. a sharp
+    /// turn after straight driving). Off (`0`; measured in docs/RESULTS.md §9, twenty-third
+    /// session, tail37).
     pub yaw_history_predict: f64,
     /// With [`HypothesesOptions::yaw_history_predict`]: where the re-solve is not possible
     /// (fewer than 12 matches explained by the prediction), fails or jumps too, the prediction
-    /// itself (the previous frame's motion, unsolved) replaces A. Off (`false`) in
-    /// `HypothesesOptions::default()`, on in the default configuration since the twenty-third
-    /// session (with `yaw_history_predict`).
+    /// itself (the previous frame's motion, unsolved) replaces A. Off (`false`).
     pub yaw_history_predict_hold: bool,
     /// With [`HypothesesOptions::yaw_history_predict`]: the prediction is also formed where
     /// A's tilt jumps from the recent frames' (the gate of the tilt's converse,

@@ -453,11 +453,7 @@ impl SeparateOptions {
     /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36), and the
     /// converse's gate measures the jump from the minimum of the last three frames' tilts
     /// where A's road score is below `min_matches` (`hypotheses.tilt_weak_road_frames = 3`;
-    /// docs/RESULTS.md §9, twenty-second session, grid36). Since the twenty-third session an
-    /// A whose yaw jumps more than 1 deg from the previous frame's without road, where no rule
-    /// found an alternative, is replaced by the previous motion re-solved on its support, or
-    /// held where that is not possible (`hypotheses.yaw_history_predict = 0.01745`,
-    /// `yaw_history_predict_hold`; docs/RESULTS.md §9, twenty-third session, tail37). A
+    /// docs/RESULTS.md §9, twenty-second session, grid36). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -491,8 +487,6 @@ impl SeparateOptions {
                 yaw_history_margin: 0.01745,
                 yaw_history_replace: true,
                 tilt_weak_road_frames: 3,
-                yaw_history_predict: 0.01745,
-                yaw_history_predict_hold: true,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -3508,17 +3502,6 @@ mod tests {
                 d.tilt_predict
             ),
             (0.0, false, false)
-        );
-        // On in the default configuration (1 deg with the hold), `tilt_predict` off.
-        let dc = SeparateOptions::competition_over_time();
-        let dc = dc.hypotheses().expect("hypotheses");
-        assert_eq!(
-            (
-                dc.yaw_history_predict,
-                dc.yaw_history_predict_hold,
-                dc.tilt_predict
-            ),
-            (0.01745, true, false)
         );
         let bad = HypothesesOptions {
             yaw_history_predict: -1.0,
