@@ -115,9 +115,32 @@ fn cholesky_solve_block(
     damping: f64,
     scaled: bool,
 ) -> Option<ParamVec> {
+    // One instance per size, so that the loops have constant bounds (`MAX_PARAMS` = 8).
+    match n {
+        0 => Some(*b),
+        1 => cholesky_solve_n::<1>(h, b, damping, scaled),
+        2 => cholesky_solve_n::<2>(h, b, damping, scaled),
+        3 => cholesky_solve_n::<3>(h, b, damping, scaled),
+        4 => cholesky_solve_n::<4>(h, b, damping, scaled),
+        5 => cholesky_solve_n::<5>(h, b, damping, scaled),
+        6 => cholesky_solve_n::<6>(h, b, damping, scaled),
+        7 => cholesky_solve_n::<7>(h, b, damping, scaled),
+        _ => cholesky_solve_n::<MAX_PARAMS>(h, b, damping, scaled),
+    }
+}
+
+/// [`cholesky_solve_block`] for `n = N`.
+#[inline]
+fn cholesky_solve_n<const N: usize>(
+    h: &NormalMatrix,
+    b: &ParamVec,
+    damping: f64,
+    scaled: bool,
+) -> Option<ParamVec> {
+    let n = N;
     // `l[j][i]` = `L_ij` (column j), the lower triangle of the damped block.
-    let mut l = [[0.0_f64; MAX_PARAMS]; MAX_PARAMS];
-    let mut diag = [0.0_f64; MAX_PARAMS];
+    let mut l = [[0.0_f64; N]; N];
+    let mut diag = [0.0_f64; N];
     for j in 0..n {
         for i in j..n {
             l[j][i] = h[(i, j)];
