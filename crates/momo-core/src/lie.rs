@@ -259,7 +259,10 @@ mod tests {
     fn dual_bits<const N: usize>(x: &DualSVec64<N>) -> (u64, Option<Vec<u64>>) {
         (
             x.re.to_bits(),
-            x.eps.0.as_ref().map(|e| e.iter().map(|v| v.to_bits()).collect()),
+            x.eps
+                .0
+                .as_ref()
+                .map(|e| e.iter().map(|v| v.to_bits()).collect()),
         )
     }
 

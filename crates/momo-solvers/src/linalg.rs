@@ -443,7 +443,10 @@ mod tests {
             .unwrap();
         // Both outcomes are exercised.
         let (solved, refused) = (solved.get(), refused.get());
-        assert!(solved > 500 && refused > 100, "{solved} solved, {refused} refused");
+        assert!(
+            solved > 500 && refused > 100,
+            "{solved} solved, {refused} refused"
+        );
     }
 
     #[test]
