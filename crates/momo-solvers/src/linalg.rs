@@ -436,7 +436,11 @@ mod tests {
                         }
                     }
                     (None, None) => refused.set(refused.get() + 1),
-                    _ => prop_assert!(false, "n {}: {:?} vs {:?}", n, reference, block),
+                    _ => {
+                        return Err(proptest::test_runner::TestCaseError::fail(format!(
+                            "n {n}: {reference:?} vs {block:?}"
+                        )));
+                    }
                 }
                 Ok(())
             })
