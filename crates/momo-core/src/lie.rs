@@ -52,11 +52,23 @@ fn so3_coefficients<T: Scalar>(theta_sq: T) -> (T, T, T) {
 }
 
 /// SO(3) exponential (Rodrigues): `R = I + a [w]_x + b [w]_x²`.
+///
+/// Written out entry by entry in the order nalgebra evaluates `I + k a + (k k) b` with
+/// `k = [w]_x`: `R_ij = (I_ij + k_ij a) + ((k_i0 k_0j + k_i1 k_1j) + k_i2 k_2j) b`. nalgebra's
+/// generic product (its `gemv` per column) forms the same sums with extra factors of exactly
+/// one (`(1 · k_i0) k_0j + 1 · y`), which change no bit on `f64` or on dual numbers, so this is
+/// bit-identical to the matrix expression (test `so3_exp_matches_the_matrix_expression_bitwise`)
+/// without its calls and copies (the dual-number motion of every linearisation).
 #[inline]
 pub fn so3_exp<T: Scalar>(w: &Vector3<T>) -> Matrix3<T> {
     let (a, b, _) = so3_coefficients(w.norm_squared());
     let k = hat(w);
-    Matrix3::identity() + k * a + k * k * b
+    let (z, o) = (T::zero(), T::one());
+    Matrix3::from_fn(|i, j| {
+        let kk = (k[(i, 0)] * k[(0, j)] + k[(i, 1)] * k[(1, j)]) + k[(i, 2)] * k[(2, j)];
+        let id = if i == j { o } else { z };
+        (id + k[(i, j)] * a) + kk * b
+    })
 }
 
 /// SO(3) logarithm: the rotation vector `w` with `so3_exp(w) = r`, `|w| <= π`.
@@ -232,6 +244,55 @@ mod tests {
                     let eps = r[(row, col)].eps.unwrap_generic(nalgebra::U3, U1);
                     assert_eq!(eps[i], g[(row, col)], "entry ({row},{col}) wrt w{i}");
                 }
+            }
+        }
+    }
+
+    /// The matrix expression [`so3_exp`] writes out (its reference).
+    fn so3_exp_matrix<T: Scalar>(w: &Vector3<T>) -> Matrix3<T> {
+        let (a, b, _) = so3_coefficients(w.norm_squared());
+        let k = hat(w);
+        Matrix3::identity() + k * a + k * k * b
+    }
+
+    /// The bits of a dual number: value and derivatives (`None` as no bits).
+    fn dual_bits<const N: usize>(x: &DualSVec64<N>) -> (u64, Option<Vec<u64>>) {
+        (
+            x.re.to_bits(),
+            x.eps
+                .0
+                .as_ref()
+                .map(|e| e.iter().map(|v| v.to_bits()).collect()),
+        )
+    }
+
+    proptest! {
+        /// Bit for bit on `f64` and on dual numbers (5 and 8 derivatives, some components
+        /// constant), over both branches of the coefficients and with exact zeros (signed).
+        #[test]
+        fn so3_exp_matches_the_matrix_expression_bitwise(
+            w in proptest::array::uniform3(prop_oneof![
+                Just(0.0), Just(-0.0), -1e-4..1e-4_f64, -3.0..3.0_f64
+            ]),
+            free in proptest::array::uniform3(any::<bool>()),
+        ) {
+            let v = Vector3::from(w);
+            let (x, y) = (so3_exp(&v), so3_exp_matrix(&v));
+            for i in 0..9 {
+                prop_assert_eq!(x[i].to_bits(), y[i].to_bits());
+            }
+            let d5 = Vector3::from_fn(|i, _| {
+                let d = DualSVec64::<5>::from_re(w[i]);
+                if free[i] { d.derivative(i + 1) } else { d }
+            });
+            let (x, y) = (so3_exp(&d5), so3_exp_matrix(&d5));
+            for i in 0..9 {
+                prop_assert_eq!(dual_bits(&x[i]), dual_bits(&y[i]));
+            }
+            let d8 = Vector3::from_fn(|i, _| DualSVec64::<8>::from_re(w[i]).derivative(2 * i));
+            let (x, y) = (so3_exp(&d8), so3_exp_matrix(&d8));
+            for i in 0..9 {
+                prop_assert_eq!(dual_bits(&x[i]), dual_bits(&y[i]));
             }
         }
     }
