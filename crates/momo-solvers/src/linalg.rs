@@ -157,7 +157,7 @@ fn cholesky_solve_n<const N: usize>(
             let (head, tail) = l.split_at_mut(j);
             let (col_k, col_j) = (&head[k], &mut tail[0]);
             for i in j..n {
-                col_j[i] = factor * col_k[i] + col_j[i];
+                col_j[i] += factor * col_k[i];
             }
         }
         let v = l[j][j];
@@ -182,7 +182,7 @@ fn cholesky_solve_n<const N: usize>(
         let coeff = x[i] / l[i][i];
         x[i] = coeff;
         for k in i + 1..n {
-            x[k] = -coeff * l[i][k] + x[k];
+            x[k] += -coeff * l[i][k];
         }
     }
     for i in (0..n).rev() {
