@@ -2160,7 +2160,12 @@ impl Odometry {
                     .collect(),
             };
             if let Some(j) = trust::jackknife_covariance(&samples) {
-                cov = trust::widen(&cov, &j, self.config.trust.jackknife_min_ratio);
+                let ratio = if k < status_grids {
+                    t.jackknife_min_ratio
+                } else {
+                    t.report_min_ratio
+                };
+                cov = trust::widen(&cov, &j, ratio);
             }
         }
         Some((status_cov.unwrap_or_else(|| cov.clone()), cov))

@@ -521,6 +521,7 @@ fn a_rigid_object_moving_differently_widens_the_covariance() {
     let mut off = base();
     off.trust.jackknife_grids.clear();
     off.trust.clustering_grids.clear();
+    off.trust.report_grids.clear();
     off.trust.clustering_z = 0.0;
     let (with, without) = (inside(base()), inside(off));
     eprintln!("inside the 95 % bound: {with:.2} with the jackknife, {without:.2} without");
