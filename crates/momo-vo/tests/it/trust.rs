@@ -962,7 +962,8 @@ fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
 /// `trust.report_grids` widen only the reported covariance: the competing-motions test reads
 /// the covariance before them, so on a moving-traffic drive the poses and every status stay as
 /// they are without them, every reported covariance is at least as wide in every direction,
-/// and some are wider (a lead vehicle in the image's middle column). Empty grids are rejected.
+/// and some are wider (a lead vehicle in the image's middle column). Empty grids and a ratio
+/// below 1 are rejected.
 #[test]
 fn report_grids_widen_only_the_reported_covariance() {
     let mut traffic = momo_sim::SimConfig::moving_traffic();
@@ -1004,4 +1005,6 @@ fn report_grids_widen_only_the_reported_covariance() {
     assert!(wider >= 3, "{wider} covariances widened");
     let e = config_error("[trust]\nreport_grids = [[0, 1]]\n");
     assert!(e.contains("trust.report_grids"), "{e}");
+    let e = config_error("[trust]\nreport_min_ratio = 0.5\n");
+    assert!(e.contains("trust.report_min_ratio"), "{e}");
 }
