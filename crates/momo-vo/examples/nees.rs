@@ -115,6 +115,7 @@ fn main() {
                 let mut c = config();
                 c.trust.jackknife_grids.clear();
                 c.trust.clustering_grids.clear();
+                c.trust.report_grids.clear();
                 c.trust.clustering_z = 0.0;
                 c.trust.competing_min_fraction = 0.0;
                 Odometry::new(seq.rig.clone(), c).ok()

@@ -261,6 +261,10 @@ pub struct Odometry {
     frame_stage: Option<crate::final_fit::StageSupport>,
     /// The residual-clustering trigger of the jackknife (`trust.clustering_z`).
     clustering: trust::ClusteringTrigger,
+    /// The previous moving frame's covariance before any competing or alternative motion was
+    /// added (its frame number, free parameters and the matrix): the floor of the next frame's
+    /// (`trust.covariance_memory`).
+    covariance_memory: Option<(usize, Vec<usize>, nalgebra::DMatrix<f64>)>,
     /// Consecutive moving frames whose separation kept no competing alternative (the
     /// quiet-frame fast path, `odometry.quiet_frames`).
     quiet_streak: usize,
@@ -357,6 +361,7 @@ impl Odometry {
             frame_constants: None,
             frame_stage: None,
             clustering: Default::default(),
+            covariance_memory: None,
             quiet_streak: 0,
             quiet_taken: 0,
         })
@@ -1017,6 +1022,7 @@ impl Odometry {
         self.frame_constants = None;
         self.frame_stage = None;
         self.clustering = Default::default();
+        self.covariance_memory = None;
         self.quiet_streak = 0;
         self.quiet_taken = 0;
     }
@@ -1224,6 +1230,7 @@ impl Odometry {
                             (false, false),
                             None,
                             None,
+                            None,
                             &mut diag,
                         );
                         None
@@ -1424,15 +1431,25 @@ impl Odometry {
                 // The soft prior's data view of the first stage's solution (else of `sol`): the
                 // conflict check of the covariance and the innovation below share it.
                 let soft_view = SoftView::new();
-                self.fill_diagnostics(
+                // The previous frame's covariance, decayed (`trust.covariance_memory`).
+                let floor = if standstill {
+                    None
+                } else {
+                    self.covariance_floor(&sol)
+                };
+                let base = self.fill_diagnostics(
                     obs,
                     &sol,
                     !standstill,
                     (jackknife, clustered),
                     outside,
                     Some(&soft_view),
+                    floor.as_ref(),
                     &mut diag,
                 );
+                if !standstill && self.config.trust.covariance_memory > 0.0 {
+                    self.covariance_memory = base.map(|c| (self.frame, sol.free.clone(), c));
+                }
                 if !standstill && !self.soft_inv_scale.is_empty() {
                     soft_sample =
                         self.soft_innovation(self.first_stage.as_ref().unwrap_or(&sol), &soft_view);
@@ -2077,6 +2094,10 @@ impl Odometry {
 
     /// The reported covariance: the calibrated one, widened where the leave-one-cell-out
     /// jackknife is wider ([`trust::jackknife_covariance`], `trust.jackknife_grid`).
+    ///
+    /// Returns that covariance and the one to report, which the grids of
+    /// `trust.report_grids` widen further (the first is the one the competing-motions test
+    /// reads, so that those grids do not change a status).
     fn reported_covariance(
         &self,
         obs: &FrameObservations,
@@ -2084,7 +2105,7 @@ impl Odometry {
         jackknife: bool,
         clustered: bool,
         soft_view: Option<&SoftView>,
-    ) -> Option<nalgebra::DMatrix<f64>> {
+    ) -> Option<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>)> {
         let mut cov = match self.unlearnt_prior_covariance(sol) {
             Some(c) => c,
             None => self.covariance(sol)?,
@@ -2104,20 +2125,23 @@ impl Odometry {
             cov += w;
         }
         if !jackknife {
-            return Some(cov);
+            return Some((cov.clone(), cov));
         }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let t = &self.config.trust;
         let extra: &[[usize; 2]] = if clustered { &t.clustering_grids } else { &[] };
         // The one-linearisation jackknife: the frame's exact Hessian and gradient and every
-        // grid's cells' data terms, in one pass over the matches.
+        // grid's cells' data terms, in one pass over the matches; the report-only grids last.
         let grids: Vec<(usize, usize)> = t
             .jackknife_grids
             .iter()
             .chain(extra)
+            .chain(&t.report_grids)
             .map(|&[gx, gy]| (gx, gy))
             .collect();
+        let status_grids = grids.len() - t.report_grids.len();
+        let mut status_cov = None;
         // (No grid: nothing to linearise.)
         let frame = if t.jackknife_influence && !grids.is_empty() {
             self.influence_frame(obs, sol, &fixed, &grids)
@@ -2125,6 +2149,9 @@ impl Odometry {
             None
         };
         for (k, &(gx, gy)) in grids.iter().enumerate() {
+            if k == status_grids {
+                status_cov = Some(cov.clone());
+            }
             let samples: Vec<Vec<f64>> = match &frame {
                 Some(f) => self.influence_samples(f, k, obs, sol, &fixed, &cov, (gx, gy)),
                 None => trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
@@ -2133,10 +2160,15 @@ impl Odometry {
                     .collect(),
             };
             if let Some(j) = trust::jackknife_covariance(&samples) {
-                cov = trust::widen(&cov, &j, self.config.trust.jackknife_min_ratio);
+                let ratio = if k < status_grids {
+                    t.jackknife_min_ratio
+                } else {
+                    t.report_min_ratio
+                };
+                cov = trust::widen(&cov, &j, ratio);
             }
         }
-        Some(cov)
+        Some((status_cov.unwrap_or_else(|| cov.clone()), cov))
     }
 
     /// One leave-one-cell-out re-estimate of the jackknife (its free parameters) from the
@@ -2464,8 +2496,9 @@ impl Odometry {
         jackknife: (bool, bool),
         outside: Option<Vec<Vec<bool>>>,
         soft_view: Option<&SoftView>,
+        floor: Option<&nalgebra::DMatrix<f64>>,
         diag: &mut FrameDiagnostics,
-    ) {
+    ) -> Option<nalgebra::DMatrix<f64>> {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
         diag.iterations = sol.report.iterations;
@@ -2479,8 +2512,16 @@ impl Odometry {
             None
         };
         diag.jackknife = moving && (jackknife.0 || competing.is_some());
-        let mut reported =
-            self.reported_covariance(obs, sol, diag.jackknife, moving && jackknife.1, soft_view);
+        let (status_cov, mut reported) = match self.reported_covariance(
+            obs,
+            sol,
+            diag.jackknife,
+            moving && jackknife.1,
+            soft_view,
+        ) {
+            Some((s, r)) => (Some(s), Some(r)),
+            None => (None, None),
+        };
         if let Some((b, w)) = &competing {
             let mut all = sol.params.clone();
             for (&i, v) in sol.free.iter().zip(b) {
@@ -2488,18 +2529,29 @@ impl Odometry {
             }
             diag.competing = Some((all, *w));
         }
-        if let Some(cov) = reported.as_mut()
-            && let Some((b, w)) = competing
+        if let Some(cov) = status_cov.as_ref()
+            && let Some((b, w)) = &competing
         {
             let a: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
             // A frame whose covariance the two motions' difference dominates is flagged
             // (`weak`, `competing_motions`): it keeps its estimate and does not centre the next
             // frame's prior. Frames where the difference stays within the (jackknife-widened)
             // covariance keep `estimated`.
-            if trust::mixture_dominates(cov, &a, &b, w) && diag.constraint == Constraint::Well {
+            if trust::mixture_dominates(cov, &a, b, *w) && diag.constraint == Constraint::Well {
                 diag.constraint = Constraint::Weak;
                 diag.reason = Some(Reason::CompetingMotions);
             }
+        }
+        // The floor from the previous frame (`trust.covariance_memory`), after the test above:
+        // the status and so the poses do not depend on it.
+        if let (Some(cov), Some(floor)) = (reported.as_mut(), floor) {
+            *cov = trust::widen(cov, floor, 1.0);
+        }
+        let base = reported.clone();
+        if let Some(cov) = reported.as_mut()
+            && let Some((b, w)) = competing
+        {
+            let a: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
             *cov = trust::mixture_covariance(cov, &a, &b, w);
         }
         if let Some(cov) = reported {
@@ -2507,6 +2559,23 @@ impl Odometry {
                 diag.param_sigmas[i] = cov[(k, k)].max(0.0).sqrt();
             }
             diag.covariance = cov.transpose().iter().copied().collect();
+        }
+        base
+    }
+
+    /// The floor of this frame's reported covariance (`trust.covariance_memory` `ρ`): `ρ Σ'`
+    /// with `Σ'` the previous frame's covariance before competing or alternative motions were
+    /// added (itself floored), where that frame was the previous one and had the same free
+    /// parameters; `None` otherwise or where `ρ` is 0.
+    fn covariance_floor(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+        let rho = self.config.trust.covariance_memory;
+        match &self.covariance_memory {
+            Some((frame, free, m))
+                if rho > 0.0 && *frame + 1 == self.frame && *free == sol.free =>
+            {
+                Some(m * rho)
+            }
+            _ => None,
         }
     }
 }

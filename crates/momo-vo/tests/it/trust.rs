@@ -521,6 +521,7 @@ fn a_rigid_object_moving_differently_widens_the_covariance() {
     let mut off = base();
     off.trust.jackknife_grids.clear();
     off.trust.clustering_grids.clear();
+    off.trust.report_grids.clear();
     off.trust.clustering_z = 0.0;
     let (with, without) = (inside(base()), inside(off));
     eprintln!("inside the 95 % bound: {with:.2} with the jackknife, {without:.2} without");
@@ -886,4 +887,124 @@ fn the_road_alternatives_covariance_covers_each_alternative() {
         let e = config_error(&format!("[trust]\n{key} = {v}\n"));
         assert!(e.contains(&format!("trust.{key}")), "{e}");
     }
+}
+
+/// `trust.covariance_memory` (off by default): a moving frame's reported covariance is at least
+/// `ρ` times the previous frame's, applied after the competing-motions test. On a moving-traffic
+/// drive the poses and every status stay as they are, every reported covariance is at least the
+/// default's in every direction, some are wider, and where neither frame of a pair carries a
+/// competing or alternative motion (both `estimated`, and the one before them too), the later
+/// one is at least `ρ` times the earlier one. Out-of-range values are rejected.
+#[test]
+fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 60;
+    traffic.seed = 1;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |config: Config| {
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+        (1..seq.num_frames())
+            .map(|k| {
+                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+                let r = vo.process(&seq.frames[k], arc);
+                (r.motion, r.diagnostics)
+            })
+            .collect::<Vec<_>>()
+    };
+    const RHO: f64 = 0.5;
+    let base = run(Config::default());
+    let mut memory = Config::default();
+    memory.trust.covariance_memory = RHO;
+    let with = run(memory);
+    // The smallest eigenvalue of `a - s b`, relative to the largest of `a`.
+    let excess = |a: &[f64], b: &[f64], s: f64| {
+        let n = (a.len() as f64).sqrt() as usize;
+        let a = nalgebra::DMatrix::from_row_slice(n, n, a);
+        let b = nalgebra::DMatrix::from_row_slice(n, n, b);
+        let d = &a - b * s;
+        let scale = a.symmetric_eigen().eigenvalues.max();
+        d.symmetric_eigen().eigenvalues.min() / scale
+    };
+    let (mut wider, mut floored) = (0, 0);
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.0.translation, b.0.translation);
+        assert_eq!(a.1.status, b.1.status);
+        assert_eq!(a.1.reason, b.1.reason);
+        if a.1.covariance.is_empty() || a.1.covariance.len() != b.1.covariance.len() {
+            continue;
+        }
+        assert!(excess(&b.1.covariance, &a.1.covariance, 1.0) > -1e-9);
+        wider += usize::from(a.1.covariance != b.1.covariance);
+    }
+    let plain = |d: &momo_vo::FrameDiagnostics| {
+        d.status == FrameStatus::Estimated
+            && d.competing.is_none()
+            && d.road_alternative.is_none()
+            && !d.covariance.is_empty()
+    };
+    for w in with.windows(3) {
+        let (before, prev, this) = (&w[0].1, &w[1].1, &w[2].1);
+        if plain(before) && plain(prev) && plain(this) && prev.free == this.free {
+            assert!(excess(&this.covariance, &prev.covariance, RHO) > -1e-9);
+            floored += 1;
+        }
+    }
+    assert!(wider >= 3, "{wider} covariances widened");
+    assert!(floored >= 10, "{floored} pairs checked");
+    for v in ["1.0", "-0.1", "nan"] {
+        let e = config_error(&format!("[trust]\ncovariance_memory = {v}\n"));
+        assert!(e.contains("trust.covariance_memory"), "{e}");
+    }
+}
+
+/// `trust.report_grids` widen only the reported covariance: the competing-motions test reads
+/// the covariance before them, so on a moving-traffic drive the poses and every status stay as
+/// they are without them, every reported covariance is at least as wide in every direction,
+/// and some are wider (a lead vehicle in the image's middle column). Empty grids and a ratio
+/// below 1 are rejected.
+#[test]
+fn report_grids_widen_only_the_reported_covariance() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 60;
+    traffic.seed = 2;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |grids: Vec<[usize; 2]>| {
+        let mut config = Config::default();
+        config.trust.report_grids = grids;
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+        (1..seq.num_frames())
+            .map(|k| {
+                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+                let r = vo.process(&seq.frames[k], arc);
+                (r.motion, r.diagnostics)
+            })
+            .collect::<Vec<_>>()
+    };
+    let without = run(Vec::new());
+    let with = run(vec![[3, 1]]);
+    let mut wider = 0;
+    for (a, b) in without.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.0.translation, b.0.translation);
+        assert_eq!(a.1.status, b.1.status);
+        assert_eq!(a.1.reason, b.1.reason);
+        assert_eq!(a.1.covariance.len(), b.1.covariance.len());
+        if a.1.covariance.is_empty() {
+            continue;
+        }
+        let n = a.1.free.len();
+        let a = nalgebra::DMatrix::from_row_slice(n, n, &a.1.covariance);
+        let b = nalgebra::DMatrix::from_row_slice(n, n, &b.1.covariance);
+        let scale = b.clone().symmetric_eigen().eigenvalues.max();
+        assert!((&b - &a).symmetric_eigen().eigenvalues.min() / scale > -1e-9);
+        wider += usize::from(a != b);
+    }
+    assert!(wider >= 3, "{wider} covariances widened");
+    let e = config_error("[trust]\nreport_grids = [[0, 1]]\n");
+    assert!(e.contains("trust.report_grids"), "{e}");
+    let e = config_error("[trust]\nreport_min_ratio = 0.5\n");
+    assert!(e.contains("trust.report_min_ratio"), "{e}");
 }
