@@ -2946,6 +2946,8 @@ mod tests {
         let mut opts = crate::config::OdometryOptions {
             soft_prior_trend_frames: 10,
             soft_prior_trend_z: 2.0,
+            soft_prior_trend_blend: false,
+            soft_prior_trend_widen: false,
             ..Default::default()
         };
         let levels = |f: &dyn Fn(usize) -> [(f64, f64); 2]| {
@@ -3014,6 +3016,7 @@ mod tests {
             soft_prior_trend_frames: 10,
             soft_prior_trend_z: 1.0,
             soft_prior_trend_blend: true,
+            soft_prior_trend_widen: false,
             ..Default::default()
         };
         let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
