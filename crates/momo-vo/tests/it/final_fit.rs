@@ -46,10 +46,11 @@ fn run_on(cfg: SimConfig, final_fit: &str) -> Vec<(f64, f64)> {
     out
 }
 
-/// The final fit's learnt loss and the soft prior's consistency widening off, as in the default
-/// before the twenty-first session (where these tests' comparisons were measured): a
-/// `run_on` suffix (it opens `[odometry]` last).
-const BEFORE_21: &str = "learnt_cauchy_max = 0.0\n[odometry]\nsoft_prior_consistency_frames = 0\n";
+/// The final fit's learnt loss, the soft prior's consistency widening and its trend centre
+/// (the default since the twenty-third session) off, as in the default before the twenty-first
+/// session (where these tests' comparisons were measured): a `run_on` suffix (it opens
+/// `[odometry]` last).
+const BEFORE_21: &str = "learnt_cauchy_max = 0.0\n[odometry]\nsoft_prior_consistency_frames = 0\nsoft_prior_trend_frames = 0\n";
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -253,7 +254,7 @@ fn the_learnt_cauchy_scale_weighs_gaussian_pixels_closer_to_least_squares() {
             err(&run_on(cfg(), BEFORE_21)),
             err(&run_on(
                 cfg(),
-                "learnt_cauchy_max = 6.0\n[odometry]\nsoft_prior_consistency_frames = 0\n",
+                "learnt_cauchy_max = 6.0\n[odometry]\nsoft_prior_consistency_frames = 0\nsoft_prior_trend_frames = 0\n",
             )),
         );
         assert!(
@@ -284,7 +285,7 @@ fn the_consistency_widening_lets_a_drifting_direction_of_travel_pull_the_soft_pr
             let off = err(&run_on(cfg(), BEFORE_21));
             let on = err(&run_on(
                 cfg(),
-                "learnt_cauchy_max = 0.0\n[odometry]\nsoft_prior_consistency_frames = 10\nsoft_prior_consistency_limit = 2.0\n",
+                "learnt_cauchy_max = 0.0\n[odometry]\nsoft_prior_consistency_frames = 10\nsoft_prior_consistency_limit = 2.0\nsoft_prior_trend_frames = 0\n",
             ));
             on / off
         })

@@ -262,6 +262,9 @@ fn object_run(chi2: f64, on_support: bool, object: usize, climb: f64) -> (f64, V
     config.odometry.soft_prior_conflict_widening = chi2;
     config.odometry.soft_prior_conflict_residuals = vec![1];
     config.odometry.soft_prior_conflict_on_support = on_support;
+    // The conflict widening alone, as measured before the trend centre became the default
+    // (twenty-third session): the trend also follows the object's pull on the climb.
+    config.odometry.soft_prior_trend_frames = 0;
     let mut vo = Odometry::new(rig.clone(), config).expect("valid config");
     let (mut err, mut params) = (0.0, Vec::new());
     let n = 80;
