@@ -11,6 +11,22 @@ use nalgebra::{Vector2, Vector3};
 use crate::support;
 use support::*;
 
+/// Every frame pair of `seq` through one odometry with `config`: each pair's motion and
+/// diagnostics.
+fn process_all(
+    seq: &momo_io::Sequence,
+    config: Config,
+) -> Vec<(Pose<f64>, momo_vo::FrameDiagnostics)> {
+    let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+    (1..seq.num_frames())
+        .map(|k| {
+            let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+            let r = vo.process(&seq.frames[k], arc);
+            (r.motion, r.diagnostics)
+        })
+        .collect()
+}
+
 /// The default estimator, warmed up on `frames` ordinary frames of `warm` (each estimated).
 fn warmed_up(
     rig: &Rig,
@@ -686,16 +702,7 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
     }
     let sim = momo_sim::simulate(&cfg).expect("simulated");
     let seq = &sim.sequence;
-    let run = |config: Config| {
-        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
-        (1..seq.num_frames())
-            .map(|k| {
-                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-                let r = vo.process(&seq.frames[k], arc);
-                (r.motion, r.diagnostics)
-            })
-            .collect::<Vec<_>>()
-    };
+    let run = |config: Config| process_all(seq, config);
     let mut solves = Config::default();
     solves.trust.jackknife_influence = false;
     let base = run(solves);
@@ -724,16 +731,10 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
 #[test]
 fn gauss_newton_steps_for_the_undefined_cells_change_only_their_covariances() {
     let run = |cfg: &momo_sim::SimConfig, config: Config| {
-        let sim = momo_sim::simulate(cfg).expect("simulated");
-        let seq = sim.sequence;
-        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
-        (1..seq.num_frames())
-            .map(|k| {
-                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-                let r = vo.process(&seq.frames[k], arc);
-                (r.motion, r.diagnostics)
-            })
-            .collect::<Vec<_>>()
+        process_all(
+            &momo_sim::simulate(cfg).expect("simulated").sequence,
+            config,
+        )
     };
     let steps = || {
         let mut c = Config::default();
@@ -902,16 +903,7 @@ fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
     traffic.seed = 1;
     let sim = momo_sim::simulate(&traffic).expect("simulated");
     let seq = &sim.sequence;
-    let run = |config: Config| {
-        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
-        (1..seq.num_frames())
-            .map(|k| {
-                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-                let r = vo.process(&seq.frames[k], arc);
-                (r.motion, r.diagnostics)
-            })
-            .collect::<Vec<_>>()
-    };
+    let run = |config: Config| process_all(seq, config);
     const RHO: f64 = 0.5;
     let base = run(Config::default());
     let mut memory = Config::default();
@@ -974,14 +966,7 @@ fn report_grids_widen_only_the_reported_covariance() {
     let run = |grids: Vec<[usize; 2]>| {
         let mut config = Config::default();
         config.trust.report_grids = grids;
-        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
-        (1..seq.num_frames())
-            .map(|k| {
-                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-                let r = vo.process(&seq.frames[k], arc);
-                (r.motion, r.diagnostics)
-            })
-            .collect::<Vec<_>>()
+        process_all(seq, config)
     };
     let without = run(Vec::new());
     let with = run(vec![[3, 1]]);
