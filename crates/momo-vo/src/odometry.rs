@@ -2486,7 +2486,10 @@ impl Odometry {
     /// (`moving`) a competing motion widens it ([`trust::mixture_covariance`]), and the
     /// leave-one-cell-out jackknife does where `jackknife` (the support dropped, see
     /// [`trust::TrustOptions::jackknife_support_drop`]) or a competing motion was found.
-    /// `soft_view`: the frame's shared soft-prior data view ([`SoftView`]), if any.
+    /// `soft_view`: the frame's shared soft-prior data view ([`SoftView`]), if any. `floor`:
+    /// the previous frame's decayed covariance (`trust.covariance_memory`). Returns the
+    /// covariance before the competing motions' mixture where `trust.covariance_memory` is on
+    /// (the next frame's floor), else `None`.
     #[allow(clippy::too_many_arguments)]
     fn fill_diagnostics(
         &self,
@@ -2547,7 +2550,13 @@ impl Odometry {
         if let (Some(cov), Some(floor)) = (reported.as_mut(), floor) {
             *cov = trust::widen(cov, floor, 1.0);
         }
-        let base = reported.clone();
+        // The covariance before the competing motions' mixture, kept only for
+        // `trust.covariance_memory`.
+        let base = if self.config.trust.covariance_memory > 0.0 {
+            reported.clone()
+        } else {
+            None
+        };
         if let Some(cov) = reported.as_mut()
             && let Some((b, w)) = competing
         {

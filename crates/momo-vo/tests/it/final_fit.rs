@@ -232,6 +232,19 @@ fn drifting_drive(frames: usize) -> Vec<momo_core::Pose<f64>> {
     poses
 }
 
+/// Median rotation error (rad) of `clean_pinhole`'s 200 frame pairs along [`drifting_drive`],
+/// seed `seed`, with the `run_on` suffixes `off` and `on`: `(off, on)`.
+fn drifting_errors(seed: u64, off: &str, on: &str) -> (f64, f64) {
+    let err = |suffix: &str| {
+        let mut c = SimConfig::clean_pinhole();
+        c.frames = 201;
+        c.seed = seed;
+        c.camera_trajectory = Some(drifting_drive(201));
+        median(run_on(c, suffix).iter().map(|x| x.1).collect())
+    };
+    (err(off), err(on))
+}
+
 #[test]
 fn the_learnt_cauchy_scale_weighs_gaussian_pixels_closer_to_least_squares() {
     // The learnt Cauchy scale (`learnt_cauchy_max`) on Gaussian pixel noise (the simulator's
@@ -241,21 +254,11 @@ fn the_learnt_cauchy_scale_weighs_gaussian_pixels_closer_to_least_squares() {
     // error falls. Measured (200 frame pairs, seeds 1-6): -6.3 / -1.5 / -0.8 / -2.0 / -2.0 /
     // -2.9 %. (On the built-in drive, whose motion is single-track, the same comparison is
     // mixed: seeds 1-8 of 200 frames, 4 better and 4 worse, mean +1 %.)
-    let err = |v: &[(f64, f64)]| median(v.iter().map(|x| x.1).collect());
     for seed in 1..=3 {
-        let cfg = || {
-            let mut c = SimConfig::clean_pinhole();
-            c.frames = 201;
-            c.seed = seed;
-            c.camera_trajectory = Some(drifting_drive(201));
-            c
-        };
-        let (off, on) = (
-            err(&run_on(cfg(), BEFORE_21)),
-            err(&run_on(
-                cfg(),
-                "learnt_cauchy_max = 6.0\n[odometry]\nsoft_prior_consistency_frames = 0\nsoft_prior_trend_frames = 0\n",
-            )),
+        let (off, on) = drifting_errors(
+            seed,
+            BEFORE_21,
+            "learnt_cauchy_max = 6.0\n[odometry]\nsoft_prior_consistency_frames = 0\nsoft_prior_trend_frames = 0\n",
         );
         assert!(
             on < 0.995 * off,
@@ -272,21 +275,13 @@ fn the_consistency_widening_lets_a_drifting_direction_of_travel_pull_the_soft_pr
     // frames' innovations keep disagreeing with the prior's width, the width grows until they
     // agree, and the (biased) prior pulls the rotation less. Measured (200 frame pairs), median
     // rotation error with / without: seeds 1-3 0.977 / 1.000 / 0.981 (mean 0.986).
-    let err = |v: &[(f64, f64)]| median(v.iter().map(|x| x.1).collect());
     let ratios: Vec<f64> = (1..=3)
         .map(|seed| {
-            let cfg = || {
-                let mut c = SimConfig::clean_pinhole();
-                c.frames = 201;
-                c.seed = seed;
-                c.camera_trajectory = Some(drifting_drive(201));
-                c
-            };
-            let off = err(&run_on(cfg(), BEFORE_21));
-            let on = err(&run_on(
-                cfg(),
+            let (off, on) = drifting_errors(
+                seed,
+                BEFORE_21,
                 "learnt_cauchy_max = 0.0\n[odometry]\nsoft_prior_consistency_frames = 10\nsoft_prior_consistency_limit = 2.0\nsoft_prior_trend_frames = 0\n",
-            ));
+            );
             on / off
         })
         .collect();
@@ -301,29 +296,21 @@ fn the_consistency_widening_lets_a_drifting_direction_of_travel_pull_the_soft_pr
 fn the_trend_centre_follows_a_slowly_changing_climb() {
     // The soft prior's trend centre (`odometry.soft_prior_trend_frames = 20`, `z = 1`, soft
     // threshold: static36's form, without the blend and widening of today's default) against
-    // the prior without a trend along a drive whose rise per step changes slowly (1-5 cm per step over a
-    // period of about 57 frames): the recent frames' data-only levels of the slips move away
+    // the prior without a trend along a drive whose rise per step changes slowly (1-5 cm per
+    // step over a period of about 57 frames): the recent frames' data-only levels of the slips move away
     // from the long (100-frame) centre, and the centre follows them. Measured (200 frame
     // pairs), median rotation error with / without: seeds 1-3 0.995 / 0.988 / 0.986. With
     // `m = 10` the same drive is worse (1.024 / 1.017 / 1.009): its sideways shift turns with
     // a period of about 17 frames, and a 10-frame level lags it by a quarter of that
     // (docs/RESULTS.md §9, twenty-second session, static36).
-    let err = |v: &[(f64, f64)]| median(v.iter().map(|x| x.1).collect());
     let ratios: Vec<f64> = (1..=3)
         .map(|seed| {
-            let cfg = || {
-                let mut c = SimConfig::clean_pinhole();
-                c.frames = 201;
-                c.seed = seed;
-                c.camera_trajectory = Some(drifting_drive(201));
-                c
-            };
-            let off = err(&run_on(cfg(), "[odometry]\nsoft_prior_trend_frames = 0\n"));
-            let on = err(&run_on(
-                cfg(),
+            let (off, on) = drifting_errors(
+                seed,
+                "[odometry]\nsoft_prior_trend_frames = 0\n",
                 "[odometry]\nsoft_prior_trend_frames = 20\nsoft_prior_trend_z = 1.0\n\
                  soft_prior_trend_blend = false\nsoft_prior_trend_widen = false\n",
-            ));
+            );
             on / off
         })
         .collect();
