@@ -1,0 +1,166 @@
+#!/usr/bin/env bash
+# Issue 14's yardsticks in one run: the moving-traffic family (frames above 1 deg, efficiency
+# against the Cramér-Rao bound, the trust gap), the static scenarios along the KITTI
+# trajectories and along the built-in drive (efficiency), and real KITTI 00 (median
+# frame-to-frame rotation error, t_err) for one momo binary and configuration.
+#
+# Usage: scripts/family_eval.sh OUT_DIR [SET...]
+#   SET  one of (default: grid holdout static builtin k00)
+#        grid      moving_traffic, KITTI trajectories 00-10 and the built-in drive, seeds 1-10
+#        holdout   the same, seeds 11-15
+#        fresh     the same, seeds 16-20 (keep for confirmation: choose nothing on it)
+#        dev       the same, seeds 21-30
+#        static    clean_pinhole and outliers along KITTI 00-10, seeds 1-3
+#        static2   the same, seeds 4-6
+#        builtin   six scenarios without moving objects along the built-in drive, seeds 1-5,
+#                  300 frames (clean_pinhole highway very_sparse fisheye_surround outliers
+#                  sparse_outliers)
+#        k00       real KITTI 00 (frames 0-300): mono 100 / 200 / 300 matches, stereo 200,
+#                  ground-truth arc lengths as odometry
+#   MOMO        environment variable: the momo binary (default target/release/momo)
+#   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
+#   SETS_DIR    environment variable: where the simulated / imported sequences are kept and
+#               reused (default target/family_sets); they are made by the same binary's
+#               `momo simulate` / `momo import-kitti` the first time
+#   FRAMES      environment variable: frames per family / static sequence (default 500)
+#   JOBS        environment variable: parallel runs (default 2)
+#   PYTHON      environment variable: a Python with numpy for the trust gap
+#               (scripts/family_calibration.py); without numpy the gap column is "-"
+#   MOMO_DATA   environment variable: the shared data folder (default ../shared/data)
+#
+# Writes OUT_DIR/SET/rows.tsv (name, median deg, frames above 1 deg, bound deg, eff, t_err %),
+# the estimates and diagnostics (OUT_DIR/SET/est), OUT_DIR/SET/summary.txt, and prints one
+# summary line per set.
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+abs() { case "$1" in /*) printf '%s\n' "$1" ;; *) printf '%s\n' "$PWD/$1" ;; esac; }
+out="$(abs "${1:?usage: scripts/family_eval.sh OUT_DIR [SET...]}")"
+shift
+sets=("$@")
+((${#sets[@]})) || sets=(grid holdout static builtin k00)
+momo="$(abs "${MOMO:-$root/target/release/momo}")"
+sets_dir="$(abs "${SETS_DIR:-$root/target/family_sets}")"
+data="$(abs "${MOMO_DATA:-$root/../shared/data}")"
+frames="${FRAMES:-500}"
+jobs="${JOBS:-2}"
+py="${PYTHON:-python3}"
+cfg=""
+[[ -n "${MOMO_CONFIG:-}" ]] && cfg="$(abs "$MOMO_CONFIG")"
+if [[ ! -x "$momo" ]]; then
+    echo "family_eval: no momo binary at $momo (cargo build --release)" >&2
+    exit 2
+fi
+export momo cfg data frames
+
+# make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES]: simulates one sequence unless it is there.
+make_seq() {
+    local dir="$1" sc="$2" t="$3" seed="$4" n="${5:-$frames}" traj=()
+    [[ -f "$dir/bound.csv" ]] && return 0
+    [[ "$t" != drive ]] && traj=(--trajectory "$data/kitti_odometry_gt/poses/$t.txt")
+    rm -rf "$dir"
+    "$momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "$dir" >/dev/null
+}
+export -f make_seq
+
+# run_one SEQDIR ESTDIR: runs momo with diagnostics and prints the row.
+run_one() {
+    local seq="$1" est="$2" name c=()
+    name="$(basename "$seq")"
+    [[ -n "$cfg" ]] && c=(--config "$cfg")
+    if ! "$momo" run "$seq" "${c[@]}" -o "$est/$name.txt" --diagnostics "$est/$name.jsonl" -q \
+        2>"$est/$name.err"; then
+        printf '%s\tfailed\n' "$name"
+        return 0
+    fi
+    "$momo" eval --gt "$seq/poses.txt" --est "$est/$name.txt" | tail -n 2 |
+        awk -v n="$name" '
+            NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+            { t = ("t_err" in c) ? $c["t_err"] : "-"
+              printf "%s\t%s\t%s\t%s\t%s\t%s\n", n, $c["median"], $c[">1deg"],
+                  ("bound" in c) ? $c["bound"] : "-", ("eff" in c) ? $c["eff"] : "-", t }'
+}
+export -f run_one
+
+# The sequences of a set, one "DIR SCENARIO TRAJECTORY SEED FRAMES" per line.
+list_set() {
+    local s="$1" seeds trajs="00 01 02 03 04 05 06 07 08 09 10" sc t seed
+    case "$s" in
+    grid | holdout | fresh | dev)
+        case "$s" in
+        grid) seeds="$(seq 1 10)" ;; holdout) seeds="$(seq 11 15)" ;;
+        fresh) seeds="$(seq 16 20)" ;; dev) seeds="$(seq 21 30)" ;;
+        esac
+        for t in $trajs drive; do for seed in $seeds; do
+            echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
+        done; done ;;
+    static | static2)
+        [[ "$s" == static ]] && seeds="1 2 3" || seeds="4 5 6"
+        for sc in clean_pinhole outliers; do for t in $trajs; do for seed in $seeds; do
+            echo "$sets_dir/static/${sc}_${t}_s$seed $sc $t $seed $frames"
+        done; done; done ;;
+    builtin)
+        for sc in clean_pinhole highway very_sparse fisheye_surround outliers sparse_outliers; do
+            for seed in 1 2 3 4 5; do
+                echo "$sets_dir/builtin/${sc}_s$seed $sc drive $seed 300"
+            done
+        done ;;
+    *) echo "family_eval: unknown set $s" >&2; exit 2 ;;
+    esac
+}
+
+make_k00() {
+    local d="$sets_dir/k00" src="$data/kitti00_stereo_matches_l1avgvo"
+    [[ -f "$src/calib.txt" ]] || { echo "family_eval: no $src: skipping k00" >&2; return 1; }
+    mkdir -p "$d"
+    [[ -d "$d/mono100" ]] || "$momo" import-kitti "$src" "$d/mono100" --matches 100 --seed 1 >/dev/null 2>&1
+    [[ -d "$d/mono200" ]] || "$momo" import-kitti "$src" "$d/mono200" --matches 200 --seed 1 >/dev/null 2>&1
+    [[ -d "$d/mono300" ]] || "$momo" import-kitti "$src" "$d/mono300" --matches 300 --seed 1 >/dev/null 2>&1
+    [[ -d "$d/stereo200" ]] || "$momo" import-kitti "$src" "$d/stereo200" --stereo --matches 200 --seed 1 >/dev/null 2>&1
+}
+
+for s in "${sets[@]}"; do
+    start=$(date +%s)
+    mkdir -p "$out/$s/est"
+    if [[ "$s" == k00 ]]; then
+        make_k00 || continue
+        ls -d "$sets_dir/k00"/* >"$out/$s/list"
+    else
+        list_set "$s" >"$out/$s/list.spec"
+        awk '{ print $1 }' "$out/$s/list.spec" >"$out/$s/list"
+        # shellcheck disable=SC2016
+        xargs -P "$jobs" -L 1 bash -c 'make_seq "$@"' _ <"$out/$s/list.spec"
+    fi
+    xargs -P "$jobs" -I{} bash -c 'run_one "$1" "$2"' _ {} "$out/$s/est" <"$out/$s/list" |
+        sort >"$out/$s/rows.tsv"
+    gap="-"
+    if [[ "$s" != k00 && "$s" != static* && "$s" != builtin ]] &&
+        "$py" -c 'import numpy' 2>/dev/null; then
+        seqd="$(dirname "$(head -n 1 "$out/$s/list")")"
+        gap="$("$py" "$root/scripts/family_calibration.py" "$out/$s/est" "$seqd" \
+            $(xargs -n 1 basename <"$out/$s/list") 2>/dev/null |
+            sed -n 's/.*neither (the trust gap) \([0-9]*\).*/\1/p' | head -n 1)"
+        gap="${gap:--}"
+    fi
+    python3 - "$out/$s/rows.tsv" "$s" "$gap" "$(($(date +%s) - start))" <<'PY' | tee "$out/$s/summary.txt"
+import statistics, sys
+rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1]) if l.strip()]
+failed = [r[0] for r in rows if r[1] == "failed"]
+ok = [r for r in rows if r[1] != "failed"]
+name, gap, secs = sys.argv[2], sys.argv[3], sys.argv[4]
+big = sum(int(r[2]) for r in ok)
+eff = [float(r[4]) for r in ok if r[4] not in ("-", "")]
+line = f"{name}: {len(ok)} sequences"
+if failed:
+    line += f" ({len(failed)} FAILED: {' '.join(failed[:5])})"
+line += f"; frames > 1 deg {big}"
+if eff:
+    line += (f"; eff median {statistics.median(eff):.4f} mean {statistics.mean(eff):.4f} "
+             f"max {max(eff):.3f}; above 1.15: {sum(e > 1.15 for e in eff)}; above 1.5: "
+             f"{sum(e > 1.5 for e in eff)}")
+if name == "k00":
+    line += "; " + " ".join(f"{r[0]} {float(r[1]):.4f} deg t_err {r[5]}" for r in ok)
+line += f"; trust gap {gap}; {secs} s"
+print(line)
+PY
+done
