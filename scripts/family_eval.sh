@@ -59,7 +59,13 @@ make_seq() {
     [[ -f "$dir/bound.csv" ]] && return 0
     [[ "$t" != drive ]] && traj=(--trajectory "$data/kitti_odometry_gt/poses/$t.txt")
     rm -rf "$dir"
-    "$momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "$dir" >/dev/null
+    mkdir -p "$(dirname "$dir")"
+    if ! "$momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "$dir" \
+        >/dev/null 2>"$dir.err"; then
+        echo "family_eval: momo simulate failed for $dir: $(cat "$dir.err")" >&2
+        return 1
+    fi
+    rm -f "$dir.err"
 }
 export -f make_seq
 
