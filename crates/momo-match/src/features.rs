@@ -600,6 +600,7 @@ impl FrameFeatures {
                         cols,
                         sliding: scratch,
                         out,
+                        starts,
                         strong,
                     } = &mut **s;
                     let v1 = (v0 + step).min(h - BORDER);
@@ -648,7 +649,14 @@ impl FrameFeatures {
                     // Class `c`'s candidates fill the slots from `c * blocks` (the list is by
                     // class, then block).
                     out.resize(blocks * CLASSES, Extremum::default());
-                    strong.resize(blocks, 0);
+                    let words = inner.div_ceil(64);
+                    if starts.0 != (inner, step) {
+                        *starts = ((inner, step), vec![0; words]);
+                        for k0 in (0..inner).step_by(step) {
+                            starts.1[k0 / 64] |= 1 << (k0 % 64);
+                        }
+                    }
+                    strong.resize(words, 0);
                     let mut len = [0usize; CLASSES];
                     for (c, (slots, len)) in out.chunks_exact_mut(blocks).zip(&mut len).enumerate()
                     {
@@ -660,11 +668,11 @@ impl FrameFeatures {
                         };
                         *len = if c % 2 == 0 {
                             class_candidates::<true>(
-                                col, blk, win, inner, n, tau, at, strong, slots,
+                                col, blk, win, inner, n, tau, at, &starts.1, strong, slots,
                             )
                         } else {
                             class_candidates::<false>(
-                                col, blk, win, inner, n, tau, at, strong, slots,
+                                col, blk, win, inner, n, tau, at, &starts.1, strong, slots,
                             )
                         };
                     }
@@ -1130,8 +1138,11 @@ struct PassOneScratch {
     cols: [Vec<i16>; CLASSES],
     sliding: [SlidingScratch; CLASSES],
     out: Vec<Extremum>,
-    /// The strong blocks of one class ([`class_candidates`]).
-    strong: Vec<u16>,
+    /// One bit per column of the block row: the blocks' first columns ([`class_candidates`]),
+    /// for the columns and block width (`inner`, `n + 1`) of the first field.
+    starts: ((usize, usize), Vec<u64>),
+    /// One bit per column: the block extremes of one class that are strong.
+    strong: Vec<u64>,
 }
 
 thread_local! {
@@ -1232,11 +1243,12 @@ struct PassOneRow {
 /// The candidates of one class of a block row of [`FrameFeatures::block_extrema_packed`]
 /// (maxima if `MAX`; `col`, `blocks`, `window` as [`packed_candidate`] reads them) into the
 /// front of `slots` (one per block), their number returned, in block order. First the strong
-/// blocks are listed into `strong` (one per block: a block's best key, at `blocks[k0]`, holds
-/// its response), every block written and the count advanced by the outcome; then only those
-/// go through [`packed_candidate`], written likewise. About two blocks in three are not strong
-/// on the KITTI snippets, and each took the whole candidate step before (about 75 instructions
-/// per block and class).
+/// block extremes are marked, one bit per column in `strong` ([`strong_columns`]: every
+/// column's `blocks[k]`, 16 at a time, of which only the blocks' first columns count), then
+/// only the blocks whose first column is set in both `strong` and `starts` (the bits of the
+/// blocks' first columns) go through [`packed_candidate`], every one written and the count
+/// advanced by the outcome. Before, each block and class took the whole candidate step (about
+/// 75 instructions), and about a third of the blocks are not strong on the KITTI snippets.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn class_candidates<const MAX: bool>(
@@ -1247,39 +1259,93 @@ fn class_candidates<const MAX: bool>(
     n: usize,
     tau: i16,
     at: PassOneRow,
-    strong: &mut [u16],
+    starts: &[u64],
+    strong: &mut [u64],
     slots: &mut [Extremum],
 ) -> usize {
-    let step = n + 1;
-    let mut m = 0;
-    for (b, &best) in blocks[..inner].iter().step_by(step).enumerate() {
-        let val = best >> 3;
-        let is_strong = if MAX { val >= tau } else { val <= -tau };
-        if let Some(slot) = strong.get_mut(m) {
-            *slot = b as u16;
-        }
-        m += usize::from(is_strong);
-    }
+    strong_columns::<MAX>(&blocks[..inner], tau, strong);
     let mut len = 0;
-    for &b in &strong[..m.min(strong.len())] {
-        let k0 = usize::from(b) * step;
-        let (val, k, r, checked, keep) =
-            packed_candidate::<MAX>(col, blocks, window, inner, k0, n, tau);
-        let v = at.v0 + r;
-        if let Some(slot) = slots.get_mut(len) {
-            *slot = Extremum {
-                val,
-                u: (BORDER + k) as u16,
-                v: v as u16,
-                class: at.class,
-                // `v < v1`: the rows below `v` in its block row.
-                cleared: Extremum::cleared_rows(at.v1 - 1 - v, r)
-                    & 0u8.wrapping_sub(u8::from(checked)),
-            };
+    for (i, (&s, &b)) in strong.iter().zip(starts).enumerate() {
+        let mut bits = s & b;
+        while bits != 0 {
+            let k0 = 64 * i + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (val, k, r, checked, keep) =
+                packed_candidate::<MAX>(col, blocks, window, inner, k0, n, tau);
+            let v = at.v0 + r;
+            if let Some(slot) = slots.get_mut(len) {
+                *slot = Extremum {
+                    val,
+                    u: (BORDER + k) as u16,
+                    v: v as u16,
+                    class: at.class,
+                    // `v < v1`: the rows below `v` in its block row.
+                    cleared: Extremum::cleared_rows(at.v1 - 1 - v, r)
+                        & 0u8.wrapping_sub(u8::from(checked)),
+                };
+            }
+            len += usize::from(keep);
         }
-        len += usize::from(keep);
     }
     len
+}
+
+/// One bit per key of `keys` (bit `k % 64` of word `k / 64` of `bits`, which has at least
+/// `keys.len().div_ceil(64)` words): set where the packed key ([`pack_max`], [`pack_min`])
+/// holds a strong response, `response >= tau` for maxima (`MAX`), `response <= -tau` for
+/// minima. A key `x` holds the response `x >> 3` (the row is in its low 3 bits), so `x >> 3 >=
+/// tau` is `x > 8 tau - 1` and `x >> 3 <= -tau` is `x < 8 - 8 tau` (computed in 32 bits and
+/// saturated to 16, which changes no answer: every key is a 16-bit value); one vector
+/// comparison per 8 keys on x86-64.
+#[inline(always)]
+fn strong_columns<const MAX: bool>(keys: &[i16], tau: i16, bits: &mut [u64]) {
+    let tau = i32::from(tau);
+    let t = if MAX { 8 * tau - 1 } else { 8 - 8 * tau }
+        .clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16;
+    let mut chunks = keys.chunks_exact(64);
+    for (word, chunk) in bits.iter_mut().zip(&mut chunks) {
+        let mut w = 0u64;
+        for (q, c) in chunk.chunks_exact(16).enumerate() {
+            let lanes: [i16; 16] = c.try_into().unwrap_or([t; 16]);
+            w |= u64::from(mask16::<MAX>(lanes, t)) << (16 * q);
+        }
+        *word = w;
+    }
+    let rest = chunks.remainder();
+    if let Some(word) = bits.get_mut(keys.len() / 64) {
+        *word = rest.iter().enumerate().fold(0, |w, (k, &x)| {
+            w | u64::from(if MAX { x > t } else { x < t }) << k
+        });
+    }
+}
+
+/// The 16 bits of `x > t` (`MAX`) or `x < t`: two vector comparisons, a signed byte pack and
+/// a byte mask on x86-64.
+#[inline(always)]
+fn mask16<const MAX: bool>(x: [i16; 16], t: i16) -> u16 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use safe_arch::{
+            cmp_gt_mask_i16_m128i, cmp_lt_mask_i16_m128i, m128i, move_mask_i8_m128i,
+            pack_i16_to_i8_m128i, set_splat_i16_m128i,
+        };
+        let half = |k: usize| m128i::from(std::array::from_fn::<i16, 8, _>(|i| x[8 * k + i]));
+        let (a, b, t) = (half(0), half(1), set_splat_i16_m128i(t));
+        let (ma, mb) = if MAX {
+            (cmp_gt_mask_i16_m128i(a, t), cmp_gt_mask_i16_m128i(b, t))
+        } else {
+            (cmp_lt_mask_i16_m128i(a, t), cmp_lt_mask_i16_m128i(b, t))
+        };
+        move_mask_i8_m128i(pack_i16_to_i8_m128i(ma, mb)) as u16
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let mut m = 0u16;
+        for (k, &v) in x.iter().enumerate() {
+            m |= u16::from(if MAX { v > t } else { v < t }) << k;
+        }
+        m
+    }
 }
 
 /// The candidate of the block starting at column `k0` of one class
@@ -1859,6 +1925,53 @@ mod tests {
                     let s = sobel[(v as i32 + dy) as usize * w + (u as i32 + dx) as usize];
                     assert_eq!(d[k], (s & 0xff) as u8, "du {k} at {u},{v}");
                     assert_eq!(d[16 + k], (s >> 8) as u8, "dv {k} at {u},{v}");
+                }
+            }
+        }
+    }
+
+    /// The strong keys' bits equal the definition `key >> 3 >= tau` (maxima) or `key >> 3 <=
+    /// -tau` (minima): lengths across the 16-lane chunks and the 64-bit words, keys over the
+    /// whole 16-bit range with the thresholds' neighbours, thresholds up to `i16::MAX` (where
+    /// `8 tau` leaves 16 bits).
+    #[test]
+    fn strong_columns_equal_the_definition() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for tau in [1i16, 2, 50, 600, 4095, 4096, 4097, i16::MAX] {
+            for len in [0usize, 1, 15, 16, 17, 63, 64, 65, 130, 1225] {
+                let keys: Vec<i16> = (0..len)
+                    .map(|_| {
+                        let r = next();
+                        let near = |t: i32| (t + (r >> 8) as i32 % 3 - 1) as i16;
+                        match r % 5 {
+                            0 => near(8 * i32::from(tau)),
+                            1 => near(-8 * i32::from(tau) + 7),
+                            2 => [i16::MIN, i16::MAX, 0, -1][(r >> 8) as usize % 4],
+                            _ => (r >> 16) as i16,
+                        }
+                    })
+                    .collect();
+                let mut bits = vec![u64::MAX; len.div_ceil(64)];
+                for max in [true, false] {
+                    if max {
+                        strong_columns::<true>(&keys, tau, &mut bits);
+                    } else {
+                        strong_columns::<false>(&keys, tau, &mut bits);
+                    }
+                    for (k, &x) in keys.iter().enumerate() {
+                        let expected = if max { x >> 3 >= tau } else { x >> 3 <= -tau };
+                        let got = bits[k / 64] >> (k % 64) & 1 == 1;
+                        assert_eq!(got, expected, "tau {tau} len {len} max {max} key {x}");
+                    }
+                    if len % 64 != 0 {
+                        assert_eq!(bits[len / 64] >> (len % 64), 0, "tau {tau} len {len}");
+                    }
                 }
             }
         }
