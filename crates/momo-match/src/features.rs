@@ -410,26 +410,50 @@ pub struct FrameFeatures {
 
 impl FrameFeatures {
     /// Detects and describes the features of `img` (at least [`MIN_SIDE`] pixels a side, else
-    /// there are none). Buffers of `self` are reused.
+    /// there are none). Buffers of `self` are reused; the image's pixels are copied (kept for
+    /// the KLT refinement, [`plane`](Self::plane)).
     pub fn extract(&mut self, img: &GrayImage, options: &DetectorOptions) {
         let (w, h) = (img.width() as usize, img.height() as usize);
+        let mut pixels = std::mem::take(&mut self.pixels);
+        pixels.clear();
+        if w >= MIN_SIDE && h >= MIN_SIDE {
+            pixels.extend_from_slice(&img.as_raw()[..w * h]);
+        }
+        self.extract_pixels(w, h, pixels, options);
+    }
+
+    /// [`extract`](Self::extract) of an image given away: its buffer becomes the pixels kept
+    /// for the KLT refinement, without the copy (a KITTI image is 460 KB). The features are
+    /// the same.
+    pub fn extract_owned(&mut self, img: GrayImage, options: &DetectorOptions) {
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let mut pixels = img.into_raw();
+        pixels.truncate(if w >= MIN_SIDE && h >= MIN_SIDE {
+            w * h
+        } else {
+            0
+        });
+        self.extract_pixels(w, h, pixels, options);
+    }
+
+    /// [`extract`](Self::extract) of the `w x h` image `pixels` (row-major, empty if a side is
+    /// below [`MIN_SIDE`]), which `self` keeps.
+    fn extract_pixels(&mut self, w: usize, h: usize, pixels: Vec<u8>, options: &DetectorOptions) {
         self.width = w;
         self.height = h;
         for c in &mut self.classes {
             c.points.clear();
         }
-        self.pixels.clear();
         if w < MIN_SIDE || h < MIN_SIDE {
+            self.pixels = pixels;
             for c in &mut self.classes {
                 c.build_index(w, h);
             }
             return;
         }
-        let px = img.as_raw().as_slice();
-        self.pixels.clear();
-        self.pixels.extend_from_slice(&px[..w * h]);
         self.sobel.resize(w * h, SOBEL_FLAT);
-        self.filter_and_suppress(px, options, STRIP_ROWS);
+        self.filter_and_suppress(&pixels, options, STRIP_ROWS);
+        self.pixels = pixels;
         self.classes
             .par_iter_mut()
             .for_each(|c| c.build_index(w, h));
