@@ -27,6 +27,7 @@ use crate::features::{CLASSES, DetectorOptions, Feature, FrameFeatures, MIN_SIDE
 use crate::refine::{KltOptions, MAX_HALF, prefetch_patch, refine_match};
 use image::GrayImage;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Options of the matcher.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -656,6 +657,23 @@ impl FrameMatcher {
     /// Adds frame k (one image per camera, each camera's size fixed over the sequence). Returns
     /// `None` for the first frame, else the matches of `(k-1, k)`, `result[camera]`.
     pub fn push(&mut self, images: &[GrayImage]) -> Result<Option<Vec<Vec<Match>>>, MatchError> {
+        self.push_images(images.iter().map(Cow::Borrowed).collect())
+    }
+
+    /// [`push`](Self::push) of images given away: each camera's features keep its image's
+    /// buffer ([`FrameFeatures::extract_owned`]) where `push` copies the pixels. The matches
+    /// are the same.
+    pub fn push_owned(
+        &mut self,
+        images: Vec<GrayImage>,
+    ) -> Result<Option<Vec<Vec<Match>>>, MatchError> {
+        self.push_images(images.into_iter().map(Cow::Owned).collect())
+    }
+
+    fn push_images(
+        &mut self,
+        images: Vec<Cow<'_, GrayImage>>,
+    ) -> Result<Option<Vec<Vec<Match>>>, MatchError> {
         if images.len() != self.prev.len() {
             return Err(MatchError::Option(format!(
                 "{} images for {} cameras",
@@ -678,14 +696,17 @@ impl FrameMatcher {
         }
         let options = self.options;
         let (prev, spare, priors) = (&mut self.prev, &mut self.spare, &mut self.priors);
-        let mut work = || -> Vec<Option<Vec<Match>>> {
+        let work = || -> Vec<Option<Vec<Match>>> {
             images
-                .par_iter()
+                .into_par_iter()
                 .zip(prev.par_iter_mut())
                 .zip(spare.par_iter_mut())
                 .zip(priors.par_iter_mut())
                 .map(|(((img, prev), spare), prior)| {
-                    spare.extract(img, &options.detector);
+                    match img {
+                        Cow::Borrowed(img) => spare.extract(img, &options.detector),
+                        Cow::Owned(img) => spare.extract_owned(img, &options.detector),
+                    }
                     let matches = prev.as_ref().map(|p| {
                         let m = match_features_with_prior(p, spare, &options, prior.as_ref());
                         // Too few with the prediction (a change of motion): the full window.

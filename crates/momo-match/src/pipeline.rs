@@ -164,7 +164,7 @@ impl ImageFrontEnd {
                 }
             }
             let t1 = Instant::now();
-            let result = self.matcher.push(&imgs)?;
+            let result = self.matcher.push_owned(imgs)?;
             let t2 = Instant::now();
             self.stats.frames += 1;
             self.stats.decode_seconds += (t1 - t0).as_secs_f64();

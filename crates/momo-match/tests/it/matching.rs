@@ -164,6 +164,45 @@ fn streaming_matcher_and_unrelated_images() {
     assert!(m.push(std::slice::from_ref(&small)).is_err());
 }
 
+/// Images given away (`push_owned`, the pipeline's) give the matches of borrowed ones
+/// (`push`) over a short stereo sequence with the flow prior and KLT on (the default), and the
+/// features keep the same pixels for KLT; a size change is an error either way.
+#[test]
+fn owned_images_give_the_same_matches() {
+    let a = dead_leaves(320, 240, 1500, 4);
+    let frames: Vec<[GrayImage; 2]> = (0..4)
+        .map(|k| {
+            let s = f64::from(k);
+            let h = |dx: f64| similarity(160.0, 120.0, 1.0 + 0.01 * s, 0.01 * s, 2.5 * s + dx, s);
+            [
+                warp(&a, &h(0.0)).expect("invertible"),
+                warp(&a, &h(-7.0)).expect("invertible"),
+            ]
+        })
+        .collect();
+    let options = MatchOptions::default();
+    let mut borrowed = FrameMatcher::new(2, options).expect("valid");
+    let mut owned = FrameMatcher::new(2, options).expect("valid");
+    let mut pairs = 0;
+    for images in &frames {
+        let b = borrowed.push(images).expect("ok");
+        let o = owned.push_owned(images.to_vec()).expect("ok");
+        assert_eq!(b, o);
+        pairs += usize::from(b.is_some_and(|m| m.iter().all(|c| c.len() > 50)));
+        for camera in 0..2 {
+            let (fb, fo) = (
+                borrowed.current(camera).expect("features"),
+                owned.current(camera).expect("features"),
+            );
+            assert_eq!(fb.plane().px, fo.plane().px);
+            assert_eq!(fb.classes[0].points, fo.classes[0].points);
+        }
+    }
+    assert_eq!(pairs, 3);
+    let small = dead_leaves(100, 80, 100, 3);
+    assert!(owned.push_owned(vec![small.clone(), small]).is_err());
+}
+
 #[test]
 fn options_are_checked() {
     for bad in [
