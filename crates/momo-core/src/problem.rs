@@ -755,7 +755,7 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             if obs.is_empty() {
                 continue;
             }
-            let c = camera_motion(&m, &cam.t_vehicle_camera);
+            let c = camera_motion_dual(&m, &cam.t_vehicle_camera);
             self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
             for chunk in obs.chunks(LANES) {
                 // The kernel per match, its derivatives transposed into lanes; unused lanes
@@ -1103,7 +1103,7 @@ impl<R: ResidualMetric> Problem<'_, R> {
             if obs.is_empty() {
                 continue;
             }
-            let c = camera_motion(m, &cam.t_vehicle_camera);
+            let c = camera_motion_dual(m, &cam.t_vehicle_camera);
             self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
             for o in obs {
                 self.metric.kernel(
@@ -1285,6 +1285,96 @@ pub fn cross_camera_motion<T: Scalar>(
     )
 }
 
+/// [`camera_motion`] on dual numbers (the linearisations' per-camera motion): the same
+/// composition `C_j = P_j⁻¹ M P_j` on plain arrays of values and derivatives.
+///
+/// Bit-identical to [`camera_motion`]: num-dual multiplies a dual number by a constant entry
+/// by entry (`re c`, `eps_k c`) and adds two of them entry by entry where both carry a
+/// derivative, and adding the lifted constant `t_A` leaves the derivative as it is; the sums
+/// here are those of [`compose_const`] in the same order. Where an entry of `M` has no
+/// derivative (num-dual's `None`, which a sum skips instead of adding zeros), the generic
+/// path is taken.
+#[inline]
+fn camera_motion_dual<const N: usize>(
+    vehicle_motion: &Pose<DualSVec64<N>>,
+    t_vehicle_camera: &Pose<f64>,
+) -> Pose<DualSVec64<N>> {
+    compose_const_dual(
+        &t_vehicle_camera.inverse(),
+        vehicle_motion,
+        t_vehicle_camera,
+    )
+}
+
+/// [`compose_const`] for `M` on dual numbers with every derivative present, on plain arrays
+/// (see [`camera_motion_dual`]); the generic path otherwise.
+#[inline]
+fn compose_const_dual<const N: usize>(
+    a: &Pose<f64>,
+    m: &Pose<DualSVec64<N>>,
+    b: &Pose<f64>,
+) -> Pose<DualSVec64<N>> {
+    let mut rv = [[0.0; 3]; 3];
+    let mut rd = [[[0.0; N]; 3]; 3];
+    let mut tv = [0.0; 3];
+    let mut td = [[0.0; N]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let e = &m.rotation[(i, j)];
+            let Some(d) = &e.eps.0 else {
+                return compose_const(a, m, b);
+            };
+            rv[i][j] = e.re;
+            rd[i][j] = std::array::from_fn(|k| d[k]);
+        }
+        let e = &m.translation[i];
+        let Some(d) = &e.eps.0 else {
+            return compose_const(a, m, b);
+        };
+        tv[i] = e.re;
+        td[i] = std::array::from_fn(|k| d[k]);
+    }
+    let (ra, rb, tb) = (&a.rotation, &b.rotation, &b.translation);
+    // R_M R_B.
+    let mut mbv = [[0.0; 3]; 3];
+    let mut mbd = [[[0.0; N]; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let (c0, c1, c2) = (rb[(0, j)], rb[(1, j)], rb[(2, j)]);
+            mbv[i][j] = rv[i][0] * c0 + rv[i][1] * c1 + rv[i][2] * c2;
+            for k in 0..N {
+                mbd[i][j][k] = rd[i][0][k] * c0 + rd[i][1][k] * c1 + rd[i][2][k] * c2;
+            }
+        }
+    }
+    // R_M t_B + t_M.
+    let mut mtv = [0.0; 3];
+    let mut mtd = [[0.0; N]; 3];
+    for i in 0..3 {
+        mtv[i] = (rv[i][0] * tb.x + rv[i][1] * tb.y + rv[i][2] * tb.z) + tv[i];
+        for k in 0..N {
+            mtd[i][k] = (rd[i][0][k] * tb.x + rd[i][1][k] * tb.y + rd[i][2][k] * tb.z) + td[i][k];
+        }
+    }
+    let dual = |re: f64, d: &[f64; N]| {
+        DualSVec64::<N>::new(re, num_dual::Derivative::some(SVector::from(*d)))
+    };
+    // R_A (...) and R_A (...) + t_A (a constant: the derivative stays).
+    let rotation = Matrix3::from_fn(|i, j| {
+        let (c0, c1, c2) = (ra[(i, 0)], ra[(i, 1)], ra[(i, 2)]);
+        let re = mbv[0][j] * c0 + mbv[1][j] * c1 + mbv[2][j] * c2;
+        let d = std::array::from_fn(|k| mbd[0][j][k] * c0 + mbd[1][j][k] * c1 + mbd[2][j][k] * c2);
+        dual(re, &d)
+    });
+    let translation = Vector3::from_fn(|i, _| {
+        let (c0, c1, c2) = (ra[(i, 0)], ra[(i, 1)], ra[(i, 2)]);
+        let re = (mtv[0] * c0 + mtv[1] * c1 + mtv[2] * c2) + a.translation[i];
+        let d = std::array::from_fn(|k| mtd[0][k] * c0 + mtd[1][k] * c1 + mtd[2][k] * c2);
+        dual(re, &d)
+    });
+    Pose::new(rotation, translation)
+}
+
 /// `A M B` for constant poses `A`, `B` and a pose `M` of scalars, without lifting `A` and `B`:
 /// `R = R_A (R_M R_B)`, `t = R_A (R_M t_B + t_M) + t_A`, every matrix product summed as
 /// nalgebra's (`(x_0 y_0 + x_1 y_1) + x_2 y_2`).
@@ -1398,6 +1488,43 @@ mod tests {
             prop_assert_eq!(bits(&as_pose(e)), bits(&as_pose(e_ref)));
             let e = crate::metric::essential(&m0);
             prop_assert_eq!(e, m0.rotation.transpose() * crate::lie::hat(&m0.translation));
+        }
+
+        /// `camera_motion_dual` (plain arrays) is bit-identical to `camera_motion` on dual
+        /// numbers: arbitrary derivatives with exact and signed zeros, and an entry without a
+        /// derivative (the generic path).
+        #[test]
+        fn camera_motion_on_arrays_is_bit_identical(
+            wm in proptest::array::uniform3(-2.0..2.0f64),
+            tm in proptest::array::uniform3(-5.0..5.0f64),
+            wj in proptest::array::uniform3(-3.0..3.0f64),
+            tj in proptest::array::uniform3(-2.0..2.0f64),
+            seed in proptest::array::uniform6(-1.0..1.0f64),
+            zeros in proptest::array::uniform12(0usize..4),
+            none in 0usize..24,
+        ) {
+            let m0 = pose(wm, tm);
+            let entry = |k: usize, v: f64| {
+                let mut d = DualSVec64::<6>::from_re(v);
+                // 0: arbitrary, 1: exact zeros, 2: negative zeros, 3: mixed signs of zero.
+                let e: [f64; 6] = match zeros[k] {
+                    0 => std::array::from_fn(|i| seed[i] * v + i as f64 * 0.1),
+                    1 => [0.0; 6],
+                    2 => [-0.0; 6],
+                    _ => std::array::from_fn(|i| if i % 2 == 0 { -0.0 } else { seed[i] }),
+                };
+                d.eps = num_dual::Derivative::some(SVector::from(e));
+                if k == none {
+                    d.eps = num_dual::Derivative::none();
+                }
+                d
+            };
+            let m = Pose::new(
+                Matrix3::from_fn(|i, j| entry(3 * i + j, m0.rotation[(i, j)])),
+                Vector3::from_fn(|i, _| entry(9 + i, m0.translation[i])),
+            );
+            let pj = pose(wj, tj);
+            prop_assert_eq!(bits(&camera_motion_dual(&m, &pj)), bits(&camera_motion(&m, &pj)));
         }
     }
 }
