@@ -63,7 +63,9 @@ pub use lie::{Pose, hat, so3_exp, so3_log, vee};
 pub use loss::RobustLoss;
 pub use loss_trivial::TrivialLoss;
 pub use manifold::{MAX_PRIOR_RESIDUALS, Manifold, MotionPrior, ROTATION_PRIOR_CAUCHY};
-pub use metric::{MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric, RotationOnly, essential};
+pub use metric::{
+    KernelInputsKind, MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric, RotationOnly, essential,
+};
 pub use problem::{
     GroupedLinearization, Problem, camera_motion, compute_match_constants, cross_camera_motion,
 };

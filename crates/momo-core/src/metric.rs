@@ -12,6 +12,17 @@ pub const MAX_RESIDUALS: usize = 3;
 /// Most per-camera inputs of a fused kernel ([`ResidualMetric::KERNEL_INPUTS`]).
 pub const MAX_KERNEL_INPUTS: usize = 9;
 
+/// The form of a fused kernel's per-camera inputs ([`ResidualMetric::KERNEL_INPUTS_KIND`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelInputsKind {
+    /// Any: [`ResidualMetric::kernel_inputs`] on dual numbers.
+    Custom,
+    /// The camera motion's rotation `R`, row-major (9 inputs).
+    Rotation,
+    /// The essential matrix `E = Rᵀ [t]ₓ` as [`essential`] computes it, row-major (9 inputs).
+    Essential,
+}
+
 /// A residual metric: the residuals of one match given the camera motion `C = [R | t]`
 /// (the pose of the camera at frame k in the camera at k-1), generic over the scalar.
 ///
@@ -87,6 +98,12 @@ pub trait ResidualMetric: Clone + Debug + Send + Sync + 'static {
     /// [`residuals`](Self::residuals).
     const KERNEL_INPUTS: usize = 0;
 
+    /// What [`kernel_inputs`](Self::kernel_inputs) writes, where it is one of the forms the
+    /// problem can compute on plain arrays of values and derivatives instead of dual numbers
+    /// ([`KernelInputsKind`]; bit-identical to `kernel_inputs` on dual numbers). `Custom`, the
+    /// default: `kernel_inputs` is called on dual numbers.
+    const KERNEL_INPUTS_KIND: KernelInputsKind = KernelInputsKind::Custom;
+
     /// Writes the fused kernel's per-camera inputs `q(C)` into `out[..KERNEL_INPUTS]` for the
     /// camera motion `C` (generic: the problem differentiates it on dual numbers).
     fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, _motion: &Pose<T>, _out: &mut [T]) {}
@@ -157,6 +174,7 @@ impl ResidualMetric for RotationOnly {
     }
 
     const KERNEL_INPUTS: usize = 9;
+    const KERNEL_INPUTS_KIND: KernelInputsKind = KernelInputsKind::Rotation;
 
     /// The rotation `R`, row-major.
     fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, motion: &Pose<T>, out: &mut [T]) {

@@ -6,7 +6,7 @@ use crate::error::CoreError;
 use crate::lie::{Pose, so3_log};
 use crate::loss::RobustLoss;
 use crate::manifold::{MAX_PRIOR_RESIDUALS, MotionPrior, ROTATION_PRIOR_CAUCHY};
-use crate::metric::{MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric};
+use crate::metric::{KernelInputsKind, MAX_KERNEL_INPUTS, MAX_RESIDUALS, ResidualMetric};
 use crate::rig::{FrameObservations, Rig};
 use crate::scalar::Scalar;
 use crate::solver::{LeastSquares, Linearization, MAX_PARAMS, NormalMatrix, ParamVec};
@@ -645,6 +645,35 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         self.finish_linearization(x, None, known_cost, cost, h, g)
     }
 
+    /// The fused kernel's inputs `q(C_j(p))` and `dq/dp` of the camera with the extrinsic
+    /// `mount` at the vehicle motion `m`: on plain arrays where the metric's inputs have a
+    /// [`KernelInputsKind`] and every derivative of `m` is present
+    /// ([`compose_const_arrays`], [`kernel_inputs_from_arrays`]), on dual numbers otherwise
+    /// ([`camera_motion_dual`], [`split_kernel_inputs`](Self::split_kernel_inputs)); the same
+    /// bits either way. Not inlined: once per camera, and inlined into the per-match loops it
+    /// cost them more than it saved on a one-camera rig (callgrind, clean_pinhole +0.4 %).
+    #[inline(never)]
+    fn camera_kernel_inputs<const N: usize>(
+        &self,
+        camera: &crate::Camera,
+        m: &Pose<DualSVec64<N>>,
+        mount: &Pose<f64>,
+        q_dual: &mut [DualSVec64<N>],
+        q: &mut [f64],
+        dq: &mut [[f64; N]],
+    ) where
+        DualSVec64<N>: ErasedScalar,
+    {
+        if R::KERNEL_INPUTS_KIND != KernelInputsKind::Custom
+            && let Some(c) = compose_const_arrays(&mount.inverse(), m, mount)
+        {
+            kernel_inputs_from_arrays(R::KERNEL_INPUTS_KIND, &c, q, dq);
+            return;
+        }
+        let c = camera_motion_dual(m, mount);
+        self.split_kernel_inputs(camera, &c, q_dual, q, dq);
+    }
+
     /// The metric's kernel inputs `q(C_j(p))` of one camera at its dual motion `c`, split into
     /// their values `q` and derivatives `dq/dp` over the `N` free parameters (`q_dual` is
     /// scratch of the inputs' length).
@@ -755,8 +784,14 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             if obs.is_empty() {
                 continue;
             }
-            let c = camera_motion(&m, &cam.t_vehicle_camera);
-            self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
+            self.camera_kernel_inputs(
+                &cam.model,
+                &m,
+                &cam.t_vehicle_camera,
+                &mut q_dual[..k_in],
+                &mut q,
+                &mut dq,
+            );
             for chunk in obs.chunks(LANES) {
                 // The kernel per match, its derivatives transposed into lanes; unused lanes
                 // are zero (and weigh zero).
@@ -1103,8 +1138,14 @@ impl<R: ResidualMetric> Problem<'_, R> {
             if obs.is_empty() {
                 continue;
             }
-            let c = camera_motion(m, &cam.t_vehicle_camera);
-            self.split_kernel_inputs(&cam.model, &c, &mut q_dual[..k_in], &mut q, &mut dq);
+            self.camera_kernel_inputs(
+                &cam.model,
+                m,
+                &cam.t_vehicle_camera,
+                &mut q_dual[..k_in],
+                &mut q,
+                &mut dq,
+            );
             for o in obs {
                 self.metric.kernel(
                     &cam.model,
@@ -1285,6 +1326,181 @@ pub fn cross_camera_motion<T: Scalar>(
     )
 }
 
+/// [`camera_motion`] on dual numbers (the linearisations' per-camera motion): the same
+/// composition `C_j = P_j⁻¹ M P_j` on plain arrays of values and derivatives.
+///
+/// Bit-identical to [`camera_motion`]: num-dual multiplies a dual number by a constant entry
+/// by entry (`re c`, `eps_k c`) and adds two of them entry by entry where both carry a
+/// derivative, and adding the lifted constant `t_A` leaves the derivative as it is; the sums
+/// here are those of [`compose_const`] in the same order. Where an entry of `M` has no
+/// derivative (num-dual's `None`, which a sum skips instead of adding zeros), the generic
+/// path is taken.
+#[inline]
+fn camera_motion_dual<const N: usize>(
+    vehicle_motion: &Pose<DualSVec64<N>>,
+    t_vehicle_camera: &Pose<f64>,
+) -> Pose<DualSVec64<N>> {
+    compose_const_dual(
+        &t_vehicle_camera.inverse(),
+        vehicle_motion,
+        t_vehicle_camera,
+    )
+}
+
+/// A camera motion `C` as plain arrays: the values and derivatives of `R_C` (row, column) and
+/// `t_C` ([`compose_const_arrays`]).
+struct MotionArrays<const N: usize> {
+    rv: [[f64; 3]; 3],
+    rd: [[[f64; N]; 3]; 3],
+    tv: [f64; 3],
+    td: [[f64; N]; 3],
+}
+
+/// [`compose_const`] for `M` on dual numbers with every derivative present, on plain arrays
+/// (see [`camera_motion_dual`]); `None` where an entry of `M` has no derivative.
+#[inline]
+fn compose_const_arrays<const N: usize>(
+    a: &Pose<f64>,
+    m: &Pose<DualSVec64<N>>,
+    b: &Pose<f64>,
+) -> Option<MotionArrays<N>> {
+    let mut rv = [[0.0; 3]; 3];
+    let mut rd = [[[0.0; N]; 3]; 3];
+    let mut tv = [0.0; 3];
+    let mut td = [[0.0; N]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let e = &m.rotation[(i, j)];
+            let d = e.eps.0.as_ref()?;
+            rv[i][j] = e.re;
+            rd[i][j] = std::array::from_fn(|k| d[k]);
+        }
+        let e = &m.translation[i];
+        let d = e.eps.0.as_ref()?;
+        tv[i] = e.re;
+        td[i] = std::array::from_fn(|k| d[k]);
+    }
+    let (ra, rb, tb) = (&a.rotation, &b.rotation, &b.translation);
+    // R_M R_B.
+    let mut mbv = [[0.0; 3]; 3];
+    let mut mbd = [[[0.0; N]; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let (c0, c1, c2) = (rb[(0, j)], rb[(1, j)], rb[(2, j)]);
+            mbv[i][j] = rv[i][0] * c0 + rv[i][1] * c1 + rv[i][2] * c2;
+            for k in 0..N {
+                mbd[i][j][k] = rd[i][0][k] * c0 + rd[i][1][k] * c1 + rd[i][2][k] * c2;
+            }
+        }
+    }
+    // R_M t_B + t_M.
+    let mut mtv = [0.0; 3];
+    let mut mtd = [[0.0; N]; 3];
+    for i in 0..3 {
+        mtv[i] = (rv[i][0] * tb.x + rv[i][1] * tb.y + rv[i][2] * tb.z) + tv[i];
+        for k in 0..N {
+            mtd[i][k] = (rd[i][0][k] * tb.x + rd[i][1][k] * tb.y + rd[i][2][k] * tb.z) + td[i][k];
+        }
+    }
+    // R_A (...) and R_A (...) + t_A (a constant: the derivative stays).
+    let mut c = MotionArrays {
+        rv: [[0.0; 3]; 3],
+        rd: [[[0.0; N]; 3]; 3],
+        tv: [0.0; 3],
+        td: [[0.0; N]; 3],
+    };
+    for i in 0..3 {
+        let (c0, c1, c2) = (ra[(i, 0)], ra[(i, 1)], ra[(i, 2)]);
+        for j in 0..3 {
+            c.rv[i][j] = mbv[0][j] * c0 + mbv[1][j] * c1 + mbv[2][j] * c2;
+            for k in 0..N {
+                c.rd[i][j][k] = mbd[0][j][k] * c0 + mbd[1][j][k] * c1 + mbd[2][j][k] * c2;
+            }
+        }
+        c.tv[i] = (mtv[0] * c0 + mtv[1] * c1 + mtv[2] * c2) + a.translation[i];
+        for k in 0..N {
+            c.td[i][k] = mtd[0][k] * c0 + mtd[1][k] * c1 + mtd[2][k] * c2;
+        }
+    }
+    Some(c)
+}
+
+/// [`compose_const`] for `M` on dual numbers, through [`compose_const_arrays`] where every
+/// derivative is present.
+#[inline]
+fn compose_const_dual<const N: usize>(
+    a: &Pose<f64>,
+    m: &Pose<DualSVec64<N>>,
+    b: &Pose<f64>,
+) -> Pose<DualSVec64<N>> {
+    let Some(c) = compose_const_arrays(a, m, b) else {
+        return compose_const(a, m, b);
+    };
+    let dual = |re: f64, d: &[f64; N]| {
+        DualSVec64::<N>::new(re, num_dual::Derivative::some(SVector::from(*d)))
+    };
+    Pose::new(
+        Matrix3::from_fn(|i, j| dual(c.rv[i][j], &c.rd[i][j])),
+        Vector3::from_fn(|i, _| dual(c.tv[i], &c.td[i])),
+    )
+}
+
+/// The fused kernel's inputs `q` and `dq/dp` of a [`KernelInputsKind`] other than `Custom`
+/// from the camera motion's arrays: what [`ResidualMetric::kernel_inputs`] gives on dual
+/// numbers, bit for bit. The essential matrix as [`essential`](crate::metric::essential)
+/// computes it: num-dual's product `x y` is `(x.re y.re, x.eps y.re + y.eps x.re)`, the
+/// negation negates both parts, the sum adds them entry by entry.
+#[inline]
+fn kernel_inputs_from_arrays<const N: usize>(
+    kind: KernelInputsKind,
+    c: &MotionArrays<N>,
+    q: &mut [f64],
+    dq: &mut [[f64; N]],
+) {
+    match kind {
+        KernelInputsKind::Rotation => {
+            for a in 0..3 {
+                for b in 0..3 {
+                    q[3 * a + b] = c.rv[a][b];
+                    dq[3 * a + b] = c.rd[a][b];
+                }
+            }
+        }
+        KernelInputsKind::Essential => {
+            // (value, derivative) of t and of -t.
+            let t = |i: usize| (c.tv[i], c.td[i]);
+            let neg = |i: usize| (-c.tv[i], c.td[i].map(|v| -v));
+            let r = |i: usize, j: usize| (c.rv[i][j], c.rd[i][j]);
+            // x0 y0 + x1 y1 on (value, derivative) pairs.
+            let two = |(x0, dx0): (f64, [f64; N]),
+                       (y0, dy0): (f64, [f64; N]),
+                       (x1, dx1): (f64, [f64; N]),
+                       (y1, dy1): (f64, [f64; N])| {
+                let v = x0 * y0 + x1 * y1;
+                let d: [f64; N] = std::array::from_fn(|k| {
+                    (dx0[k] * y0 + dy0[k] * x0) + (dx1[k] * y1 + dy1[k] * x1)
+                });
+                (v, d)
+            };
+            for a in 0..3 {
+                for b in 0..3 {
+                    // [t]_x = [[0, -t_z, t_y], [t_z, 0, -t_x], [-t_y, t_x, 0]]; E_ab = Σ_k R_ka [t]_x,kb.
+                    let (v, d) = match b {
+                        0 => two(r(1, a), t(2), r(2, a), neg(1)),
+                        1 => two(r(0, a), neg(2), r(2, a), t(0)),
+                        _ => two(r(0, a), t(1), r(1, a), neg(0)),
+                    };
+                    q[3 * a + b] = v;
+                    dq[3 * a + b] = d;
+                }
+            }
+        }
+        KernelInputsKind::Custom => {
+            unreachable!("custom kernel inputs are computed on dual numbers")
+        }
+    }
+}
+
 /// `A M B` for constant poses `A`, `B` and a pose `M` of scalars, without lifting `A` and `B`:
 /// `R = R_A (R_M R_B)`, `t = R_A (R_M t_B + t_M) + t_A`, every matrix product summed as
 /// nalgebra's (`(x_0 y_0 + x_1 y_1) + x_2 y_2`).
@@ -1398,6 +1614,69 @@ mod tests {
             prop_assert_eq!(bits(&as_pose(e)), bits(&as_pose(e_ref)));
             let e = crate::metric::essential(&m0);
             prop_assert_eq!(e, m0.rotation.transpose() * crate::lie::hat(&m0.translation));
+        }
+
+        /// `camera_motion_dual` (plain arrays) is bit-identical to `camera_motion` on dual
+        /// numbers: arbitrary derivatives with exact and signed zeros, and an entry without a
+        /// derivative (the generic path).
+        #[test]
+        fn camera_motion_on_arrays_is_bit_identical(
+            wm in proptest::array::uniform3(-2.0..2.0f64),
+            tm in proptest::array::uniform3(-5.0..5.0f64),
+            wj in proptest::array::uniform3(-3.0..3.0f64),
+            tj in proptest::array::uniform3(-2.0..2.0f64),
+            seed in proptest::array::uniform6(-1.0..1.0f64),
+            zeros in proptest::array::uniform12(0usize..4),
+            none in 0usize..24,
+        ) {
+            let m0 = pose(wm, tm);
+            let entry = |k: usize, v: f64| {
+                let mut d = DualSVec64::<6>::from_re(v);
+                // 0: arbitrary, 1: exact zeros, 2: negative zeros, 3: mixed signs of zero.
+                let e: [f64; 6] = match zeros[k] {
+                    0 => std::array::from_fn(|i| seed[i] * v + i as f64 * 0.1),
+                    1 => [0.0; 6],
+                    2 => [-0.0; 6],
+                    _ => std::array::from_fn(|i| if i % 2 == 0 { -0.0 } else { seed[i] }),
+                };
+                d.eps = num_dual::Derivative::some(SVector::from(e));
+                if k == none {
+                    d.eps = num_dual::Derivative::none();
+                }
+                d
+            };
+            let m = Pose::new(
+                Matrix3::from_fn(|i, j| entry(3 * i + j, m0.rotation[(i, j)])),
+                Vector3::from_fn(|i, _| entry(9 + i, m0.translation[i])),
+            );
+            let pj = pose(wj, tj);
+            prop_assert_eq!(bits(&camera_motion_dual(&m, &pj)), bits(&camera_motion(&m, &pj)));
+            // The kernel inputs from the arrays: the rotation and the essential matrix as on
+            // dual numbers.
+            if let Some(c) = compose_const_arrays(&pj.inverse(), &m, &pj) {
+                let dual = camera_motion(&m, &pj);
+                let e = crate::metric::essential(&dual);
+                for (kind, want) in [
+                    (KernelInputsKind::Rotation, dual.rotation),
+                    (KernelInputsKind::Essential, e),
+                ] {
+                    let mut q = [0.0; 9];
+                    let mut dq = [[0.0; 6]; 9];
+                    kernel_inputs_from_arrays(kind, &c, &mut q, &mut dq);
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            let w = &want[(a, b)];
+                            prop_assert_eq!(q[3 * a + b].to_bits(), w.re.to_bits());
+                            let wd = w.eps.0.as_ref().expect("a derivative");
+                            for k in 0..6 {
+                                prop_assert_eq!(dq[3 * a + b][k].to_bits(), wd[k].to_bits());
+                            }
+                        }
+                    }
+                }
+            } else {
+                prop_assert!(none < 12, "arrays refused with every derivative present");
+            }
         }
     }
 }

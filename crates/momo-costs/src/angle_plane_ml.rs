@@ -206,6 +206,7 @@ impl ResidualMetric for AnglePlaneMl {
     }
 
     const KERNEL_INPUTS: usize = 9;
+    const KERNEL_INPUTS_KIND: momo_core::KernelInputsKind = momo_core::KernelInputsKind::Essential;
 
     /// The essential matrix `E = Rᵀ [t]ₓ`, row-major.
     fn kernel_inputs<T: Scalar>(&self, _camera: &Camera, motion: &Pose<T>, out: &mut [T]) {
