@@ -1510,8 +1510,11 @@ fn separate_with(
         let yaw = momo_core::so3_log(&ctx.estimator.motion(&chosen.0.params).rotation).z;
         tracker.record_yaw(h, yaw);
     }
-    if opts.ground_drop > 0.0
-        && let Some(h) = opts.hypotheses()
+    // The chosen motion's road score, for `ground_drop` and the road guard of
+    // `yaw_history_predict` (computed once).
+    if let Some(h) = opts
+        .hypotheses()
+        .filter(|h| opts.ground_drop > 0.0 || h.yaw_history_predict_road_frames > 0)
     {
         let s = score(
             h,
@@ -1520,12 +1523,15 @@ fn separate_with(
             obs,
             &chosen.1,
         );
-        outcome.ground_drop = crate::ground_drop::observe(
-            &mut tracker.ground_scores,
-            s,
-            opts.ground_drop,
-            opts.ground_drop_min,
-        );
+        tracker.record_road(h, s);
+        if opts.ground_drop > 0.0 {
+            outcome.ground_drop = crate::ground_drop::observe(
+                &mut tracker.ground_scores,
+                s,
+                opts.ground_drop,
+                opts.ground_drop_min,
+            );
+        }
     }
     let (mut sol, mut mask) = chosen;
     // The remembered-other matches (`memory_exclude`).
@@ -1753,8 +1759,10 @@ fn yaw_history_replacement(
 /// [`HypothesesOptions::yaw_history_predict_hold`] the prediction itself where that is not
 /// possible. With [`HypothesesOptions::tilt_predict`] A also qualifies where its tilt jumps
 /// ([`HypothesisTracker::tilt_jumps_given_road`], the road weak) and the re-solved motion
-/// must not jump in tilt either. None with the rule off, before any frame was recorded, or
-/// where A does not qualify and nothing is held.
+/// must not jump in tilt either. With [`HypothesesOptions::yaw_history_predict_road_frames`]
+/// only where the recent frames' chosen motions had road ([`HypothesisTracker::road_lost`]).
+/// None with the rule off, before any frame was recorded, or where A does not qualify and
+/// nothing is held.
 fn yaw_history_prediction(
     ctx: &SolveContext<'_>,
     h: &HypothesesOptions,
@@ -1777,9 +1785,11 @@ fn yaw_history_prediction(
                 true,
             )
     };
-    // `!(x <= J)`: a NaN yaw counts as a jump.
+    // `!(x <= J)`: a NaN yaw counts as a jump. `yaw_history_predict_road_frames`: only where
+    // the recent frames had the road A lost.
     if ((yaw_of(ctx, &chosen.0.params) - r).abs() <= h.yaw_history_predict
         && !tilt_jumps(&chosen.0.params))
+        || !tracker.road_lost(h)
         || road_score(ctx, h, obs, chosen) >= h.min_matches
     {
         return None;
@@ -3511,6 +3521,95 @@ mod tests {
             bad.validate()
                 .expect_err("negative")
                 .contains("yaw_history_predict")
+        );
+    }
+
+    /// `yaw_history_predict_road_frames`: the prediction replaces a roadless A that jumped
+    /// only where the recent frames' chosen motions had road (A lost it: the median of their
+    /// road scores at least `min_matches`), never in a scene without road (every recorded
+    /// score below it), nor before a score was recorded; the option parses and validates.
+    #[test]
+    fn yaw_history_predict_road_guard_acts_where_the_road_was_lost_only() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let w = yaw_of(&ctx, &sol.params);
+        let deg = 1.0_f64.to_radians();
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            yaw_history_predict: deg,
+            yaw_history_predict_hold: true,
+            yaw_history_predict_road_frames: 3,
+            ..HypothesesOptions::default()
+        };
+        let support = |p: &[f64]| -> Vec<Vec<bool>> {
+            epipolar_angles(rig, &estimator.motion(p), obs)
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        };
+        // A on an object (or a true sharp turn): 5 deg from the recorded yaw, no road under
+        // its support (score 0 < `min_matches` = 10).
+        let car = f.turned(-5.0 * deg, &none);
+        assert!(road_score(&ctx, &h, obs, &car) < h.min_matches);
+        let previous = f.turned(0.2 * deg, &none).0.params;
+        let predict = |t: &HypothesisTracker| {
+            yaw_history_prediction(&ctx, &h, t, obs, &car, &previous, &support)
+        };
+        let tracker_with = |scores: &[usize]| {
+            let mut t = HypothesisTracker::default();
+            t.record_yaw(&h, w);
+            for &s in scores {
+                t.record_road(&h, s);
+            }
+            t
+        };
+        // No road score recorded yet: the guard holds A.
+        assert!(predict(&tracker_with(&[])).is_none());
+        // Road lost: the recent frames' motions had 12-20 cells of road, A has none.
+        let (p, _) = predict(&tracker_with(&[15, 20, 12])).expect("road lost: replaced");
+        assert!((yaw_of(&ctx, &p.params) - w).abs() < 0.1 * deg);
+        // Never road: a scene without a visible road keeps A (a true turn).
+        assert!(predict(&tracker_with(&[0, 0, 0])).is_none());
+        assert!(predict(&tracker_with(&[3, 9, 2])).is_none());
+        // The median of the last 3: one frame with road among roadless ones is not enough,
+        // two are; older scores fall out of the window.
+        assert!(predict(&tracker_with(&[20, 0, 0])).is_none());
+        assert!(predict(&tracker_with(&[20, 0, 20])).is_some());
+        assert!(predict(&tracker_with(&[20, 20, 20, 0, 0, 0])).is_none());
+        assert!(predict(&tracker_with(&[0, 0, 0, 20, 20])).is_some());
+        // The guard off: A without road is replaced whatever was recorded (tail37's rule).
+        let unguarded = HypothesesOptions {
+            yaw_history_predict_road_frames: 0,
+            ..h.clone()
+        };
+        let mut t = HypothesisTracker::default();
+        t.record_yaw(&unguarded, w);
+        t.record_road(&unguarded, 20);
+        assert!(t.road_lost(&unguarded));
+        assert!(
+            yaw_history_prediction(&ctx, &unguarded, &t, obs, &car, &previous, &support).is_some()
+        );
+        // The option parses and validates; off by default.
+        let o: HypothesesOptions =
+            toml::from_str("yaw_history_predict_road_frames = 5").expect("parses");
+        assert_eq!(o.yaw_history_predict_road_frames, 5);
+        assert!(o.validate().is_ok());
+        assert_eq!(
+            HypothesesOptions::default().yaw_history_predict_road_frames,
+            0
+        );
+        let bad = HypothesesOptions {
+            yaw_history_predict_road_frames: 1001,
+            ..HypothesesOptions::default()
+        };
+        assert!(
+            bad.validate()
+                .expect_err("too many")
+                .contains("yaw_history_predict_road_frames")
         );
     }
 
