@@ -487,6 +487,9 @@ impl SeparateOptions {
                 yaw_history_margin: 0.01745,
                 yaw_history_replace: true,
                 tilt_weak_road_frames: 3,
+                yaw_history_predict: 0.01745,
+                yaw_history_predict_hold: true,
+                yaw_history_predict_road_frames: 10,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
