@@ -312,11 +312,18 @@ pub struct HypothesesOptions {
     /// prediction acts only where the median of the last `K` frames' chosen motions' road
     /// scores ([`score`], recorded by [`HypothesisTracker::record_road`]) is at least
     /// [`HypothesesOptions::min_matches`] — A *lost* the road the recent frames' motions had
-    /// ([`HypothesisTracker::road_lost`]). A lead car that hides the static background takes
-    /// the road out of A's support from one frame to the next; in a scene without a visible
-    /// road (every chosen motion's score below `min_matches`) a yaw jump is a true turn and A
-    /// stays. Off (`0`).
+    /// ([`HypothesisTracker::road_lost`]) — and A's own road score is at most
+    /// [`HypothesesOptions::yaw_history_predict_road_drop`] times that median. A lead car that
+    /// hides the static background takes the road out of A's support from one frame to the
+    /// next; in a scene without a visible road (every chosen motion's score below
+    /// `min_matches`), or where the road score only scatters about `min_matches` (a true
+    /// sharp turn among random scene points), a yaw jump is a true turn and A stays. Off
+    /// (`0`).
     pub yaw_history_predict_road_frames: usize,
+    /// With [`HypothesesOptions::yaw_history_predict_road_frames`] `= K`: the drop ratio `q`
+    /// of A's road score `s_A` against the median `m` of the last `K` frames' (`s_A <= q m`;
+    /// in `(0, 1]`; `0.4`, the ratio of `odometry.separate.ground_drop`'s flag).
+    pub yaw_history_predict_road_drop: f64,
     /// With [`HypothesesOptions::yaw_history_predict`]: the prediction is also formed where
     /// A's tilt jumps from the recent frames' (the gate of the tilt's converse,
     /// [`HypothesisTracker::tilt_jumps_given_road`] with A's road weak) instead of its yaw,
@@ -368,6 +375,7 @@ impl Default for HypothesesOptions {
             yaw_history_predict: 0.0,
             yaw_history_predict_hold: false,
             yaw_history_predict_road_frames: 0,
+            yaw_history_predict_road_drop: 0.4,
             tilt_predict: false,
         }
     }
@@ -458,6 +466,13 @@ impl HypothesesOptions {
         if self.yaw_history_predict_road_frames > 1000 {
             return Err(
                 "odometry.separate.hypotheses.yaw_history_predict_road_frames must be at most 1000"
+                    .into(),
+            );
+        }
+        if !(self.yaw_history_predict_road_drop > 0.0 && self.yaw_history_predict_road_drop <= 1.0)
+        {
+            return Err(
+                "odometry.separate.hypotheses.yaw_history_predict_road_drop must be in (0, 1]"
                     .into(),
             );
         }
@@ -1188,14 +1203,17 @@ impl HypothesisTracker {
         }
     }
 
-    /// Whether the recent frames' chosen motions had the road that a roadless A lost
-    /// ([`HypothesesOptions::yaw_history_predict_road_frames`] `= K`): the median of the last
-    /// `K` recorded road scores is at least [`HypothesesOptions::min_matches`]. True with the
-    /// guard off (`K = 0`); false before any frame was recorded.
-    pub fn road_lost(&self, opts: &HypothesesOptions) -> bool {
+    /// Whether A, of road score `score_a`, lost the road the recent frames' chosen motions had
+    /// ([`HypothesesOptions::yaw_history_predict_road_frames`] `= K`): the median `m` of the
+    /// last `K` recorded road scores is at least [`HypothesesOptions::min_matches`] and
+    /// `score_a <= q m` (`q` [`HypothesesOptions::yaw_history_predict_road_drop`]). True with
+    /// the guard off (`K = 0`); false before any frame was recorded.
+    pub fn road_lost(&self, opts: &HypothesesOptions, score_a: usize) -> bool {
         opts.yaw_history_predict_road_frames == 0
-            || crate::stats::median(self.road_scores.iter().map(|&s| s as f64))
-                .is_some_and(|m| m >= opts.min_matches as f64)
+            || crate::stats::median(self.road_scores.iter().map(|&s| s as f64)).is_some_and(|m| {
+                m >= opts.min_matches as f64
+                    && score_a as f64 <= opts.yaw_history_predict_road_drop * m
+            })
     }
 
     /// The reference yaw of the recorded frames ([`HypothesesOptions::yaw_history_frames`]):

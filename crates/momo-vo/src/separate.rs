@@ -1763,7 +1763,8 @@ fn yaw_history_replacement(
 /// possible. With [`HypothesesOptions::tilt_predict`] A also qualifies where its tilt jumps
 /// ([`HypothesisTracker::tilt_jumps_given_road`], the road weak) and the re-solved motion
 /// must not jump in tilt either. With [`HypothesesOptions::yaw_history_predict_road_frames`]
-/// only where the recent frames' chosen motions had road ([`HypothesisTracker::road_lost`]).
+/// only where A lost the road the recent frames' chosen motions had
+/// ([`HypothesisTracker::road_lost`]).
 /// None with the rule off, before any frame was recorded, or where A does not qualify and
 /// nothing is held.
 fn yaw_history_prediction(
@@ -1788,13 +1789,15 @@ fn yaw_history_prediction(
                 true,
             )
     };
-    // `!(x <= J)`: a NaN yaw counts as a jump. `yaw_history_predict_road_frames`: only where
-    // the recent frames had the road A lost.
-    if ((yaw_of(ctx, &chosen.0.params) - r).abs() <= h.yaw_history_predict
-        && !tilt_jumps(&chosen.0.params))
-        || !tracker.road_lost(h)
-        || road_score(ctx, h, obs, chosen) >= h.min_matches
+    // `!(x <= J)`: a NaN yaw counts as a jump.
+    if (yaw_of(ctx, &chosen.0.params) - r).abs() <= h.yaw_history_predict
+        && !tilt_jumps(&chosen.0.params)
     {
+        return None;
+    }
+    // `yaw_history_predict_road_frames`: only where A lost the road the recent frames had.
+    let score_a = road_score(ctx, h, obs, chosen);
+    if score_a >= h.min_matches || !tracker.road_lost(h, score_a) {
         return None;
     }
     let sup_p = support(previous);
@@ -3584,6 +3587,30 @@ mod tests {
         assert!(predict(&tracker_with(&[20, 0, 20])).is_some());
         assert!(predict(&tracker_with(&[20, 20, 20, 0, 0, 0])).is_none());
         assert!(predict(&tracker_with(&[0, 0, 0, 20, 20])).is_some());
+        // The drop: A's score must be at most `q = 0.4` of the recent median (`min_matches` 2:
+        // 1 <= 0.4 * 4 is a loss, 2 is not; a median of 1 is no road).
+        let f_tracker = |h: &HypothesesOptions, scores: &[usize]| {
+            let mut t = HypothesisTracker::default();
+            for &s in scores {
+                t.record_road(h, s);
+            }
+            t
+        };
+        let low = HypothesesOptions {
+            min_matches: 2,
+            ..h.clone()
+        };
+        assert!(f_tracker(&low, &[4, 4, 4]).road_lost(&low, 1));
+        assert!(!f_tracker(&low, &[4, 4, 4]).road_lost(&low, 2));
+        assert!(!f_tracker(&low, &[1, 1, 1]).road_lost(&low, 0));
+        // The sharp turn of `degenerate::a_sharp_turn_after_straight_driving_is_found`: A's 8
+        // against the recent 10 (scores 7-14) is no loss; 4 is.
+        let ten = HypothesesOptions {
+            min_matches: 10,
+            ..h.clone()
+        };
+        assert!(!f_tracker(&ten, &[8, 10, 10, 14, 7]).road_lost(&ten, 8));
+        assert!(f_tracker(&ten, &[8, 10, 10, 14, 7]).road_lost(&ten, 4));
         // The guard off: A without road is replaced whatever was recorded (tail37's rule).
         let unguarded = HypothesesOptions {
             yaw_history_predict_road_frames: 0,
@@ -3592,19 +3619,42 @@ mod tests {
         let mut t = HypothesisTracker::default();
         t.record_yaw(&unguarded, w);
         t.record_road(&unguarded, 20);
-        assert!(t.road_lost(&unguarded));
+        assert!(t.road_lost(&unguarded, 20));
         assert!(
             yaw_history_prediction(&ctx, &unguarded, &t, obs, &car, &previous, &support).is_some()
         );
         // The option parses and validates; off by default.
-        let o: HypothesesOptions =
-            toml::from_str("yaw_history_predict_road_frames = 5").expect("parses");
-        assert_eq!(o.yaw_history_predict_road_frames, 5);
-        assert!(o.validate().is_ok());
+        let o: HypothesesOptions = toml::from_str(
+            "yaw_history_predict_road_frames = 5\nyaw_history_predict_road_drop = 0.5",
+        )
+        .expect("parses");
         assert_eq!(
-            HypothesesOptions::default().yaw_history_predict_road_frames,
-            0
+            (
+                o.yaw_history_predict_road_frames,
+                o.yaw_history_predict_road_drop
+            ),
+            (5, 0.5)
         );
+        assert!(o.validate().is_ok());
+        let d = HypothesesOptions::default();
+        assert_eq!(
+            (
+                d.yaw_history_predict_road_frames,
+                d.yaw_history_predict_road_drop
+            ),
+            (0, 0.4)
+        );
+        for q in [0.0, -0.1, 1.1, f64::NAN] {
+            let bad = HypothesesOptions {
+                yaw_history_predict_road_drop: q,
+                ..HypothesesOptions::default()
+            };
+            assert!(
+                bad.validate()
+                    .expect_err("bad ratio")
+                    .contains("yaw_history_predict_road_drop")
+            );
+        }
         let bad = HypothesesOptions {
             yaw_history_predict_road_frames: 1001,
             ..HypothesesOptions::default()
