@@ -300,8 +300,11 @@ pub struct HypothesesOptions {
     /// run the prediction's own support is the static world's. The test of A's road does not
     /// tell an object from a scene without road: there every yaw jump beyond `J` is replaced
     /// (with `J = 1 deg` and the hold eight of `momo-vo`'s integration tests fail, e.g. a sharp
-    /// turn after straight driving). Off (`0`; measured in docs/RESULTS.md §9, twenty-third
-    /// session, tail37).
+    /// turn after straight driving): hence the road guard,
+    /// [`HypothesesOptions::yaw_history_predict_road_frames`]. Off here (`0`; measured in
+    /// docs/RESULTS.md §9, twenty-third session, tail37); `0.01745` with the hold and the
+    /// guard in [`crate::separate::SeparateOptions::competition_over_time`] since the
+    /// twenty-fourth session (tail38).
     pub yaw_history_predict: f64,
     /// With [`HypothesesOptions::yaw_history_predict`]: where the re-solve is not possible
     /// (fewer than 12 matches explained by the prediction), fails or jumps too, the prediction

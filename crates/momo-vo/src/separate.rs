@@ -453,7 +453,13 @@ impl SeparateOptions {
     /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36), and the
     /// converse's gate measures the jump from the minimum of the last three frames' tilts
     /// where A's road score is below `min_matches` (`hypotheses.tilt_weak_road_frames = 3`;
-    /// docs/RESULTS.md §9, twenty-second session, grid36). A
+    /// docs/RESULTS.md §9, twenty-second session, grid36). Since the twenty-fourth session
+    /// an A that jumps by more than 1 deg from that yaw where no rule found an alternative and
+    /// A lost the road the last ten frames had (A's road score at most 0.4 of their median,
+    /// that median at least `min_matches`) is replaced by the previous motion re-solved on its
+    /// support, or held to it (`hypotheses.yaw_history_predict = 0.01745`,
+    /// `yaw_history_predict_hold`, `yaw_history_predict_road_frames = 10`; docs/RESULTS.md §9,
+    /// twenty-fourth session, tail38). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
