@@ -82,7 +82,8 @@ def frames_of(trd, seqd, name):
                    clustering=d.get("residual_clustering") or float("nan"),
                    bound=bound.get(k, float("nan")), nees=float("nan"),
                    sx=float("nan"), sy=float("nan"), sz=float("nan"))
-        if cov is not None and all(i in free for i in range(3)):
+        # A degenerate frame reports an empty covariance (no sigma, no NEES).
+        if cov and len(cov) == len(free) ** 2 and all(i in free for i in range(3)):
             n = len(free)
             c = np.array(cov, dtype=float).reshape(n, n)
             idx = [free.index(i) for i in range(3)]

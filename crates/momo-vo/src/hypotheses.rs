@@ -300,13 +300,33 @@ pub struct HypothesesOptions {
     /// run the prediction's own support is the static world's. The test of A's road does not
     /// tell an object from a scene without road: there every yaw jump beyond `J` is replaced
     /// (with `J = 1 deg` and the hold eight of `momo-vo`'s integration tests fail, e.g. a sharp
-    /// turn after straight driving). Off (`0`; measured in docs/RESULTS.md §9, twenty-third
-    /// session, tail37).
+    /// turn after straight driving): hence the road guard,
+    /// [`HypothesesOptions::yaw_history_predict_road_frames`]. Off here (`0`; measured in
+    /// docs/RESULTS.md §9, twenty-third session, tail37); `0.01745` with the hold and the
+    /// guard in [`crate::separate::SeparateOptions::competition_over_time`] since the
+    /// twenty-fourth session (tail38).
     pub yaw_history_predict: f64,
     /// With [`HypothesesOptions::yaw_history_predict`]: where the re-solve is not possible
     /// (fewer than 12 matches explained by the prediction), fails or jumps too, the prediction
     /// itself (the previous frame's motion, unsolved) replaces A. Off (`false`).
     pub yaw_history_predict_hold: bool,
+    /// The road-support guard of [`HypothesesOptions::yaw_history_predict`] (frames; 0: off,
+    /// the prediction acts wherever A has no road; twenty-fourth session, tail38): the
+    /// prediction acts only where the median of the last `K` frames' chosen motions' road
+    /// scores ([`score`], recorded by [`HypothesisTracker::record_road`]) is at least
+    /// [`HypothesesOptions::min_matches`] — A *lost* the road the recent frames' motions had
+    /// ([`HypothesisTracker::road_lost`]) — and A's own road score is at most
+    /// [`HypothesesOptions::yaw_history_predict_road_drop`] times that median. A lead car that
+    /// hides the static background takes the road out of A's support from one frame to the
+    /// next; in a scene without a visible road (every chosen motion's score below
+    /// `min_matches`), or where the road score only scatters about `min_matches` (a true
+    /// sharp turn among random scene points), a yaw jump is a true turn and A stays. Off
+    /// (`0`).
+    pub yaw_history_predict_road_frames: usize,
+    /// With [`HypothesesOptions::yaw_history_predict_road_frames`] `= K`: the drop ratio `q`
+    /// of A's road score `s_A` against the median `m` of the last `K` frames' (`s_A <= q m`;
+    /// in `(0, 1]`; `0.4`, the ratio of `odometry.separate.ground_drop`'s flag).
+    pub yaw_history_predict_road_drop: f64,
     /// With [`HypothesesOptions::yaw_history_predict`]: the prediction is also formed where
     /// A's tilt jumps from the recent frames' (the gate of the tilt's converse,
     /// [`HypothesisTracker::tilt_jumps_given_road`] with A's road weak) instead of its yaw,
@@ -357,6 +377,8 @@ impl Default for HypothesesOptions {
             tilt_weak_road_frames: 0,
             yaw_history_predict: 0.0,
             yaw_history_predict_hold: false,
+            yaw_history_predict_road_frames: 0,
+            yaw_history_predict_road_drop: 0.4,
             tilt_predict: false,
         }
     }
@@ -444,6 +466,19 @@ impl HypothesesOptions {
                 "odometry.separate.hypotheses.tilt_weak_road_frames must be at most 1000".into(),
             );
         }
+        if self.yaw_history_predict_road_frames > 1000 {
+            return Err(
+                "odometry.separate.hypotheses.yaw_history_predict_road_frames must be at most 1000"
+                    .into(),
+            );
+        }
+        if !(self.yaw_history_predict_road_drop > 0.0 && self.yaw_history_predict_road_drop <= 1.0)
+        {
+            return Err(
+                "odometry.separate.hypotheses.yaw_history_predict_road_drop must be in (0, 1]"
+                    .into(),
+            );
+        }
         if self.tilt_reference_frames > 1000 {
             return Err(
                 "odometry.separate.hypotheses.tilt_reference_frames must be at most 1000".into(),
@@ -491,6 +526,9 @@ pub struct HypothesisTracker {
     /// The recent frames' chosen motions' yaws, newest last
     /// ([`HypothesesOptions::yaw_history_frames`]).
     yaws: std::collections::VecDeque<f64>,
+    /// The recent frames' chosen motions' road scores, newest last
+    /// ([`HypothesesOptions::yaw_history_predict_road_frames`]).
+    road_scores: std::collections::VecDeque<usize>,
 }
 
 /// Per-match memory across frames by image position (issue 14): the second-image pixels
@@ -1112,6 +1150,7 @@ impl HypothesisTracker {
         self.ground_scores.clear();
         self.tilts.clear();
         self.yaws.clear();
+        self.road_scores.clear();
     }
 
     /// Records a frame's chosen motion's [`tilt`], keeping the last
@@ -1152,6 +1191,32 @@ impl HypothesisTracker {
         while self.yaws.len() > k {
             self.yaws.pop_front();
         }
+    }
+
+    /// Records a frame's chosen motion's road score ([`score`]), keeping the last
+    /// [`HypothesesOptions::yaw_history_predict_road_frames`] (nothing where that is 0).
+    pub fn record_road(&mut self, opts: &HypothesesOptions, score: usize) {
+        let k = opts.yaw_history_predict_road_frames;
+        if k == 0 {
+            return;
+        }
+        self.road_scores.push_back(score);
+        while self.road_scores.len() > k {
+            self.road_scores.pop_front();
+        }
+    }
+
+    /// Whether A, of road score `score_a`, lost the road the recent frames' chosen motions had
+    /// ([`HypothesesOptions::yaw_history_predict_road_frames`] `= K`): the median `m` of the
+    /// last `K` recorded road scores is at least [`HypothesesOptions::min_matches`] and
+    /// `score_a <= q m` (`q` [`HypothesesOptions::yaw_history_predict_road_drop`]). True with
+    /// the guard off (`K = 0`); false before any frame was recorded.
+    pub fn road_lost(&self, opts: &HypothesesOptions, score_a: usize) -> bool {
+        opts.yaw_history_predict_road_frames == 0
+            || crate::stats::median(self.road_scores.iter().map(|&s| s as f64)).is_some_and(|m| {
+                m >= opts.min_matches as f64
+                    && score_a as f64 <= opts.yaw_history_predict_road_drop * m
+            })
     }
 
     /// The reference yaw of the recorded frames ([`HypothesesOptions::yaw_history_frames`]):

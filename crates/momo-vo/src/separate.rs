@@ -453,7 +453,13 @@ impl SeparateOptions {
     /// `yaw_history_replace`; docs/RESULTS.md §9, twenty-second session, curve36), and the
     /// converse's gate measures the jump from the minimum of the last three frames' tilts
     /// where A's road score is below `min_matches` (`hypotheses.tilt_weak_road_frames = 3`;
-    /// docs/RESULTS.md §9, twenty-second session, grid36). A
+    /// docs/RESULTS.md §9, twenty-second session, grid36). Since the twenty-fourth session
+    /// an A that jumps by more than 1 deg from that yaw where no rule found an alternative and
+    /// A lost the road the last ten frames had (A's road score at most 0.4 of their median,
+    /// that median at least `min_matches`) is replaced by the previous motion re-solved on its
+    /// support, or held to it (`hypotheses.yaw_history_predict = 0.01745`,
+    /// `yaw_history_predict_hold`, `yaw_history_predict_road_frames = 10`; docs/RESULTS.md §9,
+    /// twenty-fourth session, tail38). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -487,6 +493,9 @@ impl SeparateOptions {
                 yaw_history_margin: 0.01745,
                 yaw_history_replace: true,
                 tilt_weak_road_frames: 3,
+                yaw_history_predict: 0.01745,
+                yaw_history_predict_hold: true,
+                yaw_history_predict_road_frames: 10,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -1510,8 +1519,11 @@ fn separate_with(
         let yaw = momo_core::so3_log(&ctx.estimator.motion(&chosen.0.params).rotation).z;
         tracker.record_yaw(h, yaw);
     }
-    if opts.ground_drop > 0.0
-        && let Some(h) = opts.hypotheses()
+    // The chosen motion's road score, for `ground_drop` and the road guard of
+    // `yaw_history_predict` (computed once).
+    if let Some(h) = opts
+        .hypotheses()
+        .filter(|h| opts.ground_drop > 0.0 || h.yaw_history_predict_road_frames > 0)
     {
         let s = score(
             h,
@@ -1520,12 +1532,15 @@ fn separate_with(
             obs,
             &chosen.1,
         );
-        outcome.ground_drop = crate::ground_drop::observe(
-            &mut tracker.ground_scores,
-            s,
-            opts.ground_drop,
-            opts.ground_drop_min,
-        );
+        tracker.record_road(h, s);
+        if opts.ground_drop > 0.0 {
+            outcome.ground_drop = crate::ground_drop::observe(
+                &mut tracker.ground_scores,
+                s,
+                opts.ground_drop,
+                opts.ground_drop_min,
+            );
+        }
     }
     let (mut sol, mut mask) = chosen;
     // The remembered-other matches (`memory_exclude`).
@@ -1753,8 +1768,11 @@ fn yaw_history_replacement(
 /// [`HypothesesOptions::yaw_history_predict_hold`] the prediction itself where that is not
 /// possible. With [`HypothesesOptions::tilt_predict`] A also qualifies where its tilt jumps
 /// ([`HypothesisTracker::tilt_jumps_given_road`], the road weak) and the re-solved motion
-/// must not jump in tilt either. None with the rule off, before any frame was recorded, or
-/// where A does not qualify and nothing is held.
+/// must not jump in tilt either. With [`HypothesesOptions::yaw_history_predict_road_frames`]
+/// only where A lost the road the recent frames' chosen motions had
+/// ([`HypothesisTracker::road_lost`]).
+/// None with the rule off, before any frame was recorded, or where A does not qualify and
+/// nothing is held.
 fn yaw_history_prediction(
     ctx: &SolveContext<'_>,
     h: &HypothesesOptions,
@@ -1778,10 +1796,14 @@ fn yaw_history_prediction(
             )
     };
     // `!(x <= J)`: a NaN yaw counts as a jump.
-    if ((yaw_of(ctx, &chosen.0.params) - r).abs() <= h.yaw_history_predict
-        && !tilt_jumps(&chosen.0.params))
-        || road_score(ctx, h, obs, chosen) >= h.min_matches
+    if (yaw_of(ctx, &chosen.0.params) - r).abs() <= h.yaw_history_predict
+        && !tilt_jumps(&chosen.0.params)
     {
+        return None;
+    }
+    // `yaw_history_predict_road_frames`: only where A lost the road the recent frames had.
+    let score_a = road_score(ctx, h, obs, chosen);
+    if score_a >= h.min_matches || !tracker.road_lost(h, score_a) {
         return None;
     }
     let sup_p = support(previous);
@@ -3511,6 +3533,142 @@ mod tests {
             bad.validate()
                 .expect_err("negative")
                 .contains("yaw_history_predict")
+        );
+    }
+
+    /// `yaw_history_predict_road_frames`: the prediction replaces a roadless A that jumped
+    /// only where the recent frames' chosen motions had road (A lost it: the median of their
+    /// road scores at least `min_matches`), never in a scene without road (every recorded
+    /// score below it), nor before a score was recorded; the option parses and validates.
+    #[test]
+    fn yaw_history_predict_road_guard_acts_where_the_road_was_lost_only() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let w = yaw_of(&ctx, &sol.params);
+        let deg = 1.0_f64.to_radians();
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            yaw_history_predict: deg,
+            yaw_history_predict_hold: true,
+            yaw_history_predict_road_frames: 3,
+            ..HypothesesOptions::default()
+        };
+        let support = |p: &[f64]| -> Vec<Vec<bool>> {
+            epipolar_angles(rig, &estimator.motion(p), obs)
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        };
+        // A on an object (or a true sharp turn): 5 deg from the recorded yaw, no road under
+        // its support (score 0 < `min_matches` = 10).
+        let car = f.turned(-5.0 * deg, &none);
+        assert!(road_score(&ctx, &h, obs, &car) < h.min_matches);
+        let previous = f.turned(0.2 * deg, &none).0.params;
+        let predict = |t: &HypothesisTracker| {
+            yaw_history_prediction(&ctx, &h, t, obs, &car, &previous, &support)
+        };
+        let tracker_with = |scores: &[usize]| {
+            let mut t = HypothesisTracker::default();
+            t.record_yaw(&h, w);
+            for &s in scores {
+                t.record_road(&h, s);
+            }
+            t
+        };
+        // No road score recorded yet: the guard holds A.
+        assert!(predict(&tracker_with(&[])).is_none());
+        // Road lost: the recent frames' motions had 12-20 cells of road, A has none.
+        let (p, _) = predict(&tracker_with(&[15, 20, 12])).expect("road lost: replaced");
+        assert!((yaw_of(&ctx, &p.params) - w).abs() < 0.1 * deg);
+        // Never road: a scene without a visible road keeps A (a true turn).
+        assert!(predict(&tracker_with(&[0, 0, 0])).is_none());
+        assert!(predict(&tracker_with(&[3, 9, 2])).is_none());
+        // The median of the last 3: one frame with road among roadless ones is not enough,
+        // two are; older scores fall out of the window.
+        assert!(predict(&tracker_with(&[20, 0, 0])).is_none());
+        assert!(predict(&tracker_with(&[20, 0, 20])).is_some());
+        assert!(predict(&tracker_with(&[20, 20, 20, 0, 0, 0])).is_none());
+        assert!(predict(&tracker_with(&[0, 0, 0, 20, 20])).is_some());
+        // The drop: A's score must be at most `q = 0.4` of the recent median (`min_matches` 2:
+        // 1 <= 0.4 * 4 is a loss, 2 is not; a median of 1 is no road).
+        let f_tracker = |h: &HypothesesOptions, scores: &[usize]| {
+            let mut t = HypothesisTracker::default();
+            for &s in scores {
+                t.record_road(h, s);
+            }
+            t
+        };
+        let low = HypothesesOptions {
+            min_matches: 2,
+            ..h.clone()
+        };
+        assert!(f_tracker(&low, &[4, 4, 4]).road_lost(&low, 1));
+        assert!(!f_tracker(&low, &[4, 4, 4]).road_lost(&low, 2));
+        assert!(!f_tracker(&low, &[1, 1, 1]).road_lost(&low, 0));
+        // The sharp turn of `degenerate::a_sharp_turn_after_straight_driving_is_found`: A's 8
+        // against the recent 10 (scores 7-14) is no loss; 4 is.
+        let ten = HypothesesOptions {
+            min_matches: 10,
+            ..h.clone()
+        };
+        assert!(!f_tracker(&ten, &[8, 10, 10, 14, 7]).road_lost(&ten, 8));
+        assert!(f_tracker(&ten, &[8, 10, 10, 14, 7]).road_lost(&ten, 4));
+        // The guard off: A without road is replaced whatever was recorded (tail37's rule).
+        let unguarded = HypothesesOptions {
+            yaw_history_predict_road_frames: 0,
+            ..h.clone()
+        };
+        let mut t = HypothesisTracker::default();
+        t.record_yaw(&unguarded, w);
+        t.record_road(&unguarded, 20);
+        assert!(t.road_lost(&unguarded, 20));
+        assert!(
+            yaw_history_prediction(&ctx, &unguarded, &t, obs, &car, &previous, &support).is_some()
+        );
+        // The option parses and validates; off by default.
+        let o: HypothesesOptions = toml::from_str(
+            "yaw_history_predict_road_frames = 5\nyaw_history_predict_road_drop = 0.5",
+        )
+        .expect("parses");
+        assert_eq!(
+            (
+                o.yaw_history_predict_road_frames,
+                o.yaw_history_predict_road_drop
+            ),
+            (5, 0.5)
+        );
+        assert!(o.validate().is_ok());
+        let d = HypothesesOptions::default();
+        assert_eq!(
+            (
+                d.yaw_history_predict_road_frames,
+                d.yaw_history_predict_road_drop
+            ),
+            (0, 0.4)
+        );
+        for q in [0.0, -0.1, 1.1, f64::NAN] {
+            let bad = HypothesesOptions {
+                yaw_history_predict_road_drop: q,
+                ..HypothesesOptions::default()
+            };
+            assert!(
+                bad.validate()
+                    .expect_err("bad ratio")
+                    .contains("yaw_history_predict_road_drop")
+            );
+        }
+        let bad = HypothesesOptions {
+            yaw_history_predict_road_frames: 1001,
+            ..HypothesesOptions::default()
+        };
+        assert!(
+            bad.validate()
+                .expect_err("too many")
+                .contains("yaw_history_predict_road_frames")
         );
     }
 
