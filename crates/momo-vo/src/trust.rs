@@ -405,6 +405,15 @@ impl TrustOptions {
                 ),
             ));
         }
+        if self.report_pool_trim > 0 && self.report_pool_trim >= self.report_pool_frames {
+            out.push((
+                vec!["trust.report_pool_trim", "trust.report_pool_frames"],
+                format!(
+                    "trust.report_pool_trim must be below trust.report_pool_frames, got {} and {}",
+                    self.report_pool_trim, self.report_pool_frames
+                ),
+            ));
+        }
         if !(self.clustering_z >= 0.0 && self.clustering_z.is_finite()) {
             out.push((
                 vec!["trust.clustering_z"],
