@@ -265,6 +265,10 @@ pub struct Odometry {
     /// added (its frame number, free parameters and the matrix): the floor of the next frame's
     /// (`trust.covariance_memory`).
     covariance_memory: Option<(usize, Vec<usize>, nalgebra::DMatrix<f64>)>,
+    /// The report grids' jackknife covariances of the recent moving frames (frame number,
+    /// free parameters, one per grid of `trust.report_grids`), newest last: the pool of
+    /// `trust.report_pool_frames`.
+    report_pool: std::collections::VecDeque<ReportJackknife>,
     /// Consecutive moving frames whose separation kept no competing alternative (the
     /// quiet-frame fast path, `odometry.quiet_frames`).
     quiet_streak: usize,
@@ -362,6 +366,7 @@ impl Odometry {
             frame_stage: None,
             clustering: Default::default(),
             covariance_memory: None,
+            report_pool: Default::default(),
             quiet_streak: 0,
             quiet_taken: 0,
         })
@@ -1023,6 +1028,7 @@ impl Odometry {
         self.frame_stage = None;
         self.clustering = Default::default();
         self.covariance_memory = None;
+        self.report_pool.clear();
         self.quiet_streak = 0;
         self.quiet_taken = 0;
     }
@@ -1437,7 +1443,7 @@ impl Odometry {
                 } else {
                     self.covariance_floor(&sol)
                 };
-                let base = self.fill_diagnostics(
+                let (base, report_jackknife) = self.fill_diagnostics(
                     obs,
                     &sol,
                     !standstill,
@@ -1449,6 +1455,14 @@ impl Odometry {
                 );
                 if !standstill && self.config.trust.covariance_memory > 0.0 {
                     self.covariance_memory = base.map(|c| (self.frame, sol.free.clone(), c));
+                }
+                let pool = self.config.trust.report_pool_frames;
+                if !standstill && pool > 1 && report_jackknife.iter().any(Option::is_some) {
+                    self.report_pool
+                        .push_back((self.frame, sol.free.clone(), report_jackknife));
+                    while self.report_pool.len() >= pool {
+                        self.report_pool.pop_front();
+                    }
                 }
                 if !standstill && !self.soft_inv_scale.is_empty() {
                     soft_sample =
@@ -2097,7 +2111,10 @@ impl Odometry {
     ///
     /// Returns that covariance and the one to report, which the grids of
     /// `trust.report_grids` widen further (the first is the one the competing-motions test
-    /// reads, so that those grids do not change a status).
+    /// reads, so that those grids do not change a status), and this frame's jackknife
+    /// covariance of each report grid (`None` where it is not defined; empty where the
+    /// jackknife did not run), which `trust.report_pool_frames` pools over frames.
+    #[allow(clippy::type_complexity)]
     fn reported_covariance(
         &self,
         obs: &FrameObservations,
@@ -2105,7 +2122,11 @@ impl Odometry {
         jackknife: bool,
         clustered: bool,
         soft_view: Option<&SoftView>,
-    ) -> Option<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>)> {
+    ) -> Option<(
+        nalgebra::DMatrix<f64>,
+        nalgebra::DMatrix<f64>,
+        Vec<Option<nalgebra::DMatrix<f64>>>,
+    )> {
         let mut cov = match self.unlearnt_prior_covariance(sol) {
             Some(c) => c,
             None => self.covariance(sol)?,
@@ -2125,7 +2146,7 @@ impl Odometry {
             cov += w;
         }
         if !jackknife {
-            return Some((cov.clone(), cov));
+            return Some((cov.clone(), cov, Vec::new()));
         }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
@@ -2142,6 +2163,7 @@ impl Odometry {
             .collect();
         let status_grids = grids.len() - t.report_grids.len();
         let mut status_cov = None;
+        let mut report_jackknife = Vec::with_capacity(t.report_grids.len());
         // (No grid: nothing to linearise.)
         let frame = if t.jackknife_influence && !grids.is_empty() {
             self.influence_frame(obs, sol, &fixed, &grids)
@@ -2159,16 +2181,84 @@ impl Odometry {
                     .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
                     .collect(),
             };
-            if let Some(j) = trust::jackknife_covariance(&samples) {
-                let ratio = if k < status_grids {
-                    t.jackknife_min_ratio
-                } else {
-                    t.report_min_ratio
+            let j = trust::jackknife_covariance(&samples);
+            if k < status_grids {
+                if let Some(j) = j {
+                    cov = trust::widen(&cov, &j, t.jackknife_min_ratio);
+                }
+                continue;
+            }
+            // A report grid: its jackknife, pooled with the recent frames' where
+            // `trust.report_pool_frames` asks for it.
+            let pooled = if t.report_pool_frames > 1 {
+                if t.report_pool_own
+                    && let Some(j) = j.as_ref()
+                {
+                    cov = trust::widen(&cov, j, t.report_min_ratio);
+                }
+                self.pooled_report_jackknife(k - status_grids, sol, j.as_ref(), &cov)
+            } else {
+                j.clone()
+            };
+            if let Some(p) = pooled {
+                cov = trust::widen(&cov, &p, t.report_min_ratio);
+            }
+            report_jackknife.push(j);
+        }
+        Some((
+            status_cov.unwrap_or_else(|| cov.clone()),
+            cov,
+            report_jackknife,
+        ))
+    }
+
+    /// The mean of the report grid `index`'s jackknife covariance over this frame's (`own`)
+    /// and the pooled recent frames' (`trust.report_pool_frames` `m`: those up to `m - 1`
+    /// frames back with the same free parameters and a defined covariance of that grid):
+    /// `J̄ = (1/n) Σ_j J_j`, without the `trust.report_pool_trim` widest against `cov` (by
+    /// `tr(Σ⁻¹ J)`) where more are pooled. `None` where none is defined.
+    fn pooled_report_jackknife(
+        &self,
+        index: usize,
+        sol: &FrameSolution,
+        own: Option<&nalgebra::DMatrix<f64>>,
+        cov: &nalgebra::DMatrix<f64>,
+    ) -> Option<nalgebra::DMatrix<f64>> {
+        let m = self.config.trust.report_pool_frames;
+        let recent = self
+            .report_pool
+            .iter()
+            .filter(|(frame, free, _)| {
+                *frame < self.frame && self.frame - *frame < m && *free == sol.free
+            })
+            .filter_map(|(_, _, js)| js.get(index).and_then(Option::as_ref));
+        let mut pool: Vec<&nalgebra::DMatrix<f64>> = own.into_iter().chain(recent).collect();
+        let trim = self.config.trust.report_pool_trim;
+        if trim > 0 && pool.len() > trim {
+            // The widest against `cov`: tr(Σ⁻¹ J) (where Σ is not invertible, no trim).
+            if let Some(inv) = cov.clone().try_inverse() {
+                let width = |j: &nalgebra::DMatrix<f64>| -> f64 {
+                    if j.shape() == inv.shape() {
+                        (&inv * j).trace()
+                    } else {
+                        f64::INFINITY
+                    }
                 };
-                cov = trust::widen(&cov, &j, ratio);
+                pool.sort_by(|a, b| width(a).total_cmp(&width(b)));
+                pool.truncate(pool.len() - trim);
             }
         }
-        Some((status_cov.unwrap_or_else(|| cov.clone()), cov))
+        let mut sum: Option<nalgebra::DMatrix<f64>> = None;
+        let mut n = 0usize;
+        for j in pool {
+            match sum.as_mut() {
+                Some(s) if s.shape() == j.shape() => *s += j,
+                Some(_) => continue,
+                None => sum = Some(j.clone()),
+            }
+            n += 1;
+        }
+        sum.map(|s| s / n as f64)
     }
 
     /// One leave-one-cell-out re-estimate of the jackknife (its free parameters) from the
@@ -2501,7 +2591,10 @@ impl Odometry {
         soft_view: Option<&SoftView>,
         floor: Option<&nalgebra::DMatrix<f64>>,
         diag: &mut FrameDiagnostics,
-    ) -> Option<nalgebra::DMatrix<f64>> {
+    ) -> (
+        Option<nalgebra::DMatrix<f64>>,
+        Vec<Option<nalgebra::DMatrix<f64>>>,
+    ) {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
         diag.iterations = sol.report.iterations;
@@ -2515,15 +2608,15 @@ impl Odometry {
             None
         };
         diag.jackknife = moving && (jackknife.0 || competing.is_some());
-        let (status_cov, mut reported) = match self.reported_covariance(
+        let (status_cov, mut reported, report_jackknife) = match self.reported_covariance(
             obs,
             sol,
             diag.jackknife,
             moving && jackknife.1,
             soft_view,
         ) {
-            Some((s, r)) => (Some(s), Some(r)),
-            None => (None, None),
+            Some((s, r, j)) => (Some(s), Some(r), j),
+            None => (None, None, Vec::new()),
         };
         if let Some((b, w)) = &competing {
             let mut all = sol.params.clone();
@@ -2569,7 +2662,7 @@ impl Odometry {
             }
             diag.covariance = cov.transpose().iter().copied().collect();
         }
-        base
+        (base, report_jackknife)
     }
 
     /// The floor of this frame's reported covariance (`trust.covariance_memory` `ρ`): `ρ Σ'`
@@ -2612,6 +2705,11 @@ fn quiet_memory(labels: &[Vec<Option<bool>>], remembered: f64) -> f64 {
     }
     other as f64 / labelled as f64 - remembered
 }
+
+/// One moving frame's entry of the report grids' jackknife pool
+/// (`trust.report_pool_frames`): its frame number, free parameters and each report grid's
+/// jackknife covariance.
+type ReportJackknife = (usize, Vec<usize>, Vec<Option<nalgebra::DMatrix<f64>>>);
 
 /// The frame's part of the one-linearisation jackknife (`Odometry::influence_frame`).
 struct InfluenceFrame {

@@ -993,3 +993,63 @@ fn report_grids_widen_only_the_reported_covariance() {
     let e = config_error("[trust]\nreport_min_ratio = 0.5\n");
     assert!(e.contains("trust.report_min_ratio"), "{e}");
 }
+
+/// `trust.report_pool_frames` pools the report grids' jackknife over recent frames and widens
+/// only the reported covariance: on a moving-traffic drive the poses and every status are
+/// those of the default, some covariances change, and fewer unflagged frames have a rotation
+/// NEES above chi-square(3)'s 99 % quantile (the over-confident frames behind a lead vehicle
+/// whose own three-column jackknife happened to agree). A pool of one frame is the default
+/// bit for bit; a trim of at least the pool is rejected.
+#[test]
+fn the_report_pool_changes_only_the_reported_covariance() {
+    const CHI2_3_99: f64 = 11.344_866_730_144_373;
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 120;
+    traffic.seed = 3;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |frames: usize, trim: usize, ratio: f64| {
+        let mut config = Config::default();
+        config.trust.report_pool_frames = frames;
+        config.trust.report_pool_trim = trim;
+        config.trust.report_min_ratio = ratio;
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+        let mut rows = Vec::new();
+        let mut over = 0;
+        for k in 1..seq.num_frames() {
+            let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+            let r = vo.process(&seq.frames[k], arc);
+            let d = &r.diagnostics;
+            if d.status == FrameStatus::Estimated
+                && rotation_nees(&vo, d, &sim.vehicle_motions[k].rotation)
+                    .is_some_and(|n| n > CHI2_3_99)
+            {
+                over += 1;
+            }
+            rows.push((r.motion, r.diagnostics));
+        }
+        (rows, over)
+    };
+    let (plain, before) = run(0, 0, 4.0);
+    let (one, _) = run(1, 0, 4.0);
+    for (a, b) in plain.iter().zip(&one) {
+        assert_eq!(a.1.covariance, b.1.covariance);
+    }
+    let (pooled, after) = run(10, 2, 3.0);
+    let mut changed = 0;
+    for (a, b) in plain.iter().zip(&pooled) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.0.translation, b.0.translation);
+        assert_eq!(a.1.status, b.1.status);
+        assert_eq!(a.1.reason, b.1.reason);
+        changed += usize::from(a.1.covariance != b.1.covariance);
+    }
+    eprintln!("{changed} covariances changed; NEES above the 99 % quantile {before} -> {after}");
+    assert!(changed >= 10, "{changed} covariances changed");
+    assert!(
+        after < before,
+        "NEES above the 99 % quantile {before} -> {after}"
+    );
+    let e = config_error("[trust]\nreport_pool_frames = 3\nreport_pool_trim = 3\n");
+    assert!(e.contains("trust.report_pool_trim"), "{e}");
+}
