@@ -233,8 +233,11 @@ pub struct TrustOptions {
     pub report_grids: Vec<[usize; 2]>,
     /// [`TrustOptions::jackknife_min_ratio`] of the [`TrustOptions::report_grids`]: their
     /// jackknife widens a direction only where it exceeds the covariance so far by more than
-    /// this factor. Default 4 (2, as the other grids, widened the clean scenes more: mean NEES
-    /// 1.59 against 1.76, for 1.1 against 1.3 % of the family's frames beyond 3 sigma).
+    /// this factor. Default 3 since the twenty-fourth session, with the pool
+    /// ([`TrustOptions::report_pool_frames`] 10, [`TrustOptions::report_pool_trim`] 2); 4
+    /// before, for this frame's jackknife alone (2, as the other grids, widened the clean scenes
+    /// more: mean NEES 1.59 against 1.76, for 1.1 against 1.3 % of the family's frames beyond 3
+    /// sigma).
     pub report_min_ratio: f64,
     /// The jackknife of each of the [`TrustOptions::report_grids`] pooled over this many
     /// consecutive moving frames (this one and up to `m - 1` before it with the same free
@@ -247,7 +250,8 @@ pub struct TrustOptions {
     /// crosses [`TrustOptions::report_min_ratio`] now and then. The mean over `n` frames has
     /// about `2 n` degrees of freedom. Widens the reported covariance only (after the
     /// competing-motions test): poses and statuses unchanged. 0 or 1: this frame's alone
-    /// (default 0). Twenty-fourth session (trust38), `m = 10` with
+    /// (the default before the twenty-fourth session). Default 10 since the twenty-fourth
+    /// session (trust38, made the default by the lead), `m = 10` with
     /// [`TrustOptions::report_pool_trim`] 2 and [`TrustOptions::report_min_ratio`] 3: the
     /// moving-traffic family's unflagged frames beyond 3 sigma 1.3-2.0 % -> 0.6-0.9 %, median
     /// sigma over the Cramér-Rao bound +1.5-4.2 %, the clean scenes' -11 % (docs/RESULTS.md).
@@ -255,7 +259,8 @@ pub struct TrustOptions {
     /// Of the pooled jackknife covariances ([`TrustOptions::report_pool_frames`]), this many
     /// that are widest against the frame's covariance so far `Σ` (by `tr(Σ⁻¹ J)`) are left out
     /// of the mean where more than this many are pooled: one frame whose jackknife a few
-    /// outliers in one cell blew up does not widen its neighbours. Default 0.
+    /// outliers in one cell blew up does not widen its neighbours. Default 2 (0 before the
+    /// twenty-fourth session).
     pub report_pool_trim: usize,
     /// With [`TrustOptions::report_pool_frames`], the reported covariance is widened by this
     /// frame's own jackknife too (before the pooled one), as without the pool: the pool can
@@ -295,9 +300,9 @@ impl Default for TrustOptions {
             after_flag_weight: 1.0,
             covariance_memory: 0.0,
             report_grids: vec![[3, 1]],
-            report_min_ratio: 4.0,
-            report_pool_frames: 0,
-            report_pool_trim: 0,
+            report_min_ratio: 3.0,
+            report_pool_frames: 10,
+            report_pool_trim: 2,
             report_pool_own: false,
         }
     }

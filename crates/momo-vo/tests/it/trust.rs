@@ -996,9 +996,9 @@ fn report_grids_widen_only_the_reported_covariance() {
 
 /// `trust.report_pool_frames` pools the report grids' jackknife over recent frames and widens
 /// only the reported covariance: on a moving-traffic drive the poses and every status are
-/// those of the default, some covariances change, and fewer unflagged frames have a rotation
-/// NEES above chi-square(3)'s 99 % quantile (the over-confident frames behind a lead vehicle
-/// whose own three-column jackknife happened to agree). A pool of one frame is the default
+/// those without the pool, some covariances change, and fewer unflagged frames have a
+/// rotation NEES above chi-square(3)'s 99 % quantile (the over-confident frames behind a lead
+/// vehicle whose own three-column jackknife happened to agree). A pool of one frame is no pool
 /// bit for bit; a trim of at least the pool is rejected.
 #[test]
 fn the_report_pool_changes_only_the_reported_covariance() {
