@@ -23,6 +23,13 @@ pub const GROUND_DROP_WINDOW: usize = 20;
 /// The fewest remembered scores before a frame may be flagged.
 pub const GROUND_DROP_MIN_FRAMES: usize = 5;
 
+/// Whether `score` dropped against the recent road scores `recent`: their median `m` is at
+/// least `min` (a road was seen) and `score <= ratio · m`. False without scores.
+pub fn dropped(recent: impl Iterator<Item = usize>, score: usize, ratio: f64, min: usize) -> bool {
+    crate::stats::median(recent.map(|s| s as f64))
+        .is_some_and(|m| m >= min as f64 && score as f64 <= ratio * m)
+}
+
 /// Records the chosen motion's road score `score` of the frame in `history` (the last
 /// [`GROUND_DROP_WINDOW`] frames' scores) and returns whether it dropped: the median `m` of the
 /// scores before it (at least [`GROUND_DROP_MIN_FRAMES`]) is at least `min` and
@@ -30,8 +37,7 @@ pub const GROUND_DROP_MIN_FRAMES: usize = 5;
 pub fn observe(history: &mut VecDeque<usize>, score: usize, ratio: f64, min: usize) -> bool {
     let dropped = ratio > 0.0
         && history.len() >= GROUND_DROP_MIN_FRAMES
-        && crate::stats::median(history.iter().map(|&s| s as f64))
-            .is_some_and(|m| m >= min as f64 && score as f64 <= ratio * m);
+        && dropped(history.iter().copied(), score, ratio, min);
     history.push_back(score);
     while history.len() > GROUND_DROP_WINDOW {
         history.pop_front();

@@ -1213,10 +1213,12 @@ impl HypothesisTracker {
     /// the guard off (`K = 0`); false before any frame was recorded.
     pub fn road_lost(&self, opts: &HypothesesOptions, score_a: usize) -> bool {
         opts.yaw_history_predict_road_frames == 0
-            || crate::stats::median(self.road_scores.iter().map(|&s| s as f64)).is_some_and(|m| {
-                m >= opts.min_matches as f64
-                    && score_a as f64 <= opts.yaw_history_predict_road_drop * m
-            })
+            || crate::ground_drop::dropped(
+                self.road_scores.iter().copied(),
+                score_a,
+                opts.yaw_history_predict_road_drop,
+                opts.min_matches,
+            )
     }
 
     /// The reference yaw of the recorded frames ([`HypothesesOptions::yaw_history_frames`]):

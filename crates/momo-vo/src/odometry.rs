@@ -2114,7 +2114,6 @@ impl Odometry {
     /// reads, so that those grids do not change a status), and this frame's jackknife
     /// covariance of each report grid (`None` where it is not defined; empty where the
     /// jackknife did not run), which `trust.report_pool_frames` pools over frames.
-    #[allow(clippy::type_complexity)]
     fn reported_covariance(
         &self,
         obs: &FrameObservations,
@@ -2125,7 +2124,7 @@ impl Odometry {
     ) -> Option<(
         nalgebra::DMatrix<f64>,
         nalgebra::DMatrix<f64>,
-        Vec<Option<nalgebra::DMatrix<f64>>>,
+        GridJackknives,
     )> {
         let mut cov = match self.unlearnt_prior_covariance(sol) {
             Some(c) => c,
@@ -2591,10 +2590,7 @@ impl Odometry {
         soft_view: Option<&SoftView>,
         floor: Option<&nalgebra::DMatrix<f64>>,
         diag: &mut FrameDiagnostics,
-    ) -> (
-        Option<nalgebra::DMatrix<f64>>,
-        Vec<Option<nalgebra::DMatrix<f64>>>,
-    ) {
+    ) -> (Option<nalgebra::DMatrix<f64>>, GridJackknives) {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
         diag.iterations = sol.report.iterations;
@@ -2709,7 +2705,11 @@ fn quiet_memory(labels: &[Vec<Option<bool>>], remembered: f64) -> f64 {
 /// One moving frame's entry of the report grids' jackknife pool
 /// (`trust.report_pool_frames`): its frame number, free parameters and each report grid's
 /// jackknife covariance.
-type ReportJackknife = (usize, Vec<usize>, Vec<Option<nalgebra::DMatrix<f64>>>);
+type ReportJackknife = (usize, Vec<usize>, GridJackknives);
+
+/// Each report grid's jackknife covariance of one frame (`None` where it could not be
+/// formed), in the order of `trust.report_grids`.
+type GridJackknives = Vec<Option<nalgebra::DMatrix<f64>>>;
 
 /// The frame's part of the one-linearisation jackknife (`Odometry::influence_frame`).
 struct InfluenceFrame {
