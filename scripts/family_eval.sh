@@ -30,7 +30,7 @@
 #
 # Writes OUT_DIR/SET/rows.tsv (name, median deg, frames above 1 deg, bound deg, eff, t_err %),
 # the estimates and diagnostics (OUT_DIR/SET/est), OUT_DIR/SET/summary.txt, and prints one
-# summary line per set.
+# summary line per set. Exits 1 where a `momo run` failed (the summary names the sequences).
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -125,6 +125,7 @@ make_k00() {
     [[ -d "$d/stereo200" ]] || "$momo" import-kitti "$src" "$d/stereo200" --stereo --matches 200 --seed 1 >/dev/null 2>&1
 }
 
+failed_any=0
 for s in "${sets[@]}"; do
     start=$(date +%s)
     mkdir -p "$out/$s/est"
@@ -139,6 +140,7 @@ for s in "${sets[@]}"; do
     fi
     xargs -P "$jobs" -I{} bash -c 'run_one "$1" "$2"' _ {} "$out/$s/est" <"$out/$s/list" |
         sort >"$out/$s/rows.tsv"
+    if grep -q $'\tfailed' "$out/$s/rows.tsv"; then failed_any=1; fi
     gap="-"
     if [[ "$s" != k00 && "$s" != static* && "$s" != builtin ]] &&
         "$py" -c 'import numpy' 2>/dev/null; then
@@ -170,3 +172,7 @@ line += f"; trust gap {gap}; {secs} s"
 print(line)
 PY
 done
+if ((failed_any)); then
+    echo "family_eval: some runs failed (their rows say failed; errors in OUT_DIR/SET/est/NAME.err)" >&2
+    exit 1
+fi
