@@ -55,14 +55,15 @@ pub(crate) fn check_pixel(
         });
     }
     // The error is built only where it is raised (`ok_or` built and dropped one per pixel).
-    model
-        .unproject(&px)
-        .ok_or_else(|| IoErrorKind::Unprojectable {
+    let Some(f) = model.unproject(&px) else {
+        return Err(IoErrorKind::Unprojectable {
             field,
             camera,
             u,
             v,
-        })
+        });
+    };
+    Ok(f)
 }
 
 /// A row's fields as read: frame, camera, `u0`, `v0`, `u1`, `v1` and `camera_to` (its error kept
