@@ -78,150 +78,6 @@ type RowFields = (
     Result<Option<usize>, IoErrorKind>,
 );
 
-/// `10^k` for `k = 0..=19` (`10^19 < 2^64`).
-const POW10_U64: [u64; 20] = {
-    let mut p = [1u64; 20];
-    let mut k = 1;
-    while k < 20 {
-        p[k] = p[k - 1] * 10;
-        k += 1;
-    }
-    p
-};
-
-/// The number of leading ASCII digits of the eight bytes `v` (the first byte lowest, as
-/// `u64::from_le_bytes` loads them), 0 to 8. Per byte, `b + 0x46` or `b - 0x30` has its high bit
-/// set exactly where `b` is not a digit; the lanes below the first non-digit are digits and
-/// carry or borrow nothing into it, so its lane's bit is exact (lanes above it may not be, and
-/// are not looked at).
-#[inline(always)]
-fn digit_run(v: u64) -> usize {
-    let above = v.wrapping_add(0x4646_4646_4646_4646);
-    let below = v.wrapping_sub(0x3030_3030_3030_3030);
-    ((above | below) & 0x8080_8080_8080_8080).trailing_zeros() as usize / 8
-}
-
-/// The value of the first `n` (1 to 8) bytes of `v`, all ASCII digits, the first byte the most
-/// significant digit: the other bytes are shifted out and `'0'`s shifted in before them, then
-/// the eight digits are combined pairwise (fast_float's `parse_eight_digits_unrolled`).
-#[inline(always)]
-fn leading_digits(v: u64, n: usize) -> u64 {
-    const ZEROS: u64 = 0x3030_3030_3030_3030;
-    let v = if n >= 8 {
-        v
-    } else {
-        let drop = 8 * (8 - n as u32);
-        (v << drop) | (ZEROS >> (64 - drop))
-    };
-    let v = v.wrapping_sub(ZEROS);
-    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
-    let lo = (v & 0x0000_00FF_0000_00FF).wrapping_mul(0x000F_4240_0000_0064);
-    let hi = ((v >> 16) & 0x0000_00FF_0000_00FF).wrapping_mul(0x0000_2710_0000_0001);
-    u64::from((lo.wrapping_add(hi) >> 32) as u32)
-}
-
-/// The digits at `b[i..]` appended to `w` (wrapping: the caller bounds their number), eight at a
-/// time while eight bytes are left, then one at a time; returns `w` and the end of the digits.
-#[inline(always)]
-fn scan_digits(b: &[u8], mut i: usize, mut w: u64) -> (u64, usize) {
-    while let Some(chunk) = b.get(i..i + 8) {
-        let mut bytes = [0u8; 8];
-        bytes.copy_from_slice(chunk);
-        let v = u64::from_le_bytes(bytes);
-        let n = digit_run(v);
-        if n > 0 {
-            w = w
-                .wrapping_mul(POW10_U64[n])
-                .wrapping_add(leading_digits(v, n));
-            i += n;
-        }
-        if n < 8 {
-            return (w, i);
-        }
-    }
-    while let Some(&c) = b.get(i) {
-        let d = c.wrapping_sub(b'0');
-        if d > 9 {
-            break;
-        }
-        w = w.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    (w, i)
-}
-
-/// `w / 10^k` correctly rounded (ties to even), negated if `negative`, for `w < 10^19` and
-/// `k <= 19`. Where `w <= 2^53`, Clinger's fast path: `w` and `10^k` are exact `f64`s
-/// (`10^19 = 2^19 5^19`, `5^19 < 2^53`), so the one IEEE division is the correctly rounded
-/// value; where `k = 0`, the one conversion of `w` is. Otherwise the quotient is taken in integers:
-/// `q = floor(w 2^64 / 10^k)` (at least 54 bits, as `w > 2^53` and `10^k < 2^64`) and the
-/// remainder; `q` is rounded to 53 bits, to nearest, the dropped bits and a non-zero remainder
-/// deciding (exactly half with a zero remainder: to the even mantissa), and scaled by an exact
-/// power of two (the result is a normal number: `w / 10^k > 2^53 / 10^19`).
-#[inline(always)]
-fn decimal_value(negative: bool, w: u64, k: usize) -> f64 {
-    // `10^k` as `f64`, exact (`10^k = 2^k 5^k`, `5^19 < 2^53`).
-    const POW10_F64: [f64; 20] = [
-        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-        1e17, 1e18, 1e19,
-    ];
-    let v = if w <= 1 << 53 {
-        // `w <= 2^53` converts exactly (through `i64`: one instruction, the same value).
-        w as i64 as f64 / POW10_F64[k]
-    } else if k == 0 {
-        // One conversion, correctly rounded (ties to even).
-        w as f64
-    } else {
-        let d = POW10_U64[k];
-        let n = u128::from(w) << 64;
-        let q = n / u128::from(d);
-        let inexact = n % u128::from(d) != 0;
-        let mut shift = 128 - q.leading_zeros() - 53;
-        let mut m = (q >> shift) as u64;
-        let dropped = q & ((1u128 << shift) - 1);
-        let half = 1u128 << (shift - 1);
-        if dropped > half || (dropped == half && (inexact || m & 1 == 1)) {
-            m += 1;
-            if m == 1 << 53 {
-                m = 1 << 52;
-                shift += 1;
-            }
-        }
-        // `2^(shift - 64)`, `shift` in 1..=76: a normal power of two.
-        m as f64 * f64::from_bits(u64::from(shift + 1023 - 64) << 52)
-    };
-    if negative { -v } else { v }
-}
-
-/// A plain decimal at the start of `b`: `[-]digits[.digits]` (digits on both sides of a point,
-/// at most 19 digits in all, no `+`, no exponent) followed by a comma or the end of `b`, as its
-/// correctly rounded value ([`decimal_value`]) and its length; `None` for anything else (then
-/// `fast_float2` reads it). Where it reads a field, `fast_float2::parse_partial` reads the same
-/// bytes (it stops at the comma) to the same value (both correctly rounded).
-#[inline(always)]
-fn plain_decimal(b: &[u8]) -> Option<(f64, usize)> {
-    let negative = b.first() == Some(&b'-');
-    let start = usize::from(negative);
-    let (mut w, mut i) = scan_digits(b, start, 0);
-    let whole = i - start;
-    if whole == 0 {
-        return None;
-    }
-    let mut k = 0;
-    if b.get(i) == Some(&b'.') {
-        let first = i + 1;
-        (w, i) = scan_digits(b, first, w);
-        k = i - first;
-        if k == 0 {
-            return None;
-        }
-    }
-    if whole + k > 19 || !matches!(b.get(i), None | Some(b',')) {
-        return None;
-    }
-    Some((decimal_value(negative, w, k), i))
-}
-
 /// The fields of a row of `N` plain numbers read in one pass from its bytes, as
 /// [`MatchReader::parse_fields`] reads them, or `None` for any row that it leaves to them.
 ///
@@ -233,11 +89,8 @@ fn plain_decimal(b: &[u8]) -> Option<(f64, usize)> {
 /// algorithm, Lemire's fast_float) and the exact plain-decimal path of [`parse_f64`] are, and
 /// its syntax (`[+-]digits[.digits][e[+-]digits]`, a point with digits on either side, `inf`,
 /// `nan`) is a part of `str::parse`'s, so the value is the same bits (test
-/// `fast_float_reads_as_std_parse`). A field of the plain form `[-]digits[.digits]` (at most
-/// 19 digits) is read first by [`plain_decimal`], correctly rounded too, so to the same bits
-/// and the same length (test `plain_decimal_reads_as_std_parse`); any other field goes to
-/// `fast_float2`. Non-finite values, empty fields and anything else go to the field parsers,
-/// which raise the errors.
+/// `fast_float_reads_as_std_parse`). Non-finite values, empty fields and anything else go to
+/// the field parsers, which raise the errors.
 fn fast_fields<const N: usize>(
     b: &[u8],
     c: &[usize; 7],
@@ -325,15 +178,11 @@ fn index_field(b: &[u8], i: usize) -> Option<(usize, usize)> {
     Some((usize::try_from(w).ok()?, j))
 }
 
-/// A value field of [`fast_fields`] at `b[i..]`: [`plain_decimal`], else what
-/// `fast_float2::parse_partial` reads; finite only. Its value and end.
+/// A value field of [`fast_fields`] at `b[i..]`: what `fast_float2::parse_partial` reads, finite
+/// only. Its value and end.
 #[inline(always)]
 fn value_field(b: &[u8], i: usize) -> Option<(f64, usize)> {
-    let rest = b.get(i..)?;
-    let (v, n) = match plain_decimal(rest) {
-        Some(plain) => plain,
-        None => fast_float2::parse_partial::<f64, _>(rest).ok()?,
-    };
+    let (v, n) = fast_float2::parse_partial::<f64, _>(b.get(i..)?).ok()?;
     if !v.is_finite() {
         return None;
     }
@@ -901,120 +750,6 @@ mod tests {
             for c in &ORDERS {
                 check_fast(&line, c)?;
             }
-        }
-    }
-
-    /// Where [`plain_decimal`] reads `text` it reads it whole, to `str::parse`'s bits, and
-    /// `fast_float2` reads it to the same value and length. Returns whether it did.
-    fn check_plain(text: &str) -> Result<bool, proptest::test_runner::TestCaseError> {
-        let Some((v, n)) = plain_decimal(text.as_bytes()) else {
-            return Ok(false);
-        };
-        proptest::prop_assert_eq!(n, text.len(), "{}", text);
-        proptest::prop_assert_eq!(
-            text.parse::<f64>().ok().map(f64::to_bits),
-            Some(v.to_bits()),
-            "{}",
-            text
-        );
-        let ff = fast_float2::parse_partial::<f64, _>(text.as_bytes()).ok();
-        proptest::prop_assert_eq!(ff.map(|(f, m)| (f.to_bits(), m)), Some((v.to_bits(), n)));
-        // Followed by a comma: the same value, the comma left.
-        let with = format!("{text},7");
-        proptest::prop_assert_eq!(
-            plain_decimal(with.as_bytes()).map(|(f, m)| (f.to_bits(), m)),
-            Some((v.to_bits(), n))
-        );
-        Ok(true)
-    }
-
-    proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20000))]
-        /// Decimals of 1 to 22 digits with the point anywhere (17-19 digits: the integer
-        /// quotient; up to 16: Clinger's division), signs, leading zeros, and the shortest,
-        /// fixed and long prints of pixels: read as `str::parse` reads them, or left alone.
-        #[test]
-        fn plain_decimal_reads_as_std_parse(
-            sign in "[-+]?",
-            digits in "[0-9]{1,22}",
-            point in 0usize..23,
-            v in -5000.0f64..5000.0,
-            style in 0usize..8,
-        ) {
-            let text = if point == 0 || point >= digits.len() {
-                format!("{sign}{digits}")
-            } else {
-                format!("{sign}{}.{}", &digits[..point], &digits[point..])
-            };
-            let took = check_plain(&text)?;
-            let n = digits.len();
-            if sign != "+" && n <= 19 {
-                proptest::prop_assert!(took, "{}", text);
-            }
-            check_plain(&crate::text::tests::pixel_text(v, style))?;
-            check_plain(&format!("{v}"))?;
-        }
-    }
-
-    #[test]
-    fn plain_decimal_rounds_ties_and_edges_as_std() {
-        let mut texts: Vec<String> = Vec::new();
-        // Exact ties and their neighbours above 2^53 (17-19 digits, with zeros after a point).
-        for base in [1u64 << 53, 1 << 54, 1 << 55, 1 << 59, 1 << 62, 1 << 63] {
-            for off in 0..40u64 {
-                let w = base - 20 + off;
-                texts.push(format!("{w}"));
-                texts.push(format!("{w}.0"));
-                texts.push(format!("{w}.00"));
-                texts.push(format!("{}.{}", w / 10, w % 10));
-                texts.push(format!("{}.{:02}", w / 100, w % 100));
-                texts.push(format!("{}.{:03}", w / 1000, w % 1000));
-                texts.push(format!("0.{w}"));
-                texts.push(format!("-{}.5", w / 10));
-            }
-        }
-        for t in [
-            "0",
-            "-0",
-            "0.0",
-            "-0.000",
-            "9999999999999999999",
-            "9999999999.999999999",
-            "0.9999999999999999999",
-            "0.0000000000000000001",
-            "1.0000000000000000001",
-            "9007199254740993",
-            "9007199254740993.0",
-            "900719925474099.25",
-            "146.524735443772",
-            "193.88835442434265",
-            "-0.0030460602240009182",
-            "61",
-        ] {
-            texts.push(t.to_owned());
-        }
-        for t in &texts {
-            // Every one of these is of the plain form: read where it has at most 19 digits.
-            let plain = t.bytes().filter(u8::is_ascii_digit).count() <= 19;
-            let took = check_plain(t)
-                .map_err(|e| format!("{e}"))
-                .expect("reads as std");
-            assert_eq!(took, plain, "{t}");
-        }
-        // Not plain: left to fast_float2 / the field parsers.
-        for t in [
-            "+1",
-            "1.",
-            ".5",
-            "1e3",
-            "1.5e2",
-            "",
-            "-",
-            "1.2.3",
-            "12345678901234567890",
-            "1 ",
-        ] {
-            assert!(plain_decimal(t.as_bytes()).is_none(), "{t}");
         }
     }
 
