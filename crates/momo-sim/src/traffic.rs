@@ -475,7 +475,11 @@ fn surround_objects(
                             (path.cum[f] + s, y, (y_dot / 12.0).atan())
                         })
                         .collect();
-                    let kind = if cut { "overtaking_cut_in" } else { "overtaking" };
+                    let kind = if cut {
+                        "overtaking_cut_in"
+                    } else {
+                        "overtaking"
+                    };
                     (kind, frames, size, path_pose)
                 }
                 1 => {
@@ -729,13 +733,15 @@ impl CameraTraffic {
         let norm: f64 = visible.iter().map(|v| v.4 * v.5.sqrt()).sum();
         let objects = visible
             .into_iter()
-            .map(|(index, object, motion, bbox, weight, area)| VisibleObject {
-                index,
-                object,
-                motion,
-                bbox,
-                fraction: total * weight * area.sqrt() / norm,
-            })
+            .map(
+                |(index, object, motion, bbox, weight, area)| VisibleObject {
+                    index,
+                    object,
+                    motion,
+                    bbox,
+                    fraction: total * weight * area.sqrt() / norm,
+                },
+            )
             .collect();
         Some(Self { objects, occluders })
     }
