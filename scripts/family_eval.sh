@@ -20,6 +20,8 @@
 #        rigtraffic   moving_traffic_surround (the four-camera fisheye rig with traffic all
 #                  around), KITTI trajectories 00-10 and the built-in drive, seeds 1-3
 #        rigtraffic2  the same, seeds 4-6 (keep for confirmation: choose nothing on it)
+#        rigblind  moving_traffic_surround_blind (the same with the front camera covered in frame
+#                  pairs 150-249, glare on the right camera in 300-349), seeds 1-3
 #   MOMO        environment variable: the momo binary (default target/release/momo)
 #   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
 #   SIM_MOMO    environment variable: the momo binary that simulates missing sequences (default
@@ -117,6 +119,10 @@ list_set() {
         [[ "$s" == rigtraffic ]] && seeds="1 2 3" || seeds="4 5 6"
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/rigtraffic/moving_traffic_surround_${t}_s$seed moving_traffic_surround $t $seed $frames"
+        done; done ;;
+    rigblind)
+        for t in $trajs drive; do for seed in 1 2 3; do
+            echo "$sets_dir/rigblind/moving_traffic_surround_blind_${t}_s$seed moving_traffic_surround_blind $t $seed $frames"
         done; done ;;
     builtin)
         for sc in clean_pinhole highway very_sparse fisheye_surround outliers sparse_outliers; do

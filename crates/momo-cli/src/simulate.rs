@@ -7,7 +7,9 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub(crate) struct SimulateArgs {
     /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, moving_traffic,
-    /// moving_traffic_surround (the fisheye rig with traffic all around), fisheye_surround,
+    /// moving_traffic_surround (the fisheye rig with traffic all around),
+    /// moving_traffic_surround_blind (the same, front camera covered, then glare on the right
+    /// one), fisheye_surround,
     /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s),
     /// radtan_mono (OpenCV distortion), wide_angle_surround (double sphere and unified).
     #[arg(long, default_value = "clean_pinhole")]

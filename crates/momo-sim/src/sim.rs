@@ -219,6 +219,7 @@ impl SimConfig {
         "moving_object",
         "moving_traffic",
         "moving_traffic_surround",
+        "moving_traffic_surround_blind",
         "fisheye_surround",
         "sparse_outliers",
         "very_sparse",
@@ -245,6 +246,7 @@ impl SimConfig {
             "moving_object" => Self::moving_object(),
             "moving_traffic" => Self::moving_traffic(),
             "moving_traffic_surround" => Self::moving_traffic_surround(),
+            "moving_traffic_surround_blind" => Self::moving_traffic_surround_blind(),
             "fisheye_surround" => Self::fisheye_surround(),
             "sparse_outliers" => Self::sparse_outliers(),
             "very_sparse" => Self::very_sparse(),
@@ -328,6 +330,27 @@ impl SimConfig {
             }),
             trajectory_mount: Some(crate::rigs::kitti_mono().cameras()[0].t_vehicle_camera),
             ..Self::default()
+        }
+    }
+
+    /// [`Self::moving_traffic_surround`] with blinded cameras: the front camera (0) delivers no
+    /// matches in frame pairs 150..250 (a covered lens: the traffic ahead is seen only by the
+    /// side cameras), and the right camera (3) only wrong matches in 300..350 (glare).
+    pub fn moving_traffic_surround_blind() -> Self {
+        Self {
+            blinded: vec![
+                Blinding {
+                    camera: 0,
+                    frames: 150..250,
+                    mode: BlindMode::Absent,
+                },
+                Blinding {
+                    camera: 3,
+                    frames: 300..350,
+                    mode: BlindMode::Outliers,
+                },
+            ],
+            ..Self::moving_traffic_surround()
         }
     }
 
