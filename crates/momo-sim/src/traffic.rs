@@ -14,7 +14,10 @@
 //! - **a bus filling half the image**: a bus 2.5 to 5 m ahead (stop-and-go);
 //! - **cut-ins**: a car from the left or right lane moving into the ego lane 8 to 25 m ahead;
 //! - **oncoming traffic**: cars in the opposite lane (3.5 m left) driving towards the ego car;
-//! - **crossing trucks**: 12 m trucks crossing the path 15 to 40 m ahead at 3 to 9 m/s.
+//! - **crossing trucks**: 12 m trucks crossing the path 15 to 40 m ahead at 3 to 9 m/s;
+//! - with [`TrafficConfig::surround`] (surround rigs), also followers behind, overtaking cars
+//!   (some cutting in), overtaken vehicles and vehicles alongside in the adjacent lanes
+//!   (`surround_objects`).
 //!
 //! Matches: in every camera and frame pair where objects are visible (at least
 //! [`TrafficConfig::min_area_px`] pixels of them, occlusions between objects included), a
@@ -39,7 +42,7 @@ pub struct TrafficConfig {
     /// scenario, [`crate::SimConfig::moving_traffic_surround`]): besides the objects ahead,
     /// followers behind, cars overtaking the ego vehicle in the adjacent lanes (some cutting in
     /// ahead of it), vehicles the ego vehicle overtakes and vehicles riding alongside
-    /// ([`surround_objects`]); and the pixel box of an object from points sampled over its
+    /// (`surround_objects`); and the pixel box of an object from points sampled over its
     /// surface (a fisheye sees boxes partly behind its image plane). Off (the default): the
     /// mono family's objects and boxes, bit for bit.
     pub surround: bool,
