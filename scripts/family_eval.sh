@@ -17,8 +17,15 @@
 #                  sparse_outliers)
 #        k00       real KITTI 00 (frames 0-300): mono 100 / 200 / 300 matches, stereo 200,
 #                  ground-truth arc lengths as odometry
+#        rigtraffic   moving_traffic_surround (the four-camera fisheye rig with traffic all
+#                  around), KITTI trajectories 00-10 and the built-in drive, seeds 1-3
+#        rigtraffic2  the same, seeds 4-6 (keep for confirmation: choose nothing on it)
+#        rigblind  moving_traffic_surround_blind (the same with the front camera covered in frame
+#                  pairs 150-249, glare on the right camera in 300-349), seeds 1-3
 #   MOMO        environment variable: the momo binary (default target/release/momo)
 #   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
+#   SIM_MOMO    environment variable: the momo binary that simulates missing sequences (default
+#               MOMO; e.g. a newer binary that knows a scenario MOMO does not)
 #   SETS_DIR    environment variable: where the simulated / imported sequences are kept and
 #               reused (default target/family_sets); they are made by the same binary's
 #               `momo simulate` / `momo import-kitti` the first time
@@ -47,11 +54,14 @@ jobs="${JOBS:-2}"
 py="${PYTHON:-python3}"
 cfg=""
 [[ -n "${MOMO_CONFIG:-}" ]] && cfg="$(abs "$MOMO_CONFIG")"
-if [[ ! -x "$momo" ]]; then
-    echo "family_eval: no momo binary at $momo (cargo build --release)" >&2
-    exit 2
-fi
-export momo cfg data frames
+sim_momo="$(abs "${SIM_MOMO:-$momo}")"
+for b in "$momo" "$sim_momo"; do
+    if [[ ! -x "$b" ]]; then
+        echo "family_eval: no momo binary at $b (cargo build --release)" >&2
+        exit 2
+    fi
+done
+export momo sim_momo cfg data frames
 
 # make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES]: simulates one sequence unless it is there.
 make_seq() {
@@ -60,7 +70,7 @@ make_seq() {
     [[ "$t" != drive ]] && traj=(--trajectory "$data/kitti_odometry_gt/poses/$t.txt")
     rm -rf "$dir"
     mkdir -p "$(dirname "$dir")"
-    if ! "$momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "$dir" \
+    if ! "$sim_momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "$dir" \
         >/dev/null 2>"$dir.err"; then
         echo "family_eval: momo simulate failed for $dir: $(cat "$dir.err")" >&2
         return 1
@@ -105,6 +115,15 @@ list_set() {
         for sc in clean_pinhole outliers; do for t in $trajs; do for seed in $seeds; do
             echo "$sets_dir/static/${sc}_${t}_s$seed $sc $t $seed $frames"
         done; done; done ;;
+    rigtraffic | rigtraffic2)
+        [[ "$s" == rigtraffic ]] && seeds="1 2 3" || seeds="4 5 6"
+        for t in $trajs drive; do for seed in $seeds; do
+            echo "$sets_dir/rigtraffic/moving_traffic_surround_${t}_s$seed moving_traffic_surround $t $seed $frames"
+        done; done ;;
+    rigblind)
+        for t in $trajs drive; do for seed in 1 2 3; do
+            echo "$sets_dir/rigblind/moving_traffic_surround_blind_${t}_s$seed moving_traffic_surround_blind $t $seed $frames"
+        done; done ;;
     builtin)
         for sc in clean_pinhole highway very_sparse fisheye_surround outliers sparse_outliers; do
             for seed in 1 2 3 4 5; do

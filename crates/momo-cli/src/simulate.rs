@@ -7,14 +7,17 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub(crate) struct SimulateArgs {
     /// Scenario: clean_pinhole, outliers (30 %, 1 px), moving_object, moving_traffic,
-    /// fisheye_surround, sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway
-    /// (25-30 m/s), radtan_mono (OpenCV distortion), wide_angle_surround (double sphere and
-    /// unified).
+    /// moving_traffic_surround (the fisheye rig with traffic all around),
+    /// moving_traffic_surround_blind (the same, front camera covered, then glare on the right
+    /// one), fisheye_surround,
+    /// sparse_outliers (100 matches, 30 %), very_sparse (40 matches), highway (25-30 m/s),
+    /// radtan_mono (OpenCV distortion), wide_angle_surround (double sphere and unified).
     #[arg(long, default_value = "clean_pinhole")]
     scenario: String,
     /// Drive along the camera-0 poses of this KITTI poses file (e.g. a KITTI ground truth)
     /// instead of a generated drive; the vehicle poses are P0 · C_k · P0⁻¹ with P0 the
-    /// scenario rig's camera 0. At most --frames frames.
+    /// scenario rig's camera 0 (moving_traffic_surround: the KITTI mono camera's mount, so the
+    /// vehicle drives level). At most --frames frames.
     #[arg(long)]
     trajectory: Option<PathBuf>,
     /// Number of frames.

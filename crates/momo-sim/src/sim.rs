@@ -174,6 +174,13 @@ pub struct SimConfig {
     /// camera 0, relative to the first; `drive` then only gives the frame rate (speeds), and
     /// `stops` is ignored. The simulation has `min(frames, len)` frames.
     pub camera_trajectory: Option<Vec<Pose<f64>>>,
+    /// The mount `T_vehicle_camera` of the camera whose poses `camera_trajectory` gives, when it
+    /// is not the rig's camera 0: the vehicle poses are then `V_k = P · C_k · P⁻¹` with this `P`
+    /// (the ground truth is still camera 0's). A KITTI trajectory is the motion of a level,
+    /// forward-looking camera; driven with the mount of a camera tilted down (the surround
+    /// fisheye's front camera, 10°) as `P`, the vehicle would sink along its path at that angle.
+    /// `None` (the default): the rig's camera 0.
+    pub trajectory_mount: Option<Pose<f64>>,
 }
 
 impl Default for SimConfig {
@@ -198,6 +205,7 @@ impl Default for SimConfig {
             odometry: true,
             odometry_noise: 0.0,
             camera_trajectory: None,
+            trajectory_mount: None,
         }
     }
 }
@@ -210,6 +218,8 @@ impl SimConfig {
         "outliers",
         "moving_object",
         "moving_traffic",
+        "moving_traffic_surround",
+        "moving_traffic_surround_blind",
         "fisheye_surround",
         "sparse_outliers",
         "very_sparse",
@@ -235,6 +245,8 @@ impl SimConfig {
             "outliers" => Self::outliers(),
             "moving_object" => Self::moving_object(),
             "moving_traffic" => Self::moving_traffic(),
+            "moving_traffic_surround" => Self::moving_traffic_surround(),
+            "moving_traffic_surround_blind" => Self::moving_traffic_surround_blind(),
             "fisheye_surround" => Self::fisheye_surround(),
             "sparse_outliers" => Self::sparse_outliers(),
             "very_sparse" => Self::very_sparse(),
@@ -296,6 +308,49 @@ impl SimConfig {
             outlier_ratio: 0.05,
             traffic: Some(TrafficConfig::default()),
             ..Self::default()
+        }
+    }
+
+    /// The moving-traffic family on the four-camera fisheye rig of [`Self::fisheye_surround`]
+    /// (200 matches per camera, σ = 0.5 px, 10 % outliers, no blinded camera, no stops): the
+    /// traffic of [`Self::moving_traffic`] (the objects ahead: lead vehicles, a close bus,
+    /// cut-ins, oncoming cars, crossing trucks) plus the traffic around the vehicle
+    /// ([`TrafficConfig::surround`]: followers, overtaking cars, some cutting in, overtaken
+    /// vehicles, vehicles alongside), every object seen by every camera it is visible in, each
+    /// holding its share of that camera's 30 to 70 % object matches. Along a KITTI trajectory
+    /// the vehicle drives as the KITTI mono rig's does (`trajectory_mount`: the trajectory is
+    /// the level forward camera's); the ground truth is the front camera's.
+    pub fn moving_traffic_surround() -> Self {
+        Self {
+            rig: RigPreset::SurroundFisheye,
+            matches_per_camera: 200,
+            traffic: Some(TrafficConfig {
+                surround: true,
+                ..TrafficConfig::default()
+            }),
+            trajectory_mount: Some(crate::rigs::kitti_mono().cameras()[0].t_vehicle_camera),
+            ..Self::default()
+        }
+    }
+
+    /// [`Self::moving_traffic_surround`] with blinded cameras: the front camera (0) delivers no
+    /// matches in frame pairs 150..250 (a covered lens: the traffic ahead is seen only by the
+    /// side cameras), and the right camera (3) only wrong matches in 300..350 (glare).
+    pub fn moving_traffic_surround_blind() -> Self {
+        Self {
+            blinded: vec![
+                Blinding {
+                    camera: 0,
+                    frames: 150..250,
+                    mode: BlindMode::Absent,
+                },
+                Blinding {
+                    camera: 3,
+                    frames: 300..350,
+                    mode: BlindMode::Outliers,
+                },
+            ],
+            ..Self::moving_traffic_surround()
         }
     }
 
@@ -393,6 +448,12 @@ impl SimConfig {
             }
         }
         self.drive.validate().map_err(SimError::InvalidConfig)?;
+        if let Some(m) = &self.trajectory_mount {
+            if m.to_homogeneous().iter().any(|v| !v.is_finite()) || m.orthonormality_error() > 1e-6
+            {
+                return bad("trajectory_mount must be a finite rigid motion".into());
+            }
+        }
         if let Some(t) = &self.camera_trajectory {
             if t.is_empty() {
                 return bad("camera_trajectory must hold at least one pose".into());
@@ -708,7 +769,7 @@ impl CameraFrame<'_> {
                     let on_object = kind != Kind::Static;
                     points.push((!on_object).then_some(x0));
                     objects.push(match (kind, &self.traffic) {
-                        (Kind::Traffic(i), Some(t)) => t.objects.get(i).map(|v| v.index),
+                        (Kind::Traffic(i), Some(t)) => t.objects.get(i).map(|v| v.object),
                         _ => None,
                     });
                     labels.push(if on_object {
@@ -757,7 +818,8 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     // last frame (objects ahead follow its curve); the frames' own poses are the same.
     let (drive, later_poses) = match &cfg.camera_trajectory {
         Some(t) => {
-            let mut drive = drive_along(t, &p0, cfg.drive.frame_rate);
+            let mount = cfg.trajectory_mount.unwrap_or(p0);
+            let mut drive = drive_along(t, &mount, cfg.drive.frame_rate);
             let n = cfg.frames.min(t.len());
             let later = drive.poses.split_off(n);
             drive.arc_lengths.truncate(n);

@@ -14,7 +14,10 @@
 //! - **a bus filling half the image**: a bus 2.5 to 5 m ahead (stop-and-go);
 //! - **cut-ins**: a car from the left or right lane moving into the ego lane 8 to 25 m ahead;
 //! - **oncoming traffic**: cars in the opposite lane (3.5 m left) driving towards the ego car;
-//! - **crossing trucks**: 12 m trucks crossing the path 15 to 40 m ahead at 3 to 9 m/s.
+//! - **crossing trucks**: 12 m trucks crossing the path 15 to 40 m ahead at 3 to 9 m/s;
+//! - with [`TrafficConfig::surround`] (surround rigs), also followers behind, overtaking cars
+//!   (some cutting in), overtaken vehicles and vehicles alongside in the adjacent lanes
+//!   (`surround_objects`).
 //!
 //! Matches: in every camera and frame pair where objects are visible (at least
 //! [`TrafficConfig::min_area_px`] pixels of them, occlusions between objects included), a
@@ -35,6 +38,14 @@ pub struct TrafficConfig {
     pub fraction: (f64, f64),
     /// An object holds matches in a camera only if at least this many pixels of it are visible.
     pub min_area_px: f64,
+    /// Traffic all around the vehicle, for surround rigs (the `moving_traffic_surround`
+    /// scenario, [`crate::SimConfig::moving_traffic_surround`]): besides the objects ahead,
+    /// followers behind, cars overtaking the ego vehicle in the adjacent lanes (some cutting in
+    /// ahead of it), vehicles the ego vehicle overtakes and vehicles riding alongside
+    /// (`surround_objects`); and the pixel box of an object from points sampled over its
+    /// surface (a fisheye sees boxes partly behind its image plane). Off (the default): the
+    /// mono family's objects and boxes, bit for bit.
+    pub surround: bool,
 }
 
 impl Default for TrafficConfig {
@@ -43,6 +54,7 @@ impl Default for TrafficConfig {
         Self {
             fraction: (0.3, 0.7),
             min_area_px: 300.0,
+            surround: false,
         }
     }
 }
@@ -50,7 +62,9 @@ impl Default for TrafficConfig {
 /// A box-shaped road user over a range of frames.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrafficObject {
-    /// What it is (for diagnostics): "lead", "bus", "cut_in", "oncoming", "crossing".
+    /// What it is (for diagnostics): "lead", "bus", "cut_in", "oncoming", "crossing"; with
+    /// [`TrafficConfig::surround`] also "follower", "overtaking", "overtaking_cut_in",
+    /// "overtaken", "alongside".
     pub kind: &'static str,
     /// Frames it exists in.
     pub frames: std::ops::Range<usize>,
@@ -339,6 +353,10 @@ pub fn generate_traffic_along(
         k += rng.random_range(40..160usize);
     }
 
+    if cfg.surround {
+        objects.extend(surround_objects(cfg, &path, n, frame_rate, seed));
+    }
+
     let poses = (0..n)
         .map(|f| {
             let v_inv = vehicle_poses[f].inverse();
@@ -358,6 +376,207 @@ pub fn generate_traffic_along(
     Traffic { objects, poses }
 }
 
+/// The objects around the vehicle that [`TrafficConfig::surround`] adds after the mono family's
+/// objects, drawn from a random stream of their own (so that those stay the same). Path
+/// positions `s` are relative to the ego vehicle's motion centre; the adjacent lanes are 3.2 to
+/// 3.8 m left or right, one vehicle per lane at a time:
+/// - **followers** in the ego lane behind the vehicle, their front 4 to 30 m behind its rear
+///   (1 m behind the motion centre) with a slowly varying gap and lateral drift, car, van or
+///   truck, present most of the time;
+/// - **overtaking** cars and vans in an adjacent lane, from 15-30 m behind to 15-40 m ahead at
+///   1.5 to 5 m/s faster than the ego vehicle; half of them cut in ahead of it once 8 to 15 m
+///   ahead, over 1.5 to 3 s (`overtaking_cut_in`);
+/// - **overtaken** vehicles (cars, vans, trucks) in an adjacent lane, from 20-40 m ahead to
+///   15-30 m behind at 1.5 to 5 m/s slower than the ego vehicle;
+/// - **alongside**: a car, van or truck in an adjacent lane riding with the vehicle for 5 to
+///   20 s, its centre within ±6 m of the motion centre (a side camera filled by a vehicle
+///   that barely moves in the image).
+fn surround_objects(
+    cfg: &TrafficConfig,
+    path: &Path,
+    n: usize,
+    frame_rate: f64,
+    seed: u64,
+) -> Vec<TrafficObject> {
+    let dt = 1.0 / frame_rate.max(1e-3);
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x5_2022_0D5E_ED5A);
+    let weight = |rng: &mut StdRng| uniform(rng, cfg.fraction.0, cfg.fraction.1);
+    let mut objects = Vec::new();
+
+    // Followers: alternating presence over the whole drive.
+    let mut k = rng.random_range(0..10usize);
+    while k < n {
+        let len = rng.random_range(80..=300usize);
+        let frames = k..(k + len).min(n);
+        let size = [CAR, CAR, VAN, TRUCK][rng.random_range(0..4usize)];
+        let lo = uniform(&mut rng, 4.0, 15.0);
+        let hi = uniform(&mut rng, lo + 3.0, 30.0);
+        let gap = smooth(&mut rng, lo, hi, (40.0, 200.0));
+        let amp = uniform(&mut rng, 0.2, 1.0);
+        let drift = smooth(&mut rng, -amp, amp, (30.0, 150.0));
+        let psi_amp = uniform(&mut rng, 0.0, 0.04);
+        let psi = smooth(&mut rng, -psi_amp, psi_amp, (20.0, 60.0));
+        let path_pose = frames
+            .clone()
+            .map(|f| {
+                let t = f as f64;
+                (path.cum[f] - 1.0 - gap(t) - size[0] / 2.0, drift(t), psi(t))
+            })
+            .collect();
+        objects.push(TrafficObject {
+            kind: "follower",
+            frames: frames.clone(),
+            size: Vector3::from(size),
+            weight: weight(&mut rng),
+            path_pose,
+        });
+        k = frames.end + rng.random_range(10..60usize);
+    }
+
+    // Vehicles in the adjacent lanes: Poisson-like events, one per lane at a time.
+    let mut busy_until = [0usize; 2]; // left, right
+    let mut k = rng.random_range(10..60usize);
+    while k < n {
+        let mut lane_index = rng.random_range(0..2usize);
+        if busy_until[lane_index] > k {
+            lane_index = 1 - lane_index;
+        }
+        if busy_until[lane_index] > k {
+            k = busy_until[0].min(busy_until[1]);
+            continue;
+        }
+        let side = if lane_index == 0 { 1.0 } else { -1.0 };
+        let lane = side * uniform(&mut rng, 3.2, 3.8);
+        let start = k;
+        let (kind, frames, size, path_pose): (&'static str, _, _, Vec<_>) =
+            match rng.random_range(0..3u32) {
+                0 => {
+                    // Overtaking the ego vehicle, half of them cutting in ahead of it.
+                    let s0 = -uniform(&mut rng, 15.0, 30.0);
+                    let s1 = uniform(&mut rng, 15.0, 40.0);
+                    let dv = uniform(&mut rng, 1.5, 5.0);
+                    let len = ((s1 - s0) / dv * frame_rate).ceil() as usize;
+                    let frames = start..(start + len.max(1)).min(n);
+                    let cut = rng.random_bool(0.5);
+                    let s_cut = uniform(&mut rng, 8.0, 15.0);
+                    let t_lane = uniform(&mut rng, 1.5, 3.0);
+                    let size = [CAR, CAR, VAN][rng.random_range(0..3usize)];
+                    let path_pose = frames
+                        .clone()
+                        .map(|f| {
+                            let t = (f - start) as f64 * dt;
+                            let s = s0 + dv * t;
+                            let (y, y_dot) = if cut && s > s_cut {
+                                let u = ((s - s_cut) / dv / t_lane).clamp(0.0, 1.0);
+                                (
+                                    lane * (1.0 - u * u * (3.0 - 2.0 * u)),
+                                    -lane * 6.0 * u * (1.0 - u) / t_lane,
+                                )
+                            } else {
+                                (lane, 0.0)
+                            };
+                            (path.cum[f] + s, y, (y_dot / 12.0).atan())
+                        })
+                        .collect();
+                    let kind = if cut {
+                        "overtaking_cut_in"
+                    } else {
+                        "overtaking"
+                    };
+                    (kind, frames, size, path_pose)
+                }
+                1 => {
+                    // Overtaken by the ego vehicle.
+                    let s0 = uniform(&mut rng, 20.0, 40.0);
+                    let s1 = -uniform(&mut rng, 15.0, 30.0);
+                    let dv = uniform(&mut rng, 1.5, 5.0);
+                    let len = ((s0 - s1) / dv * frame_rate).ceil() as usize;
+                    let frames = start..(start + len.max(1)).min(n);
+                    let size = [CAR, VAN, TRUCK, TRUCK][rng.random_range(0..4usize)];
+                    let path_pose = frames
+                        .clone()
+                        .map(|f| {
+                            let t = (f - start) as f64 * dt;
+                            (path.cum[f] + s0 - dv * t, lane, 0.0)
+                        })
+                        .collect();
+                    ("overtaken", frames, size, path_pose)
+                }
+                _ => {
+                    // Riding alongside.
+                    let len = rng.random_range(50..=200usize);
+                    let frames = start..(start + len).min(n);
+                    let size = [CAR, VAN, TRUCK][rng.random_range(0..3usize)];
+                    let s = smooth(&mut rng, -6.0, 6.0, (30.0, 120.0));
+                    let drift = smooth(&mut rng, -0.3, 0.3, (30.0, 100.0));
+                    let path_pose = frames
+                        .clone()
+                        .map(|f| {
+                            let t = f as f64;
+                            (path.cum[f] + s(t), lane + drift(t), 0.0)
+                        })
+                        .collect();
+                    ("alongside", frames, size, path_pose)
+                }
+            };
+        busy_until[lane_index] = frames.end;
+        objects.push(TrafficObject {
+            kind,
+            frames,
+            size: Vector3::from(size),
+            weight: weight(&mut rng),
+            path_pose,
+        });
+        k += rng.random_range(30..120usize);
+    }
+    objects
+}
+
+/// The pixel box `[u_min, v_min, u_max, v_max]` of the surface points of a box (pose: box centre
+/// frame to camera, half extents) that `model` sees: 9 x 9 points per face, each kept if it
+/// projects and its pixel maps back onto its ray (a fisheye sees points behind its image plane;
+/// [`TrafficConfig::surround`]), padded by 4 pixels; `None` if no point projects.
+fn surface_bbox<C: CameraModel>(
+    model: &C,
+    pose: &Pose<f64>,
+    half: &Vector3<f64>,
+) -> Option<[f64; 4]> {
+    let mut bbox = [f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY];
+    let mut any = false;
+    for axis in 0..3 {
+        let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+        for sign in [-1.0, 1.0] {
+            for a in 0..9 {
+                for b in 0..9 {
+                    let mut p = Vector3::zeros();
+                    p[axis] = sign * half[axis];
+                    p[a1] = half[a1] * (a as f64 / 4.0 - 1.0);
+                    p[a2] = half[a2] * (b as f64 / 4.0 - 1.0);
+                    let x = pose.transform_point(&p);
+                    let Some(px) = model.project(&x) else {
+                        continue;
+                    };
+                    if !(px.x.is_finite() && px.y.is_finite()) {
+                        continue;
+                    }
+                    let back = model.unproject(&px);
+                    if back.is_none_or(|d| d.dot(&x.normalize()) < 1.0 - 1e-9) {
+                        continue;
+                    }
+                    any = true;
+                    bbox = [
+                        bbox[0].min(px.x - 4.0),
+                        bbox[1].min(px.y - 4.0),
+                        bbox[2].max(px.x + 4.0),
+                        bbox[3].max(px.y + 4.0),
+                    ];
+                }
+            }
+        }
+    }
+    any.then_some(bbox)
+}
+
 /// The objects of one camera in one frame pair, in camera coordinates at k-1.
 pub(crate) struct CameraTraffic {
     /// Per visible object: box pose (box centre frame to camera), half extents, motion of its
@@ -371,6 +590,8 @@ pub(crate) struct CameraTraffic {
 pub(crate) struct VisibleObject {
     /// Index into `occluders`.
     pub index: usize,
+    /// Index into [`Traffic::objects`] (what `labels.csv` names).
+    pub object: usize,
     /// Points from camera coordinates at k-1 to camera coordinates at k.
     pub motion: Pose<f64>,
     /// Pixel box `[u_min, v_min, u_max, v_max]`.
@@ -430,6 +651,21 @@ impl CameraTraffic {
             let box_cam = p_inv.compose(&a.compose(&centre));
             // Object points: vehicle k-1 to vehicle k is b a⁻¹.
             let motion = p_inv.compose(&b.compose(&a.inverse()).compose(p));
+            if cfg.surround {
+                occluders.push((box_cam, half));
+                if let Some(b) = surface_bbox(&camera.model, &box_cam, &half) {
+                    let bbox = [
+                        b[0].max(0.0),
+                        b[1].max(0.0),
+                        b[2].min(w - 1.0),
+                        b[3].min(h - 1.0),
+                    ];
+                    if bbox[0] < bbox[2] && bbox[1] < bbox[3] {
+                        candidates.push((occluders.len() - 1, i, motion, bbox, o.weight));
+                    }
+                }
+                continue;
+            }
             let mut bbox = [f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY];
             let mut full = false;
             for c in 0..8 {
@@ -462,12 +698,12 @@ impl CameraTraffic {
             ];
             occluders.push((box_cam, half));
             if bbox[0] < bbox[2] && bbox[1] < bbox[3] {
-                candidates.push((occluders.len() - 1, motion, bbox, o.weight));
+                candidates.push((occluders.len() - 1, i, motion, bbox, o.weight));
             }
         }
         // Visible area by a grid of rays over each bounding box (occlusions included).
         let mut visible = Vec::new();
-        for (index, motion, bbox, weight) in candidates {
+        for (index, object, motion, bbox, weight) in candidates {
             let (nu, nv) = (24, 12);
             let mut hits = 0;
             for a in 0..nu {
@@ -483,7 +719,7 @@ impl CameraTraffic {
             }
             let area = (bbox[2] - bbox[0]) * (bbox[3] - bbox[1]) * hits as f64 / (nu * nv) as f64;
             if area >= cfg.min_area_px {
-                visible.push((index, motion, bbox, weight, area));
+                visible.push((index, object, motion, bbox, weight, area));
             }
         }
         if visible.is_empty() {
@@ -494,18 +730,21 @@ impl CameraTraffic {
         }
         let total = visible
             .iter()
-            .map(|v| v.3)
+            .map(|v| v.4)
             .sum::<f64>()
             .clamp(cfg.fraction.0, cfg.fraction.1);
-        let norm: f64 = visible.iter().map(|v| v.3 * v.4.sqrt()).sum();
+        let norm: f64 = visible.iter().map(|v| v.4 * v.5.sqrt()).sum();
         let objects = visible
             .into_iter()
-            .map(|(index, motion, bbox, weight, area)| VisibleObject {
-                index,
-                motion,
-                bbox,
-                fraction: total * weight * area.sqrt() / norm,
-            })
+            .map(
+                |(index, object, motion, bbox, weight, area)| VisibleObject {
+                    index,
+                    object,
+                    motion,
+                    bbox,
+                    fraction: total * weight * area.sqrt() / norm,
+                },
+            )
             .collect();
         Some(Self { objects, occluders })
     }

@@ -4,4 +4,5 @@
 mod bound;
 mod scenarios;
 mod sim;
+mod surround;
 mod traffic;

@@ -12,7 +12,7 @@ fn max_dev(a: &Pose<f64>, b: &Pose<f64>) -> f64 {
 
 #[test]
 fn every_scenario_is_valid_and_deterministic() {
-    assert_eq!(SimConfig::SCENARIOS.len(), 10);
+    assert_eq!(SimConfig::SCENARIOS.len(), 12);
     for name in SimConfig::SCENARIOS {
         let cfg = SimConfig::scenario(name).unwrap_or_else(|| panic!("{name} has no preset"));
         cfg.validate(&cfg.rig.rig())
