@@ -15,9 +15,10 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value = "clean_pinhole")]
     scenario: String,
     /// Drive along the camera-0 poses of this KITTI poses file (e.g. a KITTI ground truth)
-    /// instead of a generated drive; the vehicle poses are P0 · C_k · P0⁻¹ with P0 the
-    /// scenario rig's camera 0 (moving_traffic_surround: the KITTI mono camera's mount, so the
-    /// vehicle drives level). At most --frames frames.
+    /// instead of a generated drive; the vehicle poses are P0 · C_k · P0⁻¹ with P0 the KITTI
+    /// mono camera's mount (a level forward camera: every scenario's vehicle drives level,
+    /// the surround rigs' tilted front cameras included); the ground truth is the scenario
+    /// rig's camera 0. At most --frames frames.
     #[arg(long)]
     trajectory: Option<PathBuf>,
     /// Number of frames.

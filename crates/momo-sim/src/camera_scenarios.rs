@@ -140,12 +140,14 @@ pub fn radtan_mono() -> SimConfig {
 }
 
 /// [`wide_angle_surround_rig`], 200 matches per camera, σ = 0.5 px, 10% outliers, stops (the
-/// settings of `fisheye_surround` without its blinded camera).
+/// settings of `fisheye_surround` without its blinded camera; along a KITTI trajectory the
+/// vehicle drives level, as there: `trajectory_mount`).
 pub fn wide_angle_surround() -> SimConfig {
     SimConfig {
         rig: RigPreset::Custom(wide_angle_surround_rig()),
         matches_per_camera: 200,
         stops: true,
+        trajectory_mount: Some(crate::rigs::kitti_mono().cameras()[0].t_vehicle_camera),
         ..SimConfig::default()
     }
 }

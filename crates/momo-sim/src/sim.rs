@@ -273,7 +273,10 @@ impl SimConfig {
     }
 
     /// The four-camera fisheye rig, 200 matches per camera, σ = 0.5 px, 10% outliers, stops,
-    /// and the left camera (id 2) blinded (no matches) for frame pairs 40..70.
+    /// and the left camera (id 2) blinded (no matches) for frame pairs 40..70. Along a KITTI
+    /// trajectory the vehicle drives as the KITTI mono rig's does (`trajectory_mount`, as
+    /// [`Self::moving_traffic_surround`]): the front fisheye is tilted 10° down, and with its own
+    /// mount the level trajectory would make the vehicle sink along its path.
     pub fn fisheye_surround() -> Self {
         Self {
             rig: RigPreset::SurroundFisheye,
@@ -284,6 +287,7 @@ impl SimConfig {
                 frames: 40..70,
                 mode: BlindMode::Absent,
             }],
+            trajectory_mount: Some(crate::rigs::kitti_mono().cameras()[0].t_vehicle_camera),
             ..Self::default()
         }
     }
