@@ -1869,7 +1869,8 @@ fn yaw_history_prediction(
 /// `previous` (the constant-velocity prediction) is re-solved, without the rotation prior, on
 /// the matches it explains (`support`, at least 12): the result `P` with its own support,
 /// where its yaw lies within [`HypothesesOptions::yaw_history_margin`] of `r`, its tilt does
-/// not jump, `s_P >= min_matches` and `s_P > ρ · max(s_x, s_alt)` for every alternative
+/// not jump (against the least of the recent frames' tilts where
+/// [`HypothesesOptions::tilt_weak_road_frames`] is set), `s_P >= min_matches` and `s_P > ρ · max(s_x, s_alt)` for every alternative
 /// formed this frame (`ρ` [`HypothesesOptions::predict_by_road_ratio`]). None with the rule
 /// off, before any frame was recorded, or where `x` does not qualify or `P` is not vouched for.
 #[allow(clippy::too_many_arguments)]
@@ -1901,8 +1902,11 @@ fn road_prediction(
         return None;
     }
     let p = ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false)?;
+    // Its tilt against the least of the recent frames' (`tilt_weak_road_frames`, as for a
+    // motion without road): a prediction that carries the previous frame's tilt error is no
+    // continuation of the run.
     if tracker.yaw_jumps(h, yaw_of(ctx, &p.params))
-        || tracker.tilt_jumps_given_road(h, tilt_of(&p.params), false)
+        || tracker.tilt_jumps_given_road(h, tilt_of(&p.params), true)
     {
         return None;
     }
