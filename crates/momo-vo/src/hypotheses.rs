@@ -332,6 +332,30 @@ pub struct HypothesesOptions {
     /// [`HypothesisTracker::tilt_jumps_given_road`] with A's road weak) instead of its yaw,
     /// and it replaces A only where its own tilt does not jump either. Off (`false`).
     pub tilt_predict: bool,
+    /// The prediction chosen by its own road evidence (radians; 0: off; twenty-fifth
+    /// session, tail39). With [`HypothesesOptions::yaw_history_frames`]: let `X` be the motion
+    /// the rules leave for this frame (the alternative that the tilt's converse,
+    /// [`HypothesesOptions::yaw_jump`], [`HypothesesOptions::yaw_history_replace`] or
+    /// [`HypothesesOptions::yaw_history_predict`] chose to replace A; A where none did).
+    /// Where `X`'s yaw lies more than this margin `J'` from the recent frames' reference `r`
+    /// ([`HypothesisTracker::yaw_reference`]) or its tilt jumps from the recent frames'
+    /// ([`HypothesisTracker::tilt_jumps_given_road`], its road weak), and `X`'s road score
+    /// `s_X` ([`score`]) is below [`HypothesesOptions::min_matches`], the previous frame's
+    /// motion (the constant-velocity prediction `M_t = M_{t-1}`) re-solved on the matches it
+    /// explains, `P`, replaces `X` where `P` continues the history (its yaw within
+    /// [`HypothesesOptions::yaw_history_margin`] of `r`, its tilt not jumping) and the road
+    /// vouches for it: `s_P >= min_matches` and `s_P > ρ · max(s_X, s_alt)` over every
+    /// alternative formed this frame (`ρ` [`HypothesesOptions::predict_by_road_ratio`]). The
+    /// rules above take an alternative because its yaw stays within a 1-deg margin, or keep
+    /// A because its jump stays below it; this one asks the two motions' own evidence — the
+    /// static road that the ego motion puts under its matches — where the chosen one jumps
+    /// by more than a car's yaw rate changes (`Δω_z = v Δκ Δt`, a few tenths of a degree) and
+    /// has no road under it. Off (`0`).
+    pub predict_by_road: f64,
+    /// With [`HypothesesOptions::predict_by_road`]: the ratio `ρ` by which the re-solved
+    /// prediction's road score must exceed the chosen motion's and every alternative's
+    /// (`s_P > ρ · max(s_X, s_alt)`; at least 1; `1.0`).
+    pub predict_by_road_ratio: f64,
 }
 
 /// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
@@ -380,6 +404,8 @@ impl Default for HypothesesOptions {
             yaw_history_predict_road_frames: 0,
             yaw_history_predict_road_drop: 0.4,
             tilt_predict: false,
+            predict_by_road: 0.0,
+            predict_by_road_ratio: 1.0,
         }
     }
 }
@@ -446,6 +472,17 @@ impl HypothesesOptions {
         if !(self.yaw_history_predict.is_finite() && self.yaw_history_predict >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.yaw_history_predict must be a finite number >= 0"
+                    .into(),
+            );
+        }
+        if !(self.predict_by_road.is_finite() && self.predict_by_road >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.predict_by_road must be a finite number >= 0".into(),
+            );
+        }
+        if !(self.predict_by_road_ratio.is_finite() && self.predict_by_road_ratio >= 1.0) {
+            return Err(
+                "odometry.separate.hypotheses.predict_by_road_ratio must be a finite number >= 1"
                     .into(),
             );
         }

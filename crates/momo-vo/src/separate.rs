@@ -1289,6 +1289,29 @@ fn separate_with(
             yaw_history_prediction(ctx, h, tracker, obs, &chosen, previous, &support)
         })
         .flatten();
+    // `predict_by_road` (`road_predicted`): the motion the rules leave jumped without road,
+    // while the previous motion re-solved on its support has the road.
+    let road_predicted = opts
+        .hypotheses()
+        .filter(|h| h.predict_by_road > 0.0)
+        .and_then(|h| {
+            let x = tilted_a
+                .as_ref()
+                .or(jumped_a.as_ref())
+                .or(turned_a.as_ref())
+                .or(predicted_a.as_ref())
+                .unwrap_or(&chosen);
+            road_prediction(
+                ctx,
+                h,
+                tracker,
+                obs,
+                x,
+                &alternatives,
+                starts.first()?,
+                &support,
+            )
+        });
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
@@ -1350,7 +1373,8 @@ fn separate_with(
         || tilted_a.is_some()
         || jumped_a.is_some()
         || turned_a.is_some()
-        || predicted_a.is_some();
+        || predicted_a.is_some()
+        || road_predicted.is_some();
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
         opts.min_cell_ratio <= 0.0
@@ -1364,7 +1388,8 @@ fn separate_with(
             || tilted_a.is_some()
             || jumped_a.is_some()
             || turned_a.is_some()
-            || predicted_a.is_some())
+            || predicted_a.is_some()
+            || road_predicted.is_some())
     {
         // The alternative with the most ground (or parallax) support against A, over frames.
         let metric = arc_length.is_some();
@@ -1444,7 +1469,12 @@ fn separate_with(
         });
         // `tilt_replace` / `yaw_jump`: A tilted beyond an alternative (first), or jumped away
         // from the trusted previous motion, is replaced by it.
-        let forced_alt = tilted_a.or(jumped_a).or(turned_a).or(predicted_a);
+        // `predict_by_road`: the re-solved prediction replaces whatever they chose.
+        let forced_alt = road_predicted
+            .or(tilted_a)
+            .or(jumped_a)
+            .or(turned_a)
+            .or(predicted_a);
         let forced = forced_alt.is_some();
         let (score_b, best) = match forced_alt {
             Some(alt) => {
@@ -1828,6 +1858,67 @@ fn yaw_history_prediction(
         }
     }
     Some((p, sup_p))
+}
+
+/// The previous frame's motion re-solved on its support, chosen by its own road evidence
+/// ([`HypothesesOptions::predict_by_road`] `= J'`): where `x` (the motion the rules leave:
+/// an alternative a rule chose to replace A, else A) has `|ω_z(x) − r| > J'` (`r` the recent
+/// frames' reference yaw, [`HypothesisTracker::yaw_reference`]; a NaN yaw counts as a jump)
+/// or a tilt that jumps ([`HypothesisTracker::tilt_jumps_given_road`], its road weak), and a
+/// road score `s_x` ([`score`]) below [`HypothesesOptions::min_matches`], the previous motion
+/// `previous` (the constant-velocity prediction) is re-solved, without the rotation prior, on
+/// the matches it explains (`support`, at least 12): the result `P` with its own support,
+/// where its yaw lies within [`HypothesesOptions::yaw_history_margin`] of `r`, its tilt does
+/// not jump (against the least of the recent frames' tilts where
+/// [`HypothesesOptions::tilt_weak_road_frames`] is set), `s_P >= min_matches` and `s_P > ρ · max(s_x, s_alt)` for every alternative
+/// formed this frame (`ρ` [`HypothesesOptions::predict_by_road_ratio`]). None with the rule
+/// off, before any frame was recorded, or where `x` does not qualify or `P` is not vouched for.
+#[allow(clippy::too_many_arguments)]
+fn road_prediction(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    tracker: &HypothesisTracker,
+    obs: &FrameObservations,
+    x: &Candidate,
+    alternatives: &[Candidate],
+    previous: &[f64],
+    support: &dyn Fn(&[f64]) -> Vec<Vec<bool>>,
+) -> Option<Candidate> {
+    if !(h.predict_by_road > 0.0 && h.yaw_history_frames > 0) {
+        return None;
+    }
+    let r = tracker.yaw_reference()?;
+    let tilt_of = |params: &[f64]| crate::hypotheses::tilt(&ctx.estimator.motion(params));
+    let score_x = road_score(ctx, h, obs, x);
+    let weak = score_x < h.min_matches;
+    // `!(x <= J')`: a NaN yaw counts as a jump.
+    let jumps = !((yaw_of(ctx, &x.0.params) - r).abs() <= h.predict_by_road)
+        || tracker.tilt_jumps_given_road(h, tilt_of(&x.0.params), true);
+    if !(weak && jumps) {
+        return None;
+    }
+    let sup_p = support(previous);
+    if count(&sup_p) < 12 {
+        return None;
+    }
+    let p = ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false)?;
+    // Its tilt against the least of the recent frames' (`tilt_weak_road_frames`, as for a
+    // motion without road): a prediction that carries the previous frame's tilt error is no
+    // continuation of the run.
+    if tracker.yaw_jumps(h, yaw_of(ctx, &p.params))
+        || tracker.tilt_jumps_given_road(h, tilt_of(&p.params), true)
+    {
+        return None;
+    }
+    let sup = support(&p.params);
+    let c = (p, sup);
+    let score_p = road_score(ctx, h, obs, &c);
+    let best_other = alternatives
+        .iter()
+        .map(|alt| road_score(ctx, h, obs, alt))
+        .fold(score_x, usize::max);
+    (score_p >= h.min_matches && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
+        .then_some(c)
 }
 
 /// `k` of the `m` matches of `mask` (all of them where `m <= k`), evenly spaced in the frame's
@@ -3534,6 +3625,151 @@ mod tests {
                 .expect_err("negative")
                 .contains("yaw_history_predict")
         );
+    }
+
+    /// `predict_by_road`: a roadless motion that jumped by more than `J'` (but less than the
+    /// 1-deg margin of the older rules) is replaced by the previous motion re-solved on its
+    /// support where that has the road; not where an alternative has as much road, where the
+    /// chosen motion has road itself or stays within `J'`, with the rule off, before any frame
+    /// was recorded, or where the ratio asks for more; the options parse and validate.
+    #[test]
+    fn predict_by_road_replaces_a_roadless_jump_by_the_prediction_with_road() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let w = yaw_of(&ctx, &sol.params);
+        let deg = 1.0_f64.to_radians();
+        let support = |p: &[f64]| -> Vec<Vec<bool>> {
+            epipolar_angles(rig, &estimator.motion(p), obs)
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        };
+        let previous = f.turned(0.1 * deg, &none).0.params;
+        // The road score of the static world's motion on the matches it explains.
+        let truth = (sol.clone(), support(&sol.params));
+        let base = HypothesesOptions::default();
+        let s_truth = road_score(&ctx, &base, obs, &truth);
+        assert!(s_truth >= 4, "the clean scene has road: {s_truth}");
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            predict_by_road: 0.5 * deg,
+            min_matches: s_truth / 2,
+            ..HypothesesOptions::default()
+        };
+        // The chosen motion on an object: 0.8 deg less turn (within the older rules' 1-deg
+        // margin), no road under its (empty) support.
+        let car = f.turned(-0.8 * deg, &none);
+        assert_eq!(road_score(&ctx, &h, obs, &car), 0);
+        let mut tracker = HypothesisTracker::default();
+        let predict =
+            |h: &HypothesesOptions, t: &HypothesisTracker, x: &Candidate, alts: &[Candidate]| {
+                road_prediction(&ctx, h, t, obs, x, alts, &previous, &support)
+            };
+        // Nothing recorded yet: the rule does not act.
+        assert!(predict(&h, &tracker, &car, &[]).is_none());
+        tracker.record_yaw(&h, w);
+        // The previous motion re-solved on the matches it explains: the static world's, with
+        // its road.
+        let (p, sup_p) = predict(&h, &tracker, &car, &[]).expect("replaced");
+        assert!((yaw_of(&ctx, &p.params) - w).abs() < 0.1 * deg);
+        assert!(road_score(&ctx, &h, obs, &(p.clone(), sup_p.clone())) >= h.min_matches);
+        // An alternative with at least as much road: the prediction's evidence does not
+        // exceed it, the rules' choice stands.
+        let all = (sol.clone(), f.support(true));
+        assert!(road_score(&ctx, &h, obs, &all) >= road_score(&ctx, &h, obs, &(p, sup_p)));
+        assert!(predict(&h, &tracker, &car, std::slice::from_ref(&all)).is_none());
+        // A roadless alternative does not stop it.
+        let other = f.turned(3.0 * deg, &none);
+        assert!(predict(&h, &tracker, &car, std::slice::from_ref(&other)).is_some());
+        // A motion within `J'`, one with its own road, the rule off, a ratio the prediction's
+        // road does not reach: nothing.
+        let near = f.turned(-0.3 * deg, &none);
+        assert!(predict(&h, &tracker, &near, &[]).is_none());
+        let roaded = HypothesesOptions {
+            min_matches: 0,
+            ..h.clone()
+        };
+        assert!(predict(&roaded, &tracker, &car, &[]).is_none());
+        let off = HypothesesOptions {
+            predict_by_road: 0.0,
+            ..h.clone()
+        };
+        assert!(predict(&off, &tracker, &car, &[]).is_none());
+        let no_history = HypothesesOptions {
+            yaw_history_frames: 0,
+            ..h.clone()
+        };
+        assert!(predict(&no_history, &tracker, &car, &[]).is_none());
+        // `ρ`: against a roadless `X` (0) any road exceeds `ρ · 0`; against an alternative
+        // with half the prediction's road, `ρ = 3` asks for more than it has.
+        let half = HypothesesOptions {
+            min_matches: 1,
+            predict_by_road_ratio: 3.0,
+            ..h.clone()
+        };
+        assert!(predict(&half, &tracker, &car, &[]).is_some());
+        let weaker = (sol.clone(), {
+            // Half of the truth's support, taken in the frame's order.
+            let mut k = 0usize;
+            support(&sol.params)
+                .into_iter()
+                .map(|c| {
+                    c.into_iter()
+                        .map(|x| {
+                            k += usize::from(x);
+                            x && k % 2 == 0
+                        })
+                        .collect()
+                })
+                .collect::<Vec<Vec<bool>>>()
+        });
+        let s_weaker = road_score(&ctx, &half, obs, &weaker);
+        assert!(s_weaker > 0);
+        let p_half = predict(&half, &tracker, &car, &[]).expect("replaced");
+        let s_p = road_score(&ctx, &half, obs, &p_half);
+        let ratio_met = s_p as f64 > 3.0 * s_weaker as f64;
+        assert_eq!(
+            predict(&half, &tracker, &car, std::slice::from_ref(&weaker)).is_some(),
+            ratio_met
+        );
+        let one = HypothesesOptions {
+            predict_by_road_ratio: 1.0,
+            ..half.clone()
+        };
+        assert_eq!(
+            predict(&one, &tracker, &car, std::slice::from_ref(&weaker)).is_some(),
+            s_p > s_weaker
+        );
+        // The options parse and validate; off by default.
+        let o: HypothesesOptions =
+            toml::from_str("predict_by_road = 0.00873\npredict_by_road_ratio = 1.5")
+                .expect("parses");
+        assert_eq!((o.predict_by_road, o.predict_by_road_ratio), (0.00873, 1.5));
+        assert!(o.validate().is_ok());
+        let d = HypothesesOptions::default();
+        assert_eq!((d.predict_by_road, d.predict_by_road_ratio), (0.0, 1.0));
+        for j in [-1.0, f64::NAN] {
+            let bad = HypothesesOptions {
+                predict_by_road: j,
+                ..HypothesesOptions::default()
+            };
+            assert!(bad.validate().expect_err("bad").contains("predict_by_road"));
+        }
+        for q in [0.5, f64::INFINITY] {
+            let bad = HypothesesOptions {
+                predict_by_road_ratio: q,
+                ..HypothesesOptions::default()
+            };
+            assert!(
+                bad.validate()
+                    .expect_err("bad ratio")
+                    .contains("predict_by_road_ratio")
+            );
+        }
     }
 
     /// `yaw_history_predict_road_frames`: the prediction replaces a roadless A that jumped
