@@ -763,6 +763,63 @@ fn gauss_newton_steps_for_the_undefined_cells_change_only_their_covariances() {
     assert!(changed >= 3, "{changed} covariances changed");
 }
 
+/// `trust.jackknife_undefined_max_step_extrapolation` (and the two other options of the
+/// undefined cells' solver, off by default) changes only the full solves of the cells whose
+/// one-step re-estimate is undefined: on a clean drive (no such cell) the covariances are
+/// bit-identical to the default's; on a moving-traffic drive some frames' covariances change
+/// and (on this drive) no pose; a value below 1 is rejected.
+#[test]
+fn the_undefined_cells_solver_changes_only_their_covariances() {
+    let run = |cfg: &momo_sim::SimConfig, config: Config| {
+        process_all(
+            &momo_sim::simulate(cfg).expect("simulated").sequence,
+            config,
+        )
+    };
+    let lengthened = || {
+        let mut c = Config::default();
+        c.trust.jackknife_undefined_max_step_extrapolation = 2.0;
+        c
+    };
+    assert!(
+        momo_vo::trust::undefined_cell_solver(
+            Config::default().solver.as_ref(),
+            &Config::default().trust
+        )
+        .is_none()
+    );
+    assert!(
+        momo_vo::trust::undefined_cell_solver(
+            Config::default().solver.as_ref(),
+            &lengthened().trust
+        )
+        .is_some()
+    );
+    let mut bad = Config::default();
+    bad.trust.jackknife_undefined_max_step_extrapolation = 0.5;
+    assert!(Odometry::new(canned::fisheye_rig(), bad).is_err());
+    let mut clean = momo_sim::SimConfig::clean_pinhole();
+    clean.frames = 30;
+    let base = run(&clean, Config::default());
+    let with = run(&clean, lengthened());
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.1.covariance, b.1.covariance);
+    }
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 60;
+    traffic.seed = 1;
+    let base = run(&traffic, Config::default());
+    let with = run(&traffic, lengthened());
+    let mut changed = 0;
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.0.translation, b.0.translation);
+        changed += usize::from(a.1.covariance != b.1.covariance);
+    }
+    assert!(changed >= 3, "{changed} covariances changed");
+}
+
 /// Issue 14, the covariance where traffic moves with the vehicle (`momo_sim`'s moving_traffic
 /// on the built-in drive, seeds 1-3): lead and cut-in cars hold about half of the matches and
 /// pull the estimate into a compromise without any drop of the inlier share, so the jackknife
