@@ -2193,7 +2193,16 @@ impl Odometry {
                 status_cov = Some(cov.clone());
             }
             let samples: Vec<Vec<f64>> = match &frame {
-                Some(f) => self.influence_samples(f, k, obs, sol, &fixed, &cov, (gx, gy)),
+                Some(f) => self.influence_samples(
+                    f,
+                    k,
+                    obs,
+                    sol,
+                    &fixed,
+                    &cov,
+                    (gx, gy),
+                    k >= status_grids,
+                ),
                 None => trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
                     .iter()
                     .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
@@ -2406,7 +2415,7 @@ impl Odometry {
     /// The leave-one-cell-out re-estimates of one `grid` (the `index`-th of the frame's
     /// [`InfluenceFrame::cells`]) from the frame's linearisation ([`trust::influence_step`]);
     /// cells whose step is not defined, and the `trust.jackknife_solves` cells that move
-    /// farthest under `cov`, get a full solve.
+    /// farthest under `cov`, get a full solve. `report`: a grid of `trust.report_grids`.
     #[allow(clippy::too_many_arguments)]
     fn influence_samples(
         &self,
@@ -2417,6 +2426,7 @@ impl Odometry {
         fixed: &[bool],
         cov: &nalgebra::DMatrix<f64>,
         grid: (usize, usize),
+        report: bool,
     ) -> Vec<Vec<f64>> {
         let n = sol.free.len();
         let theta: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
@@ -2483,6 +2493,9 @@ impl Odometry {
                             false,
                             self.undefined_solver
                                 .as_deref()
+                                .filter(|_| {
+                                    report || !self.config.trust.jackknife_undefined_report_only
+                                })
                                 .unwrap_or(self.config.solver.as_ref()),
                         )
                         .map(|s| sol.free.iter().map(|&i| s.params[i]).collect());

@@ -170,6 +170,10 @@ pub struct TrustOptions {
     /// 1.46): not the default. `jackknife_undefined_max_iterations = 8` -20.7 % but sigmas
     /// shorter (10th percentile of the ratio to the full solve's 0.95); 3 -17.0 %.
     pub jackknife_undefined_max_step_extrapolation: f64,
+    /// The three options above apply only to the cells of [`TrustOptions::report_grids`],
+    /// whose jackknife widens the reported covariance after the competing-motions test: no
+    /// status and no pose can change. Default false (every grid's undefined cells).
+    pub jackknife_undefined_report_only: bool,
     /// Competing motions: when at least this share of the matches lies outside the estimate's
     /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
     /// fitted to them; if it explains that share of the matches, the frame's covariance is
@@ -317,6 +321,7 @@ impl Default for TrustOptions {
             jackknife_undefined_max_iterations: 0,
             jackknife_undefined_function_tolerance: 0.0,
             jackknife_undefined_max_step_extrapolation: 0.0,
+            jackknife_undefined_report_only: false,
             competing_min_fraction: 0.15,
             competing_fit_matches: 32,
             weak_prior_factor: 0.1,

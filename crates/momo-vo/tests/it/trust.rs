@@ -818,6 +818,16 @@ fn the_undefined_cells_solver_changes_only_their_covariances() {
         changed += usize::from(a.1.covariance != b.1.covariance);
     }
     assert!(changed >= 3, "{changed} covariances changed");
+    // Only the report grids' cells: no status can change (their jackknife widens the reported
+    // covariance after the competing-motions test).
+    let mut report_only = lengthened();
+    report_only.trust.jackknife_undefined_report_only = true;
+    let with = run(&traffic, report_only);
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.1.status, b.1.status);
+        assert_eq!(a.1.reason, b.1.reason);
+    }
 }
 
 /// Issue 14, the covariance where traffic moves with the vehicle (`momo_sim`'s moving_traffic
