@@ -160,19 +160,28 @@ pub struct TrustOptions {
     /// the estimate is left out, the robust loss's weights make the solver's convergence
     /// linear (14.6 iterations per undefined cell on the moving-traffic family), and the
     /// lengthened steps follow that slow descent in fewer iterations to nearly the same
-    /// minimum. Default 0. Measured with 2 (twenty-fifth session, jk39, docs/RESULTS.md): the
+    /// minimum. Measured with 2 on every grid (twenty-fifth session, jk39, docs/RESULTS.md): the
     /// whole run of a moving-traffic sequence (family 03 s1, 120 frames) 2.510 -> 2.179 G
     /// instructions (-13.2 %), of outliers along KITTI 03 (120 frames) -6.9 %, clean scenes
     /// unchanged (no undefined cell); the family sets' calibration is main's within noise
     /// (unflagged beyond 3 sigma 0.6 / 0.9 / 0.5 / 0.8 % grid / hold-out / dev / fresh), but
     /// through the competing-motions test statuses change (grid 329 frames, 18 of 120 pose
     /// files) and the fresh set got one frame above 1 deg more (7 -> 8; 00 s18 eff 1.39 ->
-    /// 1.46): not the default. `jackknife_undefined_max_iterations = 8` -20.7 % but sigmas
-    /// shorter (10th percentile of the ratio to the full solve's 0.95); 3 -17.0 %.
+    /// 1.46): on every grid, not the default. `jackknife_undefined_max_iterations = 8` -20.7 %
+    /// but sigmas shorter (10th percentile of the ratio to the full solve's 0.95); 3 -17.0 %.
+    /// Default 2 since the twenty-fifth session on the report grids' cells only
+    /// ([`TrustOptions::jackknife_undefined_report_only`]).
     pub jackknife_undefined_max_step_extrapolation: f64,
     /// The three options above apply only to the cells of [`TrustOptions::report_grids`],
     /// whose jackknife widens the reported covariance after the competing-motions test: no
-    /// status and no pose can change. Default false (every grid's undefined cells).
+    /// status and no pose can change. Default true since the twenty-fifth session (jk39), with
+    /// [`TrustOptions::jackknife_undefined_max_step_extrapolation`] 2: the whole run of a
+    /// moving-traffic sequence (family 03 s1, 120 frames) 2.510 -> 2.466 G instructions
+    /// (-1.7 %), outliers along KITTI 03 (120 frames) -1.5 %; poses and statuses of every
+    /// set byte-identical (460 sequences), unflagged frames beyond 3 sigma grid / hold-out /
+    /// dev / fresh 218 / 169 / 203 / 138 -> 220 / 169 / 196 / 138, the static scenes' NEES
+    /// and sharpness main's (docs/RESULTS.md). False: every grid's undefined cells (-13.2 %
+    /// with 2, but statuses and poses change).
     pub jackknife_undefined_report_only: bool,
     /// Competing motions: when at least this share of the matches lies outside the estimate's
     /// support (epipolar angle above [`TrustOptions::competing_threshold`]), a second motion is
@@ -320,8 +329,8 @@ impl Default for TrustOptions {
             jackknife_undefined_steps: 0,
             jackknife_undefined_max_iterations: 0,
             jackknife_undefined_function_tolerance: 0.0,
-            jackknife_undefined_max_step_extrapolation: 0.0,
-            jackknife_undefined_report_only: false,
+            jackknife_undefined_max_step_extrapolation: 2.0,
+            jackknife_undefined_report_only: true,
             competing_min_fraction: 0.15,
             competing_fit_matches: 32,
             weak_prior_factor: 0.1,

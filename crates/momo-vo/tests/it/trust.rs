@@ -711,6 +711,9 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
     let cheap = run(one);
     let mut every = Config::default();
     every.trust.jackknife_solves = 64;
+    // Every cell solved by the configured solver, as the solve-per-cell path does (the default
+    // lengthens the steps of the report grids' undefined cells' solves).
+    every.trust.jackknife_undefined_max_step_extrapolation = 0.0;
     let all = run(every);
     let mut jackknifed = 0;
     for ((b, c), a) in base.iter().zip(&cheap).zip(&all) {
@@ -776,31 +779,29 @@ fn the_undefined_cells_solver_changes_only_their_covariances() {
             config,
         )
     };
-    let lengthened = || {
+    // Off: the solver's own options on every grid (the default before the twenty-fifth
+    // session); lengthened: on every grid.
+    let off = || {
         let mut c = Config::default();
+        c.trust.jackknife_undefined_max_step_extrapolation = 0.0;
+        c.trust.jackknife_undefined_report_only = false;
+        c
+    };
+    let lengthened = || {
+        let mut c = off();
         c.trust.jackknife_undefined_max_step_extrapolation = 2.0;
         c
     };
+    assert!(momo_vo::trust::undefined_cell_solver(off().solver.as_ref(), &off().trust).is_none());
     assert!(
-        momo_vo::trust::undefined_cell_solver(
-            Config::default().solver.as_ref(),
-            &Config::default().trust
-        )
-        .is_none()
-    );
-    assert!(
-        momo_vo::trust::undefined_cell_solver(
-            Config::default().solver.as_ref(),
-            &lengthened().trust
-        )
-        .is_some()
+        momo_vo::trust::undefined_cell_solver(off().solver.as_ref(), &lengthened().trust).is_some()
     );
     let mut bad = Config::default();
     bad.trust.jackknife_undefined_max_step_extrapolation = 0.5;
     assert!(Odometry::new(canned::fisheye_rig(), bad).is_err());
     let mut clean = momo_sim::SimConfig::clean_pinhole();
     clean.frames = 30;
-    let base = run(&clean, Config::default());
+    let base = run(&clean, off());
     let with = run(&clean, lengthened());
     for (a, b) in base.iter().zip(&with) {
         assert_eq!(a.0.rotation, b.0.rotation);
@@ -809,7 +810,7 @@ fn the_undefined_cells_solver_changes_only_their_covariances() {
     let mut traffic = momo_sim::SimConfig::moving_traffic();
     traffic.frames = 60;
     traffic.seed = 1;
-    let base = run(&traffic, Config::default());
+    let base = run(&traffic, off());
     let with = run(&traffic, lengthened());
     let mut changed = 0;
     for (a, b) in base.iter().zip(&with) {
