@@ -269,6 +269,10 @@ pub struct Odometry {
     /// free parameters, one per grid of `trust.report_grids`), newest last: the pool of
     /// `trust.report_pool_frames`.
     report_pool: std::collections::VecDeque<ReportJackknife>,
+    /// The solver of the jackknife's undefined cells' full solves where
+    /// `trust.jackknife_undefined_max_iterations`, `..._function_tolerance` or
+    /// `..._max_step_extrapolation` change it ([`trust::undefined_cell_solver`]).
+    undefined_solver: Option<Box<dyn momo_core::Solver>>,
     /// Consecutive moving frames whose separation kept no competing alternative (the
     /// quiet-frame fast path, `odometry.quiet_frames`).
     quiet_streak: usize,
@@ -295,6 +299,7 @@ impl Odometry {
                 }));
             }
         };
+        let undefined_solver = trust::undefined_cell_solver(config.solver.as_ref(), &config.trust);
         let observable = estimator.observable(&rig);
         let scale_observable = estimator.arc_length_index().is_some_and(|i| observable[i]);
         let previous = estimator.initial_params(config.odometry.initial_arc_length);
@@ -367,6 +372,7 @@ impl Odometry {
             clustering: Default::default(),
             covariance_memory: None,
             report_pool: Default::default(),
+            undefined_solver,
             quiet_streak: 0,
             quiet_taken: 0,
         })
@@ -1878,11 +1884,24 @@ impl Odometry {
         fixed: &[bool],
         rotation_only: bool,
     ) -> Option<FrameSolution> {
+        self.solve_once_with(obs, init, fixed, rotation_only, self.config.solver.as_ref())
+    }
+
+    /// [`solve_once`](Self::solve_once) with another solver (the same loss, priors and
+    /// refinement stage).
+    fn solve_once_with(
+        &self,
+        obs: &FrameObservations,
+        init: &[f64],
+        fixed: &[bool],
+        rotation_only: bool,
+        solver: &dyn momo_core::Solver,
+    ) -> Option<FrameSolution> {
         let req = SolveRequest {
             rig: &self.rig,
             observations: obs,
             loss: self.config.loss.as_ref(),
-            solver: self.config.solver.as_ref(),
+            solver,
             initial: init,
             fixed,
             rotation_only,
@@ -2174,7 +2193,16 @@ impl Odometry {
                 status_cov = Some(cov.clone());
             }
             let samples: Vec<Vec<f64>> = match &frame {
-                Some(f) => self.influence_samples(f, k, obs, sol, &fixed, &cov, (gx, gy)),
+                Some(f) => self.influence_samples(
+                    f,
+                    k,
+                    obs,
+                    sol,
+                    &fixed,
+                    &cov,
+                    (gx, gy),
+                    k >= status_grids,
+                ),
                 None => trust::leave_one_cell_out(&self.rig, obs, (gx, gy))
                     .iter()
                     .filter_map(|o| self.jackknife_sample(o, sol, &fixed))
@@ -2387,7 +2415,7 @@ impl Odometry {
     /// The leave-one-cell-out re-estimates of one `grid` (the `index`-th of the frame's
     /// [`InfluenceFrame::cells`]) from the frame's linearisation ([`trust::influence_step`]);
     /// cells whose step is not defined, and the `trust.jackknife_solves` cells that move
-    /// farthest under `cov`, get a full solve.
+    /// farthest under `cov`, get a full solve. `report`: a grid of `trust.report_grids`.
     #[allow(clippy::too_many_arguments)]
     fn influence_samples(
         &self,
@@ -2398,6 +2426,7 @@ impl Odometry {
         fixed: &[bool],
         cov: &nalgebra::DMatrix<f64>,
         grid: (usize, usize),
+        report: bool,
     ) -> Vec<Vec<f64>> {
         let n = sol.free.len();
         let theta: Vec<f64> = sol.free.iter().map(|&i| sol.params[i]).collect();
@@ -2457,7 +2486,18 @@ impl Odometry {
                         }
                     }
                     samples[k] = self
-                        .solve_once(o, &sol.params, fixed, false)
+                        .solve_once_with(
+                            o,
+                            &sol.params,
+                            fixed,
+                            false,
+                            self.undefined_solver
+                                .as_deref()
+                                .filter(|_| {
+                                    report || !self.config.trust.jackknife_undefined_report_only
+                                })
+                                .unwrap_or(self.config.solver.as_ref()),
+                        )
                         .map(|s| sol.free.iter().map(|&i| s.params[i]).collect());
                 }
             }

@@ -711,6 +711,9 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
     let cheap = run(one);
     let mut every = Config::default();
     every.trust.jackknife_solves = 64;
+    // Every cell solved by the configured solver, as the solve-per-cell path does (the default
+    // lengthens the steps of the report grids' undefined cells' solves).
+    every.trust.jackknife_undefined_max_step_extrapolation = 0.0;
     let all = run(every);
     let mut jackknifed = 0;
     for ((b, c), a) in base.iter().zip(&cheap).zip(&all) {
@@ -761,6 +764,71 @@ fn gauss_newton_steps_for_the_undefined_cells_change_only_their_covariances() {
         changed += usize::from(a.1.covariance != b.1.covariance);
     }
     assert!(changed >= 3, "{changed} covariances changed");
+}
+
+/// `trust.jackknife_undefined_max_step_extrapolation` (and the two other options of the
+/// undefined cells' solver, off by default) changes only the full solves of the cells whose
+/// one-step re-estimate is undefined: on a clean drive (no such cell) the covariances are
+/// bit-identical to the default's; on a moving-traffic drive some frames' covariances change
+/// and (on this drive) no pose; a value below 1 is rejected.
+#[test]
+fn the_undefined_cells_solver_changes_only_their_covariances() {
+    let run = |cfg: &momo_sim::SimConfig, config: Config| {
+        process_all(
+            &momo_sim::simulate(cfg).expect("simulated").sequence,
+            config,
+        )
+    };
+    // Off: the solver's own options on every grid (the default before the twenty-fifth
+    // session); lengthened: on every grid.
+    let off = || {
+        let mut c = Config::default();
+        c.trust.jackknife_undefined_max_step_extrapolation = 0.0;
+        c.trust.jackknife_undefined_report_only = false;
+        c
+    };
+    let lengthened = || {
+        let mut c = off();
+        c.trust.jackknife_undefined_max_step_extrapolation = 2.0;
+        c
+    };
+    assert!(momo_vo::trust::undefined_cell_solver(off().solver.as_ref(), &off().trust).is_none());
+    assert!(
+        momo_vo::trust::undefined_cell_solver(off().solver.as_ref(), &lengthened().trust).is_some()
+    );
+    let mut bad = Config::default();
+    bad.trust.jackknife_undefined_max_step_extrapolation = 0.5;
+    assert!(Odometry::new(canned::fisheye_rig(), bad).is_err());
+    let mut clean = momo_sim::SimConfig::clean_pinhole();
+    clean.frames = 30;
+    let base = run(&clean, off());
+    let with = run(&clean, lengthened());
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.1.covariance, b.1.covariance);
+    }
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 60;
+    traffic.seed = 1;
+    let base = run(&traffic, off());
+    let with = run(&traffic, lengthened());
+    let mut changed = 0;
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.0.translation, b.0.translation);
+        changed += usize::from(a.1.covariance != b.1.covariance);
+    }
+    assert!(changed >= 3, "{changed} covariances changed");
+    // Only the report grids' cells: no status can change (their jackknife widens the reported
+    // covariance after the competing-motions test).
+    let mut report_only = lengthened();
+    report_only.trust.jackknife_undefined_report_only = true;
+    let with = run(&traffic, report_only);
+    for (a, b) in base.iter().zip(&with) {
+        assert_eq!(a.0.rotation, b.0.rotation);
+        assert_eq!(a.1.status, b.1.status);
+        assert_eq!(a.1.reason, b.1.reason);
+    }
 }
 
 /// Issue 14, the covariance where traffic moves with the vehicle (`momo_sim`'s moving_traffic
