@@ -287,16 +287,7 @@ fn surround_traffic_keeps_the_mono_objects() {
 /// the vehicle would sink along its path.
 #[test]
 fn surround_traffic_drives_level_along_a_kitti_trajectory() {
-    // The camera drives 1 m per frame along its optical axis, turning slowly left (about -y).
-    let camera: Vec<Pose<f64>> = (0..30)
-        .map(|k| {
-            let a = 0.01 * k as f64;
-            Pose::new(
-                so3_exp(&Vector3::new(0.0, -a, 0.0)),
-                Vector3::new(-(1.0 - a.cos()) * 100.0, 0.0, a.sin() * 100.0),
-            )
-        })
-        .collect();
+    let camera = turning_level_camera(30);
     let cfg = SimConfig {
         frames: 30,
         camera_trajectory: Some(camera.clone()),
@@ -334,15 +325,7 @@ fn surround_traffic_drives_level_along_a_kitti_trajectory() {
 /// `wide_angle_surround` sank at 10°).
 #[test]
 fn every_scenario_drives_level_along_a_kitti_trajectory() {
-    let camera: Vec<Pose<f64>> = (0..20)
-        .map(|k| {
-            let a = 0.01 * k as f64;
-            Pose::new(
-                so3_exp(&Vector3::new(0.0, -a, 0.0)),
-                Vector3::new(-(1.0 - a.cos()) * 100.0, 0.0, a.sin() * 100.0),
-            )
-        })
-        .collect();
+    let camera = turning_level_camera(20);
     for name in SimConfig::SCENARIOS {
         let cfg = SimConfig {
             frames: 20,
@@ -354,4 +337,18 @@ fn every_scenario_drives_level_along_a_kitti_trajectory() {
             assert!(v.translation.z.abs() < 1e-9, "{name}: {}", v.translation);
         }
     }
+}
+
+/// `n` poses of a level forward camera (KITTI's convention: z forward, y down) driving 1 m per
+/// frame along its optical axis, turning slowly left (about -y).
+fn turning_level_camera(n: usize) -> Vec<Pose<f64>> {
+    (0..n)
+        .map(|k| {
+            let a = 0.01 * k as f64;
+            Pose::new(
+                so3_exp(&Vector3::new(0.0, -a, 0.0)),
+                Vector3::new(-(1.0 - a.cos()) * 100.0, 0.0, a.sin() * 100.0),
+            )
+        })
+        .collect()
 }
