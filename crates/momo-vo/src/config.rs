@@ -543,6 +543,52 @@ fn default_loss() -> Box<dyn RobustLoss> {
 }
 
 /// The default `[solver]`: Levenberg-Marquardt with its default options.
+/// `solver` with its `max_iterations` lowered to `max_iterations` (0: kept), its
+/// `function_tolerance` raised to `function_tolerance` (0: kept) and its
+/// `max_step_extrapolation` set to `max_step_extrapolation` (0: kept), where its configuration
+/// has these fields (Levenberg-Marquardt's); `None` where no limit is set or nothing changes
+/// (the caller then uses `solver` itself). The separation's alternatives
+/// (`odometry.separate.candidate_*`) and the jackknife's undefined cells
+/// (`trust.jackknife_undefined_*`) take their solvers from here.
+pub(crate) fn solver_with_limits(
+    solver: &dyn Solver,
+    max_iterations: usize,
+    function_tolerance: f64,
+    max_step_extrapolation: f64,
+) -> Option<Box<dyn Solver>> {
+    if max_iterations == 0 && !(function_tolerance > 0.0) && !(max_step_extrapolation > 0.0) {
+        return None;
+    }
+    let mut v = serde_json::to_value(solver).ok()?;
+    let o = v.as_object_mut()?;
+    let mut changed = false;
+    if max_iterations > 0
+        && let Some(m) = o.get_mut("max_iterations")
+        && m.as_u64().is_some_and(|m| m > max_iterations as u64)
+    {
+        *m = (max_iterations as u64).into();
+        changed = true;
+    }
+    if function_tolerance > 0.0
+        && let Some(f) = o.get_mut("function_tolerance")
+        && f.as_f64().is_some_and(|f| f < function_tolerance)
+    {
+        *f = function_tolerance.into();
+        changed = true;
+    }
+    if max_step_extrapolation > 0.0
+        && let Some(t) = o.get_mut("max_step_extrapolation")
+        && t.as_f64() != Some(max_step_extrapolation)
+    {
+        *t = max_step_extrapolation.into();
+        changed = true;
+    }
+    if !changed {
+        return None;
+    }
+    serde_json::from_value(v).ok()
+}
+
 fn default_solver() -> Box<dyn Solver> {
     Box::new(momo_solvers::LevenbergMarquardt::default())
 }

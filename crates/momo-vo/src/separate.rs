@@ -1889,12 +1889,14 @@ fn road_prediction(
     }
     let r = tracker.yaw_reference()?;
     let tilt_of = |params: &[f64]| crate::hypotheses::tilt(&ctx.estimator.motion(params));
-    let score_x = road_score(ctx, h, obs, x);
-    let weak = score_x < h.min_matches;
-    // `!(x <= J')`: a NaN yaw counts as a jump.
+    // `!(x <= J')`: a NaN yaw counts as a jump. (The jump first: it costs no road score.)
     let jumps = !((yaw_of(ctx, &x.0.params) - r).abs() <= h.predict_by_road)
         || tracker.tilt_jumps_given_road(h, tilt_of(&x.0.params), true);
-    if !(weak && jumps) {
+    if !jumps {
+        return None;
+    }
+    let score_x = road_score(ctx, h, obs, x);
+    if score_x >= h.min_matches {
         return None;
     }
     let sup_p = support(previous);
@@ -1948,42 +1950,12 @@ fn spread_subsample(mask: &[Vec<bool>], k: usize) -> Vec<Vec<bool>> {
 /// Levenberg-Marquardt's); `None` where no option is set or nothing changes (the frame's
 /// solver then solves them).
 fn candidate_solver(solver: &dyn Solver, opts: &SeparateOptions) -> Option<Box<dyn Solver>> {
-    if opts.candidate_max_iterations == 0
-        && !(opts.candidate_function_tolerance > 0.0)
-        && !(opts.candidate_max_step_extrapolation > 0.0)
-    {
-        return None;
-    }
-    let mut v = serde_json::to_value(solver).ok()?;
-    let o = v.as_object_mut()?;
-    let mut changed = false;
-    if opts.candidate_max_iterations > 0
-        && let Some(m) = o.get_mut("max_iterations")
-        && m.as_u64()
-            .is_some_and(|m| m > opts.candidate_max_iterations as u64)
-    {
-        *m = (opts.candidate_max_iterations as u64).into();
-        changed = true;
-    }
-    if opts.candidate_function_tolerance > 0.0
-        && let Some(f) = o.get_mut("function_tolerance")
-        && f.as_f64()
-            .is_some_and(|f| f < opts.candidate_function_tolerance)
-    {
-        *f = opts.candidate_function_tolerance.into();
-        changed = true;
-    }
-    if opts.candidate_max_step_extrapolation > 0.0
-        && let Some(t) = o.get_mut("max_step_extrapolation")
-        && t.as_f64() != Some(opts.candidate_max_step_extrapolation)
-    {
-        *t = opts.candidate_max_step_extrapolation.into();
-        changed = true;
-    }
-    if !changed {
-        return None;
-    }
-    serde_json::from_value(v).ok()
+    crate::config::solver_with_limits(
+        solver,
+        opts.candidate_max_iterations,
+        opts.candidate_function_tolerance,
+        opts.candidate_max_step_extrapolation,
+    )
 }
 
 /// Whether competition over time ([`SeparateOptions::persistence`]; always where that is 0)

@@ -1228,42 +1228,12 @@ pub fn undefined_cell_solver(
     solver: &dyn momo_core::Solver,
     opts: &TrustOptions,
 ) -> Option<Box<dyn momo_core::Solver>> {
-    let (iterations, tolerance, extrapolation) = (
+    crate::config::solver_with_limits(
+        solver,
         opts.jackknife_undefined_max_iterations,
         opts.jackknife_undefined_function_tolerance,
         opts.jackknife_undefined_max_step_extrapolation,
-    );
-    if iterations == 0 && !(tolerance > 0.0) && !(extrapolation > 0.0) {
-        return None;
-    }
-    let mut v = serde_json::to_value(solver).ok()?;
-    let o = v.as_object_mut()?;
-    let mut changed = false;
-    if iterations > 0
-        && let Some(m) = o.get_mut("max_iterations")
-        && m.as_u64().is_some_and(|m| m > iterations as u64)
-    {
-        *m = (iterations as u64).into();
-        changed = true;
-    }
-    if tolerance > 0.0
-        && let Some(f) = o.get_mut("function_tolerance")
-        && f.as_f64().is_some_and(|f| f < tolerance)
-    {
-        *f = tolerance.into();
-        changed = true;
-    }
-    if extrapolation > 0.0
-        && let Some(t) = o.get_mut("max_step_extrapolation")
-        && t.as_f64() != Some(extrapolation)
-    {
-        *t = extrapolation.into();
-        changed = true;
-    }
-    if !changed {
-        return None;
-    }
-    serde_json::from_value(v).ok()
+    )
 }
 
 /// The exact robust Hessian `2A - N` of a linearisation `a` under a loss with `ρ'' <= 0` and
