@@ -20,6 +20,7 @@
 #        rigtraffic   moving_traffic_surround (the four-camera fisheye rig with traffic all
 #                  around), KITTI trajectories 00-10 and the built-in drive, seeds 1-3
 #        rigtraffic2  the same, seeds 4-6 (keep for confirmation: choose nothing on it)
+#        rigdev    the same, seeds 7-12 (a second development set for the rig)
 #        rigblind  moving_traffic_surround_blind (the same with the front camera covered in frame
 #                  pairs 150-249, glare on the right camera in 300-349), seeds 1-3
 #   MOMO        environment variable: the momo binary (default target/release/momo)
@@ -115,8 +116,10 @@ list_set() {
         for sc in clean_pinhole outliers; do for t in $trajs; do for seed in $seeds; do
             echo "$sets_dir/static/${sc}_${t}_s$seed $sc $t $seed $frames"
         done; done; done ;;
-    rigtraffic | rigtraffic2)
-        [[ "$s" == rigtraffic ]] && seeds="1 2 3" || seeds="4 5 6"
+    rigtraffic | rigtraffic2 | rigdev)
+        case "$s" in
+        rigtraffic) seeds="1 2 3" ;; rigtraffic2) seeds="4 5 6" ;; rigdev) seeds="$(seq 7 12)" ;;
+        esac
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/rigtraffic/moving_traffic_surround_${t}_s$seed moving_traffic_surround $t $seed $frames"
         done; done ;;
