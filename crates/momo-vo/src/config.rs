@@ -164,6 +164,17 @@ pub struct OdometryOptions {
     /// `σ = 0.01` rad is 5 mm), so a short step's direction may yield from the first frame
     /// on; then the learnt jitter of `soft_prior_arc_learning` takes over (none without it).
     pub soft_prior_arc_jitter: f64,
+    /// Let the soft manifold's prior learn (its centre, `soft_prior_centring_frames`; its sigmas,
+    /// `soft_prior_sigma_learning`; its level, `soft_prior_trend_frames`) also from the trusted
+    /// moving frames where two motions competed (reported `estimated`, or `weak` for
+    /// `competing_motions`); by default (false) only frames reported `estimated` where no second
+    /// motion competed teach it. With a surround rig in traffic nearly every frame competes (a
+    /// fisheye sees some vehicle almost always), so the prior keeps the model's centre and
+    /// sigmas where the direction of travel is far from them (the KITTI 08 ground truth's slow
+    /// start, whose chord climbs by 0.3-1.5 rad) and co-moving vehicles pull the rotation
+    /// instead (docs/RESULTS.md §9, twenty-sixth session, riglock40). The change-of-motion
+    /// prior's centring is not affected. Off by default.
+    pub soft_prior_learn_competing: bool,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -371,6 +382,7 @@ impl Default for OdometryOptions {
             soft_prior_student_nu: 0.0,
             soft_prior_arc_learning: false,
             soft_prior_arc_jitter: 0.0,
+            soft_prior_learn_competing: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,

@@ -1577,7 +1577,15 @@ impl Odometry {
             self.since_competing.saturating_add(1)
         };
         let n = self.config.odometry.soft_prior_centring_frames;
-        if self.prior_ready && n > 0 && !self.soft_center.is_empty() {
+        // `soft_prior_learn_competing`: the soft prior also learns from the trusted frames where
+        // two motions competed.
+        let soft_ready = self.prior_ready
+            || (self.config.odometry.soft_prior_learn_competing
+                && trusted
+                && (diag.status == FrameStatus::Estimated
+                    || (diag.status == FrameStatus::Weak
+                        && diag.reason == Some(Reason::CompetingMotions))));
+        if soft_ready && n > 0 && !self.soft_center.is_empty() {
             // A cumulative mean over the first n moving frames, then exponential with n frames.
             self.soft_count += 1;
             let alpha = 1.0 / self.soft_count.min(n) as f64;
@@ -3445,5 +3453,47 @@ mod tests {
         // Once learnt (without `soft_prior_arc_learning`) the seed is gone.
         let (j, _, _) = seeded.last().expect("frames");
         assert!(j.is_empty(), "{j:?}");
+    }
+
+    /// `soft_prior_learn_competing`: off, only frames reported `estimated` teach the soft prior
+    /// (none flagged `weak` for competing motions); on, the surround rig's frames where two
+    /// motions competed teach it too, so it learns from more frames.
+    #[test]
+    fn the_soft_prior_learns_from_competing_frames_only_when_asked() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 60,
+            seed: 1,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let sim = simulate(&cfg).expect("the rig traffic scenario simulates");
+        let seq = &sim.sequence;
+        // Per frame: whether the soft prior learnt from it, its status and reason.
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut out = Vec::new();
+            for k in 1..seq.num_frames() {
+                let before = vo.soft_count;
+                let r = vo.process(&seq.frames[k], seq.arc_length(k));
+                let d = r.diagnostics;
+                out.push((vo.soft_count > before, d.status, d.reason));
+            }
+            out
+        };
+        let competing_weak =
+            |&(_, s, r): &(bool, FrameStatus, Option<Reason>)| {
+                s == FrameStatus::Weak && r == Some(Reason::CompetingMotions)
+            };
+        let off = run("");
+        let on = run("[odometry]\nsoft_prior_learn_competing = true\n");
+        let learnt = |v: &[(bool, FrameStatus, Option<Reason>)]| v.iter().filter(|f| f.0).count();
+        // Off: every frame that taught the prior was reported `estimated`, while some frames
+        // were flagged for competing motions.
+        assert!(off.iter().filter(|f| f.0).all(|f| f.1 == FrameStatus::Estimated));
+        assert!(off.iter().any(competing_weak), "no frame competed: {off:?}");
+        // On: a frame flagged for competing motions taught it, and more frames did.
+        assert!(on.iter().any(|f| f.0 && competing_weak(f)), "{on:?}");
+        assert!(learnt(&on) > learnt(&off), "{} <= {}", learnt(&on), learnt(&off));
     }
 }
