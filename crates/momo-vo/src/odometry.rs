@@ -3481,19 +3481,27 @@ mod tests {
             }
             out
         };
-        let competing_weak =
-            |&(_, s, r): &(bool, FrameStatus, Option<Reason>)| {
-                s == FrameStatus::Weak && r == Some(Reason::CompetingMotions)
-            };
+        let competing_weak = |&(_, s, r): &(bool, FrameStatus, Option<Reason>)| {
+            s == FrameStatus::Weak && r == Some(Reason::CompetingMotions)
+        };
         let off = run("");
         let on = run("[odometry]\nsoft_prior_learn_competing = true\n");
         let learnt = |v: &[(bool, FrameStatus, Option<Reason>)]| v.iter().filter(|f| f.0).count();
         // Off: every frame that taught the prior was reported `estimated`, while some frames
         // were flagged for competing motions.
-        assert!(off.iter().filter(|f| f.0).all(|f| f.1 == FrameStatus::Estimated));
+        assert!(
+            off.iter()
+                .filter(|f| f.0)
+                .all(|f| f.1 == FrameStatus::Estimated)
+        );
         assert!(off.iter().any(competing_weak), "no frame competed: {off:?}");
         // On: a frame flagged for competing motions taught it, and more frames did.
         assert!(on.iter().any(|f| f.0 && competing_weak(f)), "{on:?}");
-        assert!(learnt(&on) > learnt(&off), "{} <= {}", learnt(&on), learnt(&off));
+        assert!(
+            learnt(&on) > learnt(&off),
+            "{} <= {}",
+            learnt(&on),
+            learnt(&off)
+        );
     }
 }
