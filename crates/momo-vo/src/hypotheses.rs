@@ -356,6 +356,17 @@ pub struct HypothesesOptions {
     /// prediction's road score must exceed the chosen motion's and every alternative's
     /// (`s_P > ρ · max(s_X, s_alt)`; at least 1; `1.0`).
     pub predict_by_road_ratio: f64,
+    /// With [`HypothesesOptions::predict_by_road`]: where the re-solved prediction `P`
+    /// replaced the motion and nothing else competed in the frame (no alternative kept by
+    /// competition over time, no other rule replaced A), the frame does not switch the next
+    /// frame's change-of-motion prior off ([`crate::separate::SeparationOutcome::prior_kept`]):
+    /// `P` continues the run by construction (its yaw within the history's margin, its tilt
+    /// not jumping, the road under it), so it may centre the next frame's rotation prior as an
+    /// unopposed frame does. The final stage still runs on `P`'s support, and the trust's own
+    /// tests (status, inlier ratio) still decide. Off (`false`: such a frame is reported as
+    /// one with competing motions, as the other rules' replacements are; twenty-sixth
+    /// session, road40).
+    pub predict_by_road_prior: bool,
 }
 
 /// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
@@ -406,6 +417,7 @@ impl Default for HypothesesOptions {
             tilt_predict: false,
             predict_by_road: 0.0,
             predict_by_road_ratio: 1.0,
+            predict_by_road_prior: false,
         }
     }
 }

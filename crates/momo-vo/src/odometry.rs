@@ -1258,6 +1258,8 @@ impl Odometry {
         let mut next_stage = crate::separate::NextStage::FinalFit;
         // The chosen motion's road score dropped (`separate.ground_drop`).
         let mut ground_drop = false;
+        // Only the road prediction competed and may keep the prior (`predict_by_road_prior`).
+        let mut prior_kept = false;
         let (result, competing) = match (
             result,
             self.config.odometry.separate.as_ref().filter(|s| s.enabled),
@@ -1297,6 +1299,7 @@ impl Odometry {
                 );
                 next_stage = next;
                 ground_drop = o.ground_drop;
+                prior_kept = o.prior_kept;
                 self.quiet_streak = if o.competing {
                     0
                 } else {
@@ -1566,8 +1569,10 @@ impl Odometry {
                 diag.reason,
                 Some(Reason::CompetingMotions | Reason::RoadScoreDrop)
             );
-        // A frame where two motions competed does not centre the next frame's prior.
-        self.prior_ready = diag.status == FrameStatus::Estimated && trusted && !competing;
+        // A frame where two motions competed does not centre the next frame's prior, unless
+        // only the road prediction did and `predict_by_road_prior` keeps it.
+        self.prior_ready =
+            diag.status == FrameStatus::Estimated && trusted && (!competing || prior_kept);
         if self.after_flag {
             self.parallax_tally.mark_flagged();
         }

@@ -647,6 +647,13 @@ pub struct SeparationOutcome {
     pub switched: bool,
     /// The chosen motion's road score dropped ([`SeparateOptions::ground_drop`]).
     pub ground_drop: bool,
+    /// The re-solved prediction replaced the motion the rules left
+    /// ([`crate::hypotheses::HypothesesOptions::predict_by_road`]).
+    pub road_predicted: bool,
+    /// The frame is `competing` only because the re-solved prediction replaced the motion,
+    /// and [`crate::hypotheses::HypothesesOptions::predict_by_road_prior`] lets it centre the
+    /// next frame's change-of-motion prior all the same.
+    pub prior_kept: bool,
 }
 
 /// The sines of a match's two one-sided epipolar angles under the essential matrix `e`
@@ -1369,12 +1376,15 @@ fn separate_with(
     {
         alternatives.push((t.clone(), sup_t.clone()));
     }
-    outcome.competing = !alternatives.is_empty()
+    // Whether anything but the road prediction competed (`predict_by_road_prior`).
+    let others_competed = !alternatives.is_empty()
         || tilted_a.is_some()
         || jumped_a.is_some()
         || turned_a.is_some()
-        || predicted_a.is_some()
-        || road_predicted.is_some();
+        || predicted_a.is_some();
+    outcome.competing = others_competed || road_predicted.is_some();
+    outcome.road_predicted = road_predicted.is_some();
+    outcome.prior_kept = prior_kept(opts.hypotheses(), road_predicted.is_some(), others_competed);
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
         opts.min_cell_ratio <= 0.0
@@ -1921,6 +1931,15 @@ fn road_prediction(
         .fold(score_x, usize::max);
     (score_p >= h.min_matches && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
         .then_some(c)
+}
+
+/// Whether a frame keeps the next frame's change-of-motion prior although the separation
+/// reports it `competing` ([`HypothesesOptions::predict_by_road_prior`]): only where the
+/// re-solved prediction replaced the motion (`road_predicted`) and nothing else competed
+/// (`others_competed`: an alternative kept by competition over time, or another rule's
+/// replacement of A).
+fn prior_kept(h: Option<&HypothesesOptions>, road_predicted: bool, others_competed: bool) -> bool {
+    road_predicted && !others_competed && h.is_some_and(|h| h.predict_by_road_prior)
 }
 
 /// `k` of the `m` matches of `mask` (all of them where `m <= k`), evenly spaced in the frame's
@@ -3742,6 +3761,36 @@ mod tests {
                     .contains("predict_by_road_ratio")
             );
         }
+    }
+
+    /// `predict_by_road_prior`: a frame whose motion the road prediction replaced keeps the
+    /// next frame's prior only with the option on and only where nothing else competed; off
+    /// by default; it parses.
+    #[test]
+    fn predict_by_road_prior_keeps_the_prior_only_where_only_the_prediction_competed() {
+        let off = HypothesesOptions {
+            predict_by_road: 0.00873,
+            ..HypothesesOptions::default()
+        };
+        assert!(!off.predict_by_road_prior);
+        let on = HypothesesOptions {
+            predict_by_road_prior: true,
+            ..off.clone()
+        };
+        // Off (the default): the replaced frame is an ordinary competing frame.
+        assert!(!prior_kept(Some(&off), true, false));
+        // On: kept where only the prediction competed ...
+        assert!(prior_kept(Some(&on), true, false));
+        // ... not where an alternative or another rule competed too, not where the
+        // prediction did not act, not without the hypotheses.
+        assert!(!prior_kept(Some(&on), true, true));
+        assert!(!prior_kept(Some(&on), false, false));
+        assert!(!prior_kept(Some(&on), false, true));
+        assert!(!prior_kept(None, true, false));
+        let o: HypothesesOptions =
+            toml::from_str("predict_by_road = 0.00873\npredict_by_road_prior = true")
+                .expect("parses");
+        assert!(o.predict_by_road_prior && o.validate().is_ok());
     }
 
     /// `yaw_history_predict_road_frames`: the prediction replaces a roadless A that jumped
