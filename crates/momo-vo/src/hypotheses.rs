@@ -350,7 +350,9 @@ pub struct HypothesesOptions {
     /// A because its jump stays below it; this one asks the two motions' own evidence — the
     /// static road that the ego motion puts under its matches — where the chosen one jumps
     /// by more than a car's yaw rate changes (`Δω_z = v Δκ Δt`, a few tenths of a degree) and
-    /// has no road under it. Off (`0`).
+    /// has no road under it. Off here (`0`); the default configuration
+    /// ([`crate::separate::SeparateOptions::competition_over_time`]) sets `0.00873` (0.5 deg)
+    /// since the twenty-sixth session.
     pub predict_by_road: f64,
     /// With [`HypothesesOptions::predict_by_road`]: the ratio `ρ` by which the re-solved
     /// prediction's road score must exceed the chosen motion's and every alternative's

@@ -459,7 +459,11 @@ impl SeparateOptions {
     /// that median at least `min_matches`) is replaced by the previous motion re-solved on its
     /// support, or held to it (`hypotheses.yaw_history_predict = 0.01745`,
     /// `yaw_history_predict_hold`, `yaw_history_predict_road_frames = 10`; docs/RESULTS.md §9,
-    /// twenty-fourth session, tail38). A
+    /// twenty-fourth session, tail38). Since the twenty-sixth session a chosen motion whose
+    /// yaw jumps by more than 0.5 deg (or whose tilt jumps) without road is replaced by the
+    /// previous motion re-solved on its support where that prediction's own road score beats
+    /// the choice's and every alternative's (`hypotheses.predict_by_road = 0.00873`;
+    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -496,6 +500,7 @@ impl SeparateOptions {
                 yaw_history_predict: 0.01745,
                 yaw_history_predict_hold: true,
                 yaw_history_predict_road_frames: 10,
+                predict_by_road: 0.00873,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
