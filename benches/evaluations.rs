@@ -16,6 +16,10 @@
 //! `MOMO_EVAL_SOLVER` adds lines to the driver's `[solver]` section (`;` separates them), e.g.
 //! `MOMO_EVAL_SOLVER='max_step_extrapolation = 2.0'`.
 //!
+//! `MOMO_EVAL_CONFIG=FILE` runs the processes with a configuration file's solver, `[odometry]`
+//! and `[trust]` sections (a preset such as `configs/realtime.toml`; sections it omits keep
+//! their defaults) and the case's model, metric and loss; `MOMO_EVAL_SOLVER` is then ignored.
+//!
 //! For instruction counts (repeatable on a loaded machine), run under callgrind with few
 //! rounds and a filter that matches no criterion benchmark, and read the inclusive counts of
 //! `evaluations::timed_cost`, `timed_linearize`, `timed_linearize_automatic` and
@@ -108,8 +112,20 @@ fn evaluations(c: &mut Criterion) {
             solver_extra.replace(';', "\n")
         );
         let arc = truth().translation.norm();
+        // The preset's text, parsed for every driver (outside the timed part).
+        let preset = std::env::var("MOMO_EVAL_CONFIG").ok().map(|path| {
+            let text = std::fs::read_to_string(&path).expect("MOMO_EVAL_CONFIG readable");
+            (path, text)
+        });
         let primed = || {
-            let config = momo_vo::Config::from_toml_str(&config_toml, "bench").expect("valid");
+            let mut config = momo_vo::Config::from_toml_str(&config_toml, "bench").expect("valid");
+            if let Some((path, text)) = &preset {
+                let p = momo_vo::Config::from_toml_str(text, path).expect("MOMO_EVAL_CONFIG valid");
+                config.solver = p.solver;
+                config.odometry = p.odometry;
+                config.trust = p.trust;
+                config.refine_loss = p.refine_loss;
+            }
             let mut vo = momo_vo::Odometry::new(rig.clone(), config).expect("fits");
             vo.process(&prev, Some(arc));
             vo

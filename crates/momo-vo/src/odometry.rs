@@ -3387,9 +3387,38 @@ mod tests {
         .expect("the preset parses");
         let mut default = crate::Config::from_toml_str("", "default.toml").expect("parses");
         assert!(fast.odometry.quiet_frames > 0);
+        assert!(!fast.trust.jackknife_undefined_report_only);
         default.odometry.quiet_frames = fast.odometry.quiet_frames;
         default.odometry.quiet_other_share = fast.odometry.quiet_other_share;
+        default.trust.jackknife_undefined_report_only = false;
         assert_eq!(fast.odometry, default.odometry);
+        assert_eq!(fast.trust, default.trust);
+    }
+
+    #[test]
+    fn the_realtime_preset_is_the_fast_one_with_the_lengthened_steps() {
+        // Everything the presets set, serialised whole (solver, model, metric, loss included):
+        // nothing else may differ from the default.
+        let text = |c: &crate::Config| toml::to_string(c).expect("serialises");
+        let realtime = crate::Config::from_toml_str(
+            include_str!("../../../configs/realtime.toml"),
+            "configs/realtime.toml",
+        )
+        .expect("the preset parses");
+        let fast = crate::Config::from_toml_str(
+            include_str!("../../../configs/fast.toml"),
+            "configs/fast.toml",
+        )
+        .expect("the preset parses");
+        let mut expected = crate::Config::from_toml_str(
+            "[solver]\ntype = \"levenberg_marquardt\"\nmax_step_extrapolation = 2.0\n",
+            "expected.toml",
+        )
+        .expect("parses");
+        assert_ne!(text(&realtime), text(&fast));
+        expected.odometry = fast.odometry.clone();
+        expected.trust = fast.trust.clone();
+        assert_eq!(text(&realtime), text(&expected));
     }
 
     #[test]
