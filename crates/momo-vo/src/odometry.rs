@@ -1615,6 +1615,17 @@ impl Odometry {
             self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
         }
         self.previous_yaw = moving.then_some(yaw);
+        // Too small a support for the static scene (`trust.min_inlier_share`), report only.
+        let share = self.config.trust.min_inlier_share;
+        if moving
+            && diag.status == FrameStatus::Estimated
+            && diag.matches > 0
+            && (diag.inliers as f64) < share * diag.matches as f64
+        {
+            diag.status = FrameStatus::Weak;
+            diag.constraint = Constraint::Weak;
+            diag.reason = Some(Reason::LowSupport);
+        }
         let motion = self.estimator.motion(&params);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
