@@ -1137,9 +1137,7 @@ fn yaw_change_flags_a_jump_of_the_yaw_and_changes_no_pose() {
     traffic.seed = 3;
     let sim = momo_sim::simulate(&traffic).expect("simulated");
     let seq = &sim.sequence;
-    // 0.15 deg: a threshold that the family's frame-to-frame noise crosses now and then.
-    let j = 0.15f64.to_radians();
-    let run = |on: bool, weight: f64| {
+    let run = |on: bool, j: f64, weight: f64| {
         let mut config = Config::default();
         if on {
             config.trust.yaw_change = j;
@@ -1147,10 +1145,19 @@ fn yaw_change_flags_a_jump_of_the_yaw_and_changes_no_pose() {
         }
         process_all(seq, config)
     };
-    let off = run(false, 1.0);
-    let on = run(true, 1.0);
-    let status_only = run(true, 0.0);
     let yaw = |p: &Pose<f64>| so3_log(&p.rotation).z;
+    let off = run(false, 0.0, 1.0);
+    // The threshold: the median change of the yaw between consecutive estimated frames of the
+    // run without the rule, so that about half of them cross it.
+    let mut changes: Vec<f64> = off
+        .windows(2)
+        .filter(|w| w.iter().all(|(_, d)| d.status == FrameStatus::Estimated))
+        .map(|w| (yaw(&w[1].0) - yaw(&w[0].0)).abs())
+        .collect();
+    changes.sort_by(f64::total_cmp);
+    let j = changes[changes.len() / 2];
+    let on = run(true, j, 1.0);
+    let status_only = run(true, j, 0.0);
     let sigma_z = |d: &momo_vo::FrameDiagnostics| d.param_sigmas[2];
     let (mut flagged, mut quiet) = (0, 0);
     for k in 0..off.len() {
@@ -1195,7 +1202,7 @@ fn yaw_change_flags_a_jump_of_the_yaw_and_changes_no_pose() {
             quiet += 1;
         }
     }
-    eprintln!("flagged {flagged}, left estimated {quiet}");
+    eprintln!("threshold {j}: flagged {flagged}, left estimated {quiet}");
     assert!(flagged >= 1, "no frame flagged");
     assert!(quiet >= 10, "{quiet} frames left estimated");
     for (toml, key) in [
