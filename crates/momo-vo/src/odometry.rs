@@ -2114,8 +2114,9 @@ impl Odometry {
     }
 
     /// The yaw's change against the previous frame's reported motion
-    /// (`trust.yaw_change` `J`, `trust.yaw_change_weight` `w`): where `|Δω_z| = |ω_z − ω_z,prev|
-    /// > J` (a car's yaw rate changes smoothly, so one of the two frames is wrong), the frame is
+    /// (`trust.yaw_change` `J`, `trust.yaw_change_weight` `w`): where the change
+    /// `|Δω_z| = |ω_z − ω_z,prev|` exceeds `J` (a car's yaw rate changes smoothly, so one of
+    /// the two frames is wrong), the frame is
     /// flagged `weak` / `yaw_change` if it was `estimated`, and its reported covariance adds
     /// the previous frame's motion `p` as an alternative, `Σ + w d dᵀ`, `d = p − a`. Called
     /// after the frame's state is updated: the next frame's prior, the after-flag widening
