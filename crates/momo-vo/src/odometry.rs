@@ -184,6 +184,9 @@ pub struct Odometry {
     /// The last frame pair was flagged `weak` by two competing motions or the road score's drop
     /// (`trust.after_flag_weight`).
     after_flag: bool,
+    /// The yaw `ω_z` of the previous frame's reported motion where that frame was estimated
+    /// while moving (`estimated` or `weak`), `None` otherwise (`trust.yaw_change`).
+    previous_yaw: Option<f64>,
     scale_observable: bool,
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
@@ -345,6 +348,7 @@ impl Odometry {
             last_arc_length: None,
             after_standstill: false,
             after_flag: false,
+            previous_yaw: None,
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
@@ -1006,6 +1010,7 @@ impl Odometry {
         self.last_arc_length = None;
         self.after_standstill = false;
         self.after_flag = false;
+        self.previous_yaw = None;
         self.frame = 0;
         self.inlier_ratio_average = None;
         self.inlier_share_peak = None;
@@ -1613,6 +1618,27 @@ impl Odometry {
                 self.learn_soft_sigma();
             }
         }
+        // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
+        // after the state above, so that it changes the report only.
+        let moving = !standstill
+            && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
+            && diag.covariance.len() == diag.free.len().pow(2);
+        let yaw = momo_core::so3_log(&self.estimator.motion(&params).rotation).z;
+        if moving && let Some(previous_yaw) = self.previous_yaw {
+            self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
+        }
+        self.previous_yaw = moving.then_some(yaw);
+        // Too small a support for the static scene (`trust.min_inlier_share`), report only.
+        let share = self.config.trust.min_inlier_share;
+        if moving
+            && diag.status == FrameStatus::Estimated
+            && diag.matches > 0
+            && (diag.inliers as f64) < share * diag.matches as f64
+        {
+            diag.status = FrameStatus::Weak;
+            diag.constraint = Constraint::Weak;
+            diag.reason = Some(Reason::LowSupport);
+        }
         let motion = self.estimator.motion(&params);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -2100,6 +2126,28 @@ impl Odometry {
         }
     }
 
+    /// The yaw's change against the previous frame's reported motion
+    /// (`trust.yaw_change` `J`, `trust.yaw_change_weight` `w`): where the change
+    /// `|Δω_z| = |ω_z − ω_z,prev|` exceeds `J` (a car's yaw rate changes smoothly, so one of
+    /// the two frames is wrong), the frame is
+    /// flagged `weak` / `yaw_change` if it was `estimated`, and its reported covariance adds
+    /// the previous frame's motion `p` as an alternative, `Σ + w d dᵀ`, `d = p − a`. Called
+    /// after the frame's state is updated: the next frame's prior, the after-flag widening
+    /// and the separation's history see the frame as it was, so no pose changes.
+    fn flag_yaw_change(&self, change: f64, params: &[f64], diag: &mut FrameDiagnostics) {
+        let t = &self.config.trust;
+        if t.yaw_change <= 0.0 || !(change.abs() > t.yaw_change) {
+            return;
+        }
+        if diag.status == FrameStatus::Estimated {
+            diag.status = FrameStatus::Weak;
+            diag.constraint = Constraint::Weak;
+            diag.reason = Some(Reason::YawChange);
+        }
+        let free = diag.free.clone();
+        Self::widen_by_alternatives_at(&[&self.previous], t.yaw_change_weight, &free, params, diag);
+    }
+
     /// Widens the reported covariance by alternatives to the estimate (each all of the model's
     /// parameters) with weight `w` ([`trust::alternatives_covariance`] over the free
     /// parameters): `Σ + w Σ_j d_j d_jᵀ`; the sigmas grow by the same variances. Returns
@@ -2110,22 +2158,34 @@ impl Odometry {
         sol: &FrameSolution,
         diag: &mut FrameDiagnostics,
     ) -> bool {
-        let k = sol.free.len();
+        Self::widen_by_alternatives_at(alternatives, w, &sol.free, &sol.params, diag)
+    }
+
+    /// [`widen_by_alternatives`](Self::widen_by_alternatives) about the estimate `params` with
+    /// the free parameters `free`.
+    fn widen_by_alternatives_at(
+        alternatives: &[&[f64]],
+        w: f64,
+        free_params: &[usize],
+        params: &[f64],
+        diag: &mut FrameDiagnostics,
+    ) -> bool {
+        let k = free_params.len();
         if w <= 0.0 || k == 0 || diag.covariance.len() != k * k {
             return false;
         }
         let free = |p: &[f64]| -> Vec<f64> {
-            sol.free
+            free_params
                 .iter()
                 .map(|&i| p.get(i).copied().unwrap_or(f64::NAN))
                 .collect()
         };
-        let a = free(&sol.params);
+        let a = free(params);
         let alternatives: Vec<Vec<f64>> = alternatives.iter().map(|p| free(p)).collect();
         let alternatives: Vec<&[f64]> = alternatives.iter().map(Vec::as_slice).collect();
         let cov = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
         let wide = trust::alternatives_covariance(&cov, &a, &alternatives, w);
-        for (j, &i) in sol.free.iter().enumerate() {
+        for (j, &i) in free_params.iter().enumerate() {
             let added = (wide[(j, j)] - cov[(j, j)]).max(0.0);
             diag.param_sigmas[i] = (diag.param_sigmas[i].powi(2) + added).sqrt();
         }

@@ -1121,3 +1121,151 @@ fn the_report_pool_changes_only_the_reported_covariance() {
     let e = config_error("[trust]\nreport_pool_frames = 3\nreport_pool_trim = 3\n");
     assert!(e.contains("trust.report_pool_trim"), "{e}");
 }
+
+/// `trust.yaw_change` (report only): with the rule on, every pose is the one without it; a
+/// frame whose status or reason changed is one that was `estimated`, is now `weak` /
+/// `yaw_change`, and whose reported yaw `ω_z` differs from the previous frame's by more than
+/// `J`; every frame left `estimated` after a moving estimated frame changes its yaw by at most
+/// `J`; a flagged frame's covariance adds the previous motion (`Σ + d dᵀ`: its yaw sigma is at
+/// least as wide, its NEES no larger), and with `yaw_change_weight = 0` only the status
+/// changes. Out-of-range values are rejected at their line.
+#[test]
+fn yaw_change_flags_a_jump_of_the_yaw_and_changes_no_pose() {
+    use momo_core::so3_log;
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 120;
+    traffic.seed = 3;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |on: bool, j: f64, weight: f64| {
+        let mut config = Config::default();
+        if on {
+            config.trust.yaw_change = j;
+            config.trust.yaw_change_weight = weight;
+        }
+        process_all(seq, config)
+    };
+    let yaw = |p: &Pose<f64>| so3_log(&p.rotation).z;
+    let off = run(false, 0.0, 1.0);
+    // The threshold: the median change of the yaw between consecutive estimated frames of the
+    // run without the rule, so that about half of them cross it.
+    let mut changes: Vec<f64> = off
+        .windows(2)
+        .filter(|w| w.iter().all(|(_, d)| d.status == FrameStatus::Estimated))
+        .map(|w| (yaw(&w[1].0) - yaw(&w[0].0)).abs())
+        .collect();
+    changes.sort_by(f64::total_cmp);
+    let j = changes[changes.len() / 2];
+    let on = run(true, j, 1.0);
+    let status_only = run(true, j, 0.0);
+    let sigma_z = |d: &momo_vo::FrameDiagnostics| d.param_sigmas[2];
+    let (mut flagged, mut quiet) = (0, 0);
+    for k in 0..off.len() {
+        let (a, b, c) = (&off[k], &on[k], &status_only[k]);
+        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
+        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
+        assert_eq!(a.0.rotation, c.0.rotation, "frame {k}");
+        assert_eq!(
+            (b.1.status, b.1.reason),
+            (c.1.status, c.1.reason),
+            "frame {k}"
+        );
+        let previous_moving = k > 0
+            && matches!(
+                off[k - 1].1.status,
+                FrameStatus::Estimated | FrameStatus::Weak
+            )
+            && matches!(a.1.status, FrameStatus::Estimated | FrameStatus::Weak);
+        let change = if previous_moving {
+            (yaw(&a.0) - yaw(&off[k - 1].0)).abs()
+        } else {
+            0.0
+        };
+        if (a.1.status, a.1.reason) != (b.1.status, b.1.reason) {
+            assert_eq!(a.1.status, FrameStatus::Estimated, "frame {k}");
+            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
+            assert_eq!(b.1.constraint, Constraint::Weak, "frame {k}");
+            assert_eq!(b.1.reason, Some(Reason::YawChange), "frame {k}");
+            assert!(change > j, "frame {k}: flagged at a change of {change}");
+            assert!(sigma_z(&b.1) >= sigma_z(&a.1), "frame {k}");
+            assert_eq!(
+                a.1.covariance, c.1.covariance,
+                "frame {k}: weight 0 widened"
+            );
+            flagged += 1;
+        } else if previous_moving && a.1.status == FrameStatus::Estimated {
+            assert!(
+                change <= j,
+                "frame {k}: a change of {change} left estimated"
+            );
+            assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
+            quiet += 1;
+        }
+    }
+    eprintln!("threshold {j}: flagged {flagged}, left estimated {quiet}");
+    assert!(flagged >= 1, "no frame flagged");
+    assert!(quiet >= 10, "{quiet} frames left estimated");
+    for (toml, key) in [
+        ("[trust]\nyaw_change = -0.01\n", "trust.yaw_change"),
+        (
+            "[trust]\nyaw_change_weight = 1.5\n",
+            "trust.yaw_change_weight",
+        ),
+    ] {
+        let e = config_error(toml);
+        assert!(e.contains(key), "{e}");
+    }
+}
+
+/// `trust.min_inlier_share` (report only): with the share set to the median inlier share of
+/// the estimated frames, exactly the `estimated` frames below it become `weak` /
+/// `low_support`; every pose and covariance is the one without the rule; 0 leaves every frame
+/// as it was, and a share outside `[0, 1]` is rejected at its line.
+#[test]
+fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 80;
+    traffic.seed = 3;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |share: f64| {
+        let mut config = Config::default();
+        config.trust.min_inlier_share = share;
+        process_all(seq, config)
+    };
+    let off = run(0.0);
+    let share_of = |d: &momo_vo::FrameDiagnostics| d.inliers as f64 / d.matches.max(1) as f64;
+    let mut shares: Vec<f64> = off
+        .iter()
+        .filter(|(_, d)| d.status == FrameStatus::Estimated)
+        .map(|(_, d)| share_of(d))
+        .collect();
+    shares.sort_by(f64::total_cmp);
+    let median = shares[shares.len() / 2];
+    let on = run(median);
+    let (mut flagged, mut kept) = (0, 0);
+    for (k, (a, b)) in off.iter().zip(&on).enumerate() {
+        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
+        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
+        assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
+        let below = a.1.status == FrameStatus::Estimated
+            && a.1.matches > 0
+            && (a.1.inliers as f64) < median * a.1.matches as f64;
+        if below {
+            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
+            assert_eq!(b.1.reason, Some(Reason::LowSupport), "frame {k}");
+            flagged += 1;
+        } else {
+            assert_eq!(
+                (a.1.status, a.1.reason),
+                (b.1.status, b.1.reason),
+                "frame {k}"
+            );
+            kept += usize::from(a.1.status == FrameStatus::Estimated);
+        }
+    }
+    eprintln!("flagged {flagged}, kept estimated {kept}");
+    assert!(flagged >= 5 && kept >= 5, "flagged {flagged}, kept {kept}");
+    let e = config_error("[trust]\nmin_inlier_share = 1.5\n");
+    assert!(e.contains("trust.min_inlier_share"), "{e}");
+}
