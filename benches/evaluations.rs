@@ -16,8 +16,8 @@
 //! `MOMO_EVAL_SOLVER` adds lines to the driver's `[solver]` section (`;` separates them), e.g.
 //! `MOMO_EVAL_SOLVER='max_step_extrapolation = 2.0'`.
 //!
-//! `MOMO_EVAL_CONFIG=FILE` runs the processes with a configuration file's solver, `[odometry]`
-//! and `[trust]` sections (a preset such as `configs/realtime.toml`; sections it omits keep
+//! `MOMO_EVAL_CONFIG=FILE` runs the processes with a configuration file's solver, `[odometry]`,
+//! `[trust]` and refinement loss (a preset such as `configs/realtime.toml`; sections it omits keep
 //! their defaults) and the case's model, metric and loss; `MOMO_EVAL_SOLVER` is then ignored.
 //!
 //! For instruction counts (repeatable on a loaded machine), run under callgrind with few
@@ -112,7 +112,8 @@ fn evaluations(c: &mut Criterion) {
             solver_extra.replace(';', "\n")
         );
         let arc = truth().translation.norm();
-        // The preset's text, parsed for every driver (outside the timed part).
+        // The preset's text, parsed for every driver (outside the timed part: the solver and
+        // losses are trait objects, so a parsed `Config` is not `Clone`).
         let preset = std::env::var("MOMO_EVAL_CONFIG").ok().map(|path| {
             let text = std::fs::read_to_string(&path).expect("MOMO_EVAL_CONFIG readable");
             (path, text)

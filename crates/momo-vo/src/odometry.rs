@@ -1620,26 +1620,22 @@ impl Odometry {
         }
         // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
         // after the state above, so that it changes the report only.
+        let motion = self.estimator.motion(&params);
         let moving = !standstill
             && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
             && diag.covariance.len() == diag.free.len().pow(2);
-        let yaw = momo_core::so3_log(&self.estimator.motion(&params).rotation).z;
-        if moving && let Some(previous_yaw) = self.previous_yaw {
-            self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
+        if self.config.trust.yaw_change > 0.0 {
+            let yaw = momo_core::so3_log(&motion.rotation).z;
+            if moving && let Some(previous_yaw) = self.previous_yaw {
+                self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
+            }
+            self.previous_yaw = moving.then_some(yaw);
         }
-        self.previous_yaw = moving.then_some(yaw);
         // Too small a support for the static scene (`trust.min_inlier_share`), report only.
         let share = self.config.trust.min_inlier_share;
-        if moving
-            && diag.status == FrameStatus::Estimated
-            && diag.matches > 0
-            && (diag.inliers as f64) < share * diag.matches as f64
-        {
-            diag.status = FrameStatus::Weak;
-            diag.constraint = Constraint::Weak;
-            diag.reason = Some(Reason::LowSupport);
+        if moving && diag.matches > 0 && (diag.inliers as f64) < share * diag.matches as f64 {
+            flag_weak_report_only(&mut diag, Reason::LowSupport);
         }
-        let motion = self.estimator.motion(&params);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
@@ -2139,11 +2135,7 @@ impl Odometry {
         if t.yaw_change <= 0.0 || !(change.abs() > t.yaw_change) {
             return;
         }
-        if diag.status == FrameStatus::Estimated {
-            diag.status = FrameStatus::Weak;
-            diag.constraint = Constraint::Weak;
-            diag.reason = Some(Reason::YawChange);
-        }
+        flag_weak_report_only(diag, Reason::YawChange);
         let free = diag.free.clone();
         Self::widen_by_alternatives_at(&[&self.previous], t.yaw_change_weight, &free, params, diag);
     }
@@ -3132,6 +3124,16 @@ fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<V
             .flat_map(|(_, c)| c.iter().copied())
             .collect(),
     )
+}
+
+/// A report-only flag (`trust.yaw_change`, `trust.min_inlier_share`): an `estimated` frame
+/// becomes `weak` for `reason`; a frame flagged already keeps its status and reason.
+fn flag_weak_report_only(diag: &mut FrameDiagnostics, reason: Reason) {
+    if diag.status == FrameStatus::Estimated {
+        diag.status = FrameStatus::Weak;
+        diag.constraint = Constraint::Weak;
+        diag.reason = Some(reason);
+    }
 }
 
 #[cfg(test)]
