@@ -1914,28 +1914,54 @@ fn road_prediction(
     if score_x >= h.min_matches {
         return None;
     }
-    let sup_p = support(previous);
-    if count(&sup_p) < 12 {
-        return None;
-    }
-    let p = ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false)?;
     // Its tilt against the least of the recent frames' (`tilt_weak_road_frames`, as for a
     // motion without road): a prediction that carries the previous frame's tilt error is no
     // continuation of the run.
-    if tracker.yaw_jumps(h, yaw_of(ctx, &p.params))
-        || tracker.tilt_jumps_given_road(h, tilt_of(&p.params), true)
-    {
-        return None;
+    let continues = |params: &[f64]| {
+        !tracker.yaw_jumps(h, yaw_of(ctx, params))
+            && !tracker.tilt_jumps_given_road(h, tilt_of(params), true)
+    };
+    let sup_p = support(previous);
+    let p = (count(&sup_p) >= 12)
+        .then(|| ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false))
+        .flatten()
+        .filter(|p| continues(&p.params))
+        .map(|p| {
+            let sup = support(&p.params);
+            (p, sup)
+        });
+    if !h.predict_by_road_alternatives {
+        let c = p?;
+        let score_p = road_score(ctx, h, obs, &c);
+        let best_other = alternatives
+            .iter()
+            .map(|alt| road_score(ctx, h, obs, alt))
+            .fold(score_x, usize::max);
+        return (score_p >= h.min_matches
+            && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
+            .then_some(c);
     }
-    let sup = support(&p.params);
-    let c = (p, sup);
-    let score_p = road_score(ctx, h, obs, &c);
-    let best_other = alternatives
-        .iter()
-        .map(|alt| road_score(ctx, h, obs, alt))
-        .fold(score_x, usize::max);
-    (score_p >= h.min_matches && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
-        .then_some(c)
+    // `predict_by_road_alternatives`: `P` and the alternatives that continue the history
+    // (not `X` itself) compete by road; the others and `X` are what the best must beat.
+    let mut best_other = score_x;
+    let mut continuing: Vec<(usize, &Candidate)> = Vec::new();
+    let p_scored = p.as_ref().map(|c| (road_score(ctx, h, obs, c), c));
+    continuing.extend(p_scored);
+    for alt in alternatives {
+        if alt.0.params == x.0.params {
+            continue;
+        }
+        let s = road_score(ctx, h, obs, alt);
+        if continues(&alt.0.params) {
+            continuing.push((s, alt));
+        } else {
+            best_other = best_other.max(s);
+        }
+    }
+    let (score_c, _) = *continuing.iter().rev().max_by_key(|(s, _)| *s)?;
+    (score_c >= h.min_matches && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
+        .then(|| first_highest(continuing.into_iter()))
+        .flatten()
 }
 
 /// Whether a frame keeps the next frame's change-of-motion prior although the separation
