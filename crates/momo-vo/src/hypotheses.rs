@@ -370,8 +370,8 @@ pub struct HypothesesOptions {
     /// session, road40).
     pub predict_by_road_prior: bool,
     /// With [`HypothesesOptions::predict_by_road`]: the alternatives formed this frame that
-    /// continue the history as `P` must (yaw within
-    /// [`HypothesesOptions::yaw_history_margin`] of `r`, tilt not jumping) are candidates
+    /// continue the history (yaw within `J'` of `r`, the margin by which `X` jumped; tilt not
+    /// jumping) are candidates
     /// beside `P`: of `P` and those (`C`, `P` first), the one with the highest road score
     /// `s_C` replaces `X` where `s_C >= min_matches` and `s_C > ρ · max(s_X, s_alt)` over the
     /// alternatives that do not continue the history. Where the road rule fires because `X`
