@@ -3882,6 +3882,18 @@ mod tests {
         let c = predict(&on, &tracker, &car, std::slice::from_ref(&bus));
         assert_eq!(c.is_some(), s_p > s_bus);
         assert!(c.is_none_or(|c| c.0.params == p_on.0.params));
+        // The history 0.8 deg beside the static world's yaw: the static world's motion on
+        // every match lies beyond `J'` of it and does not continue; its road (more than the
+        // prediction's, which stays within the 1-deg margin) stops the replacement, and
+        // without it the prediction replaces the jump.
+        let mut shifted = HypothesisTracker::default();
+        shifted.record_yaw(&on, w + 0.8 * deg);
+        let car2 = f.turned(1.4 * deg, &none);
+        let c = predict(&on, &shifted, &car2, &[]).expect("P continues within the margin");
+        let s_c = road_score(&ctx, &on, obs, &c);
+        assert!(s_all > s_c, "{s_all} {s_c}");
+        assert!(predict(&on, &shifted, &car2, std::slice::from_ref(&all)).is_none());
+        assert!(predict(&off, &shifted, &car2, std::slice::from_ref(&all)).is_none());
         // A ratio the best continuing road does not reach against a non-continuing one with
         // road: nothing; and a roadless continuing alternative alone does not beat `P`.
         let demanding = HypothesesOptions {
