@@ -369,6 +369,17 @@ pub struct HypothesesOptions {
     /// one with competing motions, as the other rules' replacements are; twenty-sixth
     /// session, road40).
     pub predict_by_road_prior: bool,
+    /// With [`HypothesesOptions::predict_by_road`]: the alternatives formed this frame that
+    /// continue the history (yaw within `J'` of `r`, the margin by which `X` jumped; tilt not
+    /// jumping) are candidates
+    /// beside `P`: of `P` and those (`C`, `P` first), the one with the highest road score
+    /// `s_C` replaces `X` where `s_C >= min_matches` and `s_C > ρ · max(s_X, s_alt)` over the
+    /// alternatives that do not continue the history. Where the road rule fires because `X`
+    /// jumped without road, the right motion is sometimes formed as an alternative (the
+    /// static world's own fit, more road than the prediction) while `P` loses to it; the
+    /// same road evidence then picks it. Off (`false`: `P` only, against every alternative;
+    /// twenty-seventh session, tail41).
+    pub predict_by_road_alternatives: bool,
 }
 
 /// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
@@ -420,6 +431,7 @@ impl Default for HypothesesOptions {
             predict_by_road: 0.0,
             predict_by_road_ratio: 1.0,
             predict_by_road_prior: false,
+            predict_by_road_alternatives: false,
         }
     }
 }

@@ -1914,28 +1914,58 @@ fn road_prediction(
     if score_x >= h.min_matches {
         return None;
     }
-    let sup_p = support(previous);
-    if count(&sup_p) < 12 {
-        return None;
-    }
-    let p = ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false)?;
     // Its tilt against the least of the recent frames' (`tilt_weak_road_frames`, as for a
     // motion without road): a prediction that carries the previous frame's tilt error is no
     // continuation of the run.
-    if tracker.yaw_jumps(h, yaw_of(ctx, &p.params))
-        || tracker.tilt_jumps_given_road(h, tilt_of(&p.params), true)
-    {
-        return None;
+    let continues = |params: &[f64]| {
+        !tracker.yaw_jumps(h, yaw_of(ctx, params))
+            && !tracker.tilt_jumps_given_road(h, tilt_of(params), true)
+    };
+    let sup_p = support(previous);
+    let p = (count(&sup_p) >= 12)
+        .then(|| ctx.solve(&subset(obs, &sup_p), previous, ctx.loss, false))
+        .flatten()
+        .filter(|p| continues(&p.params))
+        .map(|p| {
+            let sup = support(&p.params);
+            (p, sup)
+        });
+    if !h.predict_by_road_alternatives {
+        let c = p?;
+        let score_p = road_score(ctx, h, obs, &c);
+        let best_other = alternatives
+            .iter()
+            .map(|alt| road_score(ctx, h, obs, alt))
+            .fold(score_x, usize::max);
+        return (score_p >= h.min_matches
+            && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
+            .then_some(c);
     }
-    let sup = support(&p.params);
-    let c = (p, sup);
-    let score_p = road_score(ctx, h, obs, &c);
-    let best_other = alternatives
-        .iter()
-        .map(|alt| road_score(ctx, h, obs, alt))
-        .fold(score_x, usize::max);
-    (score_p >= h.min_matches && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
-        .then_some(c)
+    // `predict_by_road_alternatives`: `P` and the alternatives that continue the history
+    // within `J'` (not `X` itself) compete by road; the others and `X` are what the best
+    // must beat.
+    let mut best_other = score_x;
+    let mut continuing: Vec<(usize, &Candidate)> = Vec::new();
+    let p_scored = p.as_ref().map(|c| (road_score(ctx, h, obs, c), c));
+    continuing.extend(p_scored);
+    for alt in alternatives {
+        if alt.0.params == x.0.params {
+            continue;
+        }
+        let s = road_score(ctx, h, obs, alt);
+        // Within `J'` of `r` (not the wider margin `P` may use): an alternative that moved
+        // as far as `X` did is no continuation (a bus 0.8 deg off with its road-coloured
+        // lower part would be).
+        if (yaw_of(ctx, &alt.0.params) - r).abs() <= h.predict_by_road && continues(&alt.0.params) {
+            continuing.push((s, alt));
+        } else {
+            best_other = best_other.max(s);
+        }
+    }
+    let (score_c, _) = *continuing.iter().rev().max_by_key(|(s, _)| *s)?;
+    (score_c >= h.min_matches && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
+        .then(|| first_highest(continuing.into_iter()))
+        .flatten()
 }
 
 /// Whether a frame keeps the next frame's change-of-motion prior although the separation
@@ -3766,6 +3796,126 @@ mod tests {
                     .contains("predict_by_road_ratio")
             );
         }
+    }
+
+    /// `predict_by_road_alternatives`: an alternative that continues the history (here the
+    /// static world's motion on every match) competes with the prediction by road: off, its
+    /// road stops the prediction; on, the continuing candidate with the most road replaces
+    /// the roadless jump. An alternative that does not continue the history (3 deg off the
+    /// reference) is what the best continuing one must beat, and `X` itself is no candidate.
+    #[test]
+    fn predict_by_road_alternatives_let_a_continuing_alternative_win_by_road() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let w = yaw_of(&ctx, &sol.params);
+        let deg = 1.0_f64.to_radians();
+        let support = |p: &[f64]| -> Vec<Vec<bool>> {
+            epipolar_angles(rig, &estimator.motion(p), obs)
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        };
+        let previous = f.turned(0.1 * deg, &none).0.params;
+        let truth = (sol.clone(), support(&sol.params));
+        let s_truth = road_score(&ctx, &HypothesesOptions::default(), obs, &truth);
+        let off = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            predict_by_road: 0.5 * deg,
+            min_matches: s_truth / 2,
+            ..HypothesesOptions::default()
+        };
+        let on = HypothesesOptions {
+            predict_by_road_alternatives: true,
+            ..off.clone()
+        };
+        let car = f.turned(-0.8 * deg, &none);
+        let mut tracker = HypothesisTracker::default();
+        let predict =
+            |h: &HypothesesOptions, t: &HypothesisTracker, x: &Candidate, alts: &[Candidate]| {
+                road_prediction(&ctx, h, t, obs, x, alts, &previous, &support)
+            };
+        assert!(
+            predict(&on, &tracker, &car, &[]).is_none(),
+            "nothing recorded"
+        );
+        tracker.record_yaw(&on, w);
+        // Without alternatives the option changes nothing: `P` replaces the jump.
+        let p_off = predict(&off, &tracker, &car, &[]).expect("P");
+        let p_on = predict(&on, &tracker, &car, &[]).expect("P");
+        assert_eq!(p_off.0.params, p_on.0.params);
+        let s_p = road_score(&ctx, &on, obs, &p_on);
+        // The static world's motion on every match: it continues the history and has at
+        // least the prediction's road. Off it stops `P`; on, the one with more road replaces
+        // `X` (`P` first of equal ones).
+        let all = (sol.clone(), f.support(true));
+        let s_all = road_score(&ctx, &on, obs, &all);
+        assert!(s_all >= s_p && s_all >= on.min_matches, "{s_all} {s_p}");
+        assert!(predict(&off, &tracker, &car, std::slice::from_ref(&all)).is_none());
+        let c = predict(&on, &tracker, &car, std::slice::from_ref(&all)).expect("replaced");
+        let want = if s_all > s_p {
+            &all.0.params
+        } else {
+            &p_on.0.params
+        };
+        assert_eq!(&c.0.params, want);
+        // `X` among the alternatives is no candidate of its own.
+        let c = predict(&on, &tracker, &car, &[car.clone(), all.clone()]).expect("replaced");
+        assert_eq!(&c.0.params, want);
+        // An alternative 3 deg off the reference does not continue: the best continuing
+        // candidate must beat its road.
+        let far = f.turned(3.0 * deg, &f.support(true));
+        assert!(tracker.yaw_jumps(&on, yaw_of(&ctx, &far.0.params)));
+        let s_far = road_score(&ctx, &on, obs, &far);
+        assert_eq!(
+            predict(&on, &tracker, &car, &[far.clone(), all.clone()]).is_some(),
+            s_all.max(s_p) > s_far
+        );
+        // An alternative 0.8 deg off the reference (within the 1-deg margin, beyond `J'`)
+        // moved as far as `X` did: no candidate, only what the best must beat.
+        let bus = f.turned(0.8 * deg, &f.support(true));
+        assert!(!tracker.yaw_jumps(&on, yaw_of(&ctx, &bus.0.params)));
+        let s_bus = road_score(&ctx, &on, obs, &bus);
+        let c = predict(&on, &tracker, &car, std::slice::from_ref(&bus));
+        assert_eq!(c.is_some(), s_p > s_bus);
+        assert!(c.is_none_or(|c| c.0.params == p_on.0.params));
+        // The history 0.8 deg beside the static world's yaw: the static world's motion on
+        // every match lies beyond `J'` of it and does not continue; its road (more than the
+        // prediction's, which stays within the 1-deg margin) stops the replacement, and
+        // without it the prediction replaces the jump.
+        let mut shifted = HypothesisTracker::default();
+        shifted.record_yaw(&on, w + 0.8 * deg);
+        let car2 = f.turned(1.4 * deg, &none);
+        let c = predict(&on, &shifted, &car2, &[]).expect("P continues within the margin");
+        let s_c = road_score(&ctx, &on, obs, &c);
+        assert!(s_all > s_c, "{s_all} {s_c}");
+        assert!(predict(&on, &shifted, &car2, std::slice::from_ref(&all)).is_none());
+        assert!(predict(&off, &shifted, &car2, std::slice::from_ref(&all)).is_none());
+        // A ratio the best continuing road does not reach against a non-continuing one with
+        // road: nothing; and a roadless continuing alternative alone does not beat `P`.
+        let demanding = HypothesesOptions {
+            predict_by_road_ratio: 1e6,
+            ..on.clone()
+        };
+        let weak_far = (far.0.clone(), support(&far.0.params));
+        let s_weak_far = road_score(&ctx, &on, obs, &weak_far);
+        assert_eq!(
+            predict(&demanding, &tracker, &car, &[weak_far, all.clone()]).is_some(),
+            s_weak_far == 0
+        );
+        let roadless = f.turned(0.2 * deg, &none);
+        let c = predict(&on, &tracker, &car, std::slice::from_ref(&roadless)).expect("P");
+        assert_eq!(c.0.params, p_on.0.params);
+        // Parses; off by default.
+        assert!(!HypothesesOptions::default().predict_by_road_alternatives);
+        let o: HypothesesOptions =
+            toml::from_str("predict_by_road = 0.00873\npredict_by_road_alternatives = true")
+                .expect("parse");
+        assert!(o.predict_by_road_alternatives && o.validate().is_ok());
+        eprintln!("s_p {s_p} s_all {s_all} s_far {s_far} s_bus {s_bus} s_weak_far {s_weak_far}");
     }
 
     /// `predict_by_road_prior`: a frame whose motion the road prediction replaced keeps the
