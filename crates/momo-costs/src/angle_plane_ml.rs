@@ -415,15 +415,22 @@ pub struct AnglePlaneMlRig {
 
 impl AnglePlaneMlRig {
     /// The metric for a rig: `f_ref` the mean of its cameras' focal lengths
-    /// ([`Camera::focal_length`]); `None` for a rig without cameras or a non-positive mean.
+    /// ([`Camera::focal_length`]; exactly their common one where they share it); `None` for a
+    /// rig without cameras or a non-positive mean.
     pub fn for_rig(rig: &momo_core::Rig) -> Option<Self> {
         let f: Vec<f64> = rig
             .cameras()
             .iter()
             .map(|c| c.model.focal_length())
             .collect();
-        let mean = f.iter().sum::<f64>() / f.len() as f64;
-        (!f.is_empty() && mean.is_finite() && mean > 0.0).then_some(Self {
+        let first = *f.first()?;
+        // Cameras of one focal length: that one, exactly (a sum of three or more can round).
+        let mean = if f.iter().all(|v| *v == first) {
+            first
+        } else {
+            f.iter().sum::<f64>() / f.len() as f64
+        };
+        (mean.is_finite() && mean > 0.0).then_some(Self {
             reference_focal: mean,
         })
     }
