@@ -162,11 +162,11 @@ impl ResidualMetric for AnglePlaneMl {
     type Prepared<T: Scalar> = AnglePlaneMlPrepared<T>;
 
     fn prepare<T: Scalar>(&self, camera: &Camera, motion: &Pose<T>) -> AnglePlaneMlPrepared<T> {
-        AnglePlaneMlPrepared {
-            e: essential(motion),
-            camera: *camera,
-            s_ref: std::f64::consts::SQRT_2 / camera.focal_length(),
-        }
+        prepare_with(
+            camera,
+            motion,
+            std::f64::consts::SQRT_2 / camera.focal_length(),
+        )
     }
 
     #[inline]
@@ -234,53 +234,90 @@ impl ResidualMetric for AnglePlaneMl {
         out: &mut [f64],
         dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
     ) {
-        let (f0, f1) = (&obs.f0, &obs.f1);
-        let s_ref = std::f64::consts::SQRT_2 / camera.focal_length();
-        let n = [
-            e[0] * f0.x + e[1] * f0.y + e[2] * f0.z,
-            e[3] * f0.x + e[4] * f0.y + e[5] * f0.z,
-            e[6] * f0.x + e[7] * f0.y + e[8] * f0.z,
-        ];
-        let d = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] + NORM_EPS_SQ).sqrt();
-        let inv_d = d.recip();
-        let r = (n[0] * f1.x + n[1] * f1.y + n[2] * f1.z) * inv_d;
-        let g1 = Vector3::new(n[0] * inv_d, n[1] * inv_d, n[2] * inv_d);
-        let rd = r * inv_d;
-        let mut g0 = Vector3::zeros();
-        for i in 0..3 {
-            let etn = e[i] * n[0] + e[3 + i] * n[1] + e[6 + i] * n[2];
-            let etf1 = e[i] * f1.x + e[3 + i] * f1.y + e[6 + i] * f1.z;
-            g0[i] = (etf1 - etn * rd) * inv_d;
+        kernel_with(
+            std::f64::consts::SQRT_2 / camera.focal_length(),
+            camera,
+            e,
+            obs,
+            constants,
+            out,
+            dr_de,
+        );
+    }
+}
+
+/// [`AnglePlaneMl`]'s fused kernel with the reference `s_ref` given (the camera's own for
+/// [`AnglePlaneMl`], the rig's for [`AnglePlaneMlRig`]); see [`AnglePlaneMl::kernel`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn kernel_with(
+    s_ref: f64,
+    camera: &Camera,
+    e: &[f64],
+    obs: &Observation,
+    constants: &[f64],
+    out: &mut [f64],
+    dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
+) {
+    let (f0, f1) = (&obs.f0, &obs.f1);
+    let n = [
+        e[0] * f0.x + e[1] * f0.y + e[2] * f0.z,
+        e[3] * f0.x + e[4] * f0.y + e[5] * f0.z,
+        e[6] * f0.x + e[7] * f0.y + e[8] * f0.z,
+    ];
+    let d = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] + NORM_EPS_SQ).sqrt();
+    let inv_d = d.recip();
+    let r = (n[0] * f1.x + n[1] * f1.y + n[2] * f1.z) * inv_d;
+    let g1 = Vector3::new(n[0] * inv_d, n[1] * inv_d, n[2] * inv_d);
+    let rd = r * inv_d;
+    let mut g0 = Vector3::zeros();
+    for i in 0..3 {
+        let etn = e[i] * n[0] + e[3 + i] * n[1] + e[6 + i] * n[2];
+        let etf1 = e[i] * f1.x + e[3 + i] * f1.y + e[6 + i] * f1.z;
+        g0[i] = (etf1 - etn * rd) * inv_d;
+    }
+    let (s1, s0) = if constants.len() == <AnglePlaneMl as ResidualMetric>::MATCH_CONSTANTS {
+        load(constants)
+    } else {
+        (
+            bearing_covariance(camera, f1),
+            bearing_covariance(camera, f0),
+        )
+    };
+    let var = quad(&s1, &g1) + quad(&s0, &g0);
+    let floor = 1e-6 * s_ref * s_ref;
+    let w = (var + floor).sqrt().recip();
+    out[0] = r * s_ref * w;
+    // Derivatives (plain f64; rounding differs from the automatic path's, the value not).
+    let g = (f1 - g1 * r) * inv_d;
+    let s1g1 = s1 * g1;
+    let p = (s1g1 - g1 * g1.dot(&s1g1)) * (2.0 * inv_d);
+    let m = s0 * g0;
+    let em = Matrix3::new(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]) * m;
+    let (ug1, ug) = (em.dot(&g1), em.dot(&g));
+    let c = -(g * ug1 + (em - g1 * ug1) * rd + g1 * ug) * inv_d;
+    let k = 0.5 * r * w * w * w;
+    let row = &mut dr_de[0];
+    for a in 0..3 {
+        let along_f0 = s_ref * (w * g[a] - k * (p[a] + 2.0 * c[a]));
+        let along_m = -s_ref * 2.0 * k * g[a];
+        for b in 0..3 {
+            row[3 * a + b] = along_f0 * f0[b] + along_m * m[b];
         }
-        let (s1, s0) = if constants.len() == Self::MATCH_CONSTANTS {
-            load(constants)
-        } else {
-            (
-                bearing_covariance(camera, f1),
-                bearing_covariance(camera, f0),
-            )
-        };
-        let var = quad(&s1, &g1) + quad(&s0, &g0);
-        let floor = 1e-6 * s_ref * s_ref;
-        let w = (var + floor).sqrt().recip();
-        out[0] = r * s_ref * w;
-        // Derivatives (plain f64; rounding differs from the automatic path's, the value not).
-        let g = (f1 - g1 * r) * inv_d;
-        let s1g1 = s1 * g1;
-        let p = (s1g1 - g1 * g1.dot(&s1g1)) * (2.0 * inv_d);
-        let m = s0 * g0;
-        let em = Matrix3::new(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]) * m;
-        let (ug1, ug) = (em.dot(&g1), em.dot(&g));
-        let c = -(g * ug1 + (em - g1 * ug1) * rd + g1 * ug) * inv_d;
-        let k = 0.5 * r * w * w * w;
-        let row = &mut dr_de[0];
-        for a in 0..3 {
-            let along_f0 = s_ref * (w * g[a] - k * (p[a] + 2.0 * c[a]));
-            let along_m = -s_ref * 2.0 * k * g[a];
-            for b in 0..3 {
-                row[3 * a + b] = along_f0 * f0[b] + along_m * m[b];
-            }
-        }
+    }
+}
+
+/// [`AnglePlaneMlPrepared`] of a camera and motion with the reference `s_ref`.
+#[inline]
+fn prepare_with<T: Scalar>(
+    camera: &Camera,
+    motion: &Pose<T>,
+    s_ref: f64,
+) -> AnglePlaneMlPrepared<T> {
+    AnglePlaneMlPrepared {
+        e: essential(motion),
+        camera: *camera,
+        s_ref,
     }
 }
 
@@ -336,3 +373,135 @@ fn tr_mul<T: Scalar>(m: &Matrix3<T>, v: &Vector3<T>) -> Vector3<T> {
 }
 
 momo_core::register_metric!(AnglePlaneMl, "angle_plane_ml");
+
+/// [`AnglePlaneMl`] with one reference `s_ref = √2 / f_ref` for every camera of a rig, `f_ref`
+/// the rig's mean focal length (`reference_focal`, pixels; the final stage sets it from the
+/// rig, `odometry.final_fit.ml_rig_reference`), instead of each camera's own `√2 / fₚₓ`.
+///
+/// `r / sqrt(∇₁rᵀ Σ₁ ∇₁r + ∇₀rᵀ Σ₀ ∇₀r)` has the pixel noise's standard deviation on every
+/// camera (the type doc of [`AnglePlaneMl`]); the factor `s_ref` only converts it to radians.
+/// With each camera's own `s_ref`, a rig whose cameras have different focal lengths weighs
+/// camera `j`'s matches by `(f_ref / f_j)²` relative to the maximum-likelihood weights, e.g.
+/// the double sphere cameras (fx = 300) of `wide_angle_surround` 3.5 times the unified ones
+/// (fx = 560). One `s_ref` for the rig keeps the least-squares problem the ML one. On a single
+/// camera, or a rig whose cameras share one focal length, `f_ref` is that focal length and the
+/// residuals are [`AnglePlaneMl`]'s, bit for bit.
+///
+/// ```
+/// use momo_core::{Camera, Observation, Pose, ResidualMetric, Pinhole};
+/// use momo_costs::{AnglePlaneMl, AnglePlaneMlRig};
+/// use nalgebra::{Matrix3, Vector2, Vector3};
+///
+/// let cam = Camera::Pinhole(Pinhole { fx: 500.0, fy: 500.0, cx: 320.0, cy: 240.0, width: 640.0, height: 480.0 });
+/// let c = Pose::new(Matrix3::identity(), Vector3::new(0.1, 0.0, 1.0));
+/// let f0 = Vector3::new(0.01, 0.0, 1.0).normalize();
+/// let f1 = Vector3::new(0.011, 0.001, 1.0).normalize();
+/// let obs = Observation { px0: Vector2::new(325.0, 240.0), px1: Vector2::new(325.5, 240.5), f0, f1 };
+/// let (mut a, mut b, mut h) = ([0.0], [0.0], [0.0]);
+/// AnglePlaneMl.residuals(&AnglePlaneMl.prepare(&cam, &c), &obs, &mut a);
+/// let same = AnglePlaneMlRig { reference_focal: 500.0 };
+/// same.residuals(&same.prepare(&cam, &c), &obs, &mut b);
+/// let double = AnglePlaneMlRig { reference_focal: 1000.0 };
+/// double.residuals(&double.prepare(&cam, &c), &obs, &mut h);
+/// assert_eq!(a[0], b[0]);
+/// // Half the reference's s_ref: half the residual (to the variance floor, 1e-6 · s_ref²).
+/// assert!((h[0] / a[0] - 0.5).abs() < 1e-5);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnglePlaneMlRig {
+    /// `f_ref`, pixels: the rig's mean focal length ([`AnglePlaneMlRig::for_rig`]).
+    pub reference_focal: f64,
+}
+
+impl AnglePlaneMlRig {
+    /// The metric for a rig: `f_ref` the mean of its cameras' focal lengths
+    /// ([`Camera::focal_length`]; exactly their common one where they share it); `None` for a
+    /// rig without cameras or a non-positive mean.
+    pub fn for_rig(rig: &momo_core::Rig) -> Option<Self> {
+        let f: Vec<f64> = rig
+            .cameras()
+            .iter()
+            .map(|c| c.model.focal_length())
+            .collect();
+        let first = *f.first()?;
+        // Cameras of one focal length: that one, exactly (a sum of three or more can round).
+        let mean = if f.iter().all(|v| *v == first) {
+            first
+        } else {
+            f.iter().sum::<f64>() / f.len() as f64
+        };
+        (mean.is_finite() && mean > 0.0).then_some(Self {
+            reference_focal: mean,
+        })
+    }
+
+    fn s_ref(&self) -> f64 {
+        std::f64::consts::SQRT_2 / self.reference_focal
+    }
+}
+
+impl ResidualMetric for AnglePlaneMlRig {
+    const RESIDUALS: usize = 1;
+
+    type Prepared<T: Scalar> = AnglePlaneMlPrepared<T>;
+
+    fn supports(&self, camera: &Camera) -> Result<(), String> {
+        AnglePlaneMl.supports(camera)
+    }
+
+    fn prepare<T: Scalar>(&self, camera: &Camera, motion: &Pose<T>) -> AnglePlaneMlPrepared<T> {
+        prepare_with(camera, motion, self.s_ref())
+    }
+
+    #[inline]
+    fn residuals<T: Scalar>(
+        &self,
+        prep: &AnglePlaneMlPrepared<T>,
+        obs: &Observation,
+        out: &mut [T],
+    ) {
+        AnglePlaneMl.residuals(prep, obs, out);
+    }
+
+    /// [`AnglePlaneMl`]'s: the bearing covariances do not depend on `s_ref`.
+    const MATCH_CONSTANTS: usize = <AnglePlaneMl as ResidualMetric>::MATCH_CONSTANTS;
+
+    fn match_constants(&self, camera: &Camera, obs: &Observation, out: &mut [f64]) {
+        AnglePlaneMl.match_constants(camera, obs, out);
+    }
+
+    #[inline]
+    fn residuals_with<T: Scalar>(
+        &self,
+        prep: &AnglePlaneMlPrepared<T>,
+        obs: &Observation,
+        constants: &[f64],
+        out: &mut [T],
+    ) {
+        AnglePlaneMl.residuals_with(prep, obs, constants, out);
+    }
+
+    const KERNEL_INPUTS: usize = 9;
+    const KERNEL_INPUTS_KIND: momo_core::KernelInputsKind = momo_core::KernelInputsKind::Essential;
+
+    fn kernel_inputs<T: Scalar>(&self, camera: &Camera, motion: &Pose<T>, out: &mut [T]) {
+        AnglePlaneMl.kernel_inputs(camera, motion, out);
+    }
+
+    /// [`AnglePlaneMl::kernel`] with the rig's `s_ref`.
+    #[inline(always)]
+    fn kernel(
+        &self,
+        camera: &Camera,
+        e: &[f64],
+        obs: &Observation,
+        constants: &[f64],
+        out: &mut [f64],
+        dr_de: &mut [[f64; MAX_KERNEL_INPUTS]],
+    ) {
+        kernel_with(self.s_ref(), camera, e, obs, constants, out, dr_de);
+    }
+}
+
+momo_core::register_metric!(AnglePlaneMlRig, "angle_plane_ml_rig");

@@ -11,6 +11,7 @@
 //! | --- | --- | --- | --- | --- |
 //! | `angle_plane` | [`AnglePlane`]: `f1ᵀ E f0 / ‖E f0‖` | 1 | sine of an angle | any central camera |
 //! | `angle_plane_ml` | [`AnglePlaneMl`]: `angle_plane` over its pixel-noise std (ML weighting) | 1 | radians at the image centre | any central camera |
+//! | `angle_plane_ml_rig` | [`AnglePlaneMlRig`]: `angle_plane_ml` with one reference focal length for the rig | 1 | radians at the centre of a camera of the rig's mean focal length | any central camera |
 //! | `geo_line` | [`GeoLine`]: pixel distances to both epipolar lines | 2 | pixels | pinhole |
 //! | `sampson` | [`Sampson`]: first-order geometric error | 1 | pixels | any (tangent planes off pinhole) |
 //!
@@ -61,7 +62,8 @@ mod sampson;
 
 pub use angle_plane::AnglePlane;
 pub use angle_plane_ml::{
-    AnglePlaneMl, AnglePlaneMlPrepared, bearing_covariance, bearing_covariance_by_differences,
+    AnglePlaneMl, AnglePlaneMlPrepared, AnglePlaneMlRig, bearing_covariance,
+    bearing_covariance_by_differences,
 };
 pub use geo_line::{GeoLine, fundamental};
 pub use loss::{Cauchy, Huber, Tukey};

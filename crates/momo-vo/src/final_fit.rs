@@ -215,6 +215,17 @@ pub struct FinalFitOptions {
     /// twenty-first session). The static scenes along KITTI are never flagged. Default true
     /// since the twenty-first session (false before).
     pub learnt_never_after_flag: bool,
+    /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
+    /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as
+    /// `angle_plane_ml_rig`), instead of each camera's own. `angle_plane_ml` converts each
+    /// camera's noise-normalised residual to radians with that camera's `√2 / fₚₓ`, so on a rig
+    /// whose cameras differ in focal length the refit weighs camera `j` by `(f_ref / f_j)²`
+    /// against the maximum-likelihood weights (`wide_angle_surround`: the double sphere
+    /// cameras, fx = 300, 3.5 times the unified ones, fx = 560). Identical on a single camera
+    /// and on a rig whose cameras share a focal length (every other scenario and KITTI), bit for
+    /// bit. Acts only where the stage's metric resolves to `angle_plane_ml`. Default false
+    /// (docs/RESULTS.md §9, twenty-seventh session, static41).
+    pub ml_rig_reference: bool,
 }
 
 impl Default for FinalFitOptions {
@@ -251,6 +262,7 @@ impl Default for FinalFitOptions {
             learnt_cauchy_max: 6.0,
             learnt_least_squares_share: 0.0,
             learnt_never_after_flag: true,
+            ml_rig_reference: false,
         }
     }
 }
@@ -285,6 +297,25 @@ impl FinalFitOptions {
             .map_err(|e| {
                 format!("odometry.final_fit: the first stage's final-stage metric `{name}`: {e}")
             })
+    }
+
+    /// [`FinalFitOptions::resolved_metric_spec`] for a rig: with `ml_rig_reference`, a stage
+    /// metric that resolves to `angle_plane_ml` becomes
+    /// [`momo_costs::AnglePlaneMlRig::for_rig`] (the rig's mean focal length as its reference).
+    pub fn resolved_metric_spec_for_rig(
+        &self,
+        first: &dyn MetricSpec,
+        rig: &momo_core::Rig,
+    ) -> Result<Option<Box<dyn MetricSpec>>, String> {
+        let spec = self.resolved_metric_spec(first)?;
+        let name = self.metric.as_deref().or(first.final_stage_metric());
+        if !(self.ml_rig_reference && name == Some("angle_plane_ml")) {
+            return Ok(spec);
+        }
+        Ok(match momo_costs::AnglePlaneMlRig::for_rig(rig) {
+            Some(m) => Some(Box::new(m)),
+            None => spec,
+        })
     }
 
     /// Checks the options; the message names the first bad one.

@@ -291,7 +291,7 @@ impl Odometry {
         let final_estimator = match config
             .odometry
             .final_fit
-            .resolved_metric_spec(config.metric.as_ref())
+            .resolved_metric_spec_for_rig(config.metric.as_ref(), &rig)
         {
             Ok(Some(m)) => Some(config.model.build(m.as_ref())?),
             Ok(None) => None,

@@ -345,6 +345,12 @@ impl momo_core::Manifold for Straight {
 // Every built-in metric through the public one-line property-test macro (momo-testing).
 momo_testing::test_metric!(macro_angle_plane, AnglePlane);
 momo_testing::test_metric!(macro_angle_plane_ml, momo_costs::AnglePlaneMl);
+momo_testing::test_metric!(
+    macro_angle_plane_ml_rig,
+    momo_costs::AnglePlaneMlRig {
+        reference_focal: 400.0
+    }
+);
 momo_testing::test_metric!(macro_geo_line, FocalScaled(GeoLine), tol = 1e-5);
 momo_testing::test_metric!(macro_sampson, FocalScaled(Sampson), tol = 1e-5);
 
@@ -428,4 +434,126 @@ proptest! {
             prop_assert!((closed - diff).amax() <= 1e-6 * size, "{cam:?} at {px}: {closed} vs {diff}");
         }
     }
+}
+
+/// `AnglePlaneMlRig` (issue 14, twenty-seventh session): on two cameras of different focal
+/// lengths, its residual over the rig's `s_ref` is the residual over its pixel-noise standard
+/// deviation on both (the maximum-likelihood weighting across the rig), where `AnglePlaneMl`'s
+/// per-camera `s_ref` leaves the two at the same size in radians (weights off by the squared
+/// focal-length ratio, 4 here).
+#[test]
+fn angle_plane_ml_rig_weighs_each_camera_by_its_pixel_noise() {
+    use momo_core::Pinhole;
+    use momo_costs::{AnglePlaneMl, AnglePlaneMlRig};
+    let pinhole = |f: f64| {
+        Camera::Pinhole(Pinhole {
+            fx: f,
+            fy: f,
+            cx: 320.0,
+            cy: 240.0,
+            width: 640.0,
+            height: 480.0,
+        })
+    };
+    let (short, long) = (pinhole(300.0), pinhole(600.0));
+    let c = Pose::new(nalgebra::Matrix3::identity(), Vector3::new(0.1, 0.0, 1.0));
+    // The same match (bearings 1 mrad off the epipolar plane, near the optical axis) on both.
+    let f0 = Vector3::new(0.01, 0.0, 1.0).normalize();
+    let f1 = Vector3::new(0.011, 0.001, 1.0).normalize();
+    let obs = Observation {
+        px0: Vector2::new(323.0, 240.0),
+        px1: Vector2::new(323.3, 240.3),
+        f0,
+        f1,
+    };
+    let res = |m: &dyn Fn(&Camera, &mut [f64]), cam: &Camera| {
+        let mut out = [0.0];
+        m(cam, &mut out);
+        out[0]
+    };
+    let own = |cam: &Camera, out: &mut [f64]| {
+        AnglePlaneMl.residuals(&AnglePlaneMl.prepare(cam, &c), &obs, out)
+    };
+    let rig = AnglePlaneMlRig {
+        reference_focal: 450.0,
+    };
+    let shared = |cam: &Camera, out: &mut [f64]| rig.residuals(&rig.prepare(cam, &c), &obs, out);
+    // Pixel-noise units: the residual over its own camera's s_ref = √2 / f.
+    let s = |f: f64| std::f64::consts::SQRT_2 / f;
+    let (own_short, own_long) = (res(&own, &short), res(&own, &long));
+    let (px_short, px_long) = (own_short / s(300.0), own_long / s(600.0));
+    // The same residual in pixel units on the long lens is about twice the short lens's.
+    assert!(
+        (px_long / px_short - 2.0).abs() < 0.02,
+        "{px_short} {px_long}"
+    );
+    // AnglePlaneMl: about equal in radians, so the long lens is under-weighted by about 4.
+    assert!(
+        (own_long / own_short - 1.0).abs() < 0.01,
+        "{own_short} {own_long}"
+    );
+    // AnglePlaneMlRig: the pixel-unit residuals times one s_ref, on both cameras (to the
+    // variance floor's 1e-6 · s_ref², which differs between the two references).
+    let (rig_short, rig_long) = (res(&shared, &short), res(&shared, &long));
+    assert!(
+        (rig_short / (px_short * s(450.0)) - 1.0).abs() < 1e-5,
+        "{rig_short}"
+    );
+    assert!(
+        (rig_long / (px_long * s(450.0)) - 1.0).abs() < 1e-5,
+        "{rig_long}"
+    );
+}
+
+/// `AnglePlaneMlRig::for_rig`: the mean focal length of the rig's cameras, so on a rig whose
+/// cameras share one focal length (and on one camera) its residuals are `AnglePlaneMl`'s, bit
+/// for bit; on a rig of two focal lengths their mean.
+#[test]
+fn angle_plane_ml_rig_is_angle_plane_ml_on_a_rig_of_one_focal_length() {
+    use momo_core::{Pinhole, RigCamera};
+    use momo_costs::{AnglePlaneMl, AnglePlaneMlRig};
+    let rig = canned::fisheye_rig();
+    let metric = AnglePlaneMlRig::for_rig(&rig).expect("a rig with cameras");
+    assert_eq!(
+        metric.reference_focal,
+        rig.cameras()[0].model.focal_length()
+    );
+    let m = Pose::new(
+        so3_exp(&Vector3::new(0.01, -0.02, 0.03)),
+        Vector3::new(0.1, 0.02, 1.0),
+    );
+    let obs = canned::synthetic_observations(&rig, &m, 20, 5, 7);
+    for (cam, matches) in rig.cameras().iter().zip(&obs.per_camera) {
+        let cm = camera_motion(&m, &cam.t_vehicle_camera);
+        let (a, b) = (
+            AnglePlaneMl.prepare(&cam.model, &cm),
+            metric.prepare(&cam.model, &cm),
+        );
+        for o in matches {
+            let (mut ra, mut rb) = ([0.0], [0.0]);
+            AnglePlaneMl.residuals(&a, o, &mut ra);
+            metric.residuals(&b, o, &mut rb);
+            assert_eq!(ra[0].to_bits(), rb[0].to_bits());
+        }
+    }
+    let pinhole = |f: f64| {
+        Camera::Pinhole(Pinhole {
+            fx: f,
+            fy: f,
+            cx: 320.0,
+            cy: 240.0,
+            width: 640.0,
+            height: 480.0,
+        })
+    };
+    let cam = |name: &str, f: f64| RigCamera {
+        name: name.into(),
+        model: pinhole(f),
+        t_vehicle_camera: Pose::identity(),
+    };
+    let mixed = Rig::new(vec![cam("a", 300.0), cam("b", 600.0)]).expect("a valid rig");
+    assert_eq!(
+        AnglePlaneMlRig::for_rig(&mixed).map(|m| m.reference_focal),
+        Some(450.0)
+    );
 }
