@@ -223,8 +223,8 @@ pub struct FinalFitOptions {
     /// against the maximum-likelihood weights (`wide_angle_surround`: the double sphere
     /// cameras, fx = 300, 3.5 times the unified ones, fx = 560). Identical on a single camera
     /// and on a rig whose cameras share a focal length (every other scenario and KITTI), bit for
-    /// bit. Acts only where the stage's metric resolves to `angle_plane_ml`. Default false
-    /// (docs/RESULTS.md §9, twenty-seventh session, static41).
+    /// bit. Acts only where the stage's metric resolves to `angle_plane_ml`. Default true
+    /// since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session, static41).
     pub ml_rig_reference: bool,
 }
 
@@ -262,7 +262,9 @@ impl Default for FinalFitOptions {
             learnt_cauchy_max: 6.0,
             learnt_least_squares_share: 0.0,
             learnt_never_after_flag: true,
-            ml_rig_reference: false,
+            // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
+            // static41 and lead): bit-identical wherever the cameras share a focal length.
+            ml_rig_reference: true,
         }
     }
 }
