@@ -1172,6 +1172,10 @@ impl Odometry {
             }
             prior.soft_center.clone_from(&self.soft_center);
             prior.soft_inv_scale.clone_from(&self.soft_inv_scale);
+            prior.soft_cauchy = soft_cauchy_scales(
+                &self.config.odometry,
+                self.estimator.prior_residuals(&init).len(),
+            );
             if let Some(i) = arc_index {
                 arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
             }
@@ -2864,6 +2868,27 @@ impl Trajectory {
     pub fn vehicle(&self) -> Pose<f64> {
         self.vehicle
     }
+}
+
+/// The Cauchy scales of the soft prior's `n` residuals ([`momo_core::MotionPrior::soft_cauchy`]):
+/// `odometry.soft_prior_cauchy` on those of `odometry.soft_prior_cauchy_residuals` (all where
+/// empty), 0 (least squares) on the others; empty where the option is off or the model has no
+/// soft prior.
+fn soft_cauchy_scales(opts: &crate::config::OdometryOptions, n: usize) -> Vec<f64> {
+    let b = opts.soft_prior_cauchy;
+    if !(b > 0.0 && b.is_finite()) || n == 0 {
+        return Vec::new();
+    }
+    let only = &opts.soft_prior_cauchy_residuals;
+    (0..n)
+        .map(|r| {
+            if only.is_empty() || only.contains(&r) {
+                b
+            } else {
+                0.0
+            }
+        })
+        .collect()
 }
 
 /// The soft prior's factors `k_r` (units of the model's sigma) widened for a step of arc

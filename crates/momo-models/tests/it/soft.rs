@@ -46,6 +46,7 @@ fn gradient_matches_the_cost_with_priors() {
         rotation_inv_sigma: 300.0,
         soft_center: vec![0.5, -0.3],
         soft_inv_scale: vec![0.5, 0.25],
+        soft_cauchy: Vec::new(),
         scale: 0.0,
     };
     let start = [0.001, 0.002, 0.025, 0.03, 0.001, 1.2];
