@@ -905,14 +905,6 @@ impl Config {
                 ),
             ));
         }
-        let cauchy = self.odometry.soft_prior_cauchy;
-        if !(cauchy.is_finite() && cauchy >= 0.0) {
-            return Err(self.error_at(
-                &name,
-                &["odometry.soft_prior_cauchy"],
-                format!("odometry.soft_prior_cauchy must be finite and >= 0, got {cauchy}"),
-            ));
-        }
         if let Some(bad) = self
             .odometry
             .soft_prior_consistency_residuals
@@ -1079,6 +1071,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_student_nu must be finite and at least 0, got {}",
                     o.soft_prior_student_nu
+                ),
+            );
+        }
+        if !(o.soft_prior_cauchy.is_finite() && o.soft_prior_cauchy >= 0.0) {
+            bad(
+                &["odometry.soft_prior_cauchy"],
+                format!(
+                    "odometry.soft_prior_cauchy must be finite and at least 0, got {}",
+                    o.soft_prior_cauchy
                 ),
             );
         }

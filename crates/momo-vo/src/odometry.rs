@@ -3625,4 +3625,40 @@ mod tests {
             learnt(&off)
         );
     }
+
+    /// `soft_prior_cauchy`: the frame's motion prior carries the Cauchy scale on the listed
+    /// soft-prior residuals only (the climb by default), none where the option is off; an
+    /// index the model does not have and a negative scale are configuration errors.
+    #[test]
+    fn the_cauchy_soft_prior_reaches_the_frame_prior_only_when_asked() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 6,
+            seed: 1,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let sim = simulate(&cfg).expect("the rig traffic scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+            }
+            vo.motion_prior.soft_cauchy.clone()
+        };
+        assert!(run("").is_empty());
+        assert_eq!(run("[odometry]\nsoft_prior_cauchy = 3.0\n"), vec![0.0, 3.0]);
+        assert_eq!(
+            run("[odometry]\nsoft_prior_cauchy = 2.0\nsoft_prior_cauchy_residuals = []\n"),
+            vec![2.0, 2.0]
+        );
+        let bad = "[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_residuals = [2]\n";
+        let config = crate::Config::from_toml_str(bad, "t.toml").expect("parses");
+        assert!(config.validate_for_rig(&seq.rig).is_err());
+        assert!(
+            crate::Config::from_toml_str("[odometry]\nsoft_prior_cauchy = -1.0\n", "t.toml")
+                .is_err()
+        );
+    }
 }
