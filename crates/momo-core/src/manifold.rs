@@ -60,6 +60,13 @@ pub struct MotionPrior {
     /// of travel), a prior at the model's `σ` would bias the rotation. Like `soft_center`, it
     /// applies on every frame.
     pub soft_inv_scale: Vec<f64>,
+    /// Per prior residual of a soft manifold, the scale `b_i` of a Cauchy loss on its scaled
+    /// residual `z_i = k_i (q_i − c_i)` (units of its standard deviation; 0 or empty: least
+    /// squares): the term becomes `½ s² b_i² ln(1 + z_i² / b_i²)`, quadratic for `|z_i| ≪ b_i`
+    /// and with a bounded pull far out, so that a slip the data back strongly (the KITTI 08
+    /// ground truth's chord climbing by 0.4-1.5 rad at a level body) wins against the prior
+    /// while a small one is held as before (`odometry.soft_prior_cauchy`).
+    pub soft_cauchy: Vec<f64>,
     /// The unit `s` of the prior terms, the data's noise in the metric's units (0: the loss
     /// scale). The odometry sets it to the first stage's loss scale, so that a second stage
     /// with a wider loss (`[refine_loss]`, Tukey 0.0075) weighs the priors as the first does:
@@ -83,6 +90,7 @@ impl MotionPrior {
         self.inv_sigma.iter().any(|w| *w != 0.0)
             || self.rotation_inv_sigma != 0.0
             || self.soft_center.iter().any(|c| *c != 0.0)
+            || self.soft_cauchy.iter().any(|b| *b > 0.0)
     }
 
     /// Whether the per-parameter part applies to a model with `n_params` parameters.

@@ -21,7 +21,9 @@ use wide::f64x4;
 /// plus, in units `s` of the data's noise ([`MotionPrior::scale`], by default the loss scale),
 /// the soft manifold's prior residuals `½ Σ_k (s · κ_k · (q_k(p) − c_k))²`
 /// ([`Manifold::prior_residuals`], centre `c` from [`MotionPrior::soft_center`], factors `κ`
-/// from [`MotionPrior::soft_inv_scale`], 1 by default) and an
+/// from [`MotionPrior::soft_inv_scale`], 1 by default; a residual with a Cauchy scale `b_k`
+/// from [`MotionPrior::soft_cauchy`] costs `½ s² b_k² ln(1 + (κ_k (q_k − c_k))² / b_k²)`
+/// instead) and an
 /// optional [`MotionPrior`] on the change of motion, per parameter
 /// `½ Σ_i (s · (p_i − c_i) / σ_i)²` and on the rotation vector
 /// `½ s² ρ(|(log R(p) − w_c) / σ_w|²)` (Cauchy `ρ`, the only robustified prior term).
@@ -106,6 +108,18 @@ const LANES: usize = 4;
 fn rotation_prior_rho(z: f64) -> (f64, f64) {
     let c2 = ROTATION_PRIOR_CAUCHY * ROTATION_PRIOR_CAUCHY;
     (c2 * (z / c2).ln_1p(), 1.0 / (1.0 + z / c2))
+}
+
+/// A soft-prior residual's loss `ρ(z)` and weight `ρ'(z²)` at its scaled value `z`
+/// ([`MotionPrior::soft_cauchy`]): `z²` and 1 for least squares (`b ≤ 0`), the Cauchy
+/// `b² ln(1 + z² / b²)` and `1 / (1 + z² / b²)` otherwise.
+fn soft_prior_rho(z: f64, b: f64) -> (f64, f64) {
+    if b > 0.0 {
+        let b2 = b * b;
+        (b2 * (z * z / b2).ln_1p(), 1.0 / (1.0 + z * z / b2))
+    } else {
+        (z * z, 1.0)
+    }
 }
 
 impl<'a, R: ResidualMetric> Problem<'a, R> {
@@ -286,6 +300,19 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
         k
     }
 
+    /// The Cauchy scales of the soft manifold's prior residuals
+    /// ([`MotionPrior::soft_cauchy`]; zeros, least squares, unless the motion prior has them at
+    /// the right length).
+    fn soft_cauchy(&self) -> [f64; MAX_PRIOR_RESIDUALS] {
+        let mut b = [0.0; MAX_PRIOR_RESIDUALS];
+        if let Some(mp) = self.motion_prior
+            && mp.soft_cauchy.len() == self.n_prior
+        {
+            b[..self.n_prior].copy_from_slice(&mp.soft_cauchy);
+        }
+        b
+    }
+
     /// The prior terms' cost `½ Σ (s q)²` at the full parameters `params` (plain `f64`).
     pub fn prior_cost(&self, params: &[f64]) -> f64 {
         if !self.has_prior() {
@@ -297,12 +324,23 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             let mut q = [0.0; MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals_of(params, &mut q[..self.n_prior]);
-            let (c, k) = (self.soft_center(), self.soft_inv_scale());
+            let (c, k, b) = (
+                self.soft_center(),
+                self.soft_inv_scale(),
+                self.soft_cauchy(),
+            );
             cost += q[..self.n_prior]
                 .iter()
                 .zip(c)
                 .zip(k)
-                .map(|((v, c), k)| 0.5 * (s * k * (v - c)) * (s * k * (v - c)))
+                .zip(b)
+                .map(|(((v, c), k), b)| {
+                    if b > 0.0 {
+                        0.5 * s * s * soft_prior_rho(k * (v - c), b).0
+                    } else {
+                        0.5 * (s * k * (v - c)) * (s * k * (v - c))
+                    }
+                })
                 .sum::<f64>();
         }
         if let Some(mp) = self.motion_prior {
@@ -344,14 +382,30 @@ impl<'a, R: ResidualMetric> Problem<'a, R> {
             let mut q = [DualSVec64::<N>::from_re(0.0); MAX_PRIOR_RESIDUALS];
             self.model
                 .prior_residuals_of(&p[..self.np], &mut q[..self.n_prior]);
-            let k = self.soft_inv_scale();
-            for ((v, c), k) in q[..self.n_prior].iter().zip(self.soft_center()).zip(k) {
+            let (k, b) = (self.soft_inv_scale(), self.soft_cauchy());
+            for (((v, c), k), b) in q[..self.n_prior]
+                .iter()
+                .zip(self.soft_center())
+                .zip(k)
+                .zip(b)
+            {
                 let r = s * k * (v.re - c);
-                cost += 0.5 * r * r;
-                if let Some(e) = &v.eps.0 {
-                    let j = e * (s * k);
-                    *h += j * j.transpose();
-                    *g += j * r;
+                if b > 0.0 {
+                    // Iteratively reweighted: the Cauchy weight ρ'(z²) on the Gauss-Newton terms.
+                    let (rho, weight) = soft_prior_rho(k * (v.re - c), b);
+                    cost += 0.5 * s * s * rho;
+                    if let Some(e) = &v.eps.0 {
+                        let j = e * (s * k);
+                        *h += j * j.transpose() * weight;
+                        *g += j * (r * weight);
+                    }
+                } else {
+                    cost += 0.5 * r * r;
+                    if let Some(e) = &v.eps.0 {
+                        let j = e * (s * k);
+                        *h += j * j.transpose();
+                        *g += j * r;
+                    }
                 }
             }
         }

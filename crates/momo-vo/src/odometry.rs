@@ -1172,6 +1172,10 @@ impl Odometry {
             }
             prior.soft_center.clone_from(&self.soft_center);
             prior.soft_inv_scale.clone_from(&self.soft_inv_scale);
+            prior.soft_cauchy = soft_cauchy_scales(
+                &self.config.odometry,
+                self.estimator.prior_residuals(&init).len(),
+            );
             if let Some(i) = arc_index {
                 arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
             }
@@ -2866,6 +2870,27 @@ impl Trajectory {
     }
 }
 
+/// The Cauchy scales of the soft prior's `n` residuals ([`momo_core::MotionPrior::soft_cauchy`]):
+/// `odometry.soft_prior_cauchy` on those of `odometry.soft_prior_cauchy_residuals` (all where
+/// empty), 0 (least squares) on the others; empty where the option is off or the model has no
+/// soft prior.
+fn soft_cauchy_scales(opts: &crate::config::OdometryOptions, n: usize) -> Vec<f64> {
+    let b = opts.soft_prior_cauchy;
+    if !(b > 0.0 && b.is_finite()) || n == 0 {
+        return Vec::new();
+    }
+    let only = &opts.soft_prior_cauchy_residuals;
+    (0..n)
+        .map(|r| {
+            if only.is_empty() || only.contains(&r) {
+                b
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
 /// The soft prior's factors `k_r` (units of the model's sigma) widened for a step of arc
 /// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
 /// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
@@ -3598,6 +3623,42 @@ mod tests {
             "{} <= {}",
             learnt(&on),
             learnt(&off)
+        );
+    }
+
+    /// `soft_prior_cauchy`: the frame's motion prior carries the Cauchy scale on the listed
+    /// soft-prior residuals only (the climb by default), none where the option is off; an
+    /// index the model does not have and a negative scale are configuration errors.
+    #[test]
+    fn the_cauchy_soft_prior_reaches_the_frame_prior_only_when_asked() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 6,
+            seed: 1,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let sim = simulate(&cfg).expect("the rig traffic scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+            }
+            vo.motion_prior.soft_cauchy.clone()
+        };
+        assert!(run("").is_empty());
+        assert_eq!(run("[odometry]\nsoft_prior_cauchy = 3.0\n"), vec![0.0, 3.0]);
+        assert_eq!(
+            run("[odometry]\nsoft_prior_cauchy = 2.0\nsoft_prior_cauchy_residuals = []\n"),
+            vec![2.0, 2.0]
+        );
+        let bad = "[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_residuals = [2]\n";
+        let config = crate::Config::from_toml_str(bad, "t.toml").expect("parses");
+        assert!(config.validate_for_rig(&seq.rig).is_err());
+        assert!(
+            crate::Config::from_toml_str("[odometry]\nsoft_prior_cauchy = -1.0\n", "t.toml")
+                .is_err()
         );
     }
 }

@@ -52,11 +52,13 @@ proptest! {
         rx in -0.3..0.3f64, ry in -0.3..0.3f64, rz in -0.3..0.3f64,
         heading in -0.3..0.3f64, climb in -0.3..0.3f64, l in 0.1..3.0f64,
         sigma in 0.001..0.1f64, dist in prop_oneof![Just(0.0), 0.001..0.05f64],
+        climb_dist in prop_oneof![Just(0.0), 0.001..0.1f64],
     ) {
         let m = SoftSingleTrack {
             side_slip_sigma: sigma,
             climb_sigma: 2.0 * sigma,
             slip_distance_sigma: dist,
+            climb_distance_sigma: climb_dist,
         };
         assert_ok(&m, &[rx, ry, rz, heading, climb, l])?;
         assert_ok(&m, &[0.0, 0.0, 0.0, heading, climb, l])?;

@@ -37,6 +37,7 @@ fn gradient_matches_the_cost_with_priors() {
         side_slip_sigma: 0.004,
         climb_sigma: 0.006,
         slip_distance_sigma: 0.005,
+        climb_distance_sigma: 0.0,
     };
     let loss = Cauchy::new(0.001);
     let prior = MotionPrior {
@@ -46,6 +47,7 @@ fn gradient_matches_the_cost_with_priors() {
         rotation_inv_sigma: 300.0,
         soft_center: vec![0.5, -0.3],
         soft_inv_scale: vec![0.5, 0.25],
+        soft_cauchy: Vec::new(),
         scale: 0.0,
     };
     let start = [0.001, 0.002, 0.025, 0.03, 0.001, 1.2];
@@ -194,4 +196,99 @@ fn the_slip_distance_sigma_frees_short_steps() {
     assert_eq!(residual(&with_distance, 0.0), 0.0);
     // Reversing is symmetric.
     assert!((residual(&with_distance, -0.3) - residual(&with_distance, 0.3)).abs() < 1e-15);
+}
+
+/// `climb_distance_sigma`: only the vertical slip's standard deviation grows as `σ_v / s` on
+/// short steps (the side slip keeps its angle-only prior, or its own `slip_distance_sigma`);
+/// at 0 the residuals are exactly the angle-only ones.
+#[test]
+fn the_climb_distance_sigma_frees_the_climb_of_short_steps_only() {
+    let angle_only = SoftSingleTrack::default();
+    let climb_only = SoftSingleTrack {
+        climb_distance_sigma: 0.02,
+        ..SoftSingleTrack::default()
+    };
+    let both = SoftSingleTrack {
+        slip_distance_sigma: 0.01,
+        ..climb_only
+    };
+    let (slip, climb) = (0.01, 0.5);
+    let residuals = |m: &SoftSingleTrack, s: f64| {
+        let mut q = [0.0; 2];
+        m.prior_residuals(&[0.0, 0.0, 0.04, 0.02 + slip, climb, s], &mut q);
+        q
+    };
+    for s in [0.05, 0.3, 1.0, 3.0] {
+        let a = residuals(&angle_only, s);
+        let c = residuals(&climb_only, s);
+        let b = residuals(&both, s);
+        assert_eq!(c[0], a[0], "the side slip keeps its prior at s = {s}");
+        let expected = climb / (0.01f64.powi(2) + (0.02 / s).powi(2)).sqrt();
+        assert!(
+            (c[1] - expected).abs() < 1e-12 * expected,
+            "{} vs {expected}",
+            c[1]
+        );
+        let side = slip / (0.01f64.powi(2) + (0.01 / s).powi(2)).sqrt();
+        assert!((b[0] - side).abs() < 1e-12 * side && b[1] == c[1]);
+    }
+    // KITTI 08's slow start: a 0.5 rad climb at 0.3 m is under a fifth of its angle-only sigmas.
+    assert!(residuals(&climb_only, 0.3)[1] < 0.2 * residuals(&angle_only, 0.3)[1]);
+    assert_eq!(residuals(&climb_only, 0.0)[1], 0.0);
+}
+
+/// `MotionPrior::soft_cauchy`: a soft-prior residual with a Cauchy scale `b` adds
+/// `½ s² b² ln(1 + z² / b²)` (`z` its scaled residual) instead of `½ s² z²`, its linearisation
+/// agrees with the cost, and a zero scale is the least-squares prior exactly.
+#[test]
+fn a_cauchy_soft_prior_bounds_the_pull_of_a_large_climb() {
+    let rig = canned::pinhole_rig();
+    let model = SoftSingleTrack::default();
+    // A step climbing by 0.5 rad at a level body: the climb residual is 50 sigmas.
+    let truth = [0.0, 0.0, 0.02, 0.01, 0.5, 0.3];
+    let obs = canned::synthetic_observations(&rig, &Se3.motion(&truth), 60, 0, 3);
+    let loss = Cauchy::new(0.001);
+    let quadratic = MotionPrior {
+        scale: 0.001,
+        ..MotionPrior::rotation([0.0, 0.0, 0.02], 0.002)
+    };
+    let zeros = MotionPrior {
+        soft_cauchy: vec![0.0, 0.0],
+        ..quadratic.clone()
+    };
+    let robust = MotionPrior {
+        soft_cauchy: vec![0.0, 3.0],
+        ..quadratic.clone()
+    };
+    let base = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &truth)
+        .unwrap()
+        .with_fixed(&[false, false, false, false, false, true]);
+    let (pq, pz, pr) = (
+        base.clone().with_motion_prior(Some(&quadratic)),
+        base.clone().with_motion_prior(Some(&zeros)),
+        base.clone().with_motion_prior(Some(&robust)),
+    );
+    let x = pq.free_params();
+    assert_eq!(pz.prior_cost(&truth), pq.prior_cost(&truth));
+    assert_eq!(pz.cost(&x), pq.cost(&x));
+    let mut q = [0.0; 2];
+    model.prior_residuals(&truth, &mut q);
+    let (zs, zc) = (q[0], q[1]);
+    assert!(zc > 40.0);
+    let s2 = 0.001f64 * 0.001;
+    let expected = 0.5 * s2 * zs * zs + 0.5 * s2 * 9.0 * (zc * zc / 9.0).ln_1p();
+    let rotation = pq.prior_cost(&truth) - 0.5 * s2 * (zs * zs + zc * zc);
+    let added = pr.prior_cost(&truth) - rotation;
+    assert!(
+        (added - expected).abs() <= 1e-9 * expected,
+        "{added} vs {expected}"
+    );
+    assert!(pr.prior_cost(&truth) < 0.05 * pq.prior_cost(&truth));
+    // Away from the data's minimum, the linearisation agrees with the Cauchy prior's cost.
+    let start = [0.001, -0.002, 0.025, 0.015, 0.45, 0.3];
+    let off = Problem::new(&model, &AnglePlane, &loss, &rig, &obs, &start)
+        .unwrap()
+        .with_fixed(&[false, false, false, false, false, true])
+        .with_motion_prior(Some(&robust));
+    assert_gradient_matches_cost(&off);
 }

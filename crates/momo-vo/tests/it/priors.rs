@@ -26,6 +26,7 @@ fn the_side_slip_prior_trades_data_against_the_model() {
             side_slip_sigma: sigma,
             climb_sigma: sigma,
             slip_distance_sigma: 0.0,
+            climb_distance_sigma: 0.0,
         }),
         ..Config::default()
     };
@@ -215,6 +216,7 @@ fn soft_prior_centring_learns_a_mount_offset() {
                 side_slip_sigma: sigma,
                 climb_sigma: sigma,
                 slip_distance_sigma: 0.0,
+                climb_distance_sigma: 0.0,
             }),
             ..Config::default()
         };
