@@ -542,7 +542,7 @@ impl TrustOptions {
             ("trust.support_change_yaw", self.support_change_yaw),
             ("trust.support_change_tilt", self.support_change_tilt),
         ] {
-            if !(v >= 0.0 && v <= std::f64::consts::PI) {
+            if !(0.0..=std::f64::consts::PI).contains(&v) {
                 out.push((
                     vec![key],
                     format!("{key} must be within 0..=pi radians, got {v}"),
