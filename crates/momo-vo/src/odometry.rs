@@ -187,6 +187,11 @@ pub struct Odometry {
     /// The yaw `ω_z` of the previous frame's reported motion where that frame was estimated
     /// while moving (`estimated` or `weak`), `None` otherwise (`trust.yaw_change`).
     previous_yaw: Option<f64>,
+    /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
+    /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
+    previous_omega: Option<nalgebra::Vector3<f64>>,
+    /// The previous frame fired `trust.support_change_share` (whatever its status).
+    support_change_fired: bool,
     scale_observable: bool,
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
@@ -349,6 +354,8 @@ impl Odometry {
             after_standstill: false,
             after_flag: false,
             previous_yaw: None,
+            previous_omega: None,
+            support_change_fired: false,
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
@@ -1011,6 +1018,8 @@ impl Odometry {
         self.after_standstill = false;
         self.after_flag = false;
         self.previous_yaw = None;
+        self.previous_omega = None;
+        self.support_change_fired = false;
         self.frame = 0;
         self.inlier_ratio_average = None;
         self.inlier_share_peak = None;
@@ -1628,6 +1637,20 @@ impl Odometry {
         let moving = !standstill
             && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
             && diag.covariance.len() == diag.free.len().pow(2);
+        // A small support with a jump of the yaw or the tilt (`trust.support_change_share`),
+        // report only; before `yaw_change`, so that a frame it flags keeps this reason.
+        if self.config.trust.support_change_share > 0.0 {
+            let omega = momo_core::so3_log(&motion.rotation);
+            let fired = moving
+                && self
+                    .previous_omega
+                    .is_some_and(|p| self.support_change_fires(omega - p, &diag));
+            if fired {
+                flag_weak_report_only(&mut diag, Reason::SupportChange);
+            }
+            self.support_change_fired = fired;
+            self.previous_omega = moving.then_some(omega);
+        }
         if self.config.trust.yaw_change > 0.0 {
             let yaw = momo_core::so3_log(&motion.rotation).z;
             if moving && let Some(previous_yaw) = self.previous_yaw {
@@ -2124,6 +2147,27 @@ impl Odometry {
         if Self::widen_by_alternatives(&alternatives, w, sol, diag) {
             diag.road_alternative = c.map(|c| c.params);
         }
+    }
+
+    /// Whether `trust.support_change_share` fires on a moving frame whose rotation vector
+    /// changed by `change` (`ω − ω_prev`, vehicle frame) from the previous moving frame's: its
+    /// inlier share `n_in / n` below `s` with `|Δω_z|` above `support_change_yaw` or
+    /// `|(Δω_x, Δω_y)|` above `support_change_tilt` (where set), or below
+    /// `support_change_hold_share` right after a frame where it fired.
+    fn support_change_fires(
+        &self,
+        change: nalgebra::Vector3<f64>,
+        diag: &FrameDiagnostics,
+    ) -> bool {
+        let t = &self.config.trust;
+        if diag.matches == 0 {
+            return false;
+        }
+        let share = diag.inliers as f64 / diag.matches as f64;
+        let jump = change.z.abs() > t.support_change_yaw
+            || (t.support_change_tilt > 0.0 && change.x.hypot(change.y) > t.support_change_tilt);
+        (share < t.support_change_share && jump)
+            || (self.support_change_fired && share < t.support_change_hold_share)
     }
 
     /// The yaw's change against the previous frame's reported motion
@@ -3151,7 +3195,8 @@ fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<V
     )
 }
 
-/// A report-only flag (`trust.yaw_change`, `trust.min_inlier_share`): an `estimated` frame
+/// A report-only flag (`trust.support_change_share`, `trust.yaw_change`,
+/// `trust.min_inlier_share`): an `estimated` frame
 /// becomes `weak` for `reason`; a frame flagged already keeps its status and reason.
 fn flag_weak_report_only(diag: &mut FrameDiagnostics, reason: Reason) {
     if diag.status == FrameStatus::Estimated {

@@ -331,6 +331,32 @@ pub struct TrustOptions {
     /// keeps 2-10 % of its 800 matches (15-80 inliers) against 30-40 % on ordinary frames.
     /// Report only, as [`TrustOptions::yaw_change`]: poses unchanged. 0: off (default).
     pub min_inlier_share: f64,
+    /// A lock-in: a moving frame whose reported motion keeps fewer than this share of its
+    /// matches as inliers *and* changes its yaw `ω_z` (`ω = log R`, vehicle frame) by more
+    /// than [`TrustOptions::support_change_yaw`] or its tilt `(ω_x, ω_y)` by more than
+    /// [`TrustOptions::support_change_tilt`] against the previous moving frame's, is flagged
+    /// `weak` / `support_change` where it was `estimated`; so is every following moving frame
+    /// whose share stays below [`TrustOptions::support_change_hold_share`] (the run stays
+    /// locked). Both cues together: a car's yaw rate changes smoothly (along KITTI 99.9 % of
+    /// the frame-to-frame changes are below 0.49 deg) but a run whose motion alternates (a
+    /// lower frame rate, the synthetic tests' steps) keeps an ordinary support, while a run
+    /// locked onto co-moving traffic (the surround rig at KITTI 08's slow start) keeps 2-10 %
+    /// of its matches against 30-40 % on ordinary frames and leaves the static scene with a
+    /// jump. Report only, as [`TrustOptions::yaw_change`] (applied before it): every pose and
+    /// covariance is the one without it. Not on the first frame, after a standstill or a frame
+    /// that held its motion. 0: off. Default 0.15 (twenty-seventh session, trust41,
+    /// docs/RESULTS.md).
+    pub support_change_share: f64,
+    /// The yaw change of [`TrustOptions::support_change_share`] (radians). Default 0.00873
+    /// (0.5 deg).
+    pub support_change_yaw: f64,
+    /// The tilt change `|(Δω_x, Δω_y)|` of [`TrustOptions::support_change_share`] (radians;
+    /// 0: the yaw alone). Default 0.0157 (0.9 deg).
+    pub support_change_tilt: f64,
+    /// After a frame flagged (or, not `estimated`, that would have been flagged) by
+    /// [`TrustOptions::support_change_share`], the next moving frame is flagged too while its
+    /// share of inliers is below this (0: no hold). Default 0.12.
+    pub support_change_hold_share: f64,
 }
 
 impl Default for TrustOptions {
@@ -375,6 +401,10 @@ impl Default for TrustOptions {
             yaw_change: 0.0,
             yaw_change_weight: 1.0,
             min_inlier_share: 0.0,
+            support_change_share: 0.15,
+            support_change_yaw: 0.00873,
+            support_change_tilt: 0.0157,
+            support_change_hold_share: 0.12,
         }
     }
 }
@@ -495,6 +525,28 @@ impl TrustOptions {
         ] {
             if !(0.0..=1.0).contains(&v) {
                 out.push((vec![key], format!("{key} must be within 0..=1, got {v}")));
+            }
+        }
+        for (key, v) in [
+            ("trust.support_change_share", self.support_change_share),
+            (
+                "trust.support_change_hold_share",
+                self.support_change_hold_share,
+            ),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                out.push((vec![key], format!("{key} must be within 0..=1, got {v}")));
+            }
+        }
+        for (key, v) in [
+            ("trust.support_change_yaw", self.support_change_yaw),
+            ("trust.support_change_tilt", self.support_change_tilt),
+        ] {
+            if !(0.0..=std::f64::consts::PI).contains(&v) {
+                out.push((
+                    vec![key],
+                    format!("{key} must be within 0..=pi radians, got {v}"),
+                ));
             }
         }
         if !(0.0..=1.0).contains(&self.min_inlier_share) {
@@ -622,6 +674,9 @@ pub enum Reason {
     YawChange,
     /// The inliers are fewer than `trust.min_inlier_share` of the matches (report only).
     LowSupport,
+    /// A small support with a jump of the yaw or the tilt, or a small support right after
+    /// such a frame (`trust.support_change_share`; report only).
+    SupportChange,
 }
 
 impl Reason {
@@ -640,6 +695,7 @@ impl Reason {
             Reason::RoadScoreDrop => "road_score_drop",
             Reason::YawChange => "yaw_change",
             Reason::LowSupport => "low_support",
+            Reason::SupportChange => "support_change",
         }
     }
 }

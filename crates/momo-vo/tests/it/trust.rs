@@ -1269,3 +1269,119 @@ fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
     let e = config_error("[trust]\nmin_inlier_share = 1.5\n");
     assert!(e.contains("trust.min_inlier_share"), "{e}");
 }
+
+/// `trust.support_change_share` (report only): the run with the rule is the run without it
+/// except that exactly the `estimated` frames where the rule fires — recomputed here from the
+/// run without it: a moving frame after a moving frame whose inlier share is below `s` and
+/// whose rotation vector `ω = log R` changed its yaw by more than `J` or its tilt by more than
+/// `T`, or whose share is below the hold share right after a frame where it fired — become
+/// `weak` / `support_change`; poses and covariances identical. The thresholds are the run's
+/// own medians (so that the rule fires on this mono sequence, whose default thresholds hardly
+/// fire). Out-of-range values are rejected at their line.
+#[test]
+fn support_change_flags_a_small_support_with_a_jump_and_changes_no_pose() {
+    use momo_core::so3_log;
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 120;
+    traffic.seed = 3;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |c: Option<(f64, f64, f64, f64)>| {
+        let mut config = Config::default();
+        let (s, j, t, h) = c.unwrap_or((0.0, 0.0, 0.0, 0.0));
+        config.trust.support_change_share = s;
+        config.trust.support_change_yaw = j;
+        config.trust.support_change_tilt = t;
+        config.trust.support_change_hold_share = h;
+        process_all(seq, config)
+    };
+    let off = run(None);
+    let share_of = |d: &momo_vo::FrameDiagnostics| d.inliers as f64 / d.matches.max(1) as f64;
+    let moving = |d: &momo_vo::FrameDiagnostics| {
+        matches!(d.status, FrameStatus::Estimated | FrameStatus::Weak)
+            && d.covariance.len() == d.free.len().pow(2)
+    };
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let omega = |p: &Pose<f64>| so3_log(&p.rotation);
+    let pairs = || {
+        off.windows(2)
+            .filter(|w| moving(&w[0].1) && moving(&w[1].1))
+    };
+    let s = median(
+        off.iter()
+            .filter(|(_, d)| moving(d))
+            .map(|(_, d)| share_of(d))
+            .collect(),
+    );
+    let j = median(
+        pairs()
+            .map(|w| (omega(&w[1].0) - omega(&w[0].0)).z.abs())
+            .collect(),
+    );
+    let t = median(
+        pairs()
+            .map(|w| {
+                let d = omega(&w[1].0) - omega(&w[0].0);
+                d.x.hypot(d.y)
+            })
+            .collect(),
+    );
+    let h = 0.9 * s;
+    let on = run(Some((s, j, t, h)));
+    let (mut flagged, mut kept, mut held) = (0, 0, 0);
+    let mut fired = false;
+    for k in 0..off.len() {
+        let (a, b) = (&off[k], &on[k]);
+        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
+        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
+        assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
+        let fires = k > 0 && moving(&a.1) && moving(&off[k - 1].1) && {
+            let d = omega(&a.0) - omega(&off[k - 1].0);
+            let share = share_of(&a.1);
+            let jump = d.z.abs() > j || d.x.hypot(d.y) > t;
+            let hold = fired && share < h;
+            held += usize::from(hold && !(share < s && jump));
+            (share < s && jump) || hold
+        };
+        fired = fires;
+        if fires && a.1.status == FrameStatus::Estimated {
+            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
+            assert_eq!(b.1.constraint, Constraint::Weak, "frame {k}");
+            assert_eq!(b.1.reason, Some(Reason::SupportChange), "frame {k}");
+            flagged += 1;
+        } else {
+            assert_eq!(
+                (a.1.status, a.1.constraint, a.1.reason),
+                (b.1.status, b.1.constraint, b.1.reason),
+                "frame {k}"
+            );
+            kept += usize::from(a.1.status == FrameStatus::Estimated);
+        }
+    }
+    eprintln!("share {s}, yaw {j}, tilt {t}: flagged {flagged} ({held} held), kept {kept}");
+    assert!(flagged >= 3 && kept >= 10, "flagged {flagged}, kept {kept}");
+    for (toml, key) in [
+        (
+            "[trust]\nsupport_change_share = 1.5\n",
+            "trust.support_change_share",
+        ),
+        (
+            "[trust]\nsupport_change_hold_share = -0.1\n",
+            "trust.support_change_hold_share",
+        ),
+        (
+            "[trust]\nsupport_change_yaw = -0.01\n",
+            "trust.support_change_yaw",
+        ),
+        (
+            "[trust]\nsupport_change_tilt = 4.0\n",
+            "trust.support_change_tilt",
+        ),
+    ] {
+        let e = config_error(toml);
+        assert!(e.contains(key), "{e}");
+    }
+}
