@@ -1177,15 +1177,6 @@ impl Odometry {
                 self.estimator.prior_residuals(&init).len(),
                 self.soft_samples.len() >= SOFT_SIGMA_MIN_FRAMES,
             );
-            if std::env::var_os("MOMO_GATE_DEBUG").is_some() {
-                eprintln!(
-                    "gate frame {} samples {} ready {} cauchy {:?}",
-                    self.frame,
-                    self.soft_samples.len(),
-                    self.prior_ready,
-                    prior.soft_cauchy
-                );
-            }
             if let Some(i) = arc_index {
                 arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
             }
