@@ -188,6 +188,14 @@ pub struct OdometryOptions {
     /// prior residuals (`soft_single_track`: 0 side slip, 1 climb); empty: all; default `[1]`
     /// (the climb: a moving object pulls the side slip, where the prior protects the estimate).
     pub soft_prior_cauchy_residuals: Vec<usize>,
+    /// Apply `soft_prior_cauchy` only while the soft prior's sigmas are not learnt, i.e. while
+    /// fewer than [`SOFT_SIGMA_MIN_FRAMES`](crate::odometry::SOFT_SIGMA_MIN_FRAMES) trusted
+    /// moving frames have taught it (false, the default: from the first frame on). Once learnt,
+    /// the prior's centre and sigmas are the data's own and the climb is least squares again
+    /// (the mono family learns early and its learnt prior is right at KITTI 08's slow start;
+    /// the surround rig in traffic rarely learns: docs/RESULTS.md §9, twenty-seventh session,
+    /// gate41).
+    pub soft_prior_cauchy_until_learnt: bool,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -398,6 +406,7 @@ impl Default for OdometryOptions {
             soft_prior_learn_competing: false,
             soft_prior_cauchy: 0.0,
             soft_prior_cauchy_residuals: vec![1],
+            soft_prior_cauchy_until_learnt: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,

@@ -1184,6 +1184,7 @@ impl Odometry {
             prior.soft_cauchy = soft_cauchy_scales(
                 &self.config.odometry,
                 self.estimator.prior_residuals(&init).len(),
+                self.soft_samples.len() >= SOFT_SIGMA_MIN_FRAMES,
             );
             if let Some(i) = arc_index {
                 arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
@@ -2917,10 +2918,11 @@ impl Trajectory {
 /// The Cauchy scales of the soft prior's `n` residuals ([`momo_core::MotionPrior::soft_cauchy`]):
 /// `odometry.soft_prior_cauchy` on those of `odometry.soft_prior_cauchy_residuals` (all where
 /// empty), 0 (least squares) on the others; empty where the option is off or the model has no
-/// soft prior.
-fn soft_cauchy_scales(opts: &crate::config::OdometryOptions, n: usize) -> Vec<f64> {
+/// soft prior, and, with `odometry.soft_prior_cauchy_until_learnt`, once the prior's sigmas are
+/// `learnt` ([`SOFT_SIGMA_MIN_FRAMES`] trusted moving frames).
+fn soft_cauchy_scales(opts: &crate::config::OdometryOptions, n: usize, learnt: bool) -> Vec<f64> {
     let b = opts.soft_prior_cauchy;
-    if !(b > 0.0 && b.is_finite()) || n == 0 {
+    if !(b > 0.0 && b.is_finite()) || n == 0 || (learnt && opts.soft_prior_cauchy_until_learnt) {
         return Vec::new();
     }
     let only = &opts.soft_prior_cauchy_residuals;
@@ -3705,5 +3707,45 @@ mod tests {
             crate::Config::from_toml_str("[odometry]\nsoft_prior_cauchy = -1.0\n", "t.toml")
                 .is_err()
         );
+    }
+
+    /// `soft_prior_cauchy_until_learnt`: the Cauchy scales reach the frame's motion prior while
+    /// fewer than `SOFT_SIGMA_MIN_FRAMES` frames have taught the soft prior, and not once it has
+    /// learnt its sigmas; without the gate they stay on after learning.
+    #[test]
+    fn the_gated_cauchy_soft_prior_stops_once_the_sigmas_are_learnt() {
+        use momo_sim::{SimConfig, simulate};
+        let cfg = SimConfig {
+            frames: 61,
+            seed: 5,
+            ..SimConfig::clean_pinhole()
+        };
+        let sim = simulate(&cfg).expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        // Per frame: whether the sigmas were learnt when the frame's prior was set, its scales.
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut out = Vec::new();
+            for k in 1..seq.num_frames() {
+                let learnt = vo.soft_samples.len() >= SOFT_SIGMA_MIN_FRAMES;
+                vo.process(&seq.frames[k], seq.arc_length(k));
+                out.push((learnt, vo.motion_prior.soft_cauchy.clone()));
+            }
+            out
+        };
+        let gated =
+            run("[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_until_learnt = true\n");
+        let always = run("[odometry]\nsoft_prior_cauchy = 3.0\n");
+        assert!(gated.iter().any(|f| !f.0), "no frame before learning");
+        assert!(gated.iter().any(|f| f.0), "the sigmas were never learnt");
+        for (k, (learnt, b)) in gated.iter().enumerate() {
+            if *learnt {
+                assert!(b.is_empty(), "frame {}: learnt, scales {b:?}", k + 1);
+            } else {
+                assert_eq!(b, &[0.0, 3.0], "frame {}: not learnt", k + 1);
+            }
+        }
+        assert!(always.iter().all(|f| f.1 == [0.0, 3.0]), "{always:?}");
     }
 }
