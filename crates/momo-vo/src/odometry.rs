@@ -1638,10 +1638,13 @@ impl Odometry {
         let moving = !standstill
             && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
             && diag.covariance.len() == diag.free.len().pow(2);
+        // The reported rotation vector, once, where a rule below reads it.
+        let t = &self.config.trust;
+        let omega = (t.support_change_share > 0.0 || t.yaw_change > 0.0)
+            .then(|| momo_core::so3_log(&motion.rotation));
         // A small support with a jump of the yaw or the tilt (`trust.support_change_share`),
         // report only; before `yaw_change`, so that a frame it flags keeps this reason.
-        if self.config.trust.support_change_share > 0.0 {
-            let omega = momo_core::so3_log(&motion.rotation);
+        if let (true, Some(omega)) = (self.config.trust.support_change_share > 0.0, omega) {
             let fired = moving
                 && self
                     .previous_omega
@@ -1652,8 +1655,8 @@ impl Odometry {
             self.support_change_fired = fired;
             self.previous_omega = moving.then_some(omega);
         }
-        if self.config.trust.yaw_change > 0.0 {
-            let yaw = momo_core::so3_log(&motion.rotation).z;
+        if let (true, Some(omega)) = (self.config.trust.yaw_change > 0.0, omega) {
+            let yaw = omega.z;
             if moving && let Some(previous_yaw) = self.previous_yaw {
                 self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
             }

@@ -528,6 +528,7 @@ impl TrustOptions {
             }
         }
         for (key, v) in [
+            ("trust.min_inlier_share", self.min_inlier_share),
             ("trust.support_change_share", self.support_change_share),
             (
                 "trust.support_change_hold_share",
@@ -539,6 +540,7 @@ impl TrustOptions {
             }
         }
         for (key, v) in [
+            ("trust.yaw_change", self.yaw_change),
             ("trust.support_change_yaw", self.support_change_yaw),
             ("trust.support_change_tilt", self.support_change_tilt),
         ] {
@@ -548,24 +550,6 @@ impl TrustOptions {
                     format!("{key} must be within 0..=pi radians, got {v}"),
                 ));
             }
-        }
-        if !(0.0..=1.0).contains(&self.min_inlier_share) {
-            out.push((
-                vec!["trust.min_inlier_share"],
-                format!(
-                    "trust.min_inlier_share must be within 0..=1, got {}",
-                    self.min_inlier_share
-                ),
-            ));
-        }
-        if !(self.yaw_change >= 0.0 && self.yaw_change <= std::f64::consts::PI) {
-            out.push((
-                vec!["trust.yaw_change"],
-                format!(
-                    "trust.yaw_change must be within 0..=pi radians, got {}",
-                    self.yaw_change
-                ),
-            ));
         }
         if !(0.0..1.0).contains(&self.covariance_memory) {
             out.push((
