@@ -196,6 +196,24 @@ pub struct OdometryOptions {
     /// the surround rig in traffic rarely learns: docs/RESULTS.md §9, twenty-seventh session,
     /// gate41).
     pub soft_prior_cauchy_until_learnt: bool,
+    /// Gate `soft_prior_cauchy` by the soft prior's learning lag (0: off, the default): the
+    /// Cauchy loss applies to a frame only where at least `soft_prior_cauchy_after_moving`
+    /// moving frames came before it and fewer than this share `ρ` of them taught the soft prior
+    /// (`taught < ρ · moving`). A single-camera run teaches the prior on nearly every moving
+    /// frame and keeps it least squares; the surround rig in traffic, whose frames nearly all
+    /// compete with some vehicle, teaches it on few and gets the bounded climb pull at KITTI
+    /// 08's slow start (docs/RESULTS.md §9, twenty-eighth session, climbgate42). Combines with
+    /// `soft_prior_cauchy_until_learnt` (both must hold). No effect when `soft_prior_cauchy = 0`.
+    pub soft_prior_cauchy_taught_share: f64,
+    /// The fewest moving frames before `soft_prior_cauchy_taught_share` may open the Cauchy
+    /// loss (default 5): the first frames' share says nothing yet.
+    pub soft_prior_cauchy_after_moving: usize,
+    /// Apply `soft_prior_cauchy` only on a rig of at least this many cameras (default 1: any
+    /// rig). A structural gate: the learning lag of `soft_prior_cauchy_taught_share` alone does
+    /// not separate the surround rig from a single camera that meets a vehicle at its start
+    /// (62 of the mono family's 300 development sequences teach fewer than a fifth of their
+    /// first moving frames; docs/RESULTS.md §9, twenty-eighth session, climbgate42).
+    pub soft_prior_cauchy_min_cameras: usize,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -407,6 +425,9 @@ impl Default for OdometryOptions {
             soft_prior_cauchy: 0.0,
             soft_prior_cauchy_residuals: vec![1],
             soft_prior_cauchy_until_learnt: false,
+            soft_prior_cauchy_taught_share: 0.0,
+            soft_prior_cauchy_after_moving: 5,
+            soft_prior_cauchy_min_cameras: 1,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1089,6 +1110,17 @@ impl Config {
                 format!(
                     "odometry.soft_prior_cauchy must be finite and at least 0, got {}",
                     o.soft_prior_cauchy
+                ),
+            );
+        }
+        if !(o.soft_prior_cauchy_taught_share.is_finite()
+            && (0.0..=1.0).contains(&o.soft_prior_cauchy_taught_share))
+        {
+            bad(
+                &["odometry.soft_prior_cauchy_taught_share"],
+                format!(
+                    "odometry.soft_prior_cauchy_taught_share must be within [0, 1], got {}",
+                    o.soft_prior_cauchy_taught_share
                 ),
             );
         }

@@ -228,6 +228,11 @@ pub struct Odometry {
     /// residual, newest last (at most `soft_prior_centring_frames`), see
     /// [`Odometry::soft_prior_sigma`].
     soft_samples: std::collections::VecDeque<(f64, Vec<(f64, f64)>)>,
+    /// Moving frames so far (not a standstill, enough matches to solve), and of them those
+    /// whose innovations taught the soft prior (pushed to `soft_samples`; not capped): the
+    /// learning lag of `odometry.soft_prior_cauchy_taught_share`.
+    soft_moving: usize,
+    soft_taught: usize,
     /// The displacement jitters `δ_r²` (units of the model's sigma squared times metres
     /// squared) that widen a short step's soft prior ([`arc_widened_inv_scale`]): until the
     /// sigmas are learnt the seed `L²` of `odometry.soft_prior_arc_jitter`
@@ -371,6 +376,8 @@ impl Odometry {
             soft_count: 0,
             soft_inv_scale,
             soft_samples: Default::default(),
+            soft_moving: 0,
+            soft_taught: 0,
             soft_arc_jitter,
             soft_levels: Default::default(),
             first_stage: None,
@@ -1039,6 +1046,8 @@ impl Odometry {
             Vec::new()
         };
         self.soft_samples.clear();
+        self.soft_moving = 0;
+        self.soft_taught = 0;
         self.soft_levels.clear();
         self.soft_arc_jitter = seeded_arc_jitter(&self.config.odometry, self.soft_inv_scale.len());
         self.hypotheses.reset();
@@ -1185,6 +1194,8 @@ impl Odometry {
                 &self.config.odometry,
                 self.estimator.prior_residuals(&init).len(),
                 self.soft_samples.len() >= SOFT_SIGMA_MIN_FRAMES,
+                (self.soft_moving, self.soft_taught),
+                self.rig.len(),
             );
             if let Some(i) = arc_index {
                 arc_widened_inv_scale(&mut prior.soft_inv_scale, &self.soft_arc_jitter, init[i]);
@@ -1609,6 +1620,11 @@ impl Odometry {
                 && (diag.status == FrameStatus::Estimated
                     || (diag.status == FrameStatus::Weak
                         && diag.reason == Some(Reason::CompetingMotions))));
+        let dbg_z = soft_sample.as_ref().and_then(|v: &Vec<(f64, f64)>| {
+            let (d2, var) = *v.get(1)?;
+            let k = self.soft_inv_scale.get(1).copied().unwrap_or(1.0);
+            Some((d2 / (1.0 / (k * k) + var)).sqrt())
+        });
         if soft_ready && n > 0 && !self.soft_center.is_empty() {
             // A cumulative mean over the first n moving frames, then exponential with n frames.
             self.soft_count += 1;
@@ -1626,11 +1642,28 @@ impl Odometry {
             if let Some(sample) = soft_sample {
                 let arc = arc_index.map_or(f64::NAN, |i| params[i].abs());
                 self.soft_samples.push_back((arc, sample));
+                self.soft_taught += 1;
                 while self.soft_samples.len() > n {
                     self.soft_samples.pop_front();
                 }
                 self.learn_soft_sigma();
             }
+        }
+        if !standstill && enough {
+            self.soft_moving += 1;
+        }
+        if std::env::var_os("MOMO_LAG_DEBUG").is_some() {
+            eprintln!(
+                "LAG frame={} moving={} taught={} samples={} status={:?} competing={} cauchy={} z={}",
+                self.frame,
+                self.soft_moving,
+                self.soft_taught,
+                self.soft_samples.len(),
+                diag.status,
+                competing,
+                !self.motion_prior.soft_cauchy.is_empty(),
+                dbg_z.map_or(f64::NAN, |z| z),
+            );
         }
         // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
         // after the state above, so that it changes the report only.
@@ -2923,9 +2956,31 @@ impl Trajectory {
 /// empty), 0 (least squares) on the others; empty where the option is off or the model has no
 /// soft prior, and, with `odometry.soft_prior_cauchy_until_learnt`, once the prior's sigmas are
 /// `learnt` ([`SOFT_SIGMA_MIN_FRAMES`] trusted moving frames).
-fn soft_cauchy_scales(opts: &crate::config::OdometryOptions, n: usize, learnt: bool) -> Vec<f64> {
+///
+/// With `odometry.soft_prior_cauchy_taught_share = ρ > 0` (the learning-lag gate), also only
+/// where `lag = (moving, taught)` has `moving ≥ odometry.soft_prior_cauchy_after_moving` and
+/// `taught < ρ · moving`: the moving frames so far and those that taught the soft prior; and
+/// only on a rig of at least `odometry.soft_prior_cauchy_min_cameras` `cameras`.
+fn soft_cauchy_scales(
+    opts: &crate::config::OdometryOptions,
+    n: usize,
+    learnt: bool,
+    lag: (usize, usize),
+    cameras: usize,
+) -> Vec<f64> {
     let b = opts.soft_prior_cauchy;
-    if !(b > 0.0 && b.is_finite()) || n == 0 || (learnt && opts.soft_prior_cauchy_until_learnt) {
+    if !(b > 0.0 && b.is_finite())
+        || n == 0
+        || (learnt && opts.soft_prior_cauchy_until_learnt)
+        || cameras < opts.soft_prior_cauchy_min_cameras
+    {
+        return Vec::new();
+    }
+    let rho = opts.soft_prior_cauchy_taught_share;
+    let (moving, taught) = lag;
+    if rho > 0.0
+        && (moving < opts.soft_prior_cauchy_after_moving || taught as f64 >= rho * moving as f64)
+    {
         return Vec::new();
     }
     let only = &opts.soft_prior_cauchy_residuals;
