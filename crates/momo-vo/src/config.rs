@@ -211,8 +211,8 @@ pub struct OdometryOptions {
     /// Apply `soft_prior_cauchy` only on a rig of at least this many cameras (default 1: any
     /// rig). A structural gate: the learning lag of `soft_prior_cauchy_taught_share` alone does
     /// not separate the surround rig from a single camera that meets a vehicle at its start
-    /// (62 of the mono family's 300 development sequences teach fewer than a fifth of their
-    /// first moving frames; docs/RESULTS.md §9, twenty-eighth session, climbgate42).
+    /// (at `ρ = 0.5` the lag opens on 124 of the mono family's 300 development sequences, at
+    /// `ρ = 0.2` on 62; docs/RESULTS.md §9, twenty-eighth session, climbgate42).
     pub soft_prior_cauchy_min_cameras: usize,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]

@@ -1620,11 +1620,6 @@ impl Odometry {
                 && (diag.status == FrameStatus::Estimated
                     || (diag.status == FrameStatus::Weak
                         && diag.reason == Some(Reason::CompetingMotions))));
-        let dbg_z = soft_sample.as_ref().and_then(|v: &Vec<(f64, f64)>| {
-            let (d2, var) = *v.get(1)?;
-            let k = self.soft_inv_scale.get(1).copied().unwrap_or(1.0);
-            Some((d2 / (1.0 / (k * k) + var)).sqrt())
-        });
         if soft_ready && n > 0 && !self.soft_center.is_empty() {
             // A cumulative mean over the first n moving frames, then exponential with n frames.
             self.soft_count += 1;
@@ -1651,19 +1646,6 @@ impl Odometry {
         }
         if !standstill && enough {
             self.soft_moving += 1;
-        }
-        if std::env::var_os("MOMO_LAG_DEBUG").is_some() {
-            eprintln!(
-                "LAG frame={} moving={} taught={} samples={} status={:?} competing={} cauchy={} z={}",
-                self.frame,
-                self.soft_moving,
-                self.soft_taught,
-                self.soft_samples.len(),
-                diag.status,
-                competing,
-                !self.motion_prior.soft_cauchy.is_empty(),
-                dbg_z.map_or(f64::NAN, |z| z),
-            );
         }
         // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
         // after the state above, so that it changes the report only.
@@ -3805,5 +3787,94 @@ mod tests {
             }
         }
         assert!(always.iter().all(|f| f.1 == [0.0, 3.0]), "{always:?}");
+    }
+
+    /// `soft_prior_cauchy_taught_share` / `_after_moving` / `_min_cameras` at the function: the
+    /// scales are on exactly where at least `N0` moving frames came before and fewer than
+    /// `ρ` of them taught the prior, on a rig of enough cameras.
+    #[test]
+    fn the_learning_lag_gate_opens_only_where_teaching_lags() {
+        let config = crate::Config::from_toml_str(
+            "[odometry]\nsoft_prior_cauchy = 10.0\nsoft_prior_cauchy_taught_share = 0.5\n\
+             soft_prior_cauchy_after_moving = 5\nsoft_prior_cauchy_min_cameras = 2\n",
+            "t.toml",
+        )
+        .expect("a valid config");
+        let o = &config.odometry;
+        let on = vec![0.0, 10.0];
+        // The state holds: 5 or more moving frames, fewer than half taught, four cameras.
+        assert_eq!(soft_cauchy_scales(o, 2, false, (5, 0), 4), on);
+        assert_eq!(soft_cauchy_scales(o, 2, false, (10, 4), 4), on);
+        assert_eq!(soft_cauchy_scales(o, 2, true, (100, 20), 2), on);
+        // It does not: too few moving frames, half or more taught, a single camera.
+        assert!(soft_cauchy_scales(o, 2, false, (4, 0), 4).is_empty());
+        assert!(soft_cauchy_scales(o, 2, false, (10, 5), 4).is_empty());
+        assert!(soft_cauchy_scales(o, 2, false, (10, 9), 4).is_empty());
+        assert!(soft_cauchy_scales(o, 2, false, (10, 0), 1).is_empty());
+        // Off (ρ = 0, one camera enough): the scales from the first frame on, as before.
+        let off = crate::Config::from_toml_str("[odometry]\nsoft_prior_cauchy = 10.0\n", "t.toml")
+            .expect("a valid config");
+        assert_eq!(soft_cauchy_scales(&off.odometry, 2, false, (0, 0), 1), on);
+        let bad = "[odometry]\nsoft_prior_cauchy_taught_share = 1.5\n";
+        assert!(crate::Config::from_toml_str(bad, "t.toml").is_err());
+    }
+
+    /// The learning-lag gate in the driver: on the surround rig in traffic (its frames compete
+    /// with some vehicle, few teach the soft prior) the Cauchy scales reach the frame's motion
+    /// prior, and on every frame exactly where the gate's state held before the frame; on the
+    /// same rig in a static scene (every moving frame teaches) and on a single camera in
+    /// traffic under `soft_prior_cauchy_min_cameras = 2` never.
+    #[test]
+    fn the_learning_lag_gate_acts_on_the_starved_rig_only() {
+        use momo_sim::{SimConfig, simulate};
+        let text = "[odometry]\nsoft_prior_cauchy = 10.0\nsoft_prior_cauchy_taught_share = 0.5\n\
+                    soft_prior_cauchy_after_moving = 5\nsoft_prior_cauchy_min_cameras = 2\n";
+        // Per frame: whether the gate's state held when the frame's prior was set, its scales.
+        let run = |cfg: SimConfig| {
+            let sim = simulate(&cfg).expect("the scenario simulates");
+            let seq = &sim.sequence;
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut out = Vec::new();
+            for k in 1..seq.num_frames() {
+                let state = vo.soft_moving >= 5
+                    && (vo.soft_taught as f64) < 0.5 * vo.soft_moving as f64
+                    && seq.rig.len() >= 2;
+                vo.process(&seq.frames[k], seq.arc_length(k));
+                out.push((state, vo.motion_prior.soft_cauchy.clone()));
+            }
+            out
+        };
+        // Seed 2: a vehicle competes from the start (seeds 1, 2 and 4 lag, 3 and 5-8 teach).
+        let rig = run(SimConfig {
+            frames: 41,
+            seed: 2,
+            ..SimConfig::moving_traffic_surround()
+        });
+        for (k, (state, b)) in rig.iter().enumerate() {
+            if *state {
+                assert_eq!(b, &[0.0, 10.0], "rig frame {}: the state held", k + 1);
+            } else {
+                assert!(b.is_empty(), "rig frame {}: no state, scales {b:?}", k + 1);
+            }
+        }
+        assert!(
+            rig.iter().any(|f| f.0),
+            "the rig in traffic never lagged: {rig:?}"
+        );
+        let calm = run(SimConfig {
+            frames: 41,
+            seed: 3,
+            stops: false,
+            blinded: Vec::new(),
+            ..SimConfig::fisheye_surround()
+        });
+        assert!(calm.iter().all(|f| !f.0 && f.1.is_empty()), "{calm:?}");
+        let mono = run(SimConfig {
+            frames: 41,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        });
+        assert!(mono.iter().all(|f| !f.0 && f.1.is_empty()), "{mono:?}");
     }
 }
