@@ -176,7 +176,9 @@ pub struct OdometryOptions {
     /// prior's centring is not affected. Off by default.
     pub soft_prior_learn_competing: bool,
     /// A Cauchy loss on the soft prior's residuals listed in `soft_prior_cauchy_residuals`, at
-    /// this scale in units of each residual's frame sigma (0: least squares, the default):
+    /// this scale in units of each residual's frame sigma (0: least squares; default 5, gated by
+    /// `soft_prior_cauchy_until_learnt`, `soft_prior_cauchy_taught_share` and
+    /// `soft_prior_cauchy_min_cameras`, so by default it acts only on a starved surround rig):
     /// `½ s² b² ln(1 + z² / b²)` with `z = k (q − c)` ([`momo_core::MotionPrior::soft_cauchy`]),
     /// from the first frame on. Quadratic for `|z| ≪ b`, so a small slip is held as before;
     /// far out its pull is bounded, so that where the static scene backs a direction of travel
@@ -190,13 +192,13 @@ pub struct OdometryOptions {
     pub soft_prior_cauchy_residuals: Vec<usize>,
     /// Apply `soft_prior_cauchy` only while the soft prior's sigmas are not learnt, i.e. while
     /// fewer than [`SOFT_SIGMA_MIN_FRAMES`](crate::odometry::SOFT_SIGMA_MIN_FRAMES) trusted
-    /// moving frames have taught it (false, the default: from the first frame on). Once learnt,
+    /// moving frames have taught it (true, the default; false: from the first frame on). Once learnt,
     /// the prior's centre and sigmas are the data's own and the climb is least squares again
     /// (the mono family learns early and its learnt prior is right at KITTI 08's slow start;
     /// the surround rig in traffic rarely learns: docs/RESULTS.md §9, twenty-seventh session,
     /// gate41).
     pub soft_prior_cauchy_until_learnt: bool,
-    /// Gate `soft_prior_cauchy` by the soft prior's learning lag (0: off, the default): the
+    /// Gate `soft_prior_cauchy` by the soft prior's learning lag (default 0.5; 0: off): the
     /// Cauchy loss applies to a frame only where at least `soft_prior_cauchy_after_moving`
     /// moving frames came before it and fewer than this share `ρ` of them taught the soft prior
     /// (`taught < ρ · moving`). A single-camera run teaches the prior on nearly every moving
@@ -208,7 +210,7 @@ pub struct OdometryOptions {
     /// The fewest moving frames before `soft_prior_cauchy_taught_share` may open the Cauchy
     /// loss (default 5): the first frames' share says nothing yet.
     pub soft_prior_cauchy_after_moving: usize,
-    /// Apply `soft_prior_cauchy` only on a rig of at least this many cameras (default 1: any
+    /// Apply `soft_prior_cauchy` only on a rig of at least this many cameras (default 2; 1: any
     /// rig). A structural gate: the learning lag of `soft_prior_cauchy_taught_share` alone does
     /// not separate the surround rig from a single camera that meets a vehicle at its start
     /// (at `ρ = 0.5` the lag opens on 124 of the mono family's 300 development sequences, at
@@ -422,12 +424,12 @@ impl Default for OdometryOptions {
             soft_prior_arc_learning: false,
             soft_prior_arc_jitter: 0.0,
             soft_prior_learn_competing: false,
-            soft_prior_cauchy: 0.0,
+            soft_prior_cauchy: 5.0,
             soft_prior_cauchy_residuals: vec![1],
-            soft_prior_cauchy_until_learnt: false,
-            soft_prior_cauchy_taught_share: 0.0,
+            soft_prior_cauchy_until_learnt: true,
+            soft_prior_cauchy_taught_share: 0.5,
             soft_prior_cauchy_after_moving: 5,
-            soft_prior_cauchy_min_cameras: 1,
+            soft_prior_cauchy_min_cameras: 2,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,

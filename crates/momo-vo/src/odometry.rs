@@ -3734,10 +3734,30 @@ mod tests {
             }
             vo.motion_prior.soft_cauchy.clone()
         };
-        assert!(run("").is_empty());
-        assert_eq!(run("[odometry]\nsoft_prior_cauchy = 3.0\n"), vec![0.0, 3.0]);
+        // The default is the gated Cauchy (b = 5 while unlearnt, where fewer than half of at
+        // least 5 moving frames taught the prior, on a rig of two or more cameras).
+        let o = crate::Config::default().odometry;
         assert_eq!(
-            run("[odometry]\nsoft_prior_cauchy = 2.0\nsoft_prior_cauchy_residuals = []\n"),
+            (
+                o.soft_prior_cauchy,
+                o.soft_prior_cauchy_until_learnt,
+                o.soft_prior_cauchy_taught_share,
+                o.soft_prior_cauchy_after_moving,
+                o.soft_prior_cauchy_min_cameras
+            ),
+            (5.0, true, 0.5, 5, 2)
+        );
+        // Ungated, so that every frame carries the scales.
+        const UNGATED: &str = "soft_prior_cauchy_until_learnt = false\nsoft_prior_cauchy_taught_share = 0.0\nsoft_prior_cauchy_min_cameras = 1\n";
+        assert!(run("[odometry]\nsoft_prior_cauchy = 0.0\n").is_empty());
+        assert_eq!(
+            run(&format!("[odometry]\nsoft_prior_cauchy = 3.0\n{UNGATED}")),
+            vec![0.0, 3.0]
+        );
+        assert_eq!(
+            run(&format!(
+                "[odometry]\nsoft_prior_cauchy = 2.0\nsoft_prior_cauchy_residuals = []\n{UNGATED}"
+            )),
             vec![2.0, 2.0]
         );
         let bad = "[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_residuals = [2]\n";
@@ -3774,9 +3794,14 @@ mod tests {
             }
             out
         };
-        let gated =
-            run("[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_until_learnt = true\n");
-        let always = run("[odometry]\nsoft_prior_cauchy = 3.0\n");
+        // The lag and camera gates off (a single camera), so that only the learning decides.
+        let no_lag = "soft_prior_cauchy_taught_share = 0.0\nsoft_prior_cauchy_min_cameras = 1\n";
+        let gated = run(&format!(
+            "[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_until_learnt = true\n{no_lag}"
+        ));
+        let always = run(&format!(
+            "[odometry]\nsoft_prior_cauchy = 3.0\nsoft_prior_cauchy_until_learnt = false\n{no_lag}"
+        ));
         assert!(gated.iter().any(|f| !f.0), "no frame before learning");
         assert!(gated.iter().any(|f| f.0), "the sigmas were never learnt");
         for (k, (learnt, b)) in gated.iter().enumerate() {
@@ -3796,7 +3821,8 @@ mod tests {
     fn the_learning_lag_gate_opens_only_where_teaching_lags() {
         let config = crate::Config::from_toml_str(
             "[odometry]\nsoft_prior_cauchy = 10.0\nsoft_prior_cauchy_taught_share = 0.5\n\
-             soft_prior_cauchy_after_moving = 5\nsoft_prior_cauchy_min_cameras = 2\n",
+             soft_prior_cauchy_after_moving = 5\nsoft_prior_cauchy_min_cameras = 2\n\
+             soft_prior_cauchy_until_learnt = false\n",
             "t.toml",
         )
         .expect("a valid config");
@@ -3812,8 +3838,12 @@ mod tests {
         assert!(soft_cauchy_scales(o, 2, false, (10, 9), 4).is_empty());
         assert!(soft_cauchy_scales(o, 2, false, (10, 0), 1).is_empty());
         // Off (ρ = 0, one camera enough): the scales from the first frame on, as before.
-        let off = crate::Config::from_toml_str("[odometry]\nsoft_prior_cauchy = 10.0\n", "t.toml")
-            .expect("a valid config");
+        let off = crate::Config::from_toml_str(
+            "[odometry]\nsoft_prior_cauchy = 10.0\nsoft_prior_cauchy_taught_share = 0.0\n\
+             soft_prior_cauchy_min_cameras = 1\nsoft_prior_cauchy_until_learnt = false\n",
+            "t.toml",
+        )
+        .expect("a valid config");
         assert_eq!(soft_cauchy_scales(&off.odometry, 2, false, (0, 0), 1), on);
         let bad = "[odometry]\nsoft_prior_cauchy_taught_share = 1.5\n";
         assert!(crate::Config::from_toml_str(bad, "t.toml").is_err());
