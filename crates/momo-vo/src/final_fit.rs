@@ -764,8 +764,15 @@ pub struct StageSupport {
     found: Option<Kept>,
 }
 
-/// [`stage_support`]'s result: the matches kept, their constants, `σ̂`, the learnt cap's counts.
-type Kept = (FrameObservations, Vec<f64>, f64, Option<ParallaxTally>);
+/// [`stage_support`]'s result: the matches kept, their constants, `σ̂`, the learnt cap's counts,
+/// and the kept matches' membership among the given ones (per camera, per match).
+type Kept = (
+    FrameObservations,
+    Vec<f64>,
+    f64,
+    Option<ParallaxTally>,
+    Vec<Vec<bool>>,
+);
 
 impl StageSupport {
     /// The matches kept ([`support`]); `None` where the stage would not refit.
@@ -817,6 +824,23 @@ pub fn refit_tallied(
     obs: &FrameObservations,
     first: FrameSolution,
 ) -> (FrameSolution, Option<ParallaxTally>) {
+    let (fin, tally, _) = refit_supported(ctx, opts, obs, first);
+    (fin, tally)
+}
+
+/// The stage's support membership: per camera, per match of the matches the stage was given,
+/// whether the (last) refit used it; `None` where the stage did not refit.
+pub type SupportMask = Option<Vec<Vec<bool>>>;
+
+/// [`refit_tallied`], and the support of the last pass that refit ([`SupportMask`]: the
+/// matches within `inlier_sigmas · σ̂` under the caps, steps 1 and 2 of the module doc), for
+/// `odometry.report_support`.
+pub fn refit_supported(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    first: FrameSolution,
+) -> (FrameSolution, Option<ParallaxTally>, SupportMask) {
     // The stage metric's per-match constants of every match, computed once for every pass:
     // the residual norms on all matches and each refit on its support read them.
     let owned;
@@ -829,13 +853,15 @@ pub fn refit_tallied(
     };
     let mut best: Option<FrameSolution> = None;
     let mut tally = None;
+    let mut mask = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
         match refit_once(ctx, opts, obs, constants, from) {
-            Some((mut fin, support, frame_tally)) => {
+            Some((mut fin, support, frame_tally, kept)) => {
                 if best.is_none() {
                     tally = frame_tally;
                 }
+                mask = Some(kept);
                 fin.report.iterations += best
                     .as_ref()
                     .map_or(first.report.iterations, |b| b.report.iterations);
@@ -846,7 +872,7 @@ pub fn refit_tallied(
         }
     }
     let Some(mut fin) = best else {
-        return (first, None);
+        return (first, None, None);
     };
     if opts.first_stage_covariance {
         // The covariance (and the inlier count and mask, which index all matches) of the
@@ -856,7 +882,7 @@ pub fn refit_tallied(
         fin.inliers_per_camera = first.inliers_per_camera;
         fin.inlier_mask = first.inlier_mask;
     }
-    (fin, tally)
+    (fin, tally, mask)
 }
 
 impl<'a> FinalFitContext<'a> {
@@ -875,8 +901,9 @@ impl<'a> FinalFitContext<'a> {
     }
 }
 
-/// One pass of the stage from the parameters `from`: the refit solution and its support size
-/// per camera, or `None` (noise not estimable, support too small, refit failed). `constants`:
+/// One pass of the stage from the parameters `from`: the refit solution, its support size
+/// per camera, the learnt cap's counts and the support's membership among `obs`, or `None`
+/// (noise not estimable, support too small, refit failed). `constants`:
 /// the stage metric's per-match constants of `obs` ([`FrameEstimator::match_constants`]; empty:
 /// each problem computes its own).
 fn refit_once(
@@ -885,22 +912,23 @@ fn refit_once(
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>)> {
+) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>, Vec<Vec<bool>>)> {
     let scale = ctx.loss.scale();
     // The support found at the start is read in place (no copy of its matches and constants).
     let found;
-    let (core, core_constants, sigma, tally) = match ctx
+    let (core, core_constants, sigma, tally, kept) = match ctx
         .stage
         .filter(|s| s.competing == ctx.competing && s.from == from)
     {
         Some(s) => {
-            let (core, constants, sigma, tally) = s.found.as_ref()?;
-            (core, &constants[..], *sigma, tally.clone())
+            let (core, constants, sigma, tally, kept) = s.found.as_ref()?;
+            (core, &constants[..], *sigma, tally.clone(), kept)
         }
         None => {
-            let (core, constants, sigma, tally) = stage_support(ctx, opts, obs, constants, from)?;
-            found = (core, constants);
-            (&found.0, &found.1[..], sigma, tally)
+            let (core, constants, sigma, tally, kept) =
+                stage_support(ctx, opts, obs, constants, from)?;
+            found = (core, constants, kept);
+            (&found.0, &found.1[..], sigma, tally, &found.2)
         }
     };
     let req = ctx.request(obs, from);
@@ -962,7 +990,7 @@ fn refit_once(
                 && fin.report.final_cost.is_finite() =>
         {
             let support = core.per_camera.iter().map(Vec::len).collect();
-            Some((fin, support, tally))
+            Some((fin, support, tally, kept.clone()))
         }
         _ => None,
     }
@@ -972,14 +1000,14 @@ fn refit_once(
 /// parameters `from`: the matches kept, their per-match constants (empty where `constants`
 /// does not cover `obs`), the noise `σ̂` and, with `learnt_parallax_cap`, the frame's counts
 /// for [`ParallaxTally`] (before its cap); `None` where the noise cannot be estimated or
-/// fewer than [`MIN_SUPPORT`] matches are kept.
+/// fewer than [`MIN_SUPPORT`] matches are kept. Also the kept matches' membership among `obs`.
 fn stage_support(
     ctx: &FinalFitContext<'_>,
     opts: &FinalFitOptions,
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameObservations, Vec<f64>, f64, Option<ParallaxTally>)> {
+) -> Option<Kept> {
     let scale = ctx.loss.scale();
     if !(scale.is_finite() && scale > 0.0) {
         return None;
@@ -1084,6 +1112,7 @@ fn stage_support(
         })
         .collect();
     let mut k = 0;
+    let mut members: Vec<Vec<bool>> = Vec::with_capacity(obs.per_camera.len());
     let core = FrameObservations {
         per_camera: obs
             .per_camera
@@ -1093,19 +1122,23 @@ fn stage_support(
             .enumerate()
             .map(|(j, ((ms, pass), limit))| {
                 let mut kept = Vec::with_capacity(ms.len());
+                let mut member = Vec::with_capacity(ms.len());
                 for (i, (o, (ok, par))) in ms.iter().zip(pass).enumerate() {
                     let rel = learnt
                         .as_ref()
                         .and_then(|l| l[j][i])
                         .map_or(0.0, |(r, _)| r);
-                    if *ok && !(*par > *limit) && !(rel >= learnt_limits[j]) {
+                    let keep = *ok && !(*par > *limit) && !(rel >= learnt_limits[j]);
+                    if keep {
                         kept.push(*o);
                         if share {
                             core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
                         }
                     }
+                    member.push(keep);
                     k += 1;
                 }
+                members.push(member);
                 kept
             })
             .collect(),
@@ -1114,7 +1147,7 @@ fn stage_support(
     if core.len() < MIN_SUPPORT {
         return None;
     }
-    Some((core, core_constants, sigma, tally))
+    Some((core, core_constants, sigma, tally, members))
 }
 
 /// Per camera, per match of `obs`: for the support's matches (`passing`) and the band's
@@ -1178,7 +1211,7 @@ pub fn support(
 ) -> Option<FrameObservations> {
     support_at(ctx, opts, obs, from)
         .found
-        .map(|(core, _, _, _)| core)
+        .map(|(core, _, _, _, _)| core)
 }
 
 /// [`support`], kept for the stage itself ([`FinalFitContext::stage`]).

@@ -123,6 +123,14 @@ pub struct FrameDiagnostics {
     /// (all of the model's); `None` where there was none.
     #[serde(default)]
     pub road_alternative: Option<Vec<f64>>,
+    /// The final stage's support ([`crate::final_fit`]), with `odometry.report_support` only:
+    /// per camera, the indices of the matches the stage refit on (its last pass), counted
+    /// among the camera's matches of the frame in input order (matches.csv's rows of that
+    /// camera and frame). `None` (not written) where the option is off or where no final stage
+    /// refit the frame (standstill, too few matches, the stage off, not estimable or failed:
+    /// the reported motion is then the first stage's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<Vec<Vec<usize>>>,
 }
 
 /// The result of one frame pair.
@@ -1154,6 +1162,7 @@ impl Odometry {
             competing: None,
             residual_clustering: f64::NAN,
             road_alternative: None,
+            support: None,
         };
 
         {
@@ -1383,8 +1392,8 @@ impl Odometry {
                 self.first_stage = None;
                 if !standstill && next_stage != crate::separate::NextStage::Done {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
-                    let tally;
-                    (sol, tally) = match &next_stage {
+                    let (tally, support);
+                    (sol, tally, support) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
                             // The kept matches' constants, where the frame has them already.
@@ -1393,7 +1402,7 @@ impl Odometry {
                                 .frame_constants
                                 .as_deref()
                                 .and_then(|c| subset_constants(c, m, mask));
-                            self.final_fit(
+                            let (sol, tally, kept) = self.final_fit(
                                 &chosen,
                                 sol,
                                 &fixed,
@@ -1401,7 +1410,9 @@ impl Odometry {
                                 competing,
                                 constants.as_deref(),
                                 None,
-                            )
+                            );
+                            // The support's membership among all the frame's matches.
+                            (sol, tally, kept.map(|k| superset_mask(mask, &k)))
                         }
                         _ => {
                             if self.config.odometry.final_fit.enabled {
@@ -1416,6 +1427,9 @@ impl Odometry {
                     };
                     if let Some(t) = tally {
                         self.parallax_tally.add(&t);
+                    }
+                    if self.config.odometry.report_support {
+                        diag.support = support.map(|k| support_indices(&k));
                     }
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
@@ -2012,10 +2026,14 @@ impl Odometry {
         competing: bool,
         constants: Option<&[f64]>,
         stage: Option<&crate::final_fit::StageSupport>,
-    ) -> (FrameSolution, Option<crate::final_fit::ParallaxTally>) {
+    ) -> (
+        FrameSolution,
+        Option<crate::final_fit::ParallaxTally>,
+        crate::final_fit::SupportMask,
+    ) {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
-            return (sol, None);
+            return (sol, None, None);
         }
         let mut fixed = fixed.to_vec();
         if let Some(i) = self.estimator.arc_length_index()
@@ -2026,7 +2044,7 @@ impl Odometry {
         let mut ctx = self.final_fit_context(&fixed, competing);
         ctx.constants = constants;
         ctx.stage = stage;
-        crate::final_fit::refit_tallied(&ctx, opts, obs, sol)
+        crate::final_fit::refit_supported(&ctx, opts, obs, sol)
     }
 
     fn solve_with_restarts(
@@ -3180,6 +3198,33 @@ struct SoftDataView {
     q_d: nalgebra::DVector<f64>,
     /// The data's covariance of the residuals.
     v: nalgebra::DMatrix<f64>,
+}
+
+/// The membership among all matches of a subset's kept matches: `mask` chose the subset
+/// (per camera, per match), `kept` marks its kept matches in order (per camera).
+fn superset_mask(mask: &[Vec<bool>], kept: &[Vec<bool>]) -> Vec<Vec<bool>> {
+    mask.iter()
+        .zip(kept.iter().map(Some).chain(std::iter::repeat(None)))
+        .map(|(m, k)| {
+            let mut inner = k.map(|k| k.iter()).into_iter().flatten();
+            m.iter()
+                .map(|&chosen| chosen && inner.next().copied().unwrap_or(false))
+                .collect()
+        })
+        .collect()
+}
+
+/// Per camera, the indices of the matches where `mask` holds (`odometry.report_support`).
+fn support_indices(mask: &[Vec<bool>]) -> Vec<Vec<usize>> {
+    mask.iter()
+        .map(|m| {
+            m.iter()
+                .enumerate()
+                .filter(|(_, k)| **k)
+                .map(|(i, _)| i)
+                .collect()
+        })
+        .collect()
 }
 
 /// The per-match constants (`m` per match, camera by camera) of the matches `mask` keeps, in
