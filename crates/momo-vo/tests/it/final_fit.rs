@@ -372,3 +372,110 @@ fn one_reference_focal_length_changes_nothing_on_a_rig_of_one_focal_length() {
         assert_eq!(bits(&off), bits(&on), "{scenario}");
     }
 }
+
+/// Per frame pair of `cfg` with the `[odometry]` lines `odometry` (first-stage covariance off,
+/// so the diagnostics' `inliers_per_camera` are the final stage's support sizes): the motion's
+/// rotation and translation bits and the diagnostics.
+fn diagnostics_of(cfg: &SimConfig, odometry: &str) -> Vec<(Vec<u64>, momo_vo::FrameDiagnostics)> {
+    let sim = simulate(cfg).expect("the scenario simulates");
+    let seq = &sim.sequence;
+    let text =
+        format!("[odometry]\n{odometry}\n[odometry.final_fit]\nfirst_stage_covariance = false\n");
+    let config = Config::from_toml_str(&text, "ff.toml").expect("a valid configuration");
+    let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+    (1..seq.num_frames())
+        .map(|k| {
+            let r = vo.process(&seq.frames[k], seq.arc_length(k));
+            let bits = r
+                .motion
+                .rotation
+                .iter()
+                .chain(r.motion.translation.iter())
+                .map(|x| x.to_bits())
+                .collect();
+            (bits, r.diagnostics)
+        })
+        .collect()
+}
+
+#[test]
+fn the_reported_support_is_the_final_stages_and_changes_nothing_else() {
+    // `odometry.report_support`: on the mono `outliers` scenario and on the four-camera rig
+    // with traffic all around, the motions and every other diagnostic are those without it;
+    // the support lists, per camera, increasing indices of the camera's matches, as many as
+    // the final stage refit on (`inliers_per_camera` with the first stage's covariance off),
+    // and it holds the static scene's matches, not the mismatches.
+    for scenario in ["outliers", "moving_traffic_surround"] {
+        let mut cfg = SimConfig::scenario(scenario).expect("a listed scenario");
+        cfg.frames = 31;
+        cfg.seed = 3;
+        let sim = simulate(&cfg).expect("the scenario simulates");
+        let off = diagnostics_of(&cfg, "report_support = false");
+        let on = diagnostics_of(&cfg, "report_support = true");
+        let (mut reported, mut outliers_in, mut outliers, mut static_in, mut statics) =
+            (0, 0, 0, 0, 0);
+        for (k, ((bits_off, d_off), (bits_on, d_on))) in off.iter().zip(&on).enumerate() {
+            assert_eq!(bits_off, bits_on, "{scenario} frame {}", k + 1);
+            assert!(d_off.support.is_none(), "{scenario}: written while off");
+            let mut stripped = d_on.clone();
+            stripped.support = None;
+            stripped.time_us = d_off.time_us;
+            // Compared as text: the diagnostics hold NaNs (a fixed parameter's sigma).
+            assert_eq!(
+                format!("{stripped:?}"),
+                format!("{d_off:?}"),
+                "{scenario} frame {}",
+                k + 1
+            );
+            let Some(support) = &d_on.support else {
+                continue;
+            };
+            reported += 1;
+            let frame = &sim.sequence.frames[k + 1];
+            assert_eq!(support.len(), frame.per_camera.len());
+            for (j, idx) in support.iter().enumerate() {
+                assert!(
+                    idx.windows(2).all(|w| w[0] < w[1]),
+                    "{scenario}: not increasing"
+                );
+                assert!(idx.iter().all(|&i| i < frame.per_camera[j].len()));
+                assert_eq!(
+                    idx.len(),
+                    d_on.inliers_per_camera[j],
+                    "{scenario} camera {j}"
+                );
+                let labels = &sim.labels[k + 1][j];
+                for (i, l) in labels.iter().enumerate() {
+                    let member = idx.binary_search(&i).is_ok();
+                    match l {
+                        MatchLabel::Outlier => {
+                            outliers += 1;
+                            outliers_in += usize::from(member);
+                        }
+                        MatchLabel::Inlier => {
+                            statics += 1;
+                            static_in += usize::from(member);
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "{scenario}: {reported} frames reported, static {static_in} / {statics} in, \
+             mismatches {outliers_in} / {outliers} in"
+        );
+        assert!(
+            reported >= 25,
+            "{scenario}: {reported} frames with a support"
+        );
+        assert!(
+            (static_in as f64) > 0.8 * statics as f64,
+            "{scenario}: static {static_in} of {statics} in the support"
+        );
+        assert!(
+            (outliers_in as f64) < 0.1 * outliers.max(1) as f64,
+            "{scenario}: mismatches {outliers_in} of {outliers} in the support"
+        );
+    }
+}
