@@ -215,6 +215,17 @@ pub struct FinalFitOptions {
     /// twenty-first session). The static scenes along KITTI are never flagged. Default true
     /// since the twenty-first session (false before).
     pub learnt_never_after_flag: bool,
+    /// The support's neighbourhood test on a rig of several cameras ([`neighbour_kept`]; 0:
+    /// off, the default): a match of the support whose `neighbour_count` nearest matches of
+    /// the same camera (first-image pixels, all the frame's matches) lie in the support less
+    /// often than this share is left out, and the stage runs again on the rest. An object's
+    /// matches cluster in the image; those whose flow happens to fit the static epipolar
+    /// geometry pass the residual test while their neighbours on the same object do not
+    /// (docs/RESULTS.md §9, twenty-eighth session, support42). Not applied where fewer than
+    /// half of the matches the stage was given would remain. One camera: no effect.
+    pub neighbour_share: f64,
+    /// The neighbours counted by `neighbour_share` (default 8).
+    pub neighbour_count: usize,
     /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
     /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as
     /// `angle_plane_ml_rig`), instead of each camera's own. `angle_plane_ml` converts each
@@ -262,6 +273,8 @@ impl Default for FinalFitOptions {
             learnt_cauchy_max: 6.0,
             learnt_least_squares_share: 0.0,
             learnt_never_after_flag: true,
+            neighbour_share: 0.0,
+            neighbour_count: 8,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
             ml_rig_reference: true,
@@ -380,6 +393,15 @@ impl FinalFitOptions {
                 "odometry.final_fit.parallax_cap_min_outside must be within [0, 1], found {}",
                 self.parallax_cap_min_outside
             ));
+        }
+        if !(0.0..=1.0).contains(&self.neighbour_share) {
+            return Err(format!(
+                "odometry.final_fit.neighbour_share must be within [0, 1], found {}",
+                self.neighbour_share
+            ));
+        }
+        if self.neighbour_share > 0.0 && self.neighbour_count == 0 {
+            return Err("odometry.final_fit.neighbour_count must be at least 1".into());
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
             return Err(format!(
@@ -912,7 +934,12 @@ fn refit_once(
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>, Vec<Vec<bool>>)> {
+) -> Option<(
+    FrameSolution,
+    Vec<usize>,
+    Option<ParallaxTally>,
+    Vec<Vec<bool>>,
+)> {
     let scale = ctx.loss.scale();
     // The support found at the start is read in place (no copy of its matches and constants).
     let found;
@@ -1212,6 +1239,62 @@ pub fn support(
     support_at(ctx, opts, obs, from)
         .found
         .map(|(core, _, _, _, _)| core)
+}
+
+/// The membership of [`support`]'s matches among `obs` (per camera, per match); `None` where
+/// the stage would not refit.
+pub fn support_mask(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> Option<Vec<Vec<bool>>> {
+    support_at(ctx, opts, obs, from)
+        .found
+        .map(|(_, _, _, _, mask)| mask)
+}
+
+/// The neighbourhood test (`neighbour_share`): of the matches `given` (per camera, per match of
+/// `obs`), those kept, i.e. all but the members of `support` (a subset of `given`) whose `count`
+/// nearest other matches of the same camera (by first-image pixel, among all of `obs`'s) are
+/// members of `support` less often than `share`. A camera with at most `count` matches keeps
+/// its own.
+pub fn neighbour_kept(
+    obs: &FrameObservations,
+    given: &[Vec<bool>],
+    support: &[Vec<bool>],
+    count: usize,
+    share: f64,
+) -> Vec<Vec<bool>> {
+    obs.per_camera
+        .iter()
+        .zip(given)
+        .zip(support)
+        .map(|((ms, g), s)| {
+            let n = ms.len();
+            if n <= count || count == 0 {
+                return g.clone();
+            }
+            let mut d: Vec<(f64, usize)> = Vec::with_capacity(n);
+            (0..n)
+                .map(|i| {
+                    if !(g[i] && s[i]) {
+                        return g[i];
+                    }
+                    d.clear();
+                    d.extend(
+                        ms.iter()
+                            .enumerate()
+                            .filter(|(j, _)| *j != i)
+                            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
+                    );
+                    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
+                    let members = d[..count].iter().filter(|(_, j)| s[*j]).count();
+                    members as f64 >= share * count as f64
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// [`support`], kept for the stage itself ([`FinalFitContext::stage`]).

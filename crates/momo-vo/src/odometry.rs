@@ -1392,6 +1392,17 @@ impl Odometry {
                 self.first_stage = None;
                 if !standstill && next_stage != crate::separate::NextStage::Done {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
+                    // The support's neighbourhood test (`final_fit.neighbour_share`).
+                    let next_stage = self
+                        .neighbour_stage(
+                            obs,
+                            &next_stage,
+                            &sol.params,
+                            &fixed,
+                            diag.scale,
+                            competing,
+                        )
+                        .unwrap_or(next_stage);
                     let (tally, support);
                     (sol, tally, support) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
@@ -2045,6 +2056,54 @@ impl Odometry {
         ctx.constants = constants;
         ctx.stage = stage;
         crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+    }
+
+    /// The final stage's matches after the support's neighbourhood test
+    /// (`odometry.final_fit.neighbour_share`, [`crate::final_fit::neighbour_kept`]) on a rig of
+    /// several cameras: the matches `next` hands the stage less the support's members whose
+    /// neighbours are mostly outside it (at `from`), as [`crate::separate::NextStage::FinalFitOn`];
+    /// `None` where the test is off, leaves nothing out or would leave fewer than half.
+    fn neighbour_stage(
+        &self,
+        obs: &FrameObservations,
+        next: &crate::separate::NextStage,
+        from: &[f64],
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+    ) -> Option<crate::separate::NextStage> {
+        let opts = &self.config.odometry.final_fit;
+        if !(opts.enabled && opts.neighbour_share > 0.0 && self.rig.len() > 1) {
+            return None;
+        }
+        let given: Vec<Vec<bool>> = match next {
+            crate::separate::NextStage::FinalFitOn(m) => m.clone(),
+            crate::separate::NextStage::FinalFit => {
+                obs.per_camera.iter().map(|m| vec![true; m.len()]).collect()
+            }
+            crate::separate::NextStage::Done => return None,
+        };
+        let mut fixed = fixed.to_vec();
+        if let Some(i) = self.estimator.arc_length_index()
+            && scale != ScaleSource::Estimated
+        {
+            fixed[i] = true;
+        }
+        let ctx = self.final_fit_context(&fixed, competing);
+        let chosen = crate::separate::subset(obs, &given);
+        let kept = crate::final_fit::support_mask(&ctx, opts, &chosen, from)?;
+        let support = superset_mask(&given, &kept);
+        let reduced = crate::final_fit::neighbour_kept(
+            obs,
+            &given,
+            &support,
+            opts.neighbour_count,
+            opts.neighbour_share,
+        );
+        let n = |m: &[Vec<bool>]| m.iter().flatten().filter(|k| **k).count();
+        let (before, after) = (n(&given), n(&reduced));
+        (after < before && 2 * after >= before)
+            .then_some(crate::separate::NextStage::FinalFitOn(reduced))
     }
 
     fn solve_with_restarts(
