@@ -1756,7 +1756,7 @@ mod tests {
                 constants: None,
                 stage: None,
             };
-            let (sol, _, _) = refit_once(&ctx, opts, &obs, &[], &from).expect("refits");
+            let (sol, _, _, _) = refit_once(&ctx, opts, &obs, &[], &from).expect("refits");
             format!("{:?}", sol.params)
         };
         // The refit's Cauchy loss without the learnt scale (the default's before the
@@ -1976,9 +1976,83 @@ mod tests {
         0.5 * (lo + hi)
     }
 
+    /// A match at pixel `(u, v)` (bearings unused by the neighbourhood test).
+    fn at(u: f64, v: f64) -> momo_core::Observation {
+        let px = nalgebra::Vector2::new(u, v);
+        let f = nalgebra::Vector3::new(u, v, 100.0).normalize();
+        momo_core::Observation {
+            px0: px,
+            px1: px,
+            f0: f,
+            f1: f,
+        }
+    }
+
+    #[test]
+    fn the_neighbourhood_test_leaves_out_members_among_non_members() {
+        // One camera: a 5 x 5 grid of support members (10 px apart) and, 200 px away, a
+        // cluster of 9 non-members (an object) with one member in its middle; a second camera
+        // with 3 matches (at most `count`: kept as given).
+        let mut cam0 = Vec::new();
+        let mut member = Vec::new();
+        for i in 0..5 {
+            for j in 0..5 {
+                cam0.push(at(10.0 * f64::from(i), 10.0 * f64::from(j)));
+                member.push(true);
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                cam0.push(at(200.0 + 5.0 * f64::from(i), 200.0 + 5.0 * f64::from(j)));
+                member.push(i == 1 && j == 1);
+            }
+        }
+        let cam1 = vec![at(0.0, 0.0), at(1.0, 0.0), at(2.0, 0.0)];
+        let obs = FrameObservations {
+            per_camera: vec![cam0, cam1],
+            cross_camera: Vec::new(),
+        };
+        let mut given = vec![vec![true; member.len()], vec![true, false, true]];
+        // A member of the grid that was not given stays out.
+        given[0][0] = false;
+        let mut support = vec![member.clone(), vec![true, false, false]];
+        support[0][0] = false;
+        let kept = neighbour_kept(&obs, &given, &support, 8, 0.375);
+        let middle = 25 + 4;
+        assert!(!kept[0][middle], "the object's lone member is left out");
+        assert!(!kept[0][0], "a match not given stays out");
+        for (i, k) in kept[0].iter().enumerate() {
+            if i != middle && i != 0 {
+                assert!(
+                    *k,
+                    "match {i} kept (a grid member, or given but not a member)"
+                );
+            }
+        }
+        assert_eq!(
+            kept[1], given[1],
+            "a camera with at most `count` matches is kept"
+        );
+        // A share of 0 keeps every given match.
+        assert_eq!(neighbour_kept(&obs, &given, &support, 8, 0.0), given);
+    }
+
     #[test]
     fn options_validate_and_parse() {
         assert!(FinalFitOptions::default().validate().is_ok());
+        for share in [-0.1, 1.5, f64::NAN] {
+            let bad = FinalFitOptions {
+                neighbour_share: share,
+                ..FinalFitOptions::default()
+            };
+            assert!(bad.validate().unwrap_err().contains("neighbour_share"));
+        }
+        let bad = FinalFitOptions {
+            neighbour_share: 0.5,
+            neighbour_count: 0,
+            ..FinalFitOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("neighbour_count"));
         let bad = FinalFitOptions {
             inlier_sigmas: 0.0,
             ..FinalFitOptions::default()

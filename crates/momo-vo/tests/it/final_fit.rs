@@ -373,14 +373,20 @@ fn one_reference_focal_length_changes_nothing_on_a_rig_of_one_focal_length() {
     }
 }
 
-/// Per frame pair of `cfg` with the `[odometry]` lines `odometry` (first-stage covariance off,
-/// so the diagnostics' `inliers_per_camera` are the final stage's support sizes): the motion's
-/// rotation and translation bits and the diagnostics.
-fn diagnostics_of(cfg: &SimConfig, odometry: &str) -> Vec<(Vec<u64>, momo_vo::FrameDiagnostics)> {
+/// Per frame pair of `cfg` with the `[odometry]` lines `odometry` and the `[odometry.final_fit]`
+/// lines `final_fit` (first-stage covariance off, so the diagnostics' `inliers_per_camera` are
+/// the final stage's support sizes): the motion's rotation and translation bits and the
+/// diagnostics.
+fn diagnostics_of(
+    cfg: &SimConfig,
+    odometry: &str,
+    final_fit: &str,
+) -> Vec<(Vec<u64>, momo_vo::FrameDiagnostics)> {
     let sim = simulate(cfg).expect("the scenario simulates");
     let seq = &sim.sequence;
-    let text =
-        format!("[odometry]\n{odometry}\n[odometry.final_fit]\nfirst_stage_covariance = false\n");
+    let text = format!(
+        "[odometry]\n{odometry}\n[odometry.final_fit]\nfirst_stage_covariance = false\n{final_fit}\n"
+    );
     let config = Config::from_toml_str(&text, "ff.toml").expect("a valid configuration");
     let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
     (1..seq.num_frames())
@@ -410,8 +416,8 @@ fn the_reported_support_is_the_final_stages_and_changes_nothing_else() {
         cfg.frames = 31;
         cfg.seed = 3;
         let sim = simulate(&cfg).expect("the scenario simulates");
-        let off = diagnostics_of(&cfg, "report_support = false");
-        let on = diagnostics_of(&cfg, "report_support = true");
+        let off = diagnostics_of(&cfg, "report_support = false", "");
+        let on = diagnostics_of(&cfg, "report_support = true", "");
         let (mut reported, mut outliers_in, mut outliers, mut static_in, mut statics) =
             (0, 0, 0, 0, 0);
         for (k, ((bits_off, d_off), (bits_on, d_on))) in off.iter().zip(&on).enumerate() {
@@ -478,4 +484,67 @@ fn the_reported_support_is_the_final_stages_and_changes_nothing_else() {
             "{scenario}: mismatches {outliers_in} of {outliers} in the support"
         );
     }
+}
+
+/// Over every frame with a reported support of the run of `cfg` with the `[odometry.final_fit]`
+/// lines `final_fit`: the static and the object matches in it, and each frame's motion bits.
+fn support_by_label(cfg: &SimConfig, final_fit: &str) -> (usize, usize, Vec<Vec<u64>>) {
+    let sim = simulate(cfg).expect("the scenario simulates");
+    let (mut statics, mut objects) = (0, 0);
+    let mut bits = Vec::new();
+    for (k, (b, d)) in diagnostics_of(cfg, "report_support = true", final_fit)
+        .into_iter()
+        .enumerate()
+    {
+        bits.push(b);
+        let Some(support) = d.support else { continue };
+        for (j, idx) in support.iter().enumerate() {
+            for &i in idx {
+                match sim.labels[k + 1][j][i] {
+                    MatchLabel::Inlier => statics += 1,
+                    MatchLabel::MovingObject => objects += 1,
+                    _ => {}
+                }
+            }
+        }
+    }
+    (statics, objects, bits)
+}
+
+#[test]
+fn the_neighbourhood_test_leaves_object_matches_out_of_a_rigs_support() {
+    // `final_fit.neighbour_share = 0.375` on the four-camera rig with traffic all around
+    // (built-in drive, 30 frame pairs, seed 3; measured: objects 3,201 -> 2,234, static 6,644
+    // -> 6,190): the object matches that pass the residual test
+    // next to their object's rejected ones leave the support, most static ones stay (along
+    // KITTI, rigtraffic s1 + four rigdev sequences, 7,749 frames: objects in the support 58.6
+    // -> 28.0 per frame, static 224.4 -> 202.4; docs/RESULTS.md §9, twenty-eighth session,
+    // support42). On one camera (`outliers`) it changes nothing, bit for bit.
+    let mut cfg = SimConfig::scenario("moving_traffic_surround").expect("a listed scenario");
+    cfg.frames = 31;
+    cfg.seed = 3;
+    let off = support_by_label(&cfg, "");
+    let on = support_by_label(&cfg, "neighbour_share = 0.375");
+    eprintln!(
+        "static / object matches in the support: off {} / {}, on {} / {}",
+        off.0, off.1, on.0, on.1
+    );
+    assert!(
+        (on.1 as f64) < 0.8 * off.1 as f64,
+        "objects in the support: {} with the test, {} without",
+        on.1,
+        off.1
+    );
+    assert!(
+        (on.0 as f64) > 0.8 * off.0 as f64,
+        "static matches in the support: {} with the test, {} without",
+        on.0,
+        off.0
+    );
+    let mut mono = SimConfig::outliers();
+    mono.frames = 31;
+    mono.seed = 3;
+    let a = support_by_label(&mono, "");
+    let b = support_by_label(&mono, "neighbour_share = 0.375");
+    assert_eq!(a.2, b.2, "one camera: the motions are the same");
 }
