@@ -923,6 +923,15 @@ impl<'a> FinalFitContext<'a> {
     }
 }
 
+/// [`refit_once`]'s result: the refit solution, its support size per camera, the learnt cap's
+/// counts and the support's membership among the given matches.
+type Pass = (
+    FrameSolution,
+    Vec<usize>,
+    Option<ParallaxTally>,
+    Vec<Vec<bool>>,
+);
+
 /// One pass of the stage from the parameters `from`: the refit solution, its support size
 /// per camera, the learnt cap's counts and the support's membership among `obs`, or `None`
 /// (noise not estimable, support too small, refit failed). `constants`:
@@ -934,12 +943,7 @@ fn refit_once(
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(
-    FrameSolution,
-    Vec<usize>,
-    Option<ParallaxTally>,
-    Vec<Vec<bool>>,
-)> {
+) -> Option<Pass> {
     let scale = ctx.loss.scale();
     // The support found at the start is read in place (no copy of its matches and constants).
     let found;
