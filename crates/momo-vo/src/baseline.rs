@@ -128,6 +128,7 @@ impl MotionDriver for FivePointBaseline {
             competing: None,
             residual_clustering: f64::NAN,
             road_alternative: None,
+            support: None,
         };
         FrameResult {
             motion,

@@ -393,6 +393,11 @@ pub struct OdometryOptions {
     /// other outside the support as often as anywhere, an object moving against the support
     /// more often). Default 0.1.
     pub quiet_other_share: f64,
+    /// Write the final stage's support into the diagnostics (`support` of each frame's row:
+    /// per camera, the indices of the matches the final stage refit on, counted among that
+    /// camera's rows of the frame in matches.csv's order). An analysis aid: it changes no
+    /// estimate. false (the default): the field is not written (byte-identical diagnostics).
+    pub report_support: bool,
 }
 
 /// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
@@ -446,6 +451,7 @@ impl Default for OdometryOptions {
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,
+            report_support: false,
         }
     }
 }

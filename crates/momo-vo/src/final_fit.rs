@@ -215,6 +215,17 @@ pub struct FinalFitOptions {
     /// twenty-first session). The static scenes along KITTI are never flagged. Default true
     /// since the twenty-first session (false before).
     pub learnt_never_after_flag: bool,
+    /// The support's neighbourhood test on a rig of several cameras ([`neighbour_kept`]; 0:
+    /// off, the default): a match of the support whose `neighbour_count` nearest matches of
+    /// the same camera (first-image pixels, all the frame's matches) lie in the support less
+    /// often than this share is left out, and the stage runs again on the rest. An object's
+    /// matches cluster in the image; those whose flow happens to fit the static epipolar
+    /// geometry pass the residual test while their neighbours on the same object do not
+    /// (docs/RESULTS.md §9, twenty-eighth session, support42). Not applied where fewer than
+    /// half of the matches the stage was given would remain. One camera: no effect.
+    pub neighbour_share: f64,
+    /// The neighbours counted by `neighbour_share` (default 8).
+    pub neighbour_count: usize,
     /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
     /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as
     /// `angle_plane_ml_rig`), instead of each camera's own. `angle_plane_ml` converts each
@@ -262,6 +273,8 @@ impl Default for FinalFitOptions {
             learnt_cauchy_max: 6.0,
             learnt_least_squares_share: 0.0,
             learnt_never_after_flag: true,
+            neighbour_share: 0.0,
+            neighbour_count: 8,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
             ml_rig_reference: true,
@@ -380,6 +393,15 @@ impl FinalFitOptions {
                 "odometry.final_fit.parallax_cap_min_outside must be within [0, 1], found {}",
                 self.parallax_cap_min_outside
             ));
+        }
+        if !(0.0..=1.0).contains(&self.neighbour_share) {
+            return Err(format!(
+                "odometry.final_fit.neighbour_share must be within [0, 1], found {}",
+                self.neighbour_share
+            ));
+        }
+        if self.neighbour_share > 0.0 && self.neighbour_count == 0 {
+            return Err("odometry.final_fit.neighbour_count must be at least 1".into());
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
             return Err(format!(
@@ -764,8 +786,15 @@ pub struct StageSupport {
     found: Option<Kept>,
 }
 
-/// [`stage_support`]'s result: the matches kept, their constants, `σ̂`, the learnt cap's counts.
-type Kept = (FrameObservations, Vec<f64>, f64, Option<ParallaxTally>);
+/// [`stage_support`]'s result: the matches kept, their constants, `σ̂`, the learnt cap's counts,
+/// and the kept matches' membership among the given ones (per camera, per match).
+type Kept = (
+    FrameObservations,
+    Vec<f64>,
+    f64,
+    Option<ParallaxTally>,
+    Vec<Vec<bool>>,
+);
 
 impl StageSupport {
     /// The matches kept ([`support`]); `None` where the stage would not refit.
@@ -817,6 +846,23 @@ pub fn refit_tallied(
     obs: &FrameObservations,
     first: FrameSolution,
 ) -> (FrameSolution, Option<ParallaxTally>) {
+    let (fin, tally, _) = refit_supported(ctx, opts, obs, first);
+    (fin, tally)
+}
+
+/// The stage's support membership: per camera, per match of the matches the stage was given,
+/// whether the (last) refit used it; `None` where the stage did not refit.
+pub type SupportMask = Option<Vec<Vec<bool>>>;
+
+/// [`refit_tallied`], and the support of the last pass that refit ([`SupportMask`]: the
+/// matches within `inlier_sigmas · σ̂` under the caps, steps 1 and 2 of the module doc), for
+/// `odometry.report_support`.
+pub fn refit_supported(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    first: FrameSolution,
+) -> (FrameSolution, Option<ParallaxTally>, SupportMask) {
     // The stage metric's per-match constants of every match, computed once for every pass:
     // the residual norms on all matches and each refit on its support read them.
     let owned;
@@ -829,13 +875,15 @@ pub fn refit_tallied(
     };
     let mut best: Option<FrameSolution> = None;
     let mut tally = None;
+    let mut mask = None;
     for _ in 0..opts.passes.max(1) {
         let from = best.as_ref().map_or(&first.params, |b| &b.params);
         match refit_once(ctx, opts, obs, constants, from) {
-            Some((mut fin, support, frame_tally)) => {
+            Some((mut fin, support, frame_tally, kept)) => {
                 if best.is_none() {
                     tally = frame_tally;
                 }
+                mask = Some(kept);
                 fin.report.iterations += best
                     .as_ref()
                     .map_or(first.report.iterations, |b| b.report.iterations);
@@ -846,7 +894,7 @@ pub fn refit_tallied(
         }
     }
     let Some(mut fin) = best else {
-        return (first, None);
+        return (first, None, None);
     };
     if opts.first_stage_covariance {
         // The covariance (and the inlier count and mask, which index all matches) of the
@@ -856,7 +904,7 @@ pub fn refit_tallied(
         fin.inliers_per_camera = first.inliers_per_camera;
         fin.inlier_mask = first.inlier_mask;
     }
-    (fin, tally)
+    (fin, tally, mask)
 }
 
 impl<'a> FinalFitContext<'a> {
@@ -875,8 +923,18 @@ impl<'a> FinalFitContext<'a> {
     }
 }
 
-/// One pass of the stage from the parameters `from`: the refit solution and its support size
-/// per camera, or `None` (noise not estimable, support too small, refit failed). `constants`:
+/// [`refit_once`]'s result: the refit solution, its support size per camera, the learnt cap's
+/// counts and the support's membership among the given matches.
+type Pass = (
+    FrameSolution,
+    Vec<usize>,
+    Option<ParallaxTally>,
+    Vec<Vec<bool>>,
+);
+
+/// One pass of the stage from the parameters `from`: the refit solution, its support size
+/// per camera, the learnt cap's counts and the support's membership among `obs`, or `None`
+/// (noise not estimable, support too small, refit failed). `constants`:
 /// the stage metric's per-match constants of `obs` ([`FrameEstimator::match_constants`]; empty:
 /// each problem computes its own).
 fn refit_once(
@@ -885,22 +943,23 @@ fn refit_once(
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameSolution, Vec<usize>, Option<ParallaxTally>)> {
+) -> Option<Pass> {
     let scale = ctx.loss.scale();
     // The support found at the start is read in place (no copy of its matches and constants).
     let found;
-    let (core, core_constants, sigma, tally) = match ctx
+    let (core, core_constants, sigma, tally, kept) = match ctx
         .stage
         .filter(|s| s.competing == ctx.competing && s.from == from)
     {
         Some(s) => {
-            let (core, constants, sigma, tally) = s.found.as_ref()?;
-            (core, &constants[..], *sigma, tally.clone())
+            let (core, constants, sigma, tally, kept) = s.found.as_ref()?;
+            (core, &constants[..], *sigma, tally.clone(), kept)
         }
         None => {
-            let (core, constants, sigma, tally) = stage_support(ctx, opts, obs, constants, from)?;
-            found = (core, constants);
-            (&found.0, &found.1[..], sigma, tally)
+            let (core, constants, sigma, tally, kept) =
+                stage_support(ctx, opts, obs, constants, from)?;
+            found = (core, constants, kept);
+            (&found.0, &found.1[..], sigma, tally, &found.2)
         }
     };
     let req = ctx.request(obs, from);
@@ -962,7 +1021,7 @@ fn refit_once(
                 && fin.report.final_cost.is_finite() =>
         {
             let support = core.per_camera.iter().map(Vec::len).collect();
-            Some((fin, support, tally))
+            Some((fin, support, tally, kept.clone()))
         }
         _ => None,
     }
@@ -972,14 +1031,14 @@ fn refit_once(
 /// parameters `from`: the matches kept, their per-match constants (empty where `constants`
 /// does not cover `obs`), the noise `σ̂` and, with `learnt_parallax_cap`, the frame's counts
 /// for [`ParallaxTally`] (before its cap); `None` where the noise cannot be estimated or
-/// fewer than [`MIN_SUPPORT`] matches are kept.
+/// fewer than [`MIN_SUPPORT`] matches are kept. Also the kept matches' membership among `obs`.
 fn stage_support(
     ctx: &FinalFitContext<'_>,
     opts: &FinalFitOptions,
     obs: &FrameObservations,
     constants: &[f64],
     from: &[f64],
-) -> Option<(FrameObservations, Vec<f64>, f64, Option<ParallaxTally>)> {
+) -> Option<Kept> {
     let scale = ctx.loss.scale();
     if !(scale.is_finite() && scale > 0.0) {
         return None;
@@ -1084,6 +1143,7 @@ fn stage_support(
         })
         .collect();
     let mut k = 0;
+    let mut members: Vec<Vec<bool>> = Vec::with_capacity(obs.per_camera.len());
     let core = FrameObservations {
         per_camera: obs
             .per_camera
@@ -1093,19 +1153,23 @@ fn stage_support(
             .enumerate()
             .map(|(j, ((ms, pass), limit))| {
                 let mut kept = Vec::with_capacity(ms.len());
+                let mut member = Vec::with_capacity(ms.len());
                 for (i, (o, (ok, par))) in ms.iter().zip(pass).enumerate() {
                     let rel = learnt
                         .as_ref()
                         .and_then(|l| l[j][i])
                         .map_or(0.0, |(r, _)| r);
-                    if *ok && !(*par > *limit) && !(rel >= learnt_limits[j]) {
+                    let keep = *ok && !(*par > *limit) && !(rel >= learnt_limits[j]);
+                    if keep {
                         kept.push(*o);
                         if share {
                             core_constants.extend_from_slice(&constants[k * m..(k + 1) * m]);
                         }
                     }
+                    member.push(keep);
                     k += 1;
                 }
+                members.push(member);
                 kept
             })
             .collect(),
@@ -1114,7 +1178,7 @@ fn stage_support(
     if core.len() < MIN_SUPPORT {
         return None;
     }
-    Some((core, core_constants, sigma, tally))
+    Some((core, core_constants, sigma, tally, members))
 }
 
 /// Per camera, per match of `obs`: for the support's matches (`passing`) and the band's
@@ -1178,7 +1242,63 @@ pub fn support(
 ) -> Option<FrameObservations> {
     support_at(ctx, opts, obs, from)
         .found
-        .map(|(core, _, _, _)| core)
+        .map(|(core, _, _, _, _)| core)
+}
+
+/// The membership of [`support`]'s matches among `obs` (per camera, per match); `None` where
+/// the stage would not refit.
+pub fn support_mask(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    from: &[f64],
+) -> Option<Vec<Vec<bool>>> {
+    support_at(ctx, opts, obs, from)
+        .found
+        .map(|(_, _, _, _, mask)| mask)
+}
+
+/// The neighbourhood test (`neighbour_share`): of the matches `given` (per camera, per match of
+/// `obs`), those kept, i.e. all but the members of `support` (a subset of `given`) whose `count`
+/// nearest other matches of the same camera (by first-image pixel, among all of `obs`'s) are
+/// members of `support` less often than `share`. A camera with at most `count` matches keeps
+/// its own.
+pub fn neighbour_kept(
+    obs: &FrameObservations,
+    given: &[Vec<bool>],
+    support: &[Vec<bool>],
+    count: usize,
+    share: f64,
+) -> Vec<Vec<bool>> {
+    obs.per_camera
+        .iter()
+        .zip(given)
+        .zip(support)
+        .map(|((ms, g), s)| {
+            let n = ms.len();
+            if n <= count || count == 0 {
+                return g.clone();
+            }
+            let mut d: Vec<(f64, usize)> = Vec::with_capacity(n);
+            (0..n)
+                .map(|i| {
+                    if !(g[i] && s[i]) {
+                        return g[i];
+                    }
+                    d.clear();
+                    d.extend(
+                        ms.iter()
+                            .enumerate()
+                            .filter(|(j, _)| *j != i)
+                            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
+                    );
+                    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
+                    let members = d[..count].iter().filter(|(_, j)| s[*j]).count();
+                    members as f64 >= share * count as f64
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// [`support`], kept for the stage itself ([`FinalFitContext::stage`]).
@@ -1640,7 +1760,7 @@ mod tests {
                 constants: None,
                 stage: None,
             };
-            let (sol, _, _) = refit_once(&ctx, opts, &obs, &[], &from).expect("refits");
+            let (sol, _, _, _) = refit_once(&ctx, opts, &obs, &[], &from).expect("refits");
             format!("{:?}", sol.params)
         };
         // The refit's Cauchy loss without the learnt scale (the default's before the
@@ -1860,9 +1980,83 @@ mod tests {
         0.5 * (lo + hi)
     }
 
+    /// A match at pixel `(u, v)` (bearings unused by the neighbourhood test).
+    fn at(u: f64, v: f64) -> momo_core::Observation {
+        let px = nalgebra::Vector2::new(u, v);
+        let f = nalgebra::Vector3::new(u, v, 100.0).normalize();
+        momo_core::Observation {
+            px0: px,
+            px1: px,
+            f0: f,
+            f1: f,
+        }
+    }
+
+    #[test]
+    fn the_neighbourhood_test_leaves_out_members_among_non_members() {
+        // One camera: a 5 x 5 grid of support members (10 px apart) and, 200 px away, a
+        // cluster of 9 non-members (an object) with one member in its middle; a second camera
+        // with 3 matches (at most `count`: kept as given).
+        let mut cam0 = Vec::new();
+        let mut member = Vec::new();
+        for i in 0..5 {
+            for j in 0..5 {
+                cam0.push(at(10.0 * f64::from(i), 10.0 * f64::from(j)));
+                member.push(true);
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                cam0.push(at(200.0 + 5.0 * f64::from(i), 200.0 + 5.0 * f64::from(j)));
+                member.push(i == 1 && j == 1);
+            }
+        }
+        let cam1 = vec![at(0.0, 0.0), at(1.0, 0.0), at(2.0, 0.0)];
+        let obs = FrameObservations {
+            per_camera: vec![cam0, cam1],
+            cross_camera: Vec::new(),
+        };
+        let mut given = vec![vec![true; member.len()], vec![true, false, true]];
+        // A member of the grid that was not given stays out.
+        given[0][0] = false;
+        let mut support = vec![member.clone(), vec![true, false, false]];
+        support[0][0] = false;
+        let kept = neighbour_kept(&obs, &given, &support, 8, 0.375);
+        let middle = 25 + 4;
+        assert!(!kept[0][middle], "the object's lone member is left out");
+        assert!(!kept[0][0], "a match not given stays out");
+        for (i, k) in kept[0].iter().enumerate() {
+            if i != middle && i != 0 {
+                assert!(
+                    *k,
+                    "match {i} kept (a grid member, or given but not a member)"
+                );
+            }
+        }
+        assert_eq!(
+            kept[1], given[1],
+            "a camera with at most `count` matches is kept"
+        );
+        // A share of 0 keeps every given match.
+        assert_eq!(neighbour_kept(&obs, &given, &support, 8, 0.0), given);
+    }
+
     #[test]
     fn options_validate_and_parse() {
         assert!(FinalFitOptions::default().validate().is_ok());
+        for share in [-0.1, 1.5, f64::NAN] {
+            let bad = FinalFitOptions {
+                neighbour_share: share,
+                ..FinalFitOptions::default()
+            };
+            assert!(bad.validate().unwrap_err().contains("neighbour_share"));
+        }
+        let bad = FinalFitOptions {
+            neighbour_share: 0.5,
+            neighbour_count: 0,
+            ..FinalFitOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("neighbour_count"));
         let bad = FinalFitOptions {
             inlier_sigmas: 0.0,
             ..FinalFitOptions::default()

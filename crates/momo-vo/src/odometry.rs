@@ -123,6 +123,14 @@ pub struct FrameDiagnostics {
     /// (all of the model's); `None` where there was none.
     #[serde(default)]
     pub road_alternative: Option<Vec<f64>>,
+    /// The final stage's support ([`crate::final_fit`]), with `odometry.report_support` only:
+    /// per camera, the indices of the matches the stage refit on (its last pass), counted
+    /// among the camera's matches of the frame in input order (matches.csv's rows of that
+    /// camera and frame). `None` (not written) where the option is off or where no final stage
+    /// refit the frame (standstill, too few matches, the stage off, not estimable or failed:
+    /// the reported motion is then the first stage's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<Vec<Vec<usize>>>,
 }
 
 /// The result of one frame pair.
@@ -1163,6 +1171,7 @@ impl Odometry {
             competing: None,
             residual_clustering: f64::NAN,
             road_alternative: None,
+            support: None,
         };
 
         {
@@ -1394,8 +1403,19 @@ impl Odometry {
                 self.first_stage = None;
                 if !standstill && next_stage != crate::separate::NextStage::Done {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
-                    let tally;
-                    (sol, tally) = match &next_stage {
+                    // The support's neighbourhood test (`final_fit.neighbour_share`).
+                    let next_stage = self
+                        .neighbour_stage(
+                            obs,
+                            &next_stage,
+                            &sol.params,
+                            &fixed,
+                            diag.scale,
+                            competing,
+                        )
+                        .unwrap_or(next_stage);
+                    let (tally, support);
+                    (sol, tally, support) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
                             // The kept matches' constants, where the frame has them already.
@@ -1404,7 +1424,7 @@ impl Odometry {
                                 .frame_constants
                                 .as_deref()
                                 .and_then(|c| subset_constants(c, m, mask));
-                            self.final_fit(
+                            let (sol, tally, kept) = self.final_fit(
                                 &chosen,
                                 sol,
                                 &fixed,
@@ -1412,7 +1432,9 @@ impl Odometry {
                                 competing,
                                 constants.as_deref(),
                                 None,
-                            )
+                            );
+                            // The support's membership among all the frame's matches.
+                            (sol, tally, kept.map(|k| superset_mask(mask, &k)))
                         }
                         _ => {
                             if self.config.odometry.final_fit.enabled {
@@ -1427,6 +1449,9 @@ impl Odometry {
                     };
                     if let Some(t) = tally {
                         self.parallax_tally.add(&t);
+                    }
+                    if self.config.odometry.report_support {
+                        diag.support = support.map(|k| support_indices(&k));
                     }
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
@@ -2027,10 +2052,14 @@ impl Odometry {
         competing: bool,
         constants: Option<&[f64]>,
         stage: Option<&crate::final_fit::StageSupport>,
-    ) -> (FrameSolution, Option<crate::final_fit::ParallaxTally>) {
+    ) -> (
+        FrameSolution,
+        Option<crate::final_fit::ParallaxTally>,
+        crate::final_fit::SupportMask,
+    ) {
         let opts = &self.config.odometry.final_fit;
         if !opts.enabled {
-            return (sol, None);
+            return (sol, None, None);
         }
         let mut fixed = fixed.to_vec();
         if let Some(i) = self.estimator.arc_length_index()
@@ -2041,7 +2070,55 @@ impl Odometry {
         let mut ctx = self.final_fit_context(&fixed, competing);
         ctx.constants = constants;
         ctx.stage = stage;
-        crate::final_fit::refit_tallied(&ctx, opts, obs, sol)
+        crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+    }
+
+    /// The final stage's matches after the support's neighbourhood test
+    /// (`odometry.final_fit.neighbour_share`, [`crate::final_fit::neighbour_kept`]) on a rig of
+    /// several cameras: the matches `next` hands the stage less the support's members whose
+    /// neighbours are mostly outside it (at `from`), as [`crate::separate::NextStage::FinalFitOn`];
+    /// `None` where the test is off, leaves nothing out or would leave fewer than half.
+    fn neighbour_stage(
+        &self,
+        obs: &FrameObservations,
+        next: &crate::separate::NextStage,
+        from: &[f64],
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+    ) -> Option<crate::separate::NextStage> {
+        let opts = &self.config.odometry.final_fit;
+        if !(opts.enabled && opts.neighbour_share > 0.0 && self.rig.len() > 1) {
+            return None;
+        }
+        let given: Vec<Vec<bool>> = match next {
+            crate::separate::NextStage::FinalFitOn(m) => m.clone(),
+            crate::separate::NextStage::FinalFit => {
+                obs.per_camera.iter().map(|m| vec![true; m.len()]).collect()
+            }
+            crate::separate::NextStage::Done => return None,
+        };
+        let mut fixed = fixed.to_vec();
+        if let Some(i) = self.estimator.arc_length_index()
+            && scale != ScaleSource::Estimated
+        {
+            fixed[i] = true;
+        }
+        let ctx = self.final_fit_context(&fixed, competing);
+        let chosen = crate::separate::subset(obs, &given);
+        let kept = crate::final_fit::support_mask(&ctx, opts, &chosen, from)?;
+        let support = superset_mask(&given, &kept);
+        let reduced = crate::final_fit::neighbour_kept(
+            obs,
+            &given,
+            &support,
+            opts.neighbour_count,
+            opts.neighbour_share,
+        );
+        let n = |m: &[Vec<bool>]| m.iter().flatten().filter(|k| **k).count();
+        let (before, after) = (n(&given), n(&reduced));
+        (after < before && 2 * after >= before)
+            .then_some(crate::separate::NextStage::FinalFitOn(reduced))
     }
 
     fn solve_with_restarts(
@@ -3217,6 +3294,33 @@ struct SoftDataView {
     q_d: nalgebra::DVector<f64>,
     /// The data's covariance of the residuals.
     v: nalgebra::DMatrix<f64>,
+}
+
+/// The membership among all matches of a subset's kept matches: `mask` chose the subset
+/// (per camera, per match), `kept` marks its kept matches in order (per camera).
+fn superset_mask(mask: &[Vec<bool>], kept: &[Vec<bool>]) -> Vec<Vec<bool>> {
+    mask.iter()
+        .zip(kept.iter().map(Some).chain(std::iter::repeat(None)))
+        .map(|(m, k)| {
+            let mut inner = k.map(|k| k.iter()).into_iter().flatten();
+            m.iter()
+                .map(|&chosen| chosen && inner.next().copied().unwrap_or(false))
+                .collect()
+        })
+        .collect()
+}
+
+/// Per camera, the indices of the matches where `mask` holds (`odometry.report_support`).
+fn support_indices(mask: &[Vec<bool>]) -> Vec<Vec<usize>> {
+    mask.iter()
+        .map(|m| {
+            m.iter()
+                .enumerate()
+                .filter(|(_, k)| **k)
+                .map(|(i, _)| i)
+                .collect()
+        })
+        .collect()
 }
 
 /// The per-match constants (`m` per match, camera by camera) of the matches `mask` keeps, in

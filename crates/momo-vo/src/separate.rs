@@ -144,6 +144,14 @@ pub struct SeparateOptions {
     /// With the memory, the final stage of a competing frame leaves out the remembered-other
     /// matches (not applied if fewer than half of the support remain).
     pub memory_exclude: bool,
+    /// With [`SeparateOptions::memory_exclude`] and [`SeparateOptions::final_fit`], the final
+    /// stage of a frame where no second motion competed leaves out the remembered-other
+    /// matches too (not applied if fewer than half of the matches remain): on the rig with
+    /// traffic all around, objects whose flow fits the static epipolar geometry pass the final
+    /// stage's residual test and sit in its support (docs/RESULTS.md §9, twenty-eighth
+    /// session, support42). false (the default): such a frame's final stage runs on all
+    /// matches.
+    pub memory_exclude_quiet: bool,
     /// Competition over time (0: off; needs [`SeparateOptions::memory_radius`]): a second
     /// motion competes only if the split of the matches between it and A persists from the
     /// previous frame pair, i.e. its [`persistence`] (how far the memory's static / other
@@ -384,6 +392,7 @@ impl Default for SeparateOptions {
             final_own_when_competing: false,
             memory_radius: 0.0,
             memory_exclude: false,
+            memory_exclude_quiet: false,
             persistence: 0.0,
             memory_final: false,
             own_share: 0.0,
@@ -474,6 +483,7 @@ impl SeparateOptions {
             final_fit: true,
             memory_radius: 20.0,
             memory_exclude: true,
+            memory_exclude_quiet: false,
             persistence: 0.4,
             own_share: 0.1,
             own_persistence: 0.2,
@@ -1605,6 +1615,16 @@ fn separate_with(
         // competed, as without the separation elsewhere.
         let next = if outcome.competing {
             NextStage::FinalFitOn(forgotten(mask))
+        } else if opts.memory_exclude_quiet {
+            // The remembered-other matches left out of all (`memory_exclude_quiet`).
+            let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
+            let total = count(&all);
+            let kept = forgotten(all);
+            if count(&kept) < total {
+                NextStage::FinalFitOn(kept)
+            } else {
+                NextStage::FinalFit
+            }
         } else {
             NextStage::FinalFit
         };
