@@ -216,7 +216,7 @@ pub struct FinalFitOptions {
     /// since the twenty-first session (false before).
     pub learnt_never_after_flag: bool,
     /// The support's neighbourhood test on a rig of several cameras ([`neighbour_kept`]; 0:
-    /// off, the default): a match of the support whose `neighbour_count` nearest matches of
+    /// off; default 0.375 since the twenty-eighth session): a match of the support whose `neighbour_count` nearest matches of
     /// the same camera (first-image pixels, all the frame's matches) lie in the support less
     /// often than this share is left out, and the stage runs again on the rest. An object's
     /// matches cluster in the image; those whose flow happens to fit the static epipolar
@@ -273,7 +273,9 @@ impl Default for FinalFitOptions {
             learnt_cauchy_max: 6.0,
             learnt_least_squares_share: 0.0,
             learnt_never_after_flag: true,
-            neighbour_share: 0.0,
+            // Since the twenty-eighth session (docs/RESULTS.md §9, twenty-eighth session,
+            // support42 and lead): no effect on a single camera.
+            neighbour_share: 0.375,
             neighbour_count: 8,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
