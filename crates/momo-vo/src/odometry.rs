@@ -2061,16 +2061,23 @@ impl Odometry {
         if !opts.enabled {
             return (sol, None, None);
         }
+        let fixed = self.stage_fixed(fixed, scale);
+        let mut ctx = self.final_fit_context(&fixed, competing);
+        ctx.constants = constants;
+        ctx.stage = stage;
+        crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+    }
+
+    /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
+    /// frame holds it (`scale` not [`ScaleSource::Estimated`]).
+    fn stage_fixed(&self, fixed: &[bool], scale: ScaleSource) -> Vec<bool> {
         let mut fixed = fixed.to_vec();
         if let Some(i) = self.estimator.arc_length_index()
             && scale != ScaleSource::Estimated
         {
             fixed[i] = true;
         }
-        let mut ctx = self.final_fit_context(&fixed, competing);
-        ctx.constants = constants;
-        ctx.stage = stage;
-        crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+        fixed
     }
 
     /// The final stage's matches after the support's neighbourhood test
@@ -2098,12 +2105,7 @@ impl Odometry {
             }
             crate::separate::NextStage::Done => return None,
         };
-        let mut fixed = fixed.to_vec();
-        if let Some(i) = self.estimator.arc_length_index()
-            && scale != ScaleSource::Estimated
-        {
-            fixed[i] = true;
-        }
+        let fixed = self.stage_fixed(fixed, scale);
         let ctx = self.final_fit_context(&fixed, competing);
         let chosen = crate::separate::subset(obs, &given);
         let kept = crate::final_fit::support_mask(&ctx, opts, &chosen, from)?;
