@@ -393,6 +393,15 @@ pub struct OdometryOptions {
     /// other outside the support as often as anywhere, an object moving against the support
     /// more often). Default 0.1.
     pub quiet_other_share: f64,
+    /// Decide a doubted frame by its alternatives' road scores (docs/RESULTS.md, twenty-ninth
+    /// session, monotail43): on a frame flagged `weak` that carries a competing motion or a
+    /// road alternative, the chosen motion, the competing motion, the road alternative and the
+    /// previous frame's motion (this frame's arc length) are scored by the separation's road
+    /// score ([`crate::hypotheses::score`], on each motion's own epipolar support at the
+    /// separation's threshold); the best replaces the chosen motion where its score exceeds
+    /// the chosen one's by at least this many (cells or matches, as the score counts). The
+    /// frame stays flagged and keeps the chosen motion's covariance. 0 (the default): off.
+    pub decide_by_road: usize,
     /// Write the final stage's support into the diagnostics (`support` of each frame's row:
     /// per camera, the indices of the matches the final stage refit on, counted among that
     /// camera's rows of the frame in matches.csv's order). An analysis aid: it changes no
@@ -451,6 +460,7 @@ impl Default for OdometryOptions {
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,
+            decide_by_road: 0,
             report_support: false,
         }
     }

@@ -1216,6 +1216,27 @@ impl HypothesisTracker {
         self.road_scores.clear();
     }
 
+    /// Replaces the last recorded tilt, yaw and road score by those of the motion that replaced
+    /// the frame's choice after the separation (`odometry.decide_by_road`); each only where one
+    /// was recorded.
+    pub(crate) fn replace_last(
+        &mut self,
+        opts: &HypothesesOptions,
+        tilt: f64,
+        yaw: f64,
+        road: usize,
+    ) {
+        if self.tilts.pop_back().is_some() {
+            self.record_tilt(opts, tilt);
+        }
+        if self.yaws.pop_back().is_some() {
+            self.record_yaw(opts, yaw);
+        }
+        if self.road_scores.pop_back().is_some() {
+            self.record_road(opts, road);
+        }
+    }
+
     /// Records a frame's chosen motion's [`tilt`], keeping the last
     /// [`HypothesesOptions::tilt_reference_frames`] (nothing where that is 0; a non-finite
     /// tilt is not recorded).

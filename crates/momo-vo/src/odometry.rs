@@ -1588,7 +1588,30 @@ impl Odometry {
                         None => ratio,
                     });
                 }
-                sol.params
+                let mut params = sol.params;
+                // `odometry.decide_by_road`: a doubted frame decided by its alternatives' road
+                // scores.
+                if self.config.odometry.decide_by_road > 0
+                    && !standstill
+                    && diag.status == FrameStatus::Weak
+                    && (diag.competing.is_some() || diag.road_alternative.is_some())
+                {
+                    let mut previous = init.clone();
+                    if let Some(i) = arc_index {
+                        previous[i] = params[i];
+                    }
+                    let alternatives: Vec<Vec<f64>> = diag
+                        .competing
+                        .iter()
+                        .map(|c| c.0.clone())
+                        .chain(diag.road_alternative.clone())
+                        .chain(std::iter::once(previous))
+                        .collect();
+                    if let Some(p) = self.decide_by_road(obs, &params, alternatives) {
+                        params = p;
+                    }
+                }
+                params
             }
             None => {
                 if diag.status == FrameStatus::Estimated {
@@ -1720,6 +1743,74 @@ impl Odometry {
             motion,
             diagnostics: diag,
         }
+    }
+
+    /// The separation's road score of `params` ([`crate::hypotheses::score`]) on its own
+    /// support (the matches within the separation's threshold of its epipolar geometry), with
+    /// that support; `None` where the separation or its hypotheses are off.
+    fn road_score_of(
+        &self,
+        obs: &FrameObservations,
+        params: &[f64],
+    ) -> Option<(usize, Vec<Vec<bool>>)> {
+        let opts = self
+            .config
+            .odometry
+            .separate
+            .as_ref()
+            .filter(|o| o.enabled)?;
+        let h = opts.hypotheses()?;
+        let motion = self.estimator.motion(params);
+        let support: Vec<Vec<bool>> =
+            crate::separate::epipolar_at_least(&self.rig, &motion, obs, opts.threshold)
+                .into_iter()
+                .map(|m| m.into_iter().map(|outside| !outside).collect())
+                .collect();
+        Some((
+            crate::hypotheses::score(h, &self.rig, &motion, obs, &support),
+            support,
+        ))
+    }
+
+    /// `odometry.decide_by_road`: the alternative whose road score exceeds the chosen motion's
+    /// by at least the option's margin (the best of them, [`pick_by_road`]), with the match
+    /// memory, the tilt, yaw and road history of the separation moved to it; `None` where the
+    /// chosen motion stays.
+    fn decide_by_road(
+        &mut self,
+        obs: &FrameObservations,
+        chosen: &[f64],
+        alternatives: Vec<Vec<f64>>,
+    ) -> Option<Vec<f64>> {
+        let (base, _) = self.road_score_of(obs, chosen)?;
+        let arc_index = self.estimator.arc_length_index();
+        let scored: Vec<_> = alternatives
+            .into_iter()
+            .filter(|a| a.len() == chosen.len() && a.iter().all(|x| x.is_finite()))
+            .map(|mut a| {
+                // The frame's own arc length (held or measured) for every alternative.
+                if let Some(i) = arc_index {
+                    a[i] = chosen[i];
+                }
+                a
+            })
+            .filter_map(|a| self.road_score_of(obs, &a).map(|(s, sup)| (a, s, sup)))
+            .collect();
+        let scores: Vec<usize> = scored.iter().map(|x| x.1).collect();
+        let best = pick_by_road(base, &scores, self.config.odometry.decide_by_road)?;
+        let (params, score, support) = scored.into_iter().nth(best)?;
+        if let Some(opts) = self.config.odometry.separate.as_ref() {
+            if opts.memory_radius > 0.0 {
+                self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
+            }
+            if let Some(h) = opts.hypotheses() {
+                let motion = self.estimator.motion(&params);
+                let tilt = crate::hypotheses::tilt(&motion);
+                let yaw = so3_log(&motion.rotation).z;
+                self.hypotheses.replace_last(h, tilt, yaw, score);
+            }
+        }
+        Some(params)
     }
 
     /// Whether the separation of this frame may skip its alternative solves
@@ -2975,6 +3066,22 @@ struct InfluenceFrame {
 
 /// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:
 /// `T_cam0(0)_cam0(k) = P0⁻¹ · (M_1 ⋯ M_k) · P0`.
+/// The choice of `odometry.decide_by_road`: the index of the highest of the alternatives' road
+/// `scores` (the first of equal ones) where it is at least `margin` above the chosen motion's
+/// `base`; `None` (the chosen motion stays) otherwise or where `margin` is 0.
+pub fn pick_by_road(base: usize, scores: &[usize], margin: usize) -> Option<usize> {
+    if margin == 0 {
+        return None;
+    }
+    let (i, &best) = scores
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(&a.0)))?;
+    base.checked_add(margin)
+        .is_some_and(|t| best >= t)
+        .then_some(i)
+}
+
 #[derive(Clone, Debug)]
 pub struct Trajectory {
     t_vehicle_cam0: Pose<f64>,
@@ -4012,5 +4119,63 @@ mod tests {
             ..SimConfig::moving_traffic()
         });
         assert!(mono.iter().all(|f| !f.0 && f.1.is_empty()), "{mono:?}");
+    }
+
+    /// `decide_by_road`'s choice: the best alternative where it beats the chosen motion's road
+    /// score by the margin, the first of equal ones; nothing otherwise, without alternatives or
+    /// with the option off.
+    #[test]
+    fn pick_by_road_overturns_only_by_the_margin() {
+        assert_eq!(pick_by_road(5, &[7, 9, 3], 3), Some(1));
+        assert_eq!(pick_by_road(5, &[7, 6], 3), None);
+        assert_eq!(pick_by_road(5, &[8], 3), Some(0));
+        assert_eq!(pick_by_road(0, &[4, 4], 3), Some(0));
+        assert_eq!(pick_by_road(5, &[], 3), None);
+        assert_eq!(pick_by_road(0, &[40], 0), None);
+        assert_eq!(pick_by_road(usize::MAX, &[usize::MAX], 1), None);
+    }
+
+    /// `decide_by_road` in the driver, a single camera in traffic: off (the default) the
+    /// estimates are the default configuration's bit for bit; on, it replaces some frame's
+    /// motion, the first frame where the estimates part is flagged `weak` and carries a
+    /// competing motion or a road alternative, and its motion has more road than the motion
+    /// the option-off run chose there.
+    #[test]
+    fn decide_by_road_acts_on_a_doubted_frame_only() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 120,
+            seed: 7,
+            ..SimConfig::moving_traffic()
+        })
+        .expect("the scenario simulates");
+        let seq = &sim.sequence;
+        let run = |text: &str| {
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            (1..seq.num_frames())
+                .map(|k| {
+                    let r = vo.process(&seq.frames[k], seq.arc_length(k));
+                    let score = vo.road_score_of(&seq.frames[k], &r.diagnostics.params);
+                    (r.diagnostics, score.map(|s| s.0))
+                })
+                .collect::<Vec<_>>()
+        };
+        let default = run("");
+        let off = run("[odometry]\ndecide_by_road = 0\n");
+        let on = run("[odometry]\ndecide_by_road = 3\n");
+        for (d, o) in default.iter().zip(&off) {
+            assert_eq!(d.0.params, o.0.params, "frame {}", d.0.frame);
+        }
+        let first = on
+            .iter()
+            .zip(&off)
+            .position(|(a, b)| a.0.params != b.0.params)
+            .expect("the option acted on some frame");
+        let (d, score) = &on[first];
+        assert_eq!(d.status, FrameStatus::Weak, "frame {}", d.frame);
+        assert!(d.competing.is_some() || d.road_alternative.is_some());
+        let (on_score, off_score) = (score.expect("scored"), off[first].1.expect("scored"));
+        assert!(on_score >= off_score + 3, "{on_score} against {off_score}");
     }
 }
