@@ -3064,8 +3064,6 @@ struct InfluenceFrame {
     cells: Vec<Vec<momo_core::Linearization>>,
 }
 
-/// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:
-/// `T_cam0(0)_cam0(k) = P0⁻¹ · (M_1 ⋯ M_k) · P0`.
 /// The choice of `odometry.decide_by_road`: the index of the highest of the alternatives' road
 /// `scores` (the first of equal ones) where it is at least `margin` above the chosen motion's
 /// `base`; `None` (the chosen motion stays) otherwise or where `margin` is 0.
@@ -3082,6 +3080,8 @@ pub fn pick_by_road(base: usize, scores: &[usize], margin: usize) -> Option<usiz
         .then_some(i)
 }
 
+/// Accumulates frame-to-frame vehicle motions into the camera-0 trajectory of `FORMAT.md`:
+/// `T_cam0(0)_cam0(k) = P0⁻¹ · (M_1 ⋯ M_k) · P0`.
 #[derive(Clone, Debug)]
 pub struct Trajectory {
     t_vehicle_cam0: Pose<f64>,
