@@ -402,6 +402,10 @@ pub struct OdometryOptions {
     /// the chosen one's by at least this many (cells or matches, as the score counts). The
     /// frame stays flagged and keeps the chosen motion's covariance. 0 (the default): off.
     pub decide_by_road: usize,
+    /// With `decide_by_road`: only the alternatives whose yaw `ω_z` lies at least as close to
+    /// the previous frame's as the chosen motion's compete (a vehicle's motion that leaves the
+    /// run's turn is no candidate). false (the default): every alternative competes.
+    pub decide_by_road_continuing: bool,
     /// Write the final stage's support into the diagnostics (`support` of each frame's row:
     /// per camera, the indices of the matches the final stage refit on, counted among that
     /// camera's rows of the frame in matches.csv's order). An analysis aid: it changes no
@@ -461,6 +465,7 @@ impl Default for OdometryOptions {
             quiet_frames: 0,
             quiet_other_share: 0.1,
             decide_by_road: 0,
+            decide_by_road_continuing: false,
             report_support: false,
         }
     }

@@ -1784,9 +1784,18 @@ impl Odometry {
     ) -> Option<Vec<f64>> {
         let (base, _) = self.road_score_of(obs, chosen)?;
         let arc_index = self.estimator.arc_length_index();
+        let yaw = |p: &[f64]| so3_log(&self.estimator.motion(p).rotation).z;
+        // `decide_by_road_continuing`: the chosen motion's yaw distance to the previous frame's.
+        let reach = self.config.odometry.decide_by_road_continuing.then(|| {
+            (
+                yaw(&self.previous),
+                (yaw(chosen) - yaw(&self.previous)).abs(),
+            )
+        });
         let scored: Vec<_> = alternatives
             .into_iter()
             .filter(|a| a.len() == chosen.len() && a.iter().all(|x| x.is_finite()))
+            .filter(|a| reach.is_none_or(|(y0, d)| (yaw(a) - y0).abs() <= d))
             .map(|mut a| {
                 // The frame's own arc length (held or measured) for every alternative.
                 if let Some(i) = arc_index {
@@ -4177,5 +4186,26 @@ mod tests {
         assert!(d.competing.is_some() || d.road_alternative.is_some());
         let (on_score, off_score) = (score.expect("scored"), off[first].1.expect("scored"));
         assert!(on_score >= off_score + 3, "{on_score} against {off_score}");
+        // `decide_by_road_continuing`: the replacement's yaw is no further from the previous
+        // frame's than the motion it replaced.
+        let cont = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_continuing = true\n");
+        let first = cont
+            .iter()
+            .zip(&off)
+            .position(|(a, b)| a.0.params != b.0.params)
+            .expect("the continuing option acted on some frame");
+        assert!(first > 0);
+        let yaw = |p: &[f64]| {
+            let config = crate::Config::default();
+            let vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            so3_log(&vo.estimator.motion(p).rotation).z
+        };
+        let y0 = yaw(&off[first - 1].0.params);
+        let (y_on, y_off) = (yaw(&cont[first].0.params), yaw(&off[first].0.params));
+        assert_eq!(cont[first].0.status, FrameStatus::Weak);
+        assert!(
+            (y_on - y0).abs() <= (y_off - y0).abs() + 1e-12,
+            "{y_on} {y_off} against {y0}"
+        );
     }
 }
