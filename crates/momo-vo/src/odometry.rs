@@ -1453,6 +1453,11 @@ impl Odometry {
                     if self.config.odometry.report_support {
                         diag.support = support.map(|k| support_indices(&k));
                     }
+                    // The previous motion's basin on a rig (`odometry.previous_basin_change`).
+                    if let Some(alt) = self.previous_basin(obs, &sol, &fixed, diag.scale, competing)
+                    {
+                        sol = alt;
+                    }
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
                 // The match memory of the frame's final motion (`separate.memory_final`).
@@ -2066,6 +2071,52 @@ impl Odometry {
         ctx.constants = constants;
         ctx.stage = stage;
         crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+    }
+
+    /// The previous motion's basin on a rig (`odometry.previous_basin_change`, off at 0): where
+    /// the final stage's rotation `R` differs from the previous frame's `R_prev` by more than
+    /// the option (`|log(R_prevᵀ R)|`), on a rig of at least two cameras, the frame is solved
+    /// again from the previous frame's motion (its arc length the frame's) by the first stage
+    /// and the final stage; that solution is returned where the cameras vote for it
+    /// ([`basin_vote`] over the matches within `previous_basin_band` of the epipolar planes,
+    /// [`crate::separate::epipolar_at_least`]). Spatial support, counted per camera: the static
+    /// world is seen by every camera and fits the true motion tightly in each, a compact object
+    /// only in one or two (docs/RESULTS.md §9, twenty-ninth session, rigslow43).
+    fn previous_basin(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+    ) -> Option<FrameSolution> {
+        let o = &self.config.odometry;
+        if o.previous_basin_change <= 0.0 || self.rig.len() < 2 {
+            return None;
+        }
+        let r_prev = self.estimator.motion(&self.previous).rotation;
+        let r = self.estimator.motion(&sol.params).rotation;
+        if so3_log(&(r_prev.transpose() * r)).norm() <= o.previous_basin_change {
+            return None;
+        }
+        let mut start = self.previous.clone();
+        if let Some(i) = self.estimator.arc_length_index() {
+            start[i] = sol.params[i];
+        }
+        let first = self.solve_once(obs, &start, fixed, false)?;
+        let (alt, _, _) = self.final_fit(obs, first, fixed, scale, competing, None, None);
+        let inside = |params: &[f64]| -> Vec<usize> {
+            crate::separate::epipolar_at_least(
+                &self.rig,
+                &self.estimator.motion(params),
+                obs,
+                o.previous_basin_band,
+            )
+            .iter()
+            .map(|cam| cam.iter().filter(|outside| !**outside).count())
+            .collect()
+        };
+        basin_vote(&inside(&sol.params), &inside(&alt.params)).then_some(alt)
     }
 
     /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
@@ -3060,6 +3111,18 @@ fn soft_cauchy_scales(
 /// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
 /// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
 /// jitter is learnt or the arc length is not positive.
+/// The cameras' vote of `Odometry::previous_basin`: `alt` wins over `current` (per camera the
+/// matches within the band of each motion's epipolar planes) where more cameras count more
+/// matches at `alt` than fewer, and all cameras together count more.
+fn basin_vote(current: &[usize], alt: &[usize]) -> bool {
+    let (mut more, mut fewer) = (0usize, 0usize);
+    for (c, a) in current.iter().zip(alt) {
+        more += usize::from(a > c);
+        fewer += usize::from(a < c);
+    }
+    more > fewer && alt.iter().sum::<usize>() > current.iter().sum::<usize>()
+}
+
 fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
     let s = arc.abs();
     if !(s.is_finite() && s > 0.0) {
