@@ -231,6 +231,10 @@ pub struct OdometryOptions {
     /// The band of `previous_basin_change`'s per-camera vote (radians of epipolar angle,
     /// default 0.0014: the simulated noise's scale).
     pub previous_basin_band: f64,
+    /// The margin of `previous_basin_change`'s vote (default 2, at least 1): the cameras that
+    /// count more matches within the band at the alternative must outnumber those that count
+    /// fewer by at least this many (on four cameras: 3 to 1, or 2 to 0).
+    pub previous_basin_votes: usize,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -452,6 +456,7 @@ impl Default for OdometryOptions {
             soft_prior_cauchy_min_cameras: 2,
             previous_basin_change: 0.0,
             previous_basin_band: 0.0014,
+            previous_basin_votes: 2,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,

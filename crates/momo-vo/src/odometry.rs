@@ -2103,8 +2103,11 @@ impl Odometry {
         if let Some(i) = self.estimator.arc_length_index() {
             start[i] = sol.params[i];
         }
-        let first = self.solve_once(obs, &start, fixed, false)?;
-        let (alt, _, _) = self.final_fit(obs, first, fixed, scale, competing, None, None);
+        // The final stage from the previous motion (the first stage would slide into the
+        // object's basin from there: measured on the cut, RESULTS).
+        let mut from = sol.clone();
+        from.params = start;
+        let (alt, _, _) = self.final_fit(obs, from, fixed, scale, competing, None, None);
         let inside = |params: &[f64]| -> Vec<usize> {
             crate::separate::epipolar_at_least(
                 &self.rig,
@@ -2116,7 +2119,12 @@ impl Odometry {
             .map(|cam| cam.iter().filter(|outside| !**outside).count())
             .collect()
         };
-        basin_vote(&inside(&sol.params), &inside(&alt.params)).then_some(alt)
+        basin_vote(
+            &inside(&sol.params),
+            &inside(&alt.params),
+            o.previous_basin_votes,
+        )
+        .then_some(alt)
     }
 
     /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
@@ -3112,15 +3120,16 @@ fn soft_cauchy_scales(
 /// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
 /// jitter is learnt or the arc length is not positive.
 /// The cameras' vote of `Odometry::previous_basin`: `alt` wins over `current` (per camera the
-/// matches within the band of each motion's epipolar planes) where more cameras count more
-/// matches at `alt` than fewer, and all cameras together count more.
-fn basin_vote(current: &[usize], alt: &[usize]) -> bool {
+/// matches within the band of each motion's epipolar planes) where the cameras that count more
+/// matches at `alt` outnumber those that count fewer by at least `votes` (at least 1): the
+/// motion that clearly more cameras support, each camera one vote.
+fn basin_vote(current: &[usize], alt: &[usize], votes: usize) -> bool {
     let (mut more, mut fewer) = (0usize, 0usize);
     for (c, a) in current.iter().zip(alt) {
         more += usize::from(a > c);
         fewer += usize::from(a < c);
     }
-    more > fewer && alt.iter().sum::<usize>() > current.iter().sum::<usize>()
+    more >= fewer + votes.max(1)
 }
 
 fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
