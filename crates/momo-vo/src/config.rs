@@ -1148,7 +1148,10 @@ impl Config {
             ("odometry.previous_basin_band", o.previous_basin_band),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                bad(&[key], format!("{key} must be finite and at least 0, got {v}"));
+                bad(
+                    &[key],
+                    format!("{key} must be finite and at least 0, got {v}"),
+                );
             }
         }
         if !(o.soft_prior_cauchy_taught_share.is_finite()
