@@ -216,6 +216,25 @@ pub struct OdometryOptions {
     /// (at `ρ = 0.5` the lag opens on 124 of the mono family's 300 development sequences, at
     /// `ρ = 0.2` on 62; docs/RESULTS.md §9, twenty-eighth session, climbgate42).
     pub soft_prior_cauchy_min_cameras: usize,
+    /// The previous motion's basin on a rig (0: off, the default; radians): where the final
+    /// stage's rotation differs from the previous frame's by more than this angle, on a rig of
+    /// at least two cameras, solve the frame again from the previous frame's motion (the first
+    /// stage, then the final stage) and keep that solution where more cameras than not support
+    /// it better: per camera, the matches within `previous_basin_band` of the epipolar planes
+    /// ([`crate::separate::epipolar_at_least`]) are more at the alternative in more cameras
+    /// than fewer, and more in all cameras together. A compact object seen by one or two
+    /// cameras (a bus, a follower at 0.3-0.5 m per frame) can pull the estimate into a
+    /// compromise that a robust cost over all matches prefers; the static world, seen by every
+    /// camera, fits the truth tightly in each (docs/RESULTS.md §9, twenty-ninth session,
+    /// rigslow43).
+    pub previous_basin_change: f64,
+    /// The band of `previous_basin_change`'s per-camera vote (radians of epipolar angle,
+    /// default 0.0014: the simulated noise's scale).
+    pub previous_basin_band: f64,
+    /// The margin of `previous_basin_change`'s vote (default 2, at least 1): the cameras that
+    /// count more matches within the band at the alternative must outnumber those that count
+    /// fewer by at least this many (on four cameras: 3 to 1, or 2 to 0).
+    pub previous_basin_votes: usize,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -448,6 +467,9 @@ impl Default for OdometryOptions {
             soft_prior_cauchy_taught_share: 0.5,
             soft_prior_cauchy_after_moving: 5,
             soft_prior_cauchy_min_cameras: 2,
+            previous_basin_change: 0.0,
+            previous_basin_band: 0.0014,
+            previous_basin_votes: 2,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1135,6 +1157,17 @@ impl Config {
                     o.soft_prior_cauchy
                 ),
             );
+        }
+        for (key, v) in [
+            ("odometry.previous_basin_change", o.previous_basin_change),
+            ("odometry.previous_basin_band", o.previous_basin_band),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                bad(
+                    &[key],
+                    format!("{key} must be finite and at least 0, got {v}"),
+                );
+            }
         }
         if !(o.soft_prior_cauchy_taught_share.is_finite()
             && (0.0..=1.0).contains(&o.soft_prior_cauchy_taught_share))

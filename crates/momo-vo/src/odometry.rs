@@ -299,6 +299,9 @@ pub struct Odometry {
     quiet_streak: usize,
     /// Frames whose separation took the quiet-frame fast path ([`Odometry::quiet_frames_taken`]).
     quiet_taken: usize,
+    /// Frames re-solved from the previous motion and frames that took that solution
+    /// (`odometry.previous_basin_change`).
+    previous_basin_counts: (usize, usize),
 }
 
 impl Odometry {
@@ -401,6 +404,7 @@ impl Odometry {
             undefined_solver,
             quiet_streak: 0,
             quiet_taken: 0,
+            previous_basin_counts: (0, 0),
         })
     }
 
@@ -1068,12 +1072,19 @@ impl Odometry {
         self.report_pool.clear();
         self.quiet_streak = 0;
         self.quiet_taken = 0;
+        self.previous_basin_counts = (0, 0);
     }
 
     /// How many frames so far took the separation's quiet-frame fast path
     /// ([`OdometryOptions::quiet_frames`](crate::config::OdometryOptions::quiet_frames)).
     pub fn quiet_frames_taken(&self) -> usize {
         self.quiet_taken
+    }
+
+    /// How many frames so far were solved again from the previous frame's motion, and how many
+    /// of them took that solution (`odometry.previous_basin_change`).
+    pub fn previous_basin_counts(&self) -> (usize, usize) {
+        self.previous_basin_counts
     }
 
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
@@ -1452,6 +1463,16 @@ impl Odometry {
                     }
                     if self.config.odometry.report_support {
                         diag.support = support.map(|k| support_indices(&k));
+                    }
+                    // The previous motion's basin on a rig (`odometry.previous_basin_change`).
+                    if let Some((alt, taken)) =
+                        self.previous_basin(obs, &sol, &fixed, diag.scale, competing)
+                    {
+                        self.previous_basin_counts.0 += 1;
+                        if taken {
+                            self.previous_basin_counts.1 += 1;
+                            sol = alt;
+                        }
                     }
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
@@ -2166,6 +2187,61 @@ impl Odometry {
         ctx.constants = constants;
         ctx.stage = stage;
         crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+    }
+
+    /// The previous motion's basin on a rig (`odometry.previous_basin_change`, off at 0): where
+    /// the final stage's rotation `R` differs from the previous frame's `R_prev` by more than
+    /// the option (`|log(R_prevᵀ R)|`), on a rig of at least two cameras, the frame is solved
+    /// again from the previous frame's motion (its arc length the frame's) by the final stage
+    /// (the first stage slides into an object's basin from there); that solution is returned,
+    /// with whether the cameras vote for it
+    /// ([`basin_vote`] over the matches within `previous_basin_band` of the epipolar planes,
+    /// [`crate::separate::epipolar_at_least`]). Spatial support, counted per camera: the static
+    /// world is seen by every camera and fits the true motion tightly in each, a compact object
+    /// only in one or two (docs/RESULTS.md §9, twenty-ninth session, rigslow43).
+    fn previous_basin(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+    ) -> Option<(FrameSolution, bool)> {
+        let o = &self.config.odometry;
+        if o.previous_basin_change <= 0.0 || self.rig.len() < 2 {
+            return None;
+        }
+        let r_prev = self.estimator.motion(&self.previous).rotation;
+        let r = self.estimator.motion(&sol.params).rotation;
+        if so3_log(&(r_prev.transpose() * r)).norm() <= o.previous_basin_change {
+            return None;
+        }
+        let mut start = self.previous.clone();
+        if let Some(i) = self.estimator.arc_length_index() {
+            start[i] = sol.params[i];
+        }
+        // The final stage from the previous motion (the first stage would slide into the
+        // object's basin from there: measured on the cut, RESULTS).
+        let mut from = sol.clone();
+        from.params = start;
+        let (alt, _, _) = self.final_fit(obs, from, fixed, scale, competing, None, None);
+        let inside = |params: &[f64]| -> Vec<usize> {
+            crate::separate::epipolar_at_least(
+                &self.rig,
+                &self.estimator.motion(params),
+                obs,
+                o.previous_basin_band,
+            )
+            .iter()
+            .map(|cam| cam.iter().filter(|outside| !**outside).count())
+            .collect()
+        };
+        let taken = basin_vote(
+            &inside(&sol.params),
+            &inside(&alt.params),
+            o.previous_basin_votes,
+        );
+        Some((alt, taken))
     }
 
     /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
@@ -3176,6 +3252,19 @@ fn soft_cauchy_scales(
 /// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
 /// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
 /// jitter is learnt or the arc length is not positive.
+/// The cameras' vote of `Odometry::previous_basin`: `alt` wins over `current` (per camera the
+/// matches within the band of each motion's epipolar planes) where the cameras that count more
+/// matches at `alt` outnumber those that count fewer by at least `votes` (at least 1): the
+/// motion that clearly more cameras support, each camera one vote.
+fn basin_vote(current: &[usize], alt: &[usize], votes: usize) -> bool {
+    let (mut more, mut fewer) = (0usize, 0usize);
+    for (c, a) in current.iter().zip(alt) {
+        more += usize::from(a > c);
+        fewer += usize::from(a < c);
+    }
+    more >= fewer + votes.max(1)
+}
+
 fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
     let s = arc.abs();
     if !(s.is_finite() && s > 0.0) {
@@ -4207,5 +4296,77 @@ mod tests {
             (y_on - y0).abs() <= (y_off - y0).abs() + 1e-12,
             "{y_on} {y_off} against {y0}"
         );
+    }
+
+    #[test]
+    fn the_cameras_vote_needs_a_clear_majority() {
+        // Four cameras: 3 to 1 and 2 to 0 win at a margin of 2, 2 to 1 and ties do not.
+        assert!(basin_vote(&[26, 11, 19, 7], &[16, 16, 20, 9], 2));
+        assert!(basin_vote(&[10, 10, 10, 10], &[12, 10, 11, 10], 2));
+        assert!(!basin_vote(&[12, 37, 17, 8], &[12, 30, 19, 13], 2));
+        assert!(!basin_vote(&[10, 10, 10, 10], &[10, 10, 10, 10], 2));
+        assert!(!basin_vote(&[10, 20, 10, 10], &[30, 10, 10, 10], 1));
+        // A margin of 1 is the plain majority; 0 counts as 1.
+        assert!(basin_vote(&[12, 37, 17, 8], &[12, 30, 19, 13], 1));
+        assert!(!basin_vote(&[10, 10], &[10, 10], 0));
+        assert!(basin_vote(&[10, 10], &[11, 10], 0));
+        // Many more matches in one camera do not outvote the others.
+        assert!(!basin_vote(&[10, 10, 10, 10], &[90, 9, 9, 10], 1));
+    }
+
+    #[test]
+    fn the_previous_basin_leaves_a_single_camera_alone_and_acts_on_a_rig() {
+        use momo_sim::{SimConfig, simulate};
+        let run = |cfg: SimConfig, text: &str| {
+            let sim = simulate(&cfg).expect("the scenario simulates");
+            let seq = &sim.sequence;
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut params = Vec::new();
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+                params.push(vo.previous_params().to_vec());
+            }
+            (params, vo.previous_basin_counts())
+        };
+        // Every frame re-solved (the change threshold far below any frame's rotation change).
+        let every = "[odometry]\nprevious_basin_change = 1e-12\n";
+        let mono = || SimConfig {
+            frames: 31,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        };
+        let (off, _) = run(mono(), "");
+        let (on, counts) = run(mono(), every);
+        assert_eq!(counts, (0, 0), "a single camera is never re-solved");
+        assert_eq!(off, on, "a single camera's motions are unchanged");
+        let rig = || SimConfig {
+            frames: 31,
+            seed: 2,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let (off, _) = run(rig(), "");
+        let (on, counts) = run(rig(), every);
+        assert!(
+            counts.0 >= 25,
+            "the rig's moving frames are re-solved: {counts:?}"
+        );
+        assert!(counts.1 <= counts.0, "{counts:?}");
+        // A solution that is not taken changes nothing: identical motions where none was.
+        if counts.1 == 0 {
+            assert_eq!(off, on);
+        }
+        // Above every frame's change the rig is not re-solved and its motions are unchanged.
+        let (never, counts) = run(rig(), "[odometry]\nprevious_basin_change = 1.0\n");
+        assert_eq!(counts, (0, 0));
+        assert_eq!(off, never);
+        // The option's range.
+        for bad in ["-0.01", "nan"] {
+            let text = format!("[odometry]\nprevious_basin_change = {bad}\n");
+            assert!(
+                crate::Config::from_toml_str(&text, "t.toml").is_err(),
+                "{bad}"
+            );
+        }
     }
 }
