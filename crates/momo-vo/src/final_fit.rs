@@ -226,6 +226,20 @@ pub struct FinalFitOptions {
     pub neighbour_share: f64,
     /// The neighbours counted by `neighbour_share` (default 8).
     pub neighbour_count: usize,
+    /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0: off, the default): after
+    /// the final stage, a match that the separation's mask (or the neighbourhood test) did not
+    /// hand to it is added where, at the stage's final motion, its residual is within
+    /// `inlier_sigmas · σ̂` (`σ̂` of the matches the stage was given), its point is in front of
+    /// both cameras ([`cheiral`]) and at least this share of its `readmit_count` nearest
+    /// matches of the same camera (first-image pixels, all the frame's matches) pass the same
+    /// test among the given ones (the converse of `neighbour_share`); the stage then runs once
+    /// more, from the first stage's solution, on the given matches plus the re-admitted ones.
+    /// The support on a surround rig in traffic leaves about a fifth of the static matches
+    /// out; most never reach the stage (docs/RESULTS.md §9, twenty-ninth session, readmit43).
+    /// One camera: no effect.
+    pub readmit_share: f64,
+    /// The neighbours counted by `readmit_share` (default 8).
+    pub readmit_count: usize,
     /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
     /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as
     /// `angle_plane_ml_rig`), instead of each camera's own. `angle_plane_ml` converts each
@@ -277,6 +291,8 @@ impl Default for FinalFitOptions {
             // support42 and lead): no effect on a single camera.
             neighbour_share: 0.375,
             neighbour_count: 8,
+            readmit_share: 0.0,
+            readmit_count: 8,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
             ml_rig_reference: true,
@@ -404,6 +420,15 @@ impl FinalFitOptions {
         }
         if self.neighbour_share > 0.0 && self.neighbour_count == 0 {
             return Err("odometry.final_fit.neighbour_count must be at least 1".into());
+        }
+        if !(0.0..=1.0).contains(&self.readmit_share) {
+            return Err(format!(
+                "odometry.final_fit.readmit_share must be within [0, 1], found {}",
+                self.readmit_share
+            ));
+        }
+        if self.readmit_share > 0.0 && self.readmit_count == 0 {
+            return Err("odometry.final_fit.readmit_count must be at least 1".into());
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
             return Err(format!(
@@ -1296,6 +1321,120 @@ pub fn neighbour_kept(
                     );
                     d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
                     let members = d[..count].iter().filter(|(_, j)| s[*j]).count();
+                    members as f64 >= share * count as f64
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Per camera, per match of `obs`, at the parameters `from`: whether the match passes the
+/// stage's residual and cheirality tests (step 2 of the module doc, without the parallax caps)
+/// with `σ̂` estimated over the matches `given` alone (step 1), and its residual in units of
+/// that `σ̂`; `None` where the noise cannot be estimated. What [`readmit_kept`] reads.
+pub fn passing_at(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    given: &[Vec<bool>],
+    from: &[f64],
+) -> Option<Vec<Vec<(bool, f64)>>> {
+    let scale = ctx.loss.scale();
+    if !(scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    let owned;
+    let constants = match ctx.constants {
+        Some(c) => c,
+        None => {
+            owned = frame_constants(ctx, obs, from);
+            &owned[..]
+        }
+    };
+    let req = ctx.request(obs, from);
+    let norms = ctx
+        .estimator
+        .residual_norms_with_constants(&req, from, constants)
+        .ok()?;
+    if norms.len() != obs.per_camera.len()
+        || given.len() != obs.per_camera.len()
+        || norms
+            .iter()
+            .zip(&obs.per_camera)
+            .zip(given)
+            .any(|((n, o), g)| n.len() != o.len() || g.len() != o.len())
+    {
+        return None;
+    }
+    let inside: Vec<f64> = norms
+        .iter()
+        .zip(given)
+        .flat_map(|(n, g)| n.iter().zip(g).filter(|(_, g)| **g).map(|(r, _)| *r))
+        .collect();
+    let sigma = estimate_sigma(&inside, scale, opts)?;
+    let cut = opts.inlier_sigmas * sigma;
+    let motion = ctx.estimator.motion(from);
+    let tolerance = opts.cheirality_sigmas * sigma;
+    Some(
+        obs.per_camera
+            .iter()
+            .zip(&norms)
+            .zip(ctx.rig.cameras())
+            .map(|((ms, n), cam)| {
+                let c = momo_core::camera_motion(&motion, &cam.t_vehicle_camera);
+                ms.iter()
+                    .zip(n)
+                    .map(|(o, r)| {
+                        let ok = *r < cut
+                            && (opts.cheirality_sigmas <= 0.0
+                                || cheiral(&c, &o.f0, &o.f1, tolerance));
+                        (ok, r / sigma)
+                    })
+                    .collect()
+            })
+            .collect(),
+    )
+}
+
+/// Re-admission (`readmit_share`): the matches `given` (per camera, per match of `obs`) plus
+/// those not given that pass (`passing`, [`passing_at`]'s membership at the stage's final
+/// motion) and whose `count` nearest other matches of the same camera (by first-image pixel,
+/// among all of `obs`'s) are given and passing at least `share` of the time: a static match
+/// that the separation's mask left out among static neighbours, where an object's matches
+/// that fit the static motion by chance have object neighbours that do not (the converse of
+/// [`neighbour_kept`]). A camera with at most `count` matches keeps its given ones.
+pub fn readmit_kept(
+    obs: &FrameObservations,
+    given: &[Vec<bool>],
+    passing: &[Vec<bool>],
+    count: usize,
+    share: f64,
+) -> Vec<Vec<bool>> {
+    obs.per_camera
+        .iter()
+        .zip(given)
+        .zip(passing)
+        .map(|((ms, g), p)| {
+            let n = ms.len();
+            if n <= count || count == 0 || share <= 0.0 {
+                return g.clone();
+            }
+            let member = |j: usize| g[j] && p[j];
+            let mut d: Vec<(f64, usize)> = Vec::with_capacity(n);
+            (0..n)
+                .map(|i| {
+                    if g[i] || !p[i] {
+                        return g[i];
+                    }
+                    d.clear();
+                    d.extend(
+                        ms.iter()
+                            .enumerate()
+                            .filter(|(j, _)| *j != i)
+                            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
+                    );
+                    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
+                    let members = d[..count].iter().filter(|(_, j)| member(*j)).count();
                     members as f64 >= share * count as f64
                 })
                 .collect()
