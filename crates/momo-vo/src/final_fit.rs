@@ -2183,6 +2183,59 @@ mod tests {
     }
 
     #[test]
+    fn the_readmission_adds_passing_matches_among_passing_members() {
+        // One camera: a 5 x 5 grid (10 px apart) of given, passing matches; in its middle a
+        // match not given that passes (re-admitted) and one not given that does not pass (stays
+        // out); 200 px away a cluster of 9 matches not given, all passing but one, whose
+        // neighbours are not given (an object that fits the motion by chance: stays out); a
+        // second camera with 3 matches (at most `count`: kept as given).
+        let mut cam0 = Vec::new();
+        let (mut given, mut passing) = (Vec::new(), Vec::new());
+        for i in 0..5 {
+            for j in 0..5 {
+                cam0.push(at(10.0 * f64::from(i), 10.0 * f64::from(j)));
+                given.push(true);
+                passing.push(true);
+            }
+        }
+        cam0.push(at(15.0, 15.0));
+        given.push(false);
+        passing.push(true);
+        cam0.push(at(25.0, 25.0));
+        given.push(false);
+        passing.push(false);
+        for i in 0..3 {
+            for j in 0..3 {
+                cam0.push(at(200.0 + 5.0 * f64::from(i), 200.0 + 5.0 * f64::from(j)));
+                given.push(false);
+                passing.push(!(i == 0 && j == 0));
+            }
+        }
+        // A given match that does not pass stays given (the stage decides on it).
+        passing[3] = false;
+        let cam1 = vec![at(0.0, 0.0), at(1.0, 0.0), at(2.0, 0.0)];
+        let obs = FrameObservations {
+            per_camera: vec![cam0, cam1],
+            cross_camera: Vec::new(),
+        };
+        let given = vec![given, vec![true, false, true]];
+        let passing = vec![passing, vec![true, true, true]];
+        let kept = readmit_kept(&obs, &given, &passing, 8, 0.5);
+        assert!(kept[0][25], "the passing match among passing members is re-admitted");
+        assert!(!kept[0][26], "a match that does not pass stays out");
+        assert!(
+            kept[0][27..].iter().all(|k| !k),
+            "the cluster of matches not given stays out"
+        );
+        assert_eq!(&kept[0][..25], &given[0][..25], "the given matches stay given");
+        assert_eq!(kept[1], given[1], "a camera with at most `count` matches");
+        // A share of 0 re-admits nothing; a share of 1 needs all 8 nearest to be given and
+        // passing, and the middle match's include the one at (25, 25) that is neither.
+        assert_eq!(readmit_kept(&obs, &given, &passing, 8, 0.0), given);
+        assert!(!readmit_kept(&obs, &given, &passing, 8, 1.0)[0][25]);
+    }
+
+    #[test]
     fn options_validate_and_parse() {
         assert!(FinalFitOptions::default().validate().is_ok());
         for share in [-0.1, 1.5, f64::NAN] {
@@ -2198,6 +2251,20 @@ mod tests {
             ..FinalFitOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("neighbour_count"));
+        for share in [-0.1, 1.5, f64::NAN] {
+            let bad = FinalFitOptions {
+                readmit_share: share,
+                ..FinalFitOptions::default()
+            };
+            assert!(bad.validate().unwrap_err().contains("readmit_share"));
+        }
+        let bad = FinalFitOptions {
+            readmit_share: 0.5,
+            readmit_count: 0,
+            ..FinalFitOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("readmit_count"));
+        assert_eq!(FinalFitOptions::default().readmit_share, 0.0, "off by default");
         let bad = FinalFitOptions {
             inlier_sigmas: 0.0,
             ..FinalFitOptions::default()
