@@ -2221,13 +2221,20 @@ mod tests {
         let given = vec![given, vec![true, false, true]];
         let passing = vec![passing, vec![true, true, true]];
         let kept = readmit_kept(&obs, &given, &passing, 8, 0.5);
-        assert!(kept[0][25], "the passing match among passing members is re-admitted");
+        assert!(
+            kept[0][25],
+            "the passing match among passing members is re-admitted"
+        );
         assert!(!kept[0][26], "a match that does not pass stays out");
         assert!(
             kept[0][27..].iter().all(|k| !k),
             "the cluster of matches not given stays out"
         );
-        assert_eq!(&kept[0][..25], &given[0][..25], "the given matches stay given");
+        assert_eq!(
+            &kept[0][..25],
+            &given[0][..25],
+            "the given matches stay given"
+        );
         assert_eq!(kept[1], given[1], "a camera with at most `count` matches");
         // A share of 0 re-admits nothing; a share of 1 needs all 8 nearest to be given and
         // passing, and the middle match's include the one at (25, 25) that is neither.
@@ -2264,7 +2271,11 @@ mod tests {
             ..FinalFitOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("readmit_count"));
-        assert_eq!(FinalFitOptions::default().readmit_share, 0.0, "off by default");
+        assert_eq!(
+            FinalFitOptions::default().readmit_share,
+            0.0,
+            "off by default"
+        );
         let bad = FinalFitOptions {
             inlier_sigmas: 0.0,
             ..FinalFitOptions::default()
