@@ -240,6 +240,11 @@ pub struct FinalFitOptions {
     pub readmit_share: f64,
     /// The neighbours counted by `readmit_share` (default 8).
     pub readmit_count: usize,
+    /// With `readmit_share`: not on the frames whose motion prior has the Cauchy climb scales
+    /// (`odometry.soft_prior_cauchy` and its gates: the rig's slow start before the soft prior
+    /// has learnt), where the stage's final motion, whose support the re-admission widens, is
+    /// the least certain (default false: on every frame).
+    pub readmit_skip_cauchy: bool,
     /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
     /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as
     /// `angle_plane_ml_rig`), instead of each camera's own. `angle_plane_ml` converts each
@@ -293,6 +298,7 @@ impl Default for FinalFitOptions {
             neighbour_count: 8,
             readmit_share: 0.0,
             readmit_count: 8,
+            readmit_skip_cauchy: false,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
             ml_rig_reference: true,

@@ -2140,10 +2140,14 @@ impl Odometry {
     }
 
     /// Whether the re-admission (`odometry.final_fit.readmit_share`) is on: a rig of several
-    /// cameras and the final stage on.
+    /// cameras, the final stage on, and (with `readmit_skip_cauchy`) no Cauchy climb scales in
+    /// the frame's motion prior.
     fn readmit_on(&self) -> bool {
         let opts = &self.config.odometry.final_fit;
-        opts.enabled && opts.readmit_share > 0.0 && self.rig.len() > 1
+        opts.enabled
+            && opts.readmit_share > 0.0
+            && self.rig.len() > 1
+            && !(opts.readmit_skip_cauchy && !self.motion_prior.soft_cauchy.is_empty())
     }
 
     /// The re-admission (`odometry.final_fit.readmit_share`, [`crate::final_fit::readmit_kept`])
