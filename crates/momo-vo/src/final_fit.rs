@@ -226,6 +226,25 @@ pub struct FinalFitOptions {
     pub neighbour_share: f64,
     /// The neighbours counted by `neighbour_share` (default 8).
     pub neighbour_count: usize,
+    /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0: off, the default): after
+    /// the final stage, a match that the separation's mask (or the neighbourhood test) did not
+    /// hand to it is added where, at the stage's final motion, its residual is within
+    /// `inlier_sigmas · σ̂` (`σ̂` of the matches the stage was given), its point is in front of
+    /// both cameras ([`cheiral`]) and at least this share of its `readmit_count` nearest
+    /// matches of the same camera (first-image pixels, all the frame's matches) pass the same
+    /// test among the given ones (the converse of `neighbour_share`); the stage then runs once
+    /// more, from the first stage's solution, on the given matches plus the re-admitted ones.
+    /// The support on a surround rig in traffic leaves about a fifth of the static matches
+    /// out; most never reach the stage (docs/RESULTS.md §9, twenty-ninth session, readmit43).
+    /// One camera: no effect.
+    pub readmit_share: f64,
+    /// The neighbours counted by `readmit_share` (default 8).
+    pub readmit_count: usize,
+    /// With `readmit_share`: not on the frames whose motion prior has the Cauchy climb scales
+    /// (`odometry.soft_prior_cauchy` and its gates: the rig's slow start before the soft prior
+    /// has learnt), where the stage's final motion, whose support the re-admission widens, is
+    /// the least certain (default false: on every frame).
+    pub readmit_skip_cauchy: bool,
     /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
     /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as
     /// `angle_plane_ml_rig`), instead of each camera's own. `angle_plane_ml` converts each
@@ -277,6 +296,9 @@ impl Default for FinalFitOptions {
             // support42 and lead): no effect on a single camera.
             neighbour_share: 0.375,
             neighbour_count: 8,
+            readmit_share: 0.0,
+            readmit_count: 8,
+            readmit_skip_cauchy: false,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
             ml_rig_reference: true,
@@ -404,6 +426,15 @@ impl FinalFitOptions {
         }
         if self.neighbour_share > 0.0 && self.neighbour_count == 0 {
             return Err("odometry.final_fit.neighbour_count must be at least 1".into());
+        }
+        if !(0.0..=1.0).contains(&self.readmit_share) {
+            return Err(format!(
+                "odometry.final_fit.readmit_share must be within [0, 1], found {}",
+                self.readmit_share
+            ));
+        }
+        if self.readmit_share > 0.0 && self.readmit_count == 0 {
+            return Err("odometry.final_fit.readmit_count must be at least 1".into());
         }
         if !(self.cauchy_sigmas.is_finite() && self.cauchy_sigmas >= 0.0) {
             return Err(format!(
@@ -1303,6 +1334,120 @@ pub fn neighbour_kept(
         .collect()
 }
 
+/// Per camera, per match of `obs`, at the parameters `from`: whether the match passes the
+/// stage's residual and cheirality tests (step 2 of the module doc, without the parallax caps)
+/// with `σ̂` estimated over the matches `given` alone (step 1), and its residual in units of
+/// that `σ̂`; `None` where the noise cannot be estimated. What [`readmit_kept`] reads.
+pub fn passing_at(
+    ctx: &FinalFitContext<'_>,
+    opts: &FinalFitOptions,
+    obs: &FrameObservations,
+    given: &[Vec<bool>],
+    from: &[f64],
+) -> Option<Vec<Vec<(bool, f64)>>> {
+    let scale = ctx.loss.scale();
+    if !(scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    let owned;
+    let constants = match ctx.constants {
+        Some(c) => c,
+        None => {
+            owned = frame_constants(ctx, obs, from);
+            &owned[..]
+        }
+    };
+    let req = ctx.request(obs, from);
+    let norms = ctx
+        .estimator
+        .residual_norms_with_constants(&req, from, constants)
+        .ok()?;
+    if norms.len() != obs.per_camera.len()
+        || given.len() != obs.per_camera.len()
+        || norms
+            .iter()
+            .zip(&obs.per_camera)
+            .zip(given)
+            .any(|((n, o), g)| n.len() != o.len() || g.len() != o.len())
+    {
+        return None;
+    }
+    let inside: Vec<f64> = norms
+        .iter()
+        .zip(given)
+        .flat_map(|(n, g)| n.iter().zip(g).filter(|(_, g)| **g).map(|(r, _)| *r))
+        .collect();
+    let sigma = estimate_sigma(&inside, scale, opts)?;
+    let cut = opts.inlier_sigmas * sigma;
+    let motion = ctx.estimator.motion(from);
+    let tolerance = opts.cheirality_sigmas * sigma;
+    Some(
+        obs.per_camera
+            .iter()
+            .zip(&norms)
+            .zip(ctx.rig.cameras())
+            .map(|((ms, n), cam)| {
+                let c = momo_core::camera_motion(&motion, &cam.t_vehicle_camera);
+                ms.iter()
+                    .zip(n)
+                    .map(|(o, r)| {
+                        let ok = *r < cut
+                            && (opts.cheirality_sigmas <= 0.0
+                                || cheiral(&c, &o.f0, &o.f1, tolerance));
+                        (ok, r / sigma)
+                    })
+                    .collect()
+            })
+            .collect(),
+    )
+}
+
+/// Re-admission (`readmit_share`): the matches `given` (per camera, per match of `obs`) plus
+/// those not given that pass (`passing`, [`passing_at`]'s membership at the stage's final
+/// motion) and whose `count` nearest other matches of the same camera (by first-image pixel,
+/// among all of `obs`'s) are given and passing at least `share` of the time: a static match
+/// that the separation's mask left out among static neighbours, where an object's matches
+/// that fit the static motion by chance have object neighbours that do not (the converse of
+/// [`neighbour_kept`]). A camera with at most `count` matches keeps its given ones.
+pub fn readmit_kept(
+    obs: &FrameObservations,
+    given: &[Vec<bool>],
+    passing: &[Vec<bool>],
+    count: usize,
+    share: f64,
+) -> Vec<Vec<bool>> {
+    obs.per_camera
+        .iter()
+        .zip(given)
+        .zip(passing)
+        .map(|((ms, g), p)| {
+            let n = ms.len();
+            if n <= count || count == 0 || share <= 0.0 {
+                return g.clone();
+            }
+            let member = |j: usize| g[j] && p[j];
+            let mut d: Vec<(f64, usize)> = Vec::with_capacity(n);
+            (0..n)
+                .map(|i| {
+                    if g[i] || !p[i] {
+                        return g[i];
+                    }
+                    d.clear();
+                    d.extend(
+                        ms.iter()
+                            .enumerate()
+                            .filter(|(j, _)| *j != i)
+                            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
+                    );
+                    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
+                    let members = d[..count].iter().filter(|(_, j)| member(*j)).count();
+                    members as f64 >= share * count as f64
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// [`support`], kept for the stage itself ([`FinalFitContext::stage`]).
 pub fn support_at(
     ctx: &FinalFitContext<'_>,
@@ -2044,6 +2189,66 @@ mod tests {
     }
 
     #[test]
+    fn the_readmission_adds_passing_matches_among_passing_members() {
+        // One camera: a 5 x 5 grid (10 px apart) of given, passing matches; in its middle a
+        // match not given that passes (re-admitted) and one not given that does not pass (stays
+        // out); 200 px away a cluster of 9 matches not given, all passing but one, whose
+        // neighbours are not given (an object that fits the motion by chance: stays out); a
+        // second camera with 3 matches (at most `count`: kept as given).
+        let mut cam0 = Vec::new();
+        let (mut given, mut passing) = (Vec::new(), Vec::new());
+        for i in 0..5 {
+            for j in 0..5 {
+                cam0.push(at(10.0 * f64::from(i), 10.0 * f64::from(j)));
+                given.push(true);
+                passing.push(true);
+            }
+        }
+        cam0.push(at(15.0, 15.0));
+        given.push(false);
+        passing.push(true);
+        cam0.push(at(25.0, 25.0));
+        given.push(false);
+        passing.push(false);
+        for i in 0..3 {
+            for j in 0..3 {
+                cam0.push(at(200.0 + 5.0 * f64::from(i), 200.0 + 5.0 * f64::from(j)));
+                given.push(false);
+                passing.push(!(i == 0 && j == 0));
+            }
+        }
+        // A given match that does not pass stays given (the stage decides on it).
+        passing[3] = false;
+        let cam1 = vec![at(0.0, 0.0), at(1.0, 0.0), at(2.0, 0.0)];
+        let obs = FrameObservations {
+            per_camera: vec![cam0, cam1],
+            cross_camera: Vec::new(),
+        };
+        let given = vec![given, vec![true, false, true]];
+        let passing = vec![passing, vec![true, true, true]];
+        let kept = readmit_kept(&obs, &given, &passing, 8, 0.5);
+        assert!(
+            kept[0][25],
+            "the passing match among passing members is re-admitted"
+        );
+        assert!(!kept[0][26], "a match that does not pass stays out");
+        assert!(
+            kept[0][27..].iter().all(|k| !k),
+            "the cluster of matches not given stays out"
+        );
+        assert_eq!(
+            &kept[0][..25],
+            &given[0][..25],
+            "the given matches stay given"
+        );
+        assert_eq!(kept[1], given[1], "a camera with at most `count` matches");
+        // A share of 0 re-admits nothing; a share of 1 needs all 8 nearest to be given and
+        // passing, and the middle match's include the one at (25, 25) that is neither.
+        assert_eq!(readmit_kept(&obs, &given, &passing, 8, 0.0), given);
+        assert!(!readmit_kept(&obs, &given, &passing, 8, 1.0)[0][25]);
+    }
+
+    #[test]
     fn options_validate_and_parse() {
         assert!(FinalFitOptions::default().validate().is_ok());
         for share in [-0.1, 1.5, f64::NAN] {
@@ -2059,6 +2264,24 @@ mod tests {
             ..FinalFitOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("neighbour_count"));
+        for share in [-0.1, 1.5, f64::NAN] {
+            let bad = FinalFitOptions {
+                readmit_share: share,
+                ..FinalFitOptions::default()
+            };
+            assert!(bad.validate().unwrap_err().contains("readmit_share"));
+        }
+        let bad = FinalFitOptions {
+            readmit_share: 0.5,
+            readmit_count: 0,
+            ..FinalFitOptions::default()
+        };
+        assert!(bad.validate().unwrap_err().contains("readmit_count"));
+        assert_eq!(
+            FinalFitOptions::default().readmit_share,
+            0.0,
+            "off by default"
+        );
         let bad = FinalFitOptions {
             inlier_sigmas: 0.0,
             ..FinalFitOptions::default()

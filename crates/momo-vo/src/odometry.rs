@@ -1414,6 +1414,8 @@ impl Odometry {
                 self.first_stage = None;
                 if !standstill && next_stage != crate::separate::NextStage::Done {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
+                    // The first stage's solution for the re-admission (`final_fit.readmit_share`).
+                    let before_stage = self.readmit_on().then(|| sol.clone());
                     // The support's neighbourhood test (`final_fit.neighbour_share`).
                     let next_stage = self
                         .neighbour_stage(
@@ -1425,7 +1427,7 @@ impl Odometry {
                             competing,
                         )
                         .unwrap_or(next_stage);
-                    let (tally, support);
+                    let (mut tally, mut support);
                     (sol, tally, support) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
                             let chosen = crate::separate::subset(obs, mask);
@@ -1458,6 +1460,20 @@ impl Odometry {
                             )
                         }
                     };
+                    // Re-admission at the final motion (`final_fit.readmit_share`).
+                    if let Some(before) = before_stage
+                        && let Some(again) = self.readmit_stage(
+                            obs,
+                            &next_stage,
+                            before,
+                            &sol.params,
+                            &fixed,
+                            diag.scale,
+                            competing,
+                        )
+                    {
+                        (sol, tally, support) = again;
+                    }
                     if let Some(t) = tally {
                         self.parallax_tally.add(&t);
                     }
@@ -2297,6 +2313,79 @@ impl Odometry {
         let (before, after) = (n(&given), n(&reduced));
         (after < before && 2 * after >= before)
             .then_some(crate::separate::NextStage::FinalFitOn(reduced))
+    }
+
+    /// Whether the re-admission (`odometry.final_fit.readmit_share`) is on: a rig of several
+    /// cameras, the final stage on, and (with `readmit_skip_cauchy`) no Cauchy climb scales in
+    /// the frame's motion prior.
+    fn readmit_on(&self) -> bool {
+        let opts = &self.config.odometry.final_fit;
+        opts.enabled
+            && opts.readmit_share > 0.0
+            && self.rig.len() > 1
+            && !(opts.readmit_skip_cauchy && !self.motion_prior.soft_cauchy.is_empty())
+    }
+
+    /// The re-admission (`odometry.final_fit.readmit_share`, [`crate::final_fit::readmit_kept`])
+    /// on a rig of several cameras: the matches `next` handed the final stage plus those left
+    /// out that pass the stage's tests at its final motion `at` among passing neighbours; the
+    /// stage again on them from the first stage's solution `before` (the same
+    /// [`Self::final_fit`]), with its support among all the frame's matches. `None` where it is
+    /// off, re-admits nothing, or the stage was handed every match.
+    #[allow(clippy::too_many_arguments)]
+    fn readmit_stage(
+        &self,
+        obs: &FrameObservations,
+        next: &crate::separate::NextStage,
+        before: FrameSolution,
+        at: &[f64],
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+    ) -> Option<(
+        FrameSolution,
+        Option<crate::final_fit::ParallaxTally>,
+        crate::final_fit::SupportMask,
+    )> {
+        if !self.readmit_on() {
+            return None;
+        }
+        let crate::separate::NextStage::FinalFitOn(given) = next else {
+            return None;
+        };
+        let opts = &self.config.odometry.final_fit;
+        let stage_fixed = self.stage_fixed(fixed, scale);
+        let ctx = self.final_fit_context(&stage_fixed, competing);
+        let passing: Vec<Vec<bool>> = crate::final_fit::passing_at(&ctx, opts, obs, given, at)?
+            .into_iter()
+            .map(|c| c.into_iter().map(|(ok, _)| ok).collect())
+            .collect();
+        let mask = crate::final_fit::readmit_kept(
+            obs,
+            given,
+            &passing,
+            opts.readmit_count,
+            opts.readmit_share,
+        );
+        if mask == *given {
+            return None;
+        }
+        let chosen = crate::separate::subset(obs, &mask);
+        let m = self.final_fit_estimator().match_constant_count();
+        let constants = self
+            .frame_constants
+            .as_deref()
+            .and_then(|c| subset_constants(c, m, &mask));
+        let (sol, tally, kept) = self.final_fit(
+            &chosen,
+            before,
+            fixed,
+            scale,
+            competing,
+            constants.as_deref(),
+            None,
+        );
+        Some((sol, tally, kept.map(|k| superset_mask(&mask, &k))))
     }
 
     fn solve_with_restarts(
