@@ -467,7 +467,9 @@ impl Default for OdometryOptions {
             soft_prior_cauchy_taught_share: 0.5,
             soft_prior_cauchy_after_moving: 5,
             soft_prior_cauchy_min_cameras: 2,
-            previous_basin_change: 0.0,
+            // Since the twenty-ninth session (docs/RESULTS.md §9, twenty-ninth session,
+            // rigslow43 and lead): no effect on a single camera.
+            previous_basin_change: 0.01745,
             previous_basin_band: 0.0014,
             previous_basin_votes: 2,
             soft_prior_conflict_widening: 4.0,

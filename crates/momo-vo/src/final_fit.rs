@@ -296,9 +296,11 @@ impl Default for FinalFitOptions {
             // support42 and lead): no effect on a single camera.
             neighbour_share: 0.375,
             neighbour_count: 8,
-            readmit_share: 0.0,
+            // Since the twenty-ninth session (docs/RESULTS.md §9, twenty-ninth session,
+            // readmit43 and lead): no effect on a single camera.
+            readmit_share: 0.5,
             readmit_count: 8,
-            readmit_skip_cauchy: false,
+            readmit_skip_cauchy: true,
             // Since the twenty-seventh session (docs/RESULTS.md §9, twenty-seventh session,
             // static41 and lead): bit-identical wherever the cameras share a focal length.
             ml_rig_reference: true,
@@ -2277,10 +2279,11 @@ mod tests {
             ..FinalFitOptions::default()
         };
         assert!(bad.validate().unwrap_err().contains("readmit_count"));
+        // The default since the twenty-ninth session: on, gated by the Cauchy climb prior.
+        let d = FinalFitOptions::default();
         assert_eq!(
-            FinalFitOptions::default().readmit_share,
-            0.0,
-            "off by default"
+            (d.readmit_share, d.readmit_count, d.readmit_skip_cauchy),
+            (0.5, 8, true)
         );
         let bad = FinalFitOptions {
             inlier_sigmas: 0.0,

@@ -4425,7 +4425,13 @@ mod tests {
             seed: 3,
             ..SimConfig::moving_traffic()
         };
-        let (off, _) = run(mono(), "");
+        // The default is on (1 deg, since the twenty-ninth session); "off" writes 0.
+        let off_text = "[odometry]\nprevious_basin_change = 0.0\n";
+        assert_eq!(
+            crate::Config::default().odometry.previous_basin_change,
+            0.01745
+        );
+        let (off, _) = run(mono(), off_text);
         let (on, counts) = run(mono(), every);
         assert_eq!(counts, (0, 0), "a single camera is never re-solved");
         assert_eq!(off, on, "a single camera's motions are unchanged");
@@ -4434,7 +4440,7 @@ mod tests {
             seed: 2,
             ..SimConfig::moving_traffic_surround()
         };
-        let (off, _) = run(rig(), "");
+        let (off, _) = run(rig(), off_text);
         let (on, counts) = run(rig(), every);
         assert!(
             counts.0 >= 25,

@@ -523,9 +523,10 @@ fn the_neighbourhood_test_leaves_object_matches_out_of_a_rigs_support() {
     let mut cfg = SimConfig::scenario("moving_traffic_surround").expect("a listed scenario");
     cfg.frames = 31;
     cfg.seed = 3;
-    // The default is the test at 0.375 (since the twenty-eighth session); "off" writes 0.
-    let off = support_by_label(&cfg, "neighbour_share = 0.0");
-    let on = support_by_label(&cfg, "");
+    // The default is the test at 0.375 (since the twenty-eighth session); "off" writes 0. The
+    // re-admission (default since the twenty-ninth session) is held off on both sides.
+    let off = support_by_label(&cfg, "neighbour_share = 0.0\nreadmit_share = 0.0");
+    let on = support_by_label(&cfg, "readmit_share = 0.0");
     eprintln!(
         "static / object matches in the support: off {} / {}, on {} / {}",
         off.0, off.1, on.0, on.1
@@ -563,9 +564,11 @@ fn the_readmission_adds_static_matches_to_a_rigs_support() {
     let mut cfg = SimConfig::scenario("moving_traffic_surround").expect("a listed scenario");
     cfg.frames = 31;
     cfg.seed = 3;
-    let off = support_by_label(&cfg, "");
-    let on = support_by_label(&cfg, "readmit_share = 0.5");
-    let neither = support_by_label(&cfg, "neighbour_share = 0.0");
+    // The default is the re-admission at 0.5 gated by the Cauchy climb prior (since the
+    // twenty-ninth session); here it is written out ungated, as measured, and "off" writes 0.
+    let off = support_by_label(&cfg, "readmit_share = 0.0");
+    let on = support_by_label(&cfg, "readmit_share = 0.5\nreadmit_skip_cauchy = false");
+    let neither = support_by_label(&cfg, "neighbour_share = 0.0\nreadmit_share = 0.0");
     eprintln!(
         "static / object matches in the support: off {} / {}, on {} / {}, neither test {} / {}",
         off.0, off.1, on.0, on.1, neither.0, neither.1
@@ -585,7 +588,7 @@ fn the_readmission_adds_static_matches_to_a_rigs_support() {
     let mut mono = SimConfig::outliers();
     mono.frames = 31;
     mono.seed = 3;
-    let a = support_by_label(&mono, "");
-    let b = support_by_label(&mono, "readmit_share = 0.5");
+    let a = support_by_label(&mono, "readmit_share = 0.0");
+    let b = support_by_label(&mono, "readmit_share = 0.5\nreadmit_skip_cauchy = false");
     assert_eq!(a.2, b.2, "one camera: the motions are the same");
 }
