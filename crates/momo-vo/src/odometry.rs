@@ -2323,7 +2323,7 @@ impl Odometry {
         opts.enabled
             && opts.readmit_share > 0.0
             && self.rig.len() > 1
-            && !(opts.readmit_skip_cauchy && !self.motion_prior.soft_cauchy.is_empty())
+            && (!opts.readmit_skip_cauchy || self.motion_prior.soft_cauchy.is_empty())
     }
 
     /// The re-admission (`odometry.final_fit.readmit_share`, [`crate::final_fit::readmit_kept`])
