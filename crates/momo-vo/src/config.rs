@@ -216,17 +216,18 @@ pub struct OdometryOptions {
     /// (at `ρ = 0.5` the lag opens on 124 of the mono family's 300 development sequences, at
     /// `ρ = 0.2` on 62; docs/RESULTS.md §9, twenty-eighth session, climbgate42).
     pub soft_prior_cauchy_min_cameras: usize,
-    /// The previous motion's basin on a rig (0: off, the default; radians): where the final
-    /// stage's rotation differs from the previous frame's by more than this angle, on a rig of
-    /// at least two cameras, solve the frame again from the previous frame's motion (the first
-    /// stage, then the final stage) and keep that solution where more cameras than not support
-    /// it better: per camera, the matches within `previous_basin_band` of the epipolar planes
-    /// ([`crate::separate::epipolar_at_least`]) are more at the alternative in more cameras
-    /// than fewer, and more in all cameras together. A compact object seen by one or two
-    /// cameras (a bus, a follower at 0.3-0.5 m per frame) can pull the estimate into a
-    /// compromise that a robust cost over all matches prefers; the static world, seen by every
-    /// camera, fits the truth tightly in each (docs/RESULTS.md §9, twenty-ninth session,
-    /// rigslow43).
+    /// The previous motion's basin on a rig (radians; 0.01745 = 1 deg by default since the
+    /// twenty-ninth session, 0: off): where the final stage's rotation differs from the previous
+    /// frame's by more than this angle, on a rig of at least two cameras, the final stage solves
+    /// the frame again from the previous frame's motion (the first stage would slide into an
+    /// object's basin from there) and that solution is kept where the cameras vote for it: per
+    /// camera, the matches within `previous_basin_band` of the epipolar planes
+    /// ([`crate::separate::epipolar_at_least`]) are counted at both motions, and the cameras
+    /// that count more at the alternative must outnumber those that count fewer by
+    /// `previous_basin_votes`. A compact object seen by one to three cameras (a bus, a follower
+    /// at 0.3-0.5 m per frame) can pull the estimate into a compromise that a robust cost over
+    /// all matches prefers; the static world, seen by every camera, fits the truth tightly in
+    /// each (docs/RESULTS.md §9, twenty-ninth session, rigslow43). A single camera: no effect.
     pub previous_basin_change: f64,
     /// The band of `previous_basin_change`'s per-camera vote (radians of epipolar angle,
     /// default 0.0014: the simulated noise's scale).

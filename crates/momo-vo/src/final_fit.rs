@@ -226,8 +226,8 @@ pub struct FinalFitOptions {
     pub neighbour_share: f64,
     /// The neighbours counted by `neighbour_share` (default 8).
     pub neighbour_count: usize,
-    /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0: off, the default): after
-    /// the final stage, a match that the separation's mask (or the neighbourhood test) did not
+    /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0.5 by default since the
+    /// twenty-ninth session, 0: off): after the final stage, a match that the separation's mask (or the neighbourhood test) did not
     /// hand to it is added where, at the stage's final motion, its residual is within
     /// `inlier_sigmas · σ̂` (`σ̂` of the matches the stage was given), its point is in front of
     /// both cameras ([`cheiral`]) and at least this share of its `readmit_count` nearest
@@ -243,7 +243,7 @@ pub struct FinalFitOptions {
     /// With `readmit_share`: not on the frames whose motion prior has the Cauchy climb scales
     /// (`odometry.soft_prior_cauchy` and its gates: the rig's slow start before the soft prior
     /// has learnt), where the stage's final motion, whose support the re-admission widens, is
-    /// the least certain (default false: on every frame).
+    /// the least certain (default true since the twenty-ninth session; false: on every frame).
     pub readmit_skip_cauchy: bool,
     /// The stage's `angle_plane_ml` with one reference focal length for the whole rig, the
     /// mean of its cameras' ([`momo_costs::AnglePlaneMlRig`], registered as

@@ -2205,7 +2205,7 @@ impl Odometry {
         crate::final_fit::refit_supported(&ctx, opts, obs, sol)
     }
 
-    /// The previous motion's basin on a rig (`odometry.previous_basin_change`, off at 0): where
+    /// The previous motion's basin on a rig (`odometry.previous_basin_change`, 1 deg by default, off at 0): where
     /// the final stage's rotation `R` differs from the previous frame's `R_prev` by more than
     /// the option (`|log(R_prevᵀ R)|`), on a rig of at least two cameras, the frame is solved
     /// again from the previous frame's motion (its arc length the frame's) by the final stage
