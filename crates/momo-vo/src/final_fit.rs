@@ -1320,20 +1320,33 @@ pub fn neighbour_kept(
                     if !(g[i] && s[i]) {
                         return g[i];
                     }
-                    d.clear();
-                    d.extend(
-                        ms.iter()
-                            .enumerate()
-                            .filter(|(j, _)| *j != i)
-                            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
-                    );
-                    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
-                    let members = d[..count].iter().filter(|(_, j)| s[*j]).count();
+                    let members = nearest_members(ms, i, count, |j| s[j], &mut d);
                     members as f64 >= share * count as f64
                 })
                 .collect()
         })
         .collect()
+}
+
+/// How many of match `i`'s `count` nearest other matches of its camera `ms` (by first-image
+/// pixel) satisfy `member`: the count both [`neighbour_kept`] and [`readmit_kept`] test. `d` is
+/// scratch space reused across matches; `count` must be in `1..ms.len()`.
+fn nearest_members(
+    ms: &[momo_core::Observation],
+    i: usize,
+    count: usize,
+    member: impl Fn(usize) -> bool,
+    d: &mut Vec<(f64, usize)>,
+) -> usize {
+    d.clear();
+    d.extend(
+        ms.iter()
+            .enumerate()
+            .filter(|(j, _)| *j != i)
+            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
+    );
+    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
+    d[..count].iter().filter(|(_, j)| member(*j)).count()
 }
 
 /// Per camera, per match of `obs`, at the parameters `from`: whether the match passes the
@@ -1434,15 +1447,7 @@ pub fn readmit_kept(
                     if g[i] || !p[i] {
                         return g[i];
                     }
-                    d.clear();
-                    d.extend(
-                        ms.iter()
-                            .enumerate()
-                            .filter(|(j, _)| *j != i)
-                            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
-                    );
-                    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
-                    let members = d[..count].iter().filter(|(_, j)| member(*j)).count();
+                    let members = nearest_members(ms, i, count, member, &mut d);
                     members as f64 >= share * count as f64
                 })
                 .collect()
