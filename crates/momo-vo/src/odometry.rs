@@ -1474,21 +1474,22 @@ impl Odometry {
                     {
                         (sol, tally, support) = again;
                     }
-                    if let Some(t) = tally {
-                        self.parallax_tally.add(&t);
-                    }
-                    if self.config.odometry.report_support {
-                        diag.support = support.map(|k| support_indices(&k));
-                    }
-                    // The previous motion's basin on a rig (`odometry.previous_basin_change`).
-                    if let Some((alt, taken)) =
+                    // The previous motion's basin on a rig (`odometry.previous_basin_change`):
+                    // where it is taken, its stage's parallax tally and support are the frame's.
+                    if let Some((alt, alt_tally, alt_support, taken)) =
                         self.previous_basin(obs, &sol, &fixed, diag.scale, competing)
                     {
                         self.previous_basin_counts.0 += 1;
                         if taken {
                             self.previous_basin_counts.1 += 1;
-                            sol = alt;
+                            (sol, tally, support) = (alt, alt_tally, alt_support);
                         }
+                    }
+                    if let Some(t) = tally {
+                        self.parallax_tally.add(&t);
+                    }
+                    if self.config.odometry.report_support {
+                        diag.support = support.map(|k| support_indices(&k));
                     }
                     self.first_stage = first.filter(|f| f.params != sol.params);
                 }
@@ -2209,8 +2210,9 @@ impl Odometry {
     /// the final stage's rotation `R` differs from the previous frame's `R_prev` by more than
     /// the option (`|log(R_prevᵀ R)|`), on a rig of at least two cameras, the frame is solved
     /// again from the previous frame's motion (its arc length the frame's) by the final stage
-    /// (the first stage slides into an object's basin from there); that solution is returned,
-    /// with whether the cameras vote for it
+    /// (the first stage slides into an object's basin from there); that solution is returned
+    /// with its stage's parallax tally and support (the frame's where it is taken) and
+    /// whether the cameras vote for it
     /// ([`basin_vote`] over the matches within `previous_basin_band` of the epipolar planes,
     /// [`crate::separate::epipolar_at_least`]). Spatial support, counted per camera: the static
     /// world is seen by every camera and fits the true motion tightly in each, a compact object
@@ -2222,7 +2224,12 @@ impl Odometry {
         fixed: &[bool],
         scale: ScaleSource,
         competing: bool,
-    ) -> Option<(FrameSolution, bool)> {
+    ) -> Option<(
+        FrameSolution,
+        Option<crate::final_fit::ParallaxTally>,
+        crate::final_fit::SupportMask,
+        bool,
+    )> {
         let o = &self.config.odometry;
         if o.previous_basin_change <= 0.0 || self.rig.len() < 2 {
             return None;
@@ -2240,7 +2247,7 @@ impl Odometry {
         // object's basin from there: measured on the cut, RESULTS).
         let mut from = sol.clone();
         from.params = start;
-        let (alt, _, _) = self.final_fit(obs, from, fixed, scale, competing, None, None);
+        let (alt, tally, support) = self.final_fit(obs, from, fixed, scale, competing, None, None);
         let inside = |params: &[f64]| -> Vec<usize> {
             crate::separate::epipolar_at_least(
                 &self.rig,
@@ -2257,7 +2264,7 @@ impl Odometry {
             &inside(&alt.params),
             o.previous_basin_votes,
         );
-        Some((alt, taken))
+        Some((alt, tally, support, taken))
     }
 
     /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
