@@ -4433,6 +4433,27 @@ mod tests {
             (y_on - y0).abs() <= (y_off - y0).abs() + 1e-12,
             "{y_on} {y_off} against {y0}"
         );
+        // `decide_by_road_tilt`: the replacement's tilt is no further from the previous frame's
+        // reported tilt than the motion it replaced.
+        let tilted = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = true\n");
+        let first = tilted
+            .iter()
+            .zip(&off)
+            .position(|(a, b)| a.0.params != b.0.params)
+            .expect("the tilt guard leaves some replacement");
+        assert!(first > 0);
+        let tilt = |p: &[f64]| {
+            let vo = Odometry::new(seq.rig.clone(), crate::Config::default())
+                .expect("the odometry builds");
+            crate::hypotheses::tilt(&vo.estimator.motion(p))
+        };
+        let t0 = tilt(&off[first - 1].0.params);
+        let (t_on, t_off) = (tilt(&tilted[first].0.params), tilt(&off[first].0.params));
+        assert_eq!(tilted[first].0.status, FrameStatus::Weak);
+        assert!(
+            (t_on - t0).abs() <= (t_off - t0).abs() + 1e-12,
+            "{t_on} {t_off} against {t0}"
+        );
     }
 
     #[test]
