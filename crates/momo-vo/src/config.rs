@@ -426,6 +426,30 @@ pub struct OdometryOptions {
     /// the previous frame's as the chosen motion's compete (a vehicle's motion that leaves the
     /// run's turn is no candidate). false (the default): every alternative competes.
     pub decide_by_road_continuing: bool,
+    /// With `decide_by_road_continuing`: the yaw test applies only where each of the last this
+    /// many frames was trusted (status `estimated`, no competing motion, its inlier ratio
+    /// within `prior_min_inlier_ratio` of the running average: the frames that centre the
+    /// change-of-motion prior), so a history that is itself doubted (a lock-in) does not
+    /// protect itself; after a doubted frame every alternative competes. 0 (the default): the
+    /// yaw test applies on every frame (as `decide_by_road_continuing` alone).
+    pub decide_by_road_trusted_frames: usize,
+    /// With `decide_by_road`: only the alternatives whose tilt ([`crate::hypotheses::tilt`],
+    /// the norm of roll and pitch) lies at least as close to the previous frame's reported
+    /// motion's tilt as the chosen motion's compete (a tilt that leaves the run's tilt is no
+    /// candidate; the previous motion itself always competes). false (the default): no tilt
+    /// test.
+    pub decide_by_road_tilt: bool,
+    /// With `decide_by_road_tilt`: the tilt compared as the vector `(ω_x, ω_y)` (roll and
+    /// pitch; the distance of the vectors) instead of its norm. false (the default): the norm.
+    pub decide_by_road_tilt_vector: bool,
+    /// With `decide_by_road_tilt`: the reference is the median (per component for the vector)
+    /// of the last this many moving frames' reported tilts; above 1 the previous motion
+    /// competes under the same test. Default 1 (the previous frame's).
+    pub decide_by_road_tilt_frames: usize,
+    /// With `decide_by_road`: a replacement moves the separation's tilt, yaw and road history
+    /// but not its match memory. false (the default): the memory moves to the replacement's
+    /// support too.
+    pub decide_by_road_keep_memory: bool,
     /// Write the final stage's support into the diagnostics (`support` of each frame's row:
     /// per camera, the indices of the matches the final stage refit on, counted among that
     /// camera's rows of the frame in matches.csv's order). An analysis aid: it changes no
@@ -491,6 +515,11 @@ impl Default for OdometryOptions {
             quiet_other_share: 0.1,
             decide_by_road: 0,
             decide_by_road_continuing: false,
+            decide_by_road_trusted_frames: 0,
+            decide_by_road_tilt: false,
+            decide_by_road_tilt_vector: false,
+            decide_by_road_tilt_frames: 1,
+            decide_by_road_keep_memory: false,
             report_support: false,
         }
     }

@@ -223,6 +223,12 @@ pub struct Odometry {
     /// average (a prior centred on a doubtful frame would hold a wrong motion from frame to
     /// frame while the inliers drain slowly: the KITTI 08 trajectory's slow tight turn).
     prior_ready: bool,
+    /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
+    /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
+    trusted_streak: usize,
+    /// The last moving frames' reported tilts `(ω_x, ω_y)` (radians), newest last
+    /// (`odometry.decide_by_road_tilt_frames`; empty where `decide_by_road_tilt` is off).
+    recent_tilts: std::collections::VecDeque<[f64; 2]>,
     /// Running mean of the soft manifold's prior residuals over the moving frames
     /// (`odometry.soft_prior_centring_frames`; empty if off or the model is hard).
     soft_center: Vec<f64>,
@@ -383,6 +389,8 @@ impl Odometry {
             param_inv_sigma: if has_params { inv_sigma } else { Vec::new() },
             rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
             prior_ready: false,
+            trusted_streak: 0,
+            recent_tilts: std::collections::VecDeque::new(),
             soft_center,
             soft_count: 0,
             soft_inv_scale,
@@ -1043,6 +1051,8 @@ impl Odometry {
         self.inlier_ratio_average = None;
         self.inlier_share_peak = None;
         self.prior_ready = false;
+        self.trusted_streak = 0;
+        self.recent_tilts.clear();
         self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
             let neutral = self
                 .estimator
@@ -1679,6 +1689,13 @@ impl Odometry {
         {
             self.last_arc_length = Some(params[i]);
         }
+        if self.config.odometry.decide_by_road_tilt && !standstill {
+            let w = so3_log(&self.estimator.motion(&params).rotation);
+            self.recent_tilts.push_back([w.x, w.y]);
+            while self.recent_tilts.len() > self.config.odometry.decide_by_road_tilt_frames.max(1) {
+                self.recent_tilts.pop_front();
+            }
+        }
         self.after_standstill = standstill;
         self.after_flag = diag.status == FrameStatus::Weak
             && matches!(
@@ -1689,6 +1706,11 @@ impl Odometry {
         // only the road prediction did and `predict_by_road_prior` keeps it.
         self.prior_ready =
             diag.status == FrameStatus::Estimated && trusted && (!competing || prior_kept);
+        self.trusted_streak = if self.prior_ready {
+            self.trusted_streak.saturating_add(1)
+        } else {
+            0
+        };
         if self.after_flag {
             self.parallax_tally.mark_flagged();
         }
@@ -1823,17 +1845,43 @@ impl Odometry {
         let (base, _) = self.road_score_of(obs, chosen)?;
         let arc_index = self.estimator.arc_length_index();
         let yaw = |p: &[f64]| so3_log(&self.estimator.motion(p).rotation).z;
-        // `decide_by_road_continuing`: the chosen motion's yaw distance to the previous frame's.
-        let reach = self.config.odometry.decide_by_road_continuing.then(|| {
-            (
-                yaw(&self.previous),
-                (yaw(chosen) - yaw(&self.previous)).abs(),
-            )
+        let o = &self.config.odometry;
+        // `decide_by_road_continuing`: the chosen motion's yaw distance to the previous frame's,
+        // where the recent history is trusted (`decide_by_road_trusted_frames`).
+        let reach = (o.decide_by_road_continuing
+            && self.trusted_streak >= o.decide_by_road_trusted_frames)
+            .then(|| {
+                (
+                    yaw(&self.previous),
+                    (yaw(chosen) - yaw(&self.previous)).abs(),
+                )
+            });
+        // `decide_by_road_tilt`: the tilt's distance to the recent frames' (the norm's or the
+        // vector's), and the chosen motion's.
+        let tilt_reference = (o.decide_by_road_tilt && !self.recent_tilts.is_empty()).then(|| {
+            let x = crate::stats::median(self.recent_tilts.iter().map(|t| t[0])).unwrap_or(0.0);
+            let y = crate::stats::median(self.recent_tilts.iter().map(|t| t[1])).unwrap_or(0.0);
+            let norm = crate::stats::median(self.recent_tilts.iter().map(|t| t[0].hypot(t[1])))
+                .unwrap_or(0.0);
+            (x, y, norm)
         });
+        let vector = o.decide_by_road_tilt_vector;
+        let tilt_distance = |p: &[f64]| {
+            tilt_reference.map(|(x, y, norm)| {
+                let w = so3_log(&self.estimator.motion(p).rotation);
+                if vector {
+                    (w.x - x).hypot(w.y - y)
+                } else {
+                    (w.x.hypot(w.y) - norm).abs()
+                }
+            })
+        };
+        let tilt_reach = tilt_distance(chosen);
         let scored: Vec<_> = alternatives
             .into_iter()
             .filter(|a| a.len() == chosen.len() && a.iter().all(|x| x.is_finite()))
             .filter(|a| reach.is_none_or(|(y0, d)| (yaw(a) - y0).abs() <= d))
+            .filter(|a| tilt_reach.is_none_or(|d| tilt_distance(a).is_none_or(|e| e <= d)))
             .map(|mut a| {
                 // The frame's own arc length (held or measured) for every alternative.
                 if let Some(i) = arc_index {
@@ -1847,7 +1895,7 @@ impl Odometry {
         let best = pick_by_road(base, &scores, self.config.odometry.decide_by_road)?;
         let (params, score, support) = scored.into_iter().nth(best)?;
         if let Some(opts) = self.config.odometry.separate.as_ref() {
-            if opts.memory_radius > 0.0 {
+            if opts.memory_radius > 0.0 && !self.config.odometry.decide_by_road_keep_memory {
                 self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
             }
             if let Some(h) = opts.hypotheses() {
@@ -4391,6 +4439,27 @@ mod tests {
         assert!(
             (y_on - y0).abs() <= (y_off - y0).abs() + 1e-12,
             "{y_on} {y_off} against {y0}"
+        );
+        // `decide_by_road_tilt`: the replacement's tilt is no further from the previous frame's
+        // reported tilt than the motion it replaced.
+        let tilted = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = true\n");
+        let first = tilted
+            .iter()
+            .zip(&off)
+            .position(|(a, b)| a.0.params != b.0.params)
+            .expect("the tilt guard leaves some replacement");
+        assert!(first > 0);
+        let tilt = |p: &[f64]| {
+            let vo = Odometry::new(seq.rig.clone(), crate::Config::default())
+                .expect("the odometry builds");
+            crate::hypotheses::tilt(&vo.estimator.motion(p))
+        };
+        let t0 = tilt(&off[first - 1].0.params);
+        let (t_on, t_off) = (tilt(&tilted[first].0.params), tilt(&off[first].0.params));
+        assert_eq!(tilted[first].0.status, FrameStatus::Weak);
+        assert!(
+            (t_on - t0).abs() <= (t_off - t0).abs() + 1e-12,
+            "{t_on} {t_off} against {t0}"
         );
     }
 
