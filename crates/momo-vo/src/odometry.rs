@@ -4,8 +4,8 @@
 use crate::config::{Config, ConfigError};
 use crate::trust::{self, Constraint, Reason};
 use momo_core::{
-    CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, Rig,
-    SolveRequest, Termination, camera_motion, so3_log,
+    CameraModel, CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose,
+    Rig, SolveRequest, Termination, camera_motion, so3_log,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -1487,6 +1487,9 @@ impl Odometry {
                         self.previous_basin_counts.0 += 1;
                         if taken {
                             self.previous_basin_counts.1 += 1;
+                            if self.config.odometry.previous_basin_handoff {
+                                self.previous_basin_handoff(obs, &alt.params);
+                            }
                             sol = alt;
                         }
                     }
@@ -2215,6 +2218,11 @@ impl Odometry {
     /// [`crate::separate::epipolar_at_least`]). Spatial support, counted per camera: the static
     /// world is seen by every camera and fits the true motion tightly in each, a compact object
     /// only in one or two (docs/RESULTS.md §9, twenty-ninth session, rigslow43).
+    ///
+    /// On a single camera (`odometry.previous_basin_regions`, off by default) the voters are
+    /// the cells of a coarse grid over the image ([`basin_cell_counts`]), triggered by
+    /// `previous_basin_mono_change` with margin `previous_basin_mono_votes` (thirtieth
+    /// session, monobasin44).
     fn previous_basin(
         &self,
         obs: &FrameObservations,
@@ -2224,12 +2232,33 @@ impl Odometry {
         competing: bool,
     ) -> Option<(FrameSolution, bool)> {
         let o = &self.config.odometry;
-        if o.previous_basin_change <= 0.0 || self.rig.len() < 2 {
+        let regions = (o.previous_basin_regions[0], o.previous_basin_regions[1]);
+        let mono = self.rig.len() < 2;
+        let (change, votes) = if mono {
+            if regions.0 * regions.1 == 0 {
+                return None;
+            }
+            (
+                if o.previous_basin_mono_change > 0.0 {
+                    o.previous_basin_mono_change
+                } else {
+                    o.previous_basin_change
+                },
+                if o.previous_basin_mono_votes > 0 {
+                    o.previous_basin_mono_votes
+                } else {
+                    o.previous_basin_votes
+                },
+            )
+        } else {
+            (o.previous_basin_change, o.previous_basin_votes)
+        };
+        if change <= 0.0 {
             return None;
         }
         let r_prev = self.estimator.motion(&self.previous).rotation;
         let r = self.estimator.motion(&sol.params).rotation;
-        if so3_log(&(r_prev.transpose() * r)).norm() <= o.previous_basin_change {
+        if so3_log(&(r_prev.transpose() * r)).norm() <= change {
             return None;
         }
         let mut start = self.previous.clone();
@@ -2242,22 +2271,44 @@ impl Odometry {
         from.params = start;
         let (alt, _, _) = self.final_fit(obs, from, fixed, scale, competing, None, None);
         let inside = |params: &[f64]| -> Vec<usize> {
-            crate::separate::epipolar_at_least(
+            let within = crate::separate::epipolar_at_least(
                 &self.rig,
                 &self.estimator.motion(params),
                 obs,
                 o.previous_basin_band,
-            )
-            .iter()
-            .map(|cam| cam.iter().filter(|outside| !**outside).count())
-            .collect()
+            );
+            if mono {
+                basin_cell_counts(&self.rig, obs, &within, regions)
+            } else {
+                within
+                    .iter()
+                    .map(|cam| cam.iter().filter(|outside| !**outside).count())
+                    .collect()
+            }
         };
-        let taken = basin_vote(
-            &inside(&sol.params),
-            &inside(&alt.params),
-            o.previous_basin_votes,
-        );
+        let taken = basin_vote(&inside(&sol.params), &inside(&alt.params), votes);
         Some((alt, taken))
+    }
+
+    /// `odometry.previous_basin_handoff`: the separation's match memory and its tilt, yaw and
+    /// road history moved to the previous motion's basin where it was taken (as
+    /// `decide_by_road` does for its alternative); nothing where the separation or its
+    /// hypotheses are off.
+    fn previous_basin_handoff(&mut self, obs: &FrameObservations, params: &[f64]) {
+        let Some((score, support)) = self.road_score_of(obs, params) else {
+            return;
+        };
+        if let Some(opts) = self.config.odometry.separate.as_ref() {
+            if opts.memory_radius > 0.0 {
+                self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
+            }
+            if let Some(h) = opts.hypotheses() {
+                let motion = self.estimator.motion(params);
+                let tilt = crate::hypotheses::tilt(&motion);
+                let yaw = so3_log(&motion.rotation).z;
+                self.hypotheses.replace_last(h, tilt, yaw, score);
+            }
+        }
     }
 
     /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
@@ -3341,6 +3392,33 @@ fn soft_cauchy_scales(
 /// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
 /// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
 /// jitter is learnt or the arc length is not positive.
+/// The region vote's counts of `Odometry::previous_basin` on a single camera
+/// (`odometry.previous_basin_regions`): per cell of a `grid` (columns, rows) over each
+/// camera's image ([`crate::trust::cell_of`] of the frame-(k-1) pixel), the matches whose
+/// epipolar angle is below the band (`outside[j][i]` false), cameras one after the other.
+fn basin_cell_counts(
+    rig: &Rig,
+    obs: &FrameObservations,
+    outside: &[Vec<bool>],
+    grid: (usize, usize),
+) -> Vec<usize> {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let mut counts = vec![0usize; cells * obs.per_camera.len()];
+    for (j, ((cam, m), out)) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(outside)
+        .enumerate()
+    {
+        let size = cam.model.size();
+        for (ob, _) in m.iter().zip(out).filter(|(_, o)| !**o) {
+            counts[j * cells + crate::trust::cell_of((ob.px0.x, ob.px0.y), size, grid)] += 1;
+        }
+    }
+    counts
+}
+
 /// The cameras' vote of `Odometry::previous_basin`: `alt` wins over `current` (per camera the
 /// matches within the band of each motion's epipolar planes) where the cameras that count more
 /// matches at `alt` outnumber those that count fewer by at least `votes` (at least 1): the
