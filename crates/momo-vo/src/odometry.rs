@@ -4542,4 +4542,111 @@ mod tests {
             );
         }
     }
+
+    #[test]
+    fn the_region_vote_counts_each_cell_once() {
+        use momo_core::{Camera, Observation, Pinhole};
+        use nalgebra::Vector2;
+        let cam = Camera::Pinhole(Pinhole {
+            fx: 100.0,
+            fy: 100.0,
+            cx: 50.0,
+            cy: 50.0,
+            width: 100.0,
+            height: 100.0,
+        });
+        let rig = Rig::mono(cam.clone(), Pose::identity()).expect("a rig");
+        let ob = |u: f64, v: f64| {
+            Observation::new(&cam, Vector2::new(u, v), Vector2::new(u, v)).expect("a match")
+        };
+        // Two matches in the top-left cell, one in the bottom-right, one bottom-left (outside).
+        let mut obs = FrameObservations::new(1);
+        obs.per_camera[0] = vec![
+            ob(10.0, 10.0),
+            ob(20.0, 30.0),
+            ob(90.0, 90.0),
+            ob(10.0, 90.0),
+        ];
+        let outside = vec![vec![false, false, false, true]];
+        assert_eq!(
+            basin_cell_counts(&rig, &obs, &outside, (2, 2)),
+            vec![2, 0, 0, 1]
+        );
+        assert_eq!(basin_cell_counts(&rig, &obs, &outside, (1, 1)), vec![3]);
+        // A compact object's many matches in one cell do not outvote the spread-out world:
+        // at the alternative one cell gains 40, three cells lose 2 each.
+        let current = [10, 10, 10, 10];
+        let alt = [50, 8, 8, 8];
+        assert!(!basin_vote(&current, &alt, 1));
+        // Three of four cells gaining carry a margin of 2.
+        assert!(basin_vote(&current, &[12, 11, 11, 9], 2));
+        assert!(!basin_vote(&current, &[12, 11, 11, 9], 3));
+    }
+
+    #[test]
+    fn the_region_vote_acts_on_a_single_camera_only_where_on() {
+        use momo_sim::{SimConfig, simulate};
+        let run = |cfg: SimConfig, text: &str| {
+            let sim = simulate(&cfg).expect("the scenario simulates");
+            let seq = &sim.sequence;
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut params = Vec::new();
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+                params.push(vo.previous_params().to_vec());
+            }
+            (params, vo.previous_basin_counts())
+        };
+        let mono = || SimConfig {
+            frames: 31,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        };
+        // Off by default: a single camera is never re-solved even with every frame eligible.
+        assert_eq!(
+            crate::Config::default().odometry.previous_basin_regions,
+            [0, 0]
+        );
+        let every = "[odometry]\nprevious_basin_mono_change = 1e-12\n";
+        let (off, counts) = run(mono(), every);
+        assert_eq!(counts, (0, 0));
+        // On, every moving frame is re-solved; with an unreachable margin none is taken and
+        // the motions are the default's.
+        let (on, counts) = run(
+            mono(),
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 100\n",
+        );
+        assert!(
+            counts.0 >= 25,
+            "the moving frames are re-solved: {counts:?}"
+        );
+        assert_eq!(counts.1, 0);
+        assert_eq!(off, on);
+        // A plain majority of the cells takes some of them.
+        let (_, counts) = run(
+            mono(),
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 1\n",
+        );
+        assert!(counts.1 >= 1 && counts.1 <= counts.0, "{counts:?}");
+        // The regions leave a rig's camera vote alone.
+        let rig = || SimConfig {
+            frames: 31,
+            seed: 2,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let (a, ca) = run(rig(), "[odometry]\n");
+        let (b, cb) = run(
+            rig(),
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 1\n",
+        );
+        assert_eq!((a, ca), (b, cb));
+        for bad in ["-0.01", "nan"] {
+            let text = format!("[odometry]\nprevious_basin_mono_change = {bad}\n");
+            assert!(
+                crate::Config::from_toml_str(&text, "t.toml").is_err(),
+                "{bad}"
+            );
+        }
+    }
 }
