@@ -255,6 +255,9 @@ pub struct OdometryOptions {
     /// the cells that count more matches within the band at the alternative must outnumber
     /// those that count fewer by at least this many.
     pub previous_basin_mono_votes: usize,
+    /// The band of `previous_basin_regions`' per-cell count (radians of epipolar angle, 0:
+    /// `previous_basin_band`'s; default 0).
+    pub previous_basin_mono_band: f64,
     /// Where the previous motion's basin is taken (rig or region vote), move the separation's
     /// match memory and its tilt, yaw and road history to it, as `decide_by_road` does
     /// (default false: the rig's behaviour of the twenty-ninth session).
@@ -499,6 +502,7 @@ impl Default for OdometryOptions {
             previous_basin_regions: [0, 0],
             previous_basin_mono_change: 0.0,
             previous_basin_mono_votes: 0,
+            previous_basin_mono_band: 0.0,
             previous_basin_handoff: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
@@ -1194,6 +1198,10 @@ impl Config {
             (
                 "odometry.previous_basin_mono_change",
                 o.previous_basin_mono_change,
+            ),
+            (
+                "odometry.previous_basin_mono_band",
+                o.previous_basin_mono_band,
             ),
         ] {
             if !(v.is_finite() && v >= 0.0) {

@@ -2221,7 +2221,8 @@ impl Odometry {
     ///
     /// On a single camera (`odometry.previous_basin_regions`, off by default) the voters are
     /// the cells of a coarse grid over the image ([`basin_cell_counts`]), triggered by
-    /// `previous_basin_mono_change` with margin `previous_basin_mono_votes` (thirtieth
+    /// `previous_basin_mono_change` with margin `previous_basin_mono_votes` and band
+    /// `previous_basin_mono_band` (thirtieth
     /// session, monobasin44).
     fn previous_basin(
         &self,
@@ -2270,12 +2271,17 @@ impl Odometry {
         let mut from = sol.clone();
         from.params = start;
         let (alt, _, _) = self.final_fit(obs, from, fixed, scale, competing, None, None);
+        let band = if mono && o.previous_basin_mono_band > 0.0 {
+            o.previous_basin_mono_band
+        } else {
+            o.previous_basin_band
+        };
         let inside = |params: &[f64]| -> Vec<usize> {
             let within = crate::separate::epipolar_at_least(
                 &self.rig,
                 &self.estimator.motion(params),
                 obs,
-                o.previous_basin_band,
+                band,
             );
             if mono {
                 basin_cell_counts(&self.rig, obs, &within, regions)
