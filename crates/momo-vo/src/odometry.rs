@@ -4561,7 +4561,7 @@ mod tests {
             width: 100.0,
             height: 100.0,
         });
-        let rig = Rig::mono(cam.clone(), Pose::identity()).expect("a rig");
+        let rig = Rig::mono(cam, Pose::identity()).expect("a rig");
         let ob = |u: f64, v: f64| {
             Observation::new(&cam, Vector2::new(u, v), Vector2::new(u, v)).expect("a match")
         };
