@@ -236,6 +236,32 @@ pub struct OdometryOptions {
     /// count more matches within the band at the alternative must outnumber those that count
     /// fewer by at least this many (on four cameras: 3 to 1, or 2 to 0).
     pub previous_basin_votes: usize,
+    /// The previous motion's basin on a single camera, voted by image regions (`[cols, rows]`
+    /// of a coarse grid over the image, `[0, 0]`: off, the default; a rig keeps its camera
+    /// vote): a single camera has no cameras to vote, but a compact object (a lead car, a bus)
+    /// covers few cells of the image while the static world is spread over it. Where the final
+    /// stage's rotation differs from the previous frame's by more than
+    /// `previous_basin_mono_change`, the final stage solves the frame again from the previous
+    /// frame's motion (as `previous_basin_change` on a rig) and that solution is kept where the
+    /// cells vote for it: per cell ([`crate::trust::cell_of`], the frame-(k-1) pixel) the
+    /// matches within `previous_basin_band` of the epipolar planes at both motions, each cell
+    /// one vote, margin `previous_basin_mono_votes` (docs/RESULTS.md §9, thirtieth session,
+    /// monobasin44).
+    pub previous_basin_regions: [usize; 2],
+    /// The rotation change that triggers `previous_basin_regions` on a single camera (radians,
+    /// 0: `previous_basin_change`'s; default 0).
+    pub previous_basin_mono_change: f64,
+    /// The margin of `previous_basin_regions`' vote (0: `previous_basin_votes`'s; default 0):
+    /// the cells that count more matches within the band at the alternative must outnumber
+    /// those that count fewer by at least this many.
+    pub previous_basin_mono_votes: usize,
+    /// The band of `previous_basin_regions`' per-cell count (radians of epipolar angle, 0:
+    /// `previous_basin_band`'s; default 0).
+    pub previous_basin_mono_band: f64,
+    /// Where the previous motion's basin is taken (rig or region vote), move the separation's
+    /// match memory and its tilt, yaw and road history to it, as `decide_by_road` does
+    /// (default false: the rig's behaviour of the twenty-ninth session).
+    pub previous_basin_handoff: bool,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -497,6 +523,11 @@ impl Default for OdometryOptions {
             previous_basin_change: 0.01745,
             previous_basin_band: 0.0014,
             previous_basin_votes: 2,
+            previous_basin_regions: [0, 0],
+            previous_basin_mono_change: 0.0,
+            previous_basin_mono_votes: 0,
+            previous_basin_mono_band: 0.0,
+            previous_basin_handoff: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1193,6 +1224,14 @@ impl Config {
         for (key, v) in [
             ("odometry.previous_basin_change", o.previous_basin_change),
             ("odometry.previous_basin_band", o.previous_basin_band),
+            (
+                "odometry.previous_basin_mono_change",
+                o.previous_basin_mono_change,
+            ),
+            (
+                "odometry.previous_basin_mono_band",
+                o.previous_basin_mono_band,
+            ),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 bad(

@@ -4,8 +4,8 @@
 use crate::config::{Config, ConfigError};
 use crate::trust::{self, Constraint, Reason};
 use momo_core::{
-    CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, Rig,
-    SolveRequest, Termination, camera_motion, so3_log,
+    CameraModel, CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose,
+    Rig, SolveRequest, Termination, camera_motion, so3_log,
 };
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
@@ -1492,6 +1492,9 @@ impl Odometry {
                         self.previous_basin_counts.0 += 1;
                         if taken {
                             self.previous_basin_counts.1 += 1;
+                            if self.config.odometry.previous_basin_handoff {
+                                self.previous_basin_handoff(obs, &alt.params);
+                            }
                             (sol, tally, support) = (alt, alt_tally, alt_support);
                         }
                     }
@@ -2265,6 +2268,12 @@ impl Odometry {
     /// [`crate::separate::epipolar_at_least`]). Spatial support, counted per camera: the static
     /// world is seen by every camera and fits the true motion tightly in each, a compact object
     /// only in one or two (docs/RESULTS.md §9, twenty-ninth session, rigslow43).
+    ///
+    /// On a single camera (`odometry.previous_basin_regions`, off by default) the voters are
+    /// the cells of a coarse grid over the image ([`basin_cell_counts`]), triggered by
+    /// `previous_basin_mono_change` with margin `previous_basin_mono_votes` and band
+    /// `previous_basin_mono_band` (thirtieth
+    /// session, monobasin44).
     fn previous_basin(
         &self,
         obs: &FrameObservations,
@@ -2279,12 +2288,33 @@ impl Odometry {
         bool,
     )> {
         let o = &self.config.odometry;
-        if o.previous_basin_change <= 0.0 || self.rig.len() < 2 {
+        let regions = (o.previous_basin_regions[0], o.previous_basin_regions[1]);
+        let mono = self.rig.len() < 2;
+        let (change, votes) = if mono {
+            if regions.0 * regions.1 == 0 {
+                return None;
+            }
+            (
+                if o.previous_basin_mono_change > 0.0 {
+                    o.previous_basin_mono_change
+                } else {
+                    o.previous_basin_change
+                },
+                if o.previous_basin_mono_votes > 0 {
+                    o.previous_basin_mono_votes
+                } else {
+                    o.previous_basin_votes
+                },
+            )
+        } else {
+            (o.previous_basin_change, o.previous_basin_votes)
+        };
+        if change <= 0.0 {
             return None;
         }
         let r_prev = self.estimator.motion(&self.previous).rotation;
         let r = self.estimator.motion(&sol.params).rotation;
-        if so3_log(&(r_prev.transpose() * r)).norm() <= o.previous_basin_change {
+        if so3_log(&(r_prev.transpose() * r)).norm() <= change {
             return None;
         }
         let mut start = self.previous.clone();
@@ -2296,23 +2326,50 @@ impl Odometry {
         let mut from = sol.clone();
         from.params = start;
         let (alt, tally, support) = self.final_fit(obs, from, fixed, scale, competing, None, None);
+        let band = if mono && o.previous_basin_mono_band > 0.0 {
+            o.previous_basin_mono_band
+        } else {
+            o.previous_basin_band
+        };
         let inside = |params: &[f64]| -> Vec<usize> {
-            crate::separate::epipolar_at_least(
+            let within = crate::separate::epipolar_at_least(
                 &self.rig,
                 &self.estimator.motion(params),
                 obs,
-                o.previous_basin_band,
-            )
-            .iter()
-            .map(|cam| cam.iter().filter(|outside| !**outside).count())
-            .collect()
+                band,
+            );
+            if mono {
+                basin_cell_counts(&self.rig, obs, &within, regions)
+            } else {
+                within
+                    .iter()
+                    .map(|cam| cam.iter().filter(|outside| !**outside).count())
+                    .collect()
+            }
         };
-        let taken = basin_vote(
-            &inside(&sol.params),
-            &inside(&alt.params),
-            o.previous_basin_votes,
-        );
+        let taken = basin_vote(&inside(&sol.params), &inside(&alt.params), votes);
         Some((alt, tally, support, taken))
+    }
+
+    /// `odometry.previous_basin_handoff`: the separation's match memory and its tilt, yaw and
+    /// road history moved to the previous motion's basin where it was taken (as
+    /// `decide_by_road` does for its alternative); nothing where the separation or its
+    /// hypotheses are off.
+    fn previous_basin_handoff(&mut self, obs: &FrameObservations, params: &[f64]) {
+        let Some((score, support)) = self.road_score_of(obs, params) else {
+            return;
+        };
+        if let Some(opts) = self.config.odometry.separate.as_ref() {
+            if opts.memory_radius > 0.0 {
+                self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
+            }
+            if let Some(h) = opts.hypotheses() {
+                let motion = self.estimator.motion(params);
+                let tilt = crate::hypotheses::tilt(&motion);
+                let yaw = so3_log(&motion.rotation).z;
+                self.hypotheses.replace_last(h, tilt, yaw, score);
+            }
+        }
     }
 
     /// The final stage's fixed parameters: the frame's `fixed`, and the arc length where the
@@ -3396,6 +3453,33 @@ fn soft_cauchy_scales(
 /// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
 /// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
 /// jitter is learnt or the arc length is not positive.
+/// The region vote's counts of `Odometry::previous_basin` on a single camera
+/// (`odometry.previous_basin_regions`): per cell of a `grid` (columns, rows) over each
+/// camera's image ([`crate::trust::cell_of`] of the frame-(k-1) pixel), the matches whose
+/// epipolar angle is below the band (`outside[j][i]` false), cameras one after the other.
+fn basin_cell_counts(
+    rig: &Rig,
+    obs: &FrameObservations,
+    outside: &[Vec<bool>],
+    grid: (usize, usize),
+) -> Vec<usize> {
+    let cells = grid.0.max(1) * grid.1.max(1);
+    let mut counts = vec![0usize; cells * obs.per_camera.len()];
+    for (j, ((cam, m), out)) in rig
+        .cameras()
+        .iter()
+        .zip(&obs.per_camera)
+        .zip(outside)
+        .enumerate()
+    {
+        let size = cam.model.size();
+        for (ob, _) in m.iter().zip(out).filter(|(_, o)| !**o) {
+            counts[j * cells + crate::trust::cell_of((ob.px0.x, ob.px0.y), size, grid)] += 1;
+        }
+    }
+    counts
+}
+
 /// The cameras' vote of `Odometry::previous_basin`: `alt` wins over `current` (per camera the
 /// matches within the band of each motion's epipolar planes) where the cameras that count more
 /// matches at `alt` outnumber those that count fewer by at least `votes` (at least 1): the
@@ -4534,6 +4618,113 @@ mod tests {
         // The option's range.
         for bad in ["-0.01", "nan"] {
             let text = format!("[odometry]\nprevious_basin_change = {bad}\n");
+            assert!(
+                crate::Config::from_toml_str(&text, "t.toml").is_err(),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_region_vote_counts_each_cell_once() {
+        use momo_core::{Camera, Observation, Pinhole};
+        use nalgebra::Vector2;
+        let cam = Camera::Pinhole(Pinhole {
+            fx: 100.0,
+            fy: 100.0,
+            cx: 50.0,
+            cy: 50.0,
+            width: 100.0,
+            height: 100.0,
+        });
+        let rig = Rig::mono(cam, Pose::identity()).expect("a rig");
+        let ob = |u: f64, v: f64| {
+            Observation::new(&cam, Vector2::new(u, v), Vector2::new(u, v)).expect("a match")
+        };
+        // Two matches in the top-left cell, one in the bottom-right, one bottom-left (outside).
+        let mut obs = FrameObservations::new(1);
+        obs.per_camera[0] = vec![
+            ob(10.0, 10.0),
+            ob(20.0, 30.0),
+            ob(90.0, 90.0),
+            ob(10.0, 90.0),
+        ];
+        let outside = vec![vec![false, false, false, true]];
+        assert_eq!(
+            basin_cell_counts(&rig, &obs, &outside, (2, 2)),
+            vec![2, 0, 0, 1]
+        );
+        assert_eq!(basin_cell_counts(&rig, &obs, &outside, (1, 1)), vec![3]);
+        // A compact object's many matches in one cell do not outvote the spread-out world:
+        // at the alternative one cell gains 40, three cells lose 2 each.
+        let current = [10, 10, 10, 10];
+        let alt = [50, 8, 8, 8];
+        assert!(!basin_vote(&current, &alt, 1));
+        // Three of four cells gaining carry a margin of 2.
+        assert!(basin_vote(&current, &[12, 11, 11, 9], 2));
+        assert!(!basin_vote(&current, &[12, 11, 11, 9], 3));
+    }
+
+    #[test]
+    fn the_region_vote_acts_on_a_single_camera_only_where_on() {
+        use momo_sim::{SimConfig, simulate};
+        let run = |cfg: SimConfig, text: &str| {
+            let sim = simulate(&cfg).expect("the scenario simulates");
+            let seq = &sim.sequence;
+            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut params = Vec::new();
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+                params.push(vo.previous_params().to_vec());
+            }
+            (params, vo.previous_basin_counts())
+        };
+        let mono = || SimConfig {
+            frames: 31,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        };
+        // Off by default: a single camera is never re-solved even with every frame eligible.
+        assert_eq!(
+            crate::Config::default().odometry.previous_basin_regions,
+            [0, 0]
+        );
+        let every = "[odometry]\nprevious_basin_mono_change = 1e-12\n";
+        let (off, counts) = run(mono(), every);
+        assert_eq!(counts, (0, 0));
+        // On, every moving frame is re-solved; with an unreachable margin none is taken and
+        // the motions are the default's.
+        let (on, counts) = run(
+            mono(),
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 100\n",
+        );
+        assert!(
+            counts.0 >= 25,
+            "the moving frames are re-solved: {counts:?}"
+        );
+        assert_eq!(counts.1, 0);
+        assert_eq!(off, on);
+        // A plain majority of the cells takes some of them.
+        let (_, counts) = run(
+            mono(),
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 1\n",
+        );
+        assert!(counts.1 >= 1 && counts.1 <= counts.0, "{counts:?}");
+        // The regions leave a rig's camera vote alone.
+        let rig = || SimConfig {
+            frames: 31,
+            seed: 2,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let (a, ca) = run(rig(), "[odometry]\n");
+        let (b, cb) = run(
+            rig(),
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 1\n",
+        );
+        assert_eq!((a, ca), (b, cb));
+        for bad in ["-0.01", "nan"] {
+            let text = format!("[odometry]\nprevious_basin_mono_change = {bad}\n");
             assert!(
                 crate::Config::from_toml_str(&text, "t.toml").is_err(),
                 "{bad}"
