@@ -1897,18 +1897,34 @@ impl Odometry {
         let scores: Vec<usize> = scored.iter().map(|x| x.1).collect();
         let best = pick_by_road(base, &scores, self.config.odometry.decide_by_road)?;
         let (params, score, support) = scored.into_iter().nth(best)?;
+        let keep_memory = self.config.odometry.decide_by_road_keep_memory;
+        self.hand_off_separation(obs, &params, score, &support, !keep_memory);
+        Some(params)
+    }
+
+    /// The separation's match memory (where `memory`) and its tilt, yaw and road history moved
+    /// to `params`, a motion that replaced the frame's choice with road score `score` on its
+    /// epipolar `support` (`decide_by_road`, `previous_basin_handoff`); nothing where the
+    /// separation or its hypotheses are off.
+    fn hand_off_separation(
+        &mut self,
+        obs: &FrameObservations,
+        params: &[f64],
+        score: usize,
+        support: &[Vec<bool>],
+        memory: bool,
+    ) {
         if let Some(opts) = self.config.odometry.separate.as_ref() {
-            if opts.memory_radius > 0.0 && !self.config.odometry.decide_by_road_keep_memory {
-                self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
+            if memory && opts.memory_radius > 0.0 {
+                self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, support);
             }
             if let Some(h) = opts.hypotheses() {
-                let motion = self.estimator.motion(&params);
+                let motion = self.estimator.motion(params);
                 let tilt = crate::hypotheses::tilt(&motion);
                 let yaw = so3_log(&motion.rotation).z;
                 self.hypotheses.replace_last(h, tilt, yaw, score);
             }
         }
-        Some(params)
     }
 
     /// Whether the separation of this frame may skip its alternative solves
@@ -2272,8 +2288,7 @@ impl Odometry {
     /// On a single camera (`odometry.previous_basin_regions`, off by default) the voters are
     /// the cells of a coarse grid over the image ([`basin_cell_counts`]), triggered by
     /// `previous_basin_mono_change` with margin `previous_basin_mono_votes` and band
-    /// `previous_basin_mono_band` (thirtieth
-    /// session, monobasin44).
+    /// `previous_basin_mono_band` (thirtieth session, monobasin44).
     fn previous_basin(
         &self,
         obs: &FrameObservations,
@@ -2356,19 +2371,8 @@ impl Odometry {
     /// `decide_by_road` does for its alternative); nothing where the separation or its
     /// hypotheses are off.
     fn previous_basin_handoff(&mut self, obs: &FrameObservations, params: &[f64]) {
-        let Some((score, support)) = self.road_score_of(obs, params) else {
-            return;
-        };
-        if let Some(opts) = self.config.odometry.separate.as_ref() {
-            if opts.memory_radius > 0.0 {
-                self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
-            }
-            if let Some(h) = opts.hypotheses() {
-                let motion = self.estimator.motion(params);
-                let tilt = crate::hypotheses::tilt(&motion);
-                let yaw = so3_log(&motion.rotation).z;
-                self.hypotheses.replace_last(h, tilt, yaw, score);
-            }
+        if let Some((score, support)) = self.road_score_of(obs, params) {
+            self.hand_off_separation(obs, params, score, &support, true);
         }
     }
 
@@ -3449,10 +3453,6 @@ fn soft_cauchy_scales(
         .collect()
 }
 
-/// The soft prior's factors `k_r` (units of the model's sigma) widened for a step of arc
-/// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
-/// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
-/// jitter is learnt or the arc length is not positive.
 /// The region vote's counts of `Odometry::previous_basin` on a single camera
 /// (`odometry.previous_basin_regions`): per cell of a `grid` (columns, rows) over each
 /// camera's image ([`crate::trust::cell_of`] of the frame-(k-1) pixel), the matches whose
@@ -3493,6 +3493,10 @@ fn basin_vote(current: &[usize], alt: &[usize], votes: usize) -> bool {
     more >= fewer + votes.max(1)
 }
 
+/// The soft prior's factors `k_r` (units of the model's sigma) widened for a step of arc
+/// length `arc` by the learnt displacement jitters `jitter` (`δ_r²`,
+/// `odometry.soft_prior_arc_learning`): `1 / √(1 / k_r² + δ_r² / s²)`. Unchanged where no
+/// jitter is learnt or the arc length is not positive.
 fn arc_widened_inv_scale(inv_scale: &mut [f64], jitter: &[f64], arc: f64) {
     let s = arc.abs();
     if !(s.is_finite() && s > 0.0) {
@@ -4563,21 +4567,25 @@ mod tests {
         assert!(!basin_vote(&[10, 10, 10, 10], &[90, 9, 9, 10], 1));
     }
 
+    /// A simulated scenario run under a configuration: each frame's reported parameters and
+    /// the previous-basin counts at the end (the previous-basin tests).
+    fn basin_run(cfg: momo_sim::SimConfig, text: &str) -> (Vec<Vec<f64>>, (usize, usize)) {
+        let sim = momo_sim::simulate(&cfg).expect("the scenario simulates");
+        let seq = &sim.sequence;
+        let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+        let mut params = Vec::new();
+        for k in 1..seq.num_frames() {
+            vo.process(&seq.frames[k], seq.arc_length(k));
+            params.push(vo.previous_params().to_vec());
+        }
+        (params, vo.previous_basin_counts())
+    }
+
     #[test]
     fn the_previous_basin_leaves_a_single_camera_alone_and_acts_on_a_rig() {
-        use momo_sim::{SimConfig, simulate};
-        let run = |cfg: SimConfig, text: &str| {
-            let sim = simulate(&cfg).expect("the scenario simulates");
-            let seq = &sim.sequence;
-            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
-            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
-            let mut params = Vec::new();
-            for k in 1..seq.num_frames() {
-                vo.process(&seq.frames[k], seq.arc_length(k));
-                params.push(vo.previous_params().to_vec());
-            }
-            (params, vo.previous_basin_counts())
-        };
+        use momo_sim::SimConfig;
+        let run = basin_run;
         // Every frame re-solved (the change threshold far below any frame's rotation change).
         let every = "[odometry]\nprevious_basin_change = 1e-12\n";
         let mono = || SimConfig {
@@ -4667,19 +4675,8 @@ mod tests {
 
     #[test]
     fn the_region_vote_acts_on_a_single_camera_only_where_on() {
-        use momo_sim::{SimConfig, simulate};
-        let run = |cfg: SimConfig, text: &str| {
-            let sim = simulate(&cfg).expect("the scenario simulates");
-            let seq = &sim.sequence;
-            let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
-            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
-            let mut params = Vec::new();
-            for k in 1..seq.num_frames() {
-                vo.process(&seq.frames[k], seq.arc_length(k));
-                params.push(vo.previous_params().to_vec());
-            }
-            (params, vo.previous_basin_counts())
-        };
+        use momo_sim::SimConfig;
+        let run = basin_run;
         let mono = || SimConfig {
             frames: 31,
             seed: 3,
