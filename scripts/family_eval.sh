@@ -10,6 +10,7 @@
 #        holdout   the same, seeds 11-15
 #        fresh     the same, seeds 16-20 (keep for confirmation: choose nothing on it)
 #        dev       the same, seeds 21-30
+#        dev2      the same, seeds 31-40 (a second development set, added in the 31st session)
 #        static    clean_pinhole and outliers along KITTI 00-10, seeds 1-3
 #        static2   the same, seeds 4-6
 #        static3   the other scenarios without moving objects along KITTI 00-10, seeds 1-2
@@ -111,10 +112,10 @@ export -f run_one
 list_set() {
     local s="$1" seeds trajs="00 01 02 03 04 05 06 07 08 09 10" sc t seed
     case "$s" in
-    grid | holdout | fresh | dev)
+    grid | holdout | fresh | dev | dev2)
         case "$s" in
         grid) seeds="$(seq 1 10)" ;; holdout) seeds="$(seq 11 15)" ;;
-        fresh) seeds="$(seq 16 20)" ;; dev) seeds="$(seq 21 30)" ;;
+        fresh) seeds="$(seq 16 20)" ;; dev) seeds="$(seq 21 30)" ;; dev2) seeds="$(seq 31 40)" ;;
         esac
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
