@@ -237,8 +237,8 @@ pub struct OdometryOptions {
     /// fewer by at least this many (on four cameras: 3 to 1, or 2 to 0).
     pub previous_basin_votes: usize,
     /// The previous motion's basin on a single camera, voted by image regions (`[cols, rows]`
-    /// of a coarse grid over the image, `[0, 0]`: off, the default; a rig keeps its camera
-    /// vote): a single camera has no cameras to vote, but a compact object (a lead car, a bus)
+    /// of a coarse grid over the image, `[0, 0]`: off; default `[3, 2]` since the
+    /// thirty-first session; a rig keeps its camera vote): a single camera has no cameras to vote, but a compact object (a lead car, a bus)
     /// covers few cells of the image while the static world is spread over it. Where the final
     /// stage's rotation differs from the previous frame's by more than
     /// `previous_basin_mono_change`, the final stage solves the frame again from the previous
@@ -249,14 +249,14 @@ pub struct OdometryOptions {
     /// monobasin44).
     pub previous_basin_regions: [usize; 2],
     /// The rotation change that triggers `previous_basin_regions` on a single camera (radians,
-    /// 0: `previous_basin_change`'s; default 0).
+    /// 0: `previous_basin_change`'s; default 0.01309, 0.75 deg).
     pub previous_basin_mono_change: f64,
-    /// The margin of `previous_basin_regions`' vote (0: `previous_basin_votes`'s; default 0):
+    /// The margin of `previous_basin_regions`' vote (0: `previous_basin_votes`'s; default 3):
     /// the cells that count more matches within the band at the alternative must outnumber
     /// those that count fewer by at least this many.
     pub previous_basin_mono_votes: usize,
     /// The band of `previous_basin_regions`' per-cell count (radians of epipolar angle, 0:
-    /// `previous_basin_band`'s; default 0).
+    /// `previous_basin_band`'s; default 0.0028).
     pub previous_basin_mono_band: f64,
     /// Where the previous motion's basin is taken (rig or region vote), move the separation's
     /// match memory and its tilt, yaw and road history to it, as `decide_by_road` does
@@ -446,7 +446,8 @@ pub struct OdometryOptions {
     /// score ([`crate::hypotheses::score`], on each motion's own epipolar support at the
     /// separation's threshold); the best replaces the chosen motion where its score exceeds
     /// the chosen one's by at least this many (cells or matches, as the score counts). The
-    /// frame stays flagged and keeps the chosen motion's covariance. 0 (the default): off.
+    /// frame stays flagged and keeps the chosen motion's covariance. 0: off; default 3 since the
+    /// thirty-first session (with `decide_by_road_tilt`).
     pub decide_by_road: usize,
     /// With `decide_by_road`: only the alternatives whose yaw `ω_z` lies at least as close to
     /// the previous frame's as the chosen motion's compete (a vehicle's motion that leaves the
@@ -462,8 +463,8 @@ pub struct OdometryOptions {
     /// With `decide_by_road`: only the alternatives whose tilt ([`crate::hypotheses::tilt`],
     /// the norm of roll and pitch) lies at least as close to the previous frame's reported
     /// motion's tilt as the chosen motion's compete (a tilt that leaves the run's tilt is no
-    /// candidate; the previous motion itself always competes). false (the default): no tilt
-    /// test.
+    /// candidate; the previous motion itself always competes). Default true since the
+    /// thirty-first session (docs/RESULTS.md, thirtieth session, dbr44); false: no tilt test.
     pub decide_by_road_tilt: bool,
     /// With `decide_by_road_tilt`: the tilt compared as the vector `(ω_x, ω_y)` (roll and
     /// pitch; the distance of the vectors) instead of its norm. false (the default): the norm.
@@ -523,10 +524,10 @@ impl Default for OdometryOptions {
             previous_basin_change: 0.01745,
             previous_basin_band: 0.0014,
             previous_basin_votes: 2,
-            previous_basin_regions: [0, 0],
-            previous_basin_mono_change: 0.0,
-            previous_basin_mono_votes: 0,
-            previous_basin_mono_band: 0.0,
+            previous_basin_regions: [3, 2],
+            previous_basin_mono_change: 0.01309,
+            previous_basin_mono_votes: 3,
+            previous_basin_mono_band: 0.0028,
             previous_basin_handoff: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
@@ -544,10 +545,10 @@ impl Default for OdometryOptions {
             motion_prior_sigmas: BTreeMap::new(),
             quiet_frames: 0,
             quiet_other_share: 0.1,
-            decide_by_road: 0,
+            decide_by_road: 3,
             decide_by_road_continuing: false,
             decide_by_road_trusted_frames: 0,
-            decide_by_road_tilt: false,
+            decide_by_road_tilt: true,
             decide_by_road_tilt_vector: false,
             decide_by_road_tilt_frames: 1,
             decide_by_road_keep_memory: false,

@@ -4491,12 +4491,14 @@ mod tests {
                 })
                 .collect::<Vec<_>>()
         };
+        // The default since the thirty-first session: on, at a margin of 3, with the tilt guard.
         let default = run("");
-        let off = run("[odometry]\ndecide_by_road = 0\n");
-        let on = run("[odometry]\ndecide_by_road = 3\n");
-        for (d, o) in default.iter().zip(&off) {
+        let guarded = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = true\n");
+        for (d, o) in default.iter().zip(&guarded) {
             assert_eq!(d.0.params, o.0.params, "frame {}", d.0.frame);
         }
+        let off = run("[odometry]\ndecide_by_road = 0\n");
+        let on = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = false\n");
         let first = on
             .iter()
             .zip(&off)
@@ -4509,7 +4511,9 @@ mod tests {
         assert!(on_score >= off_score + 3, "{on_score} against {off_score}");
         // `decide_by_road_continuing`: the replacement's yaw is no further from the previous
         // frame's than the motion it replaced.
-        let cont = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_continuing = true\n");
+        let cont = run(
+            "[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = false\ndecide_by_road_continuing = true\n",
+        );
         let first = cont
             .iter()
             .zip(&off)
@@ -4530,7 +4534,7 @@ mod tests {
         );
         // `decide_by_road_tilt`: the replacement's tilt is no further from the previous frame's
         // reported tilt than the motion it replaced.
-        let tilted = run("[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = true\n");
+        let tilted = guarded;
         let first = tilted
             .iter()
             .zip(&off)
@@ -4595,12 +4599,17 @@ mod tests {
         };
         // The default is on (1 deg, since the twenty-ninth session); "off" writes 0.
         let off_text = "[odometry]\nprevious_basin_change = 0.0\n";
+        // A single camera without its region vote (on by default since the thirty-first
+        // session) is never re-solved by the rig's rule.
+        let mono_every =
+            "[odometry]\nprevious_basin_change = 1e-12\nprevious_basin_regions = [0, 0]\n";
+        let mono_off = "[odometry]\nprevious_basin_change = 0.0\nprevious_basin_regions = [0, 0]\n";
         assert_eq!(
             crate::Config::default().odometry.previous_basin_change,
             0.01745
         );
-        let (off, _) = run(mono(), off_text);
-        let (on, counts) = run(mono(), every);
+        let (off, _) = run(mono(), mono_off);
+        let (on, counts) = run(mono(), mono_every);
         assert_eq!(counts, (0, 0), "a single camera is never re-solved");
         assert_eq!(off, on, "a single camera's motions are unchanged");
         let rig = || SimConfig {
@@ -4682,12 +4691,18 @@ mod tests {
             seed: 3,
             ..SimConfig::moving_traffic()
         };
-        // Off by default: a single camera is never re-solved even with every frame eligible.
+        // On by default since the thirty-first session (3 x 2 cells, margin 3, band 0.0028,
+        // trigger 0.75 deg); `[0, 0]` is off: a single camera is then never re-solved even
+        // with every frame eligible.
+        let o = crate::Config::default().odometry;
+        assert_eq!(o.previous_basin_regions, [3, 2]);
         assert_eq!(
-            crate::Config::default().odometry.previous_basin_regions,
-            [0, 0]
+            (o.previous_basin_mono_change, o.previous_basin_mono_votes),
+            (0.01309, 3)
         );
-        let every = "[odometry]\nprevious_basin_mono_change = 1e-12\n";
+        assert_eq!(o.previous_basin_mono_band, 0.0028);
+        let every =
+            "[odometry]\nprevious_basin_regions = [0, 0]\nprevious_basin_mono_change = 1e-12\n";
         let (off, counts) = run(mono(), every);
         assert_eq!(counts, (0, 0));
         // On, every moving frame is re-solved; with an unreachable margin none is taken and
@@ -4714,7 +4729,7 @@ mod tests {
             seed: 2,
             ..SimConfig::moving_traffic_surround()
         };
-        let (a, ca) = run(rig(), "[odometry]\n");
+        let (a, ca) = run(rig(), "[odometry]\nprevious_basin_regions = [0, 0]\n");
         let (b, cb) = run(
             rig(),
             "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\nprevious_basin_mono_votes = 1\n",
