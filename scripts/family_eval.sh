@@ -12,11 +12,14 @@
 #        dev       the same, seeds 21-30
 #        dev2      the same, seeds 31-40 (a second development set, added in the 31st session)
 #        dev3      the same, seeds 41-50 (a third development set, added in the 31st session)
-#        few150    moving_traffic with 150 matches per frame pair instead of the scenario's 300
-#                  (`momo simulate --matches 150`: the objects keep their 30-70 % share and the
-#                  outliers their 5 %, so ~83 static matches in the median frame pair, 40-140),
-#                  KITTI trajectories 00-10 and the built-in drive, seeds 1-5 (31st session)
-#        few100    the same with 100 matches (~55 static in the median frame pair, 25-95)
+#        few200    moving_traffic with 200 matches per frame pair instead of the scenario's 300
+#                  (`momo simulate --matches 200`: the same traffic as grid's seeds 1-5, the
+#                  objects keep their 30-70 % share and the outliers their 5 %), KITTI
+#                  trajectories 00-10 and the built-in drive, seeds 1-5 (31st session)
+#        few150    the same with 150 matches (static matches: median 49 where objects are
+#                  visible, 10th percentile 42; 142 where none are)
+#        few100    the same with 100 matches (static: median 33 where objects are visible, 95
+#                  where none are)
 #        static    clean_pinhole and outliers along KITTI 00-10, seeds 1-3
 #        static2   the same, seeds 4-6
 #        static3   the other scenarios without moving objects along KITTI 00-10, seeds 1-2
@@ -129,7 +132,7 @@ list_set() {
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
         done; done ;;
-    few150 | few100)
+    few200 | few150 | few100)
         n="${s#few}"
         for t in $trajs drive; do for seed in 1 2 3 4 5; do
             echo "$sets_dir/fewtraffic/moving_traffic_m${n}_${t}_s$seed moving_traffic $t $seed $frames $n"
