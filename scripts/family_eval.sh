@@ -11,6 +11,16 @@
 #        fresh     the same, seeds 16-20 (keep for confirmation: choose nothing on it)
 #        dev       the same, seeds 21-30
 #        dev2      the same, seeds 31-40 (a second development set, added in the 31st session)
+#        dev3      the same, seeds 41-50 (a third development set, added in the 31st session)
+#        few200    moving_traffic with 200 matches per frame pair instead of the scenario's 300
+#                  (`momo simulate --matches 200`: the same traffic as grid's seeds 1-5, the
+#                  objects keep their 30-70 % share and the outliers their 5 %: static matches
+#                  median 66 where objects are visible, 10th percentile 56, against grid's 100 /
+#                  84), KITTI trajectories 00-10 and the built-in drive, seeds 1-5 (31st session)
+#        few150    the same with 150 matches (static matches: median 49 where objects are
+#                  visible, 10th percentile 42; 142 where none are)
+#        few100    the same with 100 matches (static: median 33 where objects are visible, 95
+#                  where none are)
 #        static    clean_pinhole and outliers along KITTI 00-10, seeds 1-3
 #        static2   the same, seeds 4-6
 #        static3   the other scenarios without moving objects along KITTI 00-10, seeds 1-2
@@ -73,14 +83,16 @@ for b in "$momo" "$sim_momo"; do
 done
 export momo sim_momo cfg data frames
 
-# make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES]: simulates one sequence unless it is there.
+# make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES [MATCHES]]: simulates one sequence unless it is
+# there (MATCHES: `momo simulate --matches`, default the scenario's).
 make_seq() {
-    local dir="$1" sc="$2" t="$3" seed="$4" n="${5:-$frames}" traj=()
+    local dir="$1" sc="$2" t="$3" seed="$4" n="${5:-$frames}" traj=() m=()
     [[ -f "$dir/bound.csv" ]] && return 0
     [[ "$t" != drive ]] && traj=(--trajectory "$data/kitti_odometry_gt/poses/$t.txt")
+    [[ -n "${6:-}" ]] && m=(--matches "$6")
     rm -rf "$dir"
     mkdir -p "$(dirname "$dir")"
-    if ! "$sim_momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "$dir" \
+    if ! "$sim_momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "${m[@]}" "$dir" \
         >/dev/null 2>"$dir.err"; then
         echo "family_eval: momo simulate failed for $dir: $(cat "$dir.err")" >&2
         return 1
@@ -108,17 +120,23 @@ run_one() {
 }
 export -f run_one
 
-# The sequences of a set, one "DIR SCENARIO TRAJECTORY SEED FRAMES" per line.
+# The sequences of a set, one "DIR SCENARIO TRAJECTORY SEED FRAMES [MATCHES]" per line.
 list_set() {
-    local s="$1" seeds trajs="00 01 02 03 04 05 06 07 08 09 10" sc t seed
+    local s="$1" seeds trajs="00 01 02 03 04 05 06 07 08 09 10" sc t seed n
     case "$s" in
-    grid | holdout | fresh | dev | dev2)
+    grid | holdout | fresh | dev | dev2 | dev3)
         case "$s" in
         grid) seeds="$(seq 1 10)" ;; holdout) seeds="$(seq 11 15)" ;;
         fresh) seeds="$(seq 16 20)" ;; dev) seeds="$(seq 21 30)" ;; dev2) seeds="$(seq 31 40)" ;;
+        dev3) seeds="$(seq 41 50)" ;;
         esac
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
+        done; done ;;
+    few200 | few150 | few100)
+        n="${s#few}"
+        for t in $trajs drive; do for seed in 1 2 3 4 5; do
+            echo "$sets_dir/fewtraffic/moving_traffic_m${n}_${t}_s$seed moving_traffic $t $seed $frames $n"
         done; done ;;
     static | static2)
         [[ "$s" == static ]] && seeds="1 2 3" || seeds="4 5 6"
