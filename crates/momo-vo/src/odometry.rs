@@ -1606,9 +1606,13 @@ impl Odometry {
                     diag.constraint = Constraint::Weak;
                     diag.reason = Some(Reason::RoadScoreDrop);
                 }
-                // The road's alternatives in the covariance (`trust.road_alternative_weight`).
+                // The road's alternatives in the covariance (`trust.road_alternative_weight`),
+                // and the road's alternative as a candidate of `odometry.decide_by_road`: found
+                // whatever the weight, so that the weight widens only the reported covariance.
+                let mut road_candidate = None;
                 if ground_drop && !standstill {
-                    self.widen_by_road_alternative(obs, &init, &fixed, &sol, &mut diag);
+                    road_candidate =
+                        self.widen_by_road_alternative(obs, &init, &fixed, &sol, &mut diag);
                 }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;
@@ -1645,7 +1649,7 @@ impl Odometry {
                 if self.config.odometry.decide_by_road > 0
                     && !standstill
                     && diag.status == FrameStatus::Weak
-                    && (diag.competing.is_some() || diag.road_alternative.is_some())
+                    && (diag.competing.is_some() || road_candidate.is_some())
                 {
                     let mut previous = init.clone();
                     if let Some(i) = arc_index {
@@ -1655,7 +1659,7 @@ impl Odometry {
                         .competing
                         .iter()
                         .map(|c| c.0.clone())
-                        .chain(diag.road_alternative.clone())
+                        .chain(road_candidate)
                         .chain(std::iter::once(previous))
                         .collect();
                     if let Some(p) = self.decide_by_road(obs, &params, alternatives) {
@@ -2608,6 +2612,10 @@ impl Odometry {
     /// the road's alternative ([`Odometry::road_alternative`], where there is one) less the
     /// estimate, `d_p` the previous frame's motion `previous` less the estimate
     /// ([`Odometry::widen_by_alternatives`]). Nothing where the weight is 0.
+    ///
+    /// Returns the road's alternative's parameters where `odometry.decide_by_road` is to see
+    /// them: where the frame's covariance can be widened (a free parameter, a covariance), as
+    /// at weight 1, whatever the weight (the weight changes the report only, not the choice).
     fn widen_by_road_alternative(
         &self,
         obs: &FrameObservations,
@@ -2615,17 +2623,20 @@ impl Odometry {
         fixed: &[bool],
         sol: &FrameSolution,
         diag: &mut FrameDiagnostics,
-    ) {
+    ) -> Option<Vec<f64>> {
         let w = self.config.trust.road_alternative_weight;
-        if w <= 0.0 {
-            return;
+        let k = sol.free.len();
+        let widenable = k > 0 && diag.covariance.len() == k * k;
+        if !(w > 0.0 || (self.config.odometry.decide_by_road > 0 && widenable)) {
+            return None;
         }
-        let c = self.road_alternative(obs, previous, fixed);
+        let c = self.road_alternative(obs, previous, fixed).map(|c| c.params);
         let mut alternatives = vec![previous];
-        alternatives.extend(c.as_ref().map(|c| c.params.as_slice()));
+        alternatives.extend(c.as_deref());
         if Self::widen_by_alternatives(&alternatives, w, sol, diag) {
-            diag.road_alternative = c.map(|c| c.params);
+            diag.road_alternative = c.clone();
         }
+        c.filter(|_| widenable)
     }
 
     /// Whether `trust.support_change_share` fires on a moving frame whose rotation vector
