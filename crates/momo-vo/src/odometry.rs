@@ -1662,7 +1662,20 @@ impl Odometry {
                         .chain(road_candidate)
                         .chain(std::iter::once(previous))
                         .collect();
-                    if let Some(p) = self.decide_by_road(obs, &params, alternatives) {
+                    if let Some(p) = self.decide_by_road(obs, &params, alternatives.clone()) {
+                        // The reported covariance, widened about the chosen motion, is widened
+                        // about the replacement too by the motions it was chosen among (the
+                        // first choice among them), `trust.road_alternative_weight` each, so
+                        // that the report covers them from where the frame now is.
+                        let mut others: Vec<&[f64]> = vec![params.as_slice()];
+                        others.extend(alternatives.iter().map(Vec::as_slice));
+                        Self::widen_by_alternatives_at(
+                            &others,
+                            self.config.trust.road_alternative_weight,
+                            &sol.free,
+                            &p,
+                            &mut diag,
+                        );
                         params = p;
                     }
                 }
@@ -2630,7 +2643,9 @@ impl Odometry {
         if !(w > 0.0 || (self.config.odometry.decide_by_road > 0 && widenable)) {
             return None;
         }
-        let c = self.road_alternative(obs, previous, fixed).map(|c| c.params);
+        let c = self
+            .road_alternative(obs, previous, fixed)
+            .map(|c| c.params);
         let mut alternatives = vec![previous];
         alternatives.extend(c.as_deref());
         if Self::widen_by_alternatives(&alternatives, w, sol, diag) {
