@@ -308,6 +308,9 @@ pub struct Odometry {
     /// Frames re-solved from the previous motion and frames that took that solution
     /// (`odometry.previous_basin_change`).
     previous_basin_counts: (usize, usize),
+    /// The last frame where the previous motion's basin was taken
+    /// (`odometry.previous_basin_mono_next_votes`).
+    previous_basin_taken_frame: Option<usize>,
 }
 
 impl Odometry {
@@ -413,6 +416,7 @@ impl Odometry {
             quiet_streak: 0,
             quiet_taken: 0,
             previous_basin_counts: (0, 0),
+            previous_basin_taken_frame: None,
         })
     }
 
@@ -1083,6 +1087,7 @@ impl Odometry {
         self.quiet_streak = 0;
         self.quiet_taken = 0;
         self.previous_basin_counts = (0, 0);
+        self.previous_basin_taken_frame = None;
     }
 
     /// How many frames so far took the separation's quiet-frame fast path
@@ -1492,6 +1497,7 @@ impl Odometry {
                         self.previous_basin_counts.0 += 1;
                         if taken {
                             self.previous_basin_counts.1 += 1;
+                            self.previous_basin_taken_frame = Some(self.frame);
                             if self.config.odometry.previous_basin_handoff {
                                 self.previous_basin_handoff(obs, &alt.params);
                             }
@@ -2315,7 +2321,13 @@ impl Odometry {
                 } else {
                     o.previous_basin_change
                 },
-                if o.previous_basin_mono_votes > 0 {
+                if o.previous_basin_mono_next_votes > 0
+                    && self
+                        .previous_basin_taken_frame
+                        .is_some_and(|f| f + 1 == self.frame)
+                {
+                    o.previous_basin_mono_next_votes
+                } else if o.previous_basin_mono_votes > 0 {
                     o.previous_basin_mono_votes
                 } else {
                     o.previous_basin_votes
