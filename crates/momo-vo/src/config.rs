@@ -258,6 +258,13 @@ pub struct OdometryOptions {
     /// The band of `previous_basin_regions`' per-cell count (radians of epipolar angle, 0:
     /// `previous_basin_band`'s; default 0.0028).
     pub previous_basin_mono_band: f64,
+    /// The region vote's margin on the frame right after a frame where it took the previous
+    /// motion's basin (0: `previous_basin_mono_votes`'s, the default). After a taken
+    /// alternative at KITTI 08's slow start the next frame's own solution can slide along the
+    /// pitch–climb ridge of a weak-parallax frame while the alternative from the taken motion
+    /// stays on the static world; a smaller margin there re-checks the next frame against
+    /// the taken history (docs/RESULTS.md §9, thirty-first session, slow45).
+    pub previous_basin_mono_next_votes: usize,
     /// Where the previous motion's basin is taken (rig or region vote), move the separation's
     /// match memory and its tilt, yaw and road history to it, as `decide_by_road` does
     /// (default false: the rig's behaviour of the twenty-ninth session).
@@ -527,6 +534,7 @@ impl Default for OdometryOptions {
             previous_basin_regions: [3, 2],
             previous_basin_mono_change: 0.01309,
             previous_basin_mono_votes: 3,
+            previous_basin_mono_next_votes: 0,
             previous_basin_mono_band: 0.0028,
             previous_basin_handoff: false,
             soft_prior_conflict_widening: 4.0,

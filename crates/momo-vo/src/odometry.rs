@@ -308,6 +308,9 @@ pub struct Odometry {
     /// Frames re-solved from the previous motion and frames that took that solution
     /// (`odometry.previous_basin_change`).
     previous_basin_counts: (usize, usize),
+    /// The last frame where the previous motion's basin was taken
+    /// (`odometry.previous_basin_mono_next_votes`).
+    previous_basin_taken_frame: Option<usize>,
 }
 
 impl Odometry {
@@ -413,6 +416,7 @@ impl Odometry {
             quiet_streak: 0,
             quiet_taken: 0,
             previous_basin_counts: (0, 0),
+            previous_basin_taken_frame: None,
         })
     }
 
@@ -1083,6 +1087,7 @@ impl Odometry {
         self.quiet_streak = 0;
         self.quiet_taken = 0;
         self.previous_basin_counts = (0, 0);
+        self.previous_basin_taken_frame = None;
     }
 
     /// How many frames so far took the separation's quiet-frame fast path
@@ -1492,6 +1497,7 @@ impl Odometry {
                         self.previous_basin_counts.0 += 1;
                         if taken {
                             self.previous_basin_counts.1 += 1;
+                            self.previous_basin_taken_frame = Some(self.frame);
                             if self.config.odometry.previous_basin_handoff {
                                 self.previous_basin_handoff(obs, &alt.params);
                             }
@@ -2332,7 +2338,13 @@ impl Odometry {
                 } else {
                     o.previous_basin_change
                 },
-                if o.previous_basin_mono_votes > 0 {
+                if o.previous_basin_mono_next_votes > 0
+                    && self
+                        .previous_basin_taken_frame
+                        .is_some_and(|f| f + 1 == self.frame)
+                {
+                    o.previous_basin_mono_next_votes
+                } else if o.previous_basin_mono_votes > 0 {
                     o.previous_basin_mono_votes
                 } else {
                     o.previous_basin_votes
@@ -4706,6 +4718,82 @@ mod tests {
         // Three of four cells gaining carry a margin of 2.
         assert!(basin_vote(&current, &[12, 11, 11, 9], 2));
         assert!(!basin_vote(&current, &[12, 11, 11, 9], 3));
+    }
+
+    /// The frames (1-based, as `Odometry::frame`) where the previous motion's basin was taken,
+    /// and the motions.
+    fn basin_taken_frames(cfg: momo_sim::SimConfig, text: &str) -> (Vec<Vec<f64>>, Vec<usize>) {
+        let sim = momo_sim::simulate(&cfg).expect("the scenario simulates");
+        let seq = &sim.sequence;
+        let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+        let (mut params, mut taken) = (Vec::new(), Vec::new());
+        for k in 1..seq.num_frames() {
+            let before = vo.previous_basin_counts().1;
+            vo.process(&seq.frames[k], seq.arc_length(k));
+            if vo.previous_basin_counts().1 > before {
+                taken.push(k);
+            }
+            params.push(vo.previous_params().to_vec());
+        }
+        (params, taken)
+    }
+
+    #[test]
+    fn the_next_frame_margin_acts_only_right_after_a_taken_basin() {
+        use momo_sim::SimConfig;
+        let mono = || SimConfig {
+            frames: 31,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        };
+        assert_eq!(
+            crate::Config::default()
+                .odometry
+                .previous_basin_mono_next_votes,
+            0
+        );
+        let regions =
+            "[odometry]\nprevious_basin_regions = [3, 3]\nprevious_basin_mono_change = 1e-12\n";
+        // No frame taken (unreachable margin): the next frame's margin never applies, even at 1.
+        let (a, ta) = basin_taken_frames(
+            mono(),
+            &format!("{regions}previous_basin_mono_votes = 100\n"),
+        );
+        let (b, tb) = basin_taken_frames(
+            mono(),
+            &format!(
+                "{regions}previous_basin_mono_votes = 100\nprevious_basin_mono_next_votes = 1\n"
+            ),
+        );
+        assert!(ta.is_empty() && tb.is_empty(), "{ta:?} {tb:?}");
+        assert_eq!(a, b);
+        // A plain majority takes some frames; with an unreachable margin on the frame after a
+        // taken one (9 cells), no two consecutive frames are taken.
+        let (_, plain) =
+            basin_taken_frames(mono(), &format!("{regions}previous_basin_mono_votes = 1\n"));
+        assert!(!plain.is_empty());
+        let (_, spaced) = basin_taken_frames(
+            mono(),
+            &format!(
+                "{regions}previous_basin_mono_votes = 1\nprevious_basin_mono_next_votes = 100\n"
+            ),
+        );
+        assert!(!spaced.is_empty());
+        assert!(
+            spaced.windows(2).all(|w| w[1] > w[0] + 1),
+            "a frame right after a taken one needs the next margin: {spaced:?}"
+        );
+        // The same margin on the next frame as on every frame changes nothing.
+        let (c, tc) = basin_taken_frames(
+            mono(),
+            &format!(
+                "{regions}previous_basin_mono_votes = 1\nprevious_basin_mono_next_votes = 1\n"
+            ),
+        );
+        let (d, td) =
+            basin_taken_frames(mono(), &format!("{regions}previous_basin_mono_votes = 1\n"));
+        assert_eq!((c, tc), (d, td));
     }
 
     #[test]
