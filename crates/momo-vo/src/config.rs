@@ -262,6 +262,27 @@ pub struct OdometryOptions {
     /// match memory and its tilt, yaw and road history to it, as `decide_by_road` does
     /// (default false: the rig's behaviour of the twenty-ninth session).
     pub previous_basin_handoff: bool,
+    /// The competing motion voted by image regions on a single camera (`[cols, rows]` of a
+    /// coarse grid over the image, `[0, 0]`: off, the default; a rig is never touched): where
+    /// the covariance's check found a competing motion ([`FrameDiagnostics::competing`]), its
+    /// motion replaces the frame's where the cells of the grid vote for it as in
+    /// `previous_basin_regions` (per cell the matches within `competing_region_band` of the
+    /// epipolar planes at both motions, each cell one vote, margin `competing_region_votes`).
+    /// A cut-in car that holds most of the matches at low speed covers two cells of a 3x2
+    /// grid, the static world all six: the estimate that follows the car is the majority of
+    /// matches but the minority of cells (docs/RESULTS.md §9, thirty-first session, cutin45).
+    ///
+    /// [`FrameDiagnostics::competing`]: crate::odometry::FrameDiagnostics::competing
+    pub competing_regions: [usize; 2],
+    /// The margin of `competing_regions`' vote (default 3, at least 1).
+    pub competing_region_votes: usize,
+    /// The band of `competing_regions`' per-cell count (radians of epipolar angle; default
+    /// 0.0028).
+    pub competing_region_band: f64,
+    /// Where `competing_regions` takes the competing motion, run the final stage again from it
+    /// and keep that solution (default false: the competing motion as fitted to the matches
+    /// outside the estimate's support).
+    pub competing_region_refit: bool,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -528,6 +549,10 @@ impl Default for OdometryOptions {
             previous_basin_mono_votes: 0,
             previous_basin_mono_band: 0.0,
             previous_basin_handoff: false,
+            competing_regions: [0, 0],
+            competing_region_votes: 3,
+            competing_region_band: 0.0028,
+            competing_region_refit: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1232,6 +1257,7 @@ impl Config {
                 "odometry.previous_basin_mono_band",
                 o.previous_basin_mono_band,
             ),
+            ("odometry.competing_region_band", o.competing_region_band),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 bad(
