@@ -283,6 +283,16 @@ pub struct OdometryOptions {
     /// and keep that solution (default false: the competing motion as fitted to the matches
     /// outside the estimate's support).
     pub competing_region_refit: bool,
+    /// `competing_regions` votes only where the frame's own motion is concentrated in the
+    /// image: the share of its matches within the band that lie in its fullest third of the
+    /// cells (`ceil(cells / 3)`) is at least this (0: no such guard, the default; a compact
+    /// object holds most of its support, the static world spreads over the image).
+    pub competing_region_concentration: f64,
+    /// `competing_regions` takes the competing motion only where its rotation is closer to the
+    /// previous frame's than the frame's own (default false): the static world's motion
+    /// continues the history where the estimate jumped to a cut-in car's, while a bus that
+    /// covers most of the image moves far from it.
+    pub competing_region_continuing: bool,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -553,6 +563,8 @@ impl Default for OdometryOptions {
             competing_region_votes: 3,
             competing_region_band: 0.0028,
             competing_region_refit: false,
+            competing_region_concentration: 0.0,
+            competing_region_continuing: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1265,6 +1277,17 @@ impl Config {
                     format!("{key} must be finite and at least 0, got {v}"),
                 );
             }
+        }
+        if !(o.competing_region_concentration.is_finite()
+            && (0.0..=1.0).contains(&o.competing_region_concentration))
+        {
+            bad(
+                &["odometry.competing_region_concentration"],
+                format!(
+                    "odometry.competing_region_concentration must be within [0, 1], got {}",
+                    o.competing_region_concentration
+                ),
+            );
         }
         if !(o.soft_prior_cauchy_taught_share.is_finite()
             && (0.0..=1.0).contains(&o.soft_prior_cauchy_taught_share))

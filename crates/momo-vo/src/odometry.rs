@@ -2429,6 +2429,29 @@ impl Odometry {
             );
             basin_cell_counts(&self.rig, obs, &within, grid)
         };
+        let here = inside(&sol.params);
+        // `competing_region_concentration`: the frame's support in its fullest third of cells.
+        let concentration = o.competing_region_concentration;
+        if concentration > 0.0 {
+            let mut sorted = here.clone();
+            sorted.sort_unstable_by(|a, b| b.cmp(a));
+            let top: usize = sorted[..sorted.len().div_ceil(3)].iter().sum();
+            let all: usize = sorted.iter().sum();
+            if (top as f64) < concentration * all as f64 {
+                return Some((sol.clone(), false));
+            }
+        }
+        // `competing_region_continuing`: the competing motion's rotation closer to the previous
+        // frame's than the frame's own.
+        if o.competing_region_continuing {
+            let r_prev = self.estimator.motion(&self.previous).rotation;
+            let away = |p: &[f64]| {
+                so3_log(&(r_prev.transpose() * self.estimator.motion(p).rotation)).norm()
+            };
+            if away(params) >= away(&sol.params) {
+                return Some((sol.clone(), false));
+            }
+        }
         let refit = o.competing_region_refit.then(|| {
             let mut from = sol.clone();
             from.params = params.clone();
@@ -2436,8 +2459,10 @@ impl Odometry {
                 .0
         });
         let candidate = refit.as_ref().map_or(params, |s| &s.params);
-        let here = inside(&sol.params);
         let there = inside(candidate);
+        if std::env::var_os("MOMO_CR_DEBUG").is_some() {
+            eprintln!("CR {} {:?} {:?}", self.frame, here, there);
+        }
         let taken = basin_vote(&here, &there, o.competing_region_votes);
         let chosen = refit.unwrap_or_else(|| {
             let mut s = sol.clone();
@@ -4865,6 +4890,22 @@ mod tests {
         );
         assert_eq!((a, ca), (b, cb));
         assert_eq!(cb, (0, 0));
+        // The concentration guard: a share above 1 can never hold, so nothing is taken.
+        let (guarded, counts) = run(
+            mono(),
+            "[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\ncompeting_region_concentration = 1.0\ncompeting_region_continuing = true\n",
+        );
+        assert!(counts.1 <= counts.0, "{counts:?}");
+        if counts.1 == 0 {
+            assert_eq!(off, guarded);
+        }
+        for bad in ["-0.01", "1.5", "nan"] {
+            let text = format!("[odometry]\ncompeting_region_concentration = {bad}\n");
+            assert!(
+                crate::Config::from_toml_str(&text, "t.toml").is_err(),
+                "{bad}"
+            );
+        }
         for bad in ["-0.01", "nan"] {
             let text =
                 format!("[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_band = {bad}\n");
