@@ -269,6 +269,37 @@ pub struct OdometryOptions {
     /// match memory and its tilt, yaw and road history to it, as `decide_by_road` does
     /// (default false: the rig's behaviour of the twenty-ninth session).
     pub previous_basin_handoff: bool,
+    /// The competing motion voted by image regions on a single camera (`[cols, rows]` of a
+    /// coarse grid over the image, `[0, 0]`: off, the default; a rig is never touched): where
+    /// the covariance's check found a competing motion ([`FrameDiagnostics::competing`]), its
+    /// motion replaces the frame's where the cells of the grid vote for it as in
+    /// `previous_basin_regions` (per cell the matches within `competing_region_band` of the
+    /// epipolar planes at both motions, each cell one vote, margin `competing_region_votes`).
+    /// A cut-in car that holds most of the matches at low speed covers two cells of a 3x2
+    /// grid, the static world all six: the estimate that follows the car is the majority of
+    /// matches but the minority of cells (docs/RESULTS.md §9, thirty-first session, cutin45).
+    ///
+    /// [`FrameDiagnostics::competing`]: crate::odometry::FrameDiagnostics::competing
+    pub competing_regions: [usize; 2],
+    /// The margin of `competing_regions`' vote (default 3, at least 1).
+    pub competing_region_votes: usize,
+    /// The band of `competing_regions`' per-cell count (radians of epipolar angle; default
+    /// 0.0028).
+    pub competing_region_band: f64,
+    /// Where `competing_regions` takes the competing motion, run the final stage again from it
+    /// and keep that solution (default false: the competing motion as fitted to the matches
+    /// outside the estimate's support).
+    pub competing_region_refit: bool,
+    /// `competing_regions` votes only where the frame's own motion is concentrated in the
+    /// image: the share of its matches within the band that lie in its fullest third of the
+    /// cells (`ceil(cells / 3)`) is at least this (0: no such guard, the default; a compact
+    /// object holds most of its support, the static world spreads over the image).
+    pub competing_region_concentration: f64,
+    /// `competing_regions` takes the competing motion only where its rotation is closer to the
+    /// previous frame's than the frame's own (default false): the static world's motion
+    /// continues the history where the estimate jumped to a cut-in car's, while a bus that
+    /// covers most of the image moves far from it.
+    pub competing_region_continuing: bool,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -537,6 +568,12 @@ impl Default for OdometryOptions {
             previous_basin_mono_next_votes: 0,
             previous_basin_mono_band: 0.0028,
             previous_basin_handoff: false,
+            competing_regions: [0, 0],
+            competing_region_votes: 3,
+            competing_region_band: 0.0028,
+            competing_region_refit: false,
+            competing_region_concentration: 0.0,
+            competing_region_continuing: false,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1241,6 +1278,7 @@ impl Config {
                 "odometry.previous_basin_mono_band",
                 o.previous_basin_mono_band,
             ),
+            ("odometry.competing_region_band", o.competing_region_band),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 bad(
@@ -1248,6 +1286,17 @@ impl Config {
                     format!("{key} must be finite and at least 0, got {v}"),
                 );
             }
+        }
+        if !(o.competing_region_concentration.is_finite()
+            && (0.0..=1.0).contains(&o.competing_region_concentration))
+        {
+            bad(
+                &["odometry.competing_region_concentration"],
+                format!(
+                    "odometry.competing_region_concentration must be within [0, 1], got {}",
+                    o.competing_region_concentration
+                ),
+            );
         }
         if !(o.soft_prior_cauchy_taught_share.is_finite()
             && (0.0..=1.0).contains(&o.soft_prior_cauchy_taught_share))

@@ -311,6 +311,8 @@ pub struct Odometry {
     /// The last frame where the previous motion's basin was taken
     /// (`odometry.previous_basin_mono_next_votes`).
     previous_basin_taken_frame: Option<usize>,
+    /// Frames where `odometry.competing_regions` voted, and where it took the competing motion.
+    competing_region_counts: (usize, usize),
 }
 
 impl Odometry {
@@ -417,6 +419,7 @@ impl Odometry {
             quiet_taken: 0,
             previous_basin_counts: (0, 0),
             previous_basin_taken_frame: None,
+            competing_region_counts: (0, 0),
         })
     }
 
@@ -1088,6 +1091,7 @@ impl Odometry {
         self.quiet_taken = 0;
         self.previous_basin_counts = (0, 0);
         self.previous_basin_taken_frame = None;
+        self.competing_region_counts = (0, 0);
     }
 
     /// How many frames so far took the separation's quiet-frame fast path
@@ -1100,6 +1104,12 @@ impl Odometry {
     /// of them took that solution (`odometry.previous_basin_change`).
     pub fn previous_basin_counts(&self) -> (usize, usize) {
         self.previous_basin_counts
+    }
+
+    /// Since the last reset: the frames where `odometry.competing_regions` voted (a single
+    /// camera with a competing motion) and those where it took the competing motion.
+    pub fn competing_region_counts(&self) -> (usize, usize) {
+        self.competing_region_counts
     }
 
     /// Estimates the motion of the next frame pair from its matches and, if known, the arc
@@ -1649,10 +1659,30 @@ impl Odometry {
                         None => ratio,
                     });
                 }
+                // `odometry.competing_regions`: the competing motion voted by image regions.
+                let mut region_taken = false;
+                if !standstill
+                    && let Some((alt, taken)) = self.competing_region(
+                        obs,
+                        &sol,
+                        &fixed,
+                        diag.scale,
+                        competing,
+                        diag.competing.as_ref(),
+                    )
+                {
+                    self.competing_region_counts.0 += 1;
+                    if taken {
+                        self.competing_region_counts.1 += 1;
+                        sol = alt;
+                        region_taken = true;
+                    }
+                }
                 let mut params = sol.params;
                 // `odometry.decide_by_road`: a doubted frame decided by its alternatives' road
                 // scores.
                 if self.config.odometry.decide_by_road > 0
+                    && !region_taken
                     && !standstill
                     && diag.status == FrameStatus::Weak
                     && (diag.competing.is_some() || road_candidate.is_some())
@@ -2393,6 +2423,79 @@ impl Odometry {
         };
         let taken = basin_vote(&inside(&sol.params), &inside(&alt.params), votes);
         Some((alt, tally, support, taken))
+    }
+
+    /// `odometry.competing_regions`: on a single camera, the frame's competing motion
+    /// (`competing`: its full parameters and weight, [`FrameDiagnostics::competing`]) voted
+    /// against the frame's solution by the cells of a coarse image grid
+    /// ([`basin_cell_counts`], [`basin_vote`]; band `competing_region_band`, margin
+    /// `competing_region_votes`): the solution to keep where the cells vote for the competing
+    /// motion (with `competing_region_refit` the final stage run again from it) and whether
+    /// the cells voted for it; `None` where it does not vote (off, a rig, no competing motion).
+    /// A compact object that holds most of the matches covers few cells, the static world many
+    /// (docs/RESULTS.md §9, thirty-first session, cutin45).
+    fn competing_region(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+        alternative: Option<&(Vec<f64>, f64)>,
+    ) -> Option<(FrameSolution, bool)> {
+        let o = &self.config.odometry;
+        let grid = (o.competing_regions[0], o.competing_regions[1]);
+        if grid.0 * grid.1 == 0 || self.rig.len() >= 2 {
+            return None;
+        }
+        let (params, _) = alternative?;
+        let inside = |p: &[f64]| {
+            let within = crate::separate::epipolar_at_least(
+                &self.rig,
+                &self.estimator.motion(p),
+                obs,
+                o.competing_region_band,
+            );
+            basin_cell_counts(&self.rig, obs, &within, grid)
+        };
+        let here = inside(&sol.params);
+        // `competing_region_concentration`: the frame's support in its fullest third of cells.
+        let concentration = o.competing_region_concentration;
+        if concentration > 0.0 {
+            let mut sorted = here.clone();
+            sorted.sort_unstable_by(|a, b| b.cmp(a));
+            let top: usize = sorted[..sorted.len().div_ceil(3)].iter().sum();
+            let all: usize = sorted.iter().sum();
+            if (top as f64) < concentration * all as f64 {
+                return Some((sol.clone(), false));
+            }
+        }
+        // `competing_region_continuing`: the competing motion's rotation closer to the previous
+        // frame's than the frame's own.
+        if o.competing_region_continuing {
+            let r_prev = self.estimator.motion(&self.previous).rotation;
+            let away = |p: &[f64]| {
+                so3_log(&(r_prev.transpose() * self.estimator.motion(p).rotation)).norm()
+            };
+            if away(params) >= away(&sol.params) {
+                return Some((sol.clone(), false));
+            }
+        }
+        let refit = o.competing_region_refit.then(|| {
+            let mut from = sol.clone();
+            from.params = params.clone();
+            self.final_fit(obs, from, fixed, scale, competing, None, None)
+                .0
+        });
+        let candidate = refit.as_ref().map_or(params, |s| &s.params);
+        let there = inside(candidate);
+        let taken = basin_vote(&here, &there, o.competing_region_votes);
+        let chosen = refit.unwrap_or_else(|| {
+            let mut s = sol.clone();
+            s.params = params.clone();
+            s
+        });
+        Some((chosen, taken))
     }
 
     /// `odometry.previous_basin_handoff`: the separation's match memory and its tilt, yaw and
@@ -4851,6 +4954,93 @@ mod tests {
         assert_eq!((a, ca), (b, cb));
         for bad in ["-0.01", "nan"] {
             let text = format!("[odometry]\nprevious_basin_mono_change = {bad}\n");
+            assert!(
+                crate::Config::from_toml_str(&text, "t.toml").is_err(),
+                "{bad}"
+            );
+        }
+    }
+
+    /// `odometry.competing_regions`: off by default (never votes); on, it votes on the single
+    /// camera's frames with a competing motion; an unreachable margin takes none and keeps the
+    /// default's motions; a plain majority takes some and changes the motions; a rig is never
+    /// touched; a negative or NaN band is rejected.
+    #[test]
+    fn the_competing_region_vote_acts_on_a_single_camera_only_where_on() {
+        use momo_sim::SimConfig;
+        let run = |cfg: SimConfig, text: &str| {
+            let sim = momo_sim::simulate(&cfg).expect("the scenario simulates");
+            let seq = &sim.sequence;
+            // A low competing-motion share, so that the short sequence has competing motions.
+            let text = format!("[trust]\ncompeting_min_fraction = 0.02\n{text}");
+            let config = crate::Config::from_toml_str(&text, "t.toml").expect("a valid config");
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+            let mut params = Vec::new();
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+                params.push(vo.previous_params().to_vec());
+            }
+            (params, vo.competing_region_counts())
+        };
+        let mono = || SimConfig {
+            frames: 61,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        };
+        assert_eq!(crate::Config::default().odometry.competing_regions, [0, 0]);
+        let (off, counts) = run(mono(), "[odometry]\n");
+        assert_eq!(counts, (0, 0));
+        let (on, counts) = run(
+            mono(),
+            "[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 100\n",
+        );
+        assert!(
+            counts.0 >= 1,
+            "frames with a competing motion vote: {counts:?}"
+        );
+        assert_eq!(counts.1, 0);
+        assert_eq!(off, on);
+        let (majority, counts) = run(
+            mono(),
+            "[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\n",
+        );
+        // The built-in scene's static world is the majority and spread over the image: even a
+        // plain majority of the cells never takes its objects' motions.
+        assert!(counts.0 >= 1, "{counts:?}");
+        assert_eq!(counts.1, 0);
+        assert_eq!(off, majority);
+        let rig = || SimConfig {
+            frames: 31,
+            seed: 2,
+            ..SimConfig::moving_traffic_surround()
+        };
+        let (a, ca) = run(rig(), "[odometry]\n");
+        let (b, cb) = run(
+            rig(),
+            "[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\n",
+        );
+        assert_eq!((a, ca), (b, cb));
+        assert_eq!(cb, (0, 0));
+        // Both guards at their strictest (all of the support in the fullest third of the cells,
+        // and closer to the previous motion): a subset of the frames is taken.
+        let (guarded, counts) = run(
+            mono(),
+            "[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\ncompeting_region_concentration = 1.0\ncompeting_region_continuing = true\n",
+        );
+        assert!(counts.1 <= counts.0, "{counts:?}");
+        if counts.1 == 0 {
+            assert_eq!(off, guarded);
+        }
+        for bad in ["-0.01", "1.5", "nan"] {
+            let text = format!("[odometry]\ncompeting_region_concentration = {bad}\n");
+            assert!(
+                crate::Config::from_toml_str(&text, "t.toml").is_err(),
+                "{bad}"
+            );
+        }
+        for bad in ["-0.01", "nan"] {
+            let text =
+                format!("[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_band = {bad}\n");
             assert!(
                 crate::Config::from_toml_str(&text, "t.toml").is_err(),
                 "{bad}"
