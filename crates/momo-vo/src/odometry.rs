@@ -2633,7 +2633,9 @@ impl Odometry {
         if !(w > 0.0 || (self.config.odometry.decide_by_road > 0 && widenable)) {
             return None;
         }
-        let c = self.road_alternative(obs, previous, fixed).map(|c| c.params);
+        let c = self
+            .road_alternative(obs, previous, fixed)
+            .map(|c| c.params);
         let mut alternatives = vec![previous];
         alternatives.extend(c.as_deref());
         if Self::widen_by_alternatives(&alternatives, w, sol, diag) {
