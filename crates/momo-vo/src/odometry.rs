@@ -1846,6 +1846,9 @@ impl Odometry {
         if moving && diag.matches > 0 && (diag.inliers as f64) < share * diag.matches as f64 {
             flag_weak_report_only(&mut diag, Reason::LowSupport);
         }
+        // An estimated frame reports a finite covariance, or says that it has none
+        // (`ill_conditioned`, infinite sigmas), report only: after the state above.
+        flag_ill_conditioned(&mut diag);
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
@@ -3929,6 +3932,33 @@ fn flag_weak_report_only(diag: &mut FrameDiagnostics, reason: Reason) {
         diag.status = FrameStatus::Weak;
         diag.constraint = Constraint::Weak;
         diag.reason = Some(reason);
+    }
+}
+
+/// Flags an `estimated` frame whose reported covariance is missing or has a non-finite entry
+/// (or a free parameter's sigma is not finite) `weak` with [`Reason::IllConditioned`], its free
+/// parameters' sigmas infinite ([`trust::invert_information`] gives an unconstrained direction
+/// infinite variance; a frame that says `estimated` must report a finite covariance). Report
+/// only: the caller runs it after the frame's state is set.
+fn flag_ill_conditioned(diag: &mut FrameDiagnostics) {
+    if diag.status != FrameStatus::Estimated {
+        return;
+    }
+    let k = diag.free.len();
+    let missing = diag.covariance.len() != k * k
+        || diag.covariance.iter().any(|v| !v.is_finite())
+        || diag
+            .free
+            .iter()
+            .any(|&i| diag.param_sigmas.get(i).is_none_or(|s| !s.is_finite()));
+    if !missing {
+        return;
+    }
+    flag_weak_report_only(diag, Reason::IllConditioned);
+    for &i in &diag.free {
+        if let Some(s) = diag.param_sigmas.get_mut(i) {
+            *s = f64::INFINITY;
+        }
     }
 }
 

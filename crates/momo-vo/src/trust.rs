@@ -661,6 +661,12 @@ pub enum Reason {
     /// A small support with a jump of the yaw or the tilt, or a small support right after
     /// such a frame (`trust.support_change_share`; report only).
     SupportChange,
+    /// The reported covariance could not be computed (a non-finite entry): the information's
+    /// condition number is past the inversion's relative eigenvalue test
+    /// ([`calibrated_covariance`]: a stiff direction, e.g. `1e14` above the data's other
+    /// directions, makes every other read as unconstrained), or no covariance was formed. The
+    /// sigmas are infinite (report only).
+    IllConditioned,
 }
 
 impl Reason {
@@ -680,6 +686,7 @@ impl Reason {
             Reason::YawChange => "yaw_change",
             Reason::LowSupport => "low_support",
             Reason::SupportChange => "support_change",
+            Reason::IllConditioned => "ill_conditioned",
         }
     }
 }
