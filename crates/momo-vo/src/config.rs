@@ -1287,27 +1287,19 @@ impl Config {
                 );
             }
         }
-        if !(o.competing_region_concentration.is_finite()
-            && (0.0..=1.0).contains(&o.competing_region_concentration))
-        {
-            bad(
-                &["odometry.competing_region_concentration"],
-                format!(
-                    "odometry.competing_region_concentration must be within [0, 1], got {}",
-                    o.competing_region_concentration
-                ),
-            );
-        }
-        if !(o.soft_prior_cauchy_taught_share.is_finite()
-            && (0.0..=1.0).contains(&o.soft_prior_cauchy_taught_share))
-        {
-            bad(
-                &["odometry.soft_prior_cauchy_taught_share"],
-                format!(
-                    "odometry.soft_prior_cauchy_taught_share must be within [0, 1], got {}",
-                    o.soft_prior_cauchy_taught_share
-                ),
-            );
+        for (key, v) in [
+            (
+                "odometry.competing_region_concentration",
+                o.competing_region_concentration,
+            ),
+            (
+                "odometry.soft_prior_cauchy_taught_share",
+                o.soft_prior_cauchy_taught_share,
+            ),
+        ] {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                bad(&[key], format!("{key} must be within [0, 1], got {v}"));
+            }
         }
         if !(o.soft_prior_arc_jitter.is_finite() && o.soft_prior_arc_jitter >= 0.0) {
             bad(

@@ -2409,19 +2409,18 @@ impl Odometry {
             o.previous_basin_band
         };
         let inside = |params: &[f64]| -> Vec<usize> {
-            let within = crate::separate::epipolar_at_least(
-                &self.rig,
-                &self.estimator.motion(params),
-                obs,
-                band,
-            );
             if mono {
-                basin_cell_counts(&self.rig, obs, &within, regions)
+                self.cells_within(obs, params, band, regions)
             } else {
-                within
-                    .iter()
-                    .map(|cam| cam.iter().filter(|outside| !**outside).count())
-                    .collect()
+                crate::separate::epipolar_at_least(
+                    &self.rig,
+                    &self.estimator.motion(params),
+                    obs,
+                    band,
+                )
+                .iter()
+                .map(|cam| cam.iter().filter(|outside| !**outside).count())
+                .collect()
             }
         };
         let taken = basin_vote(&inside(&sol.params), &inside(&alt.params), votes);
@@ -2452,15 +2451,7 @@ impl Odometry {
             return None;
         }
         let (params, _) = alternative?;
-        let inside = |p: &[f64]| {
-            let within = crate::separate::epipolar_at_least(
-                &self.rig,
-                &self.estimator.motion(p),
-                obs,
-                o.competing_region_band,
-            );
-            basin_cell_counts(&self.rig, obs, &within, grid)
-        };
+        let inside = |p: &[f64]| self.cells_within(obs, p, o.competing_region_band, grid);
         let here = inside(&sol.params);
         // `competing_region_concentration`: the frame's support in its fullest third of cells.
         let concentration = o.competing_region_concentration;
@@ -2499,6 +2490,26 @@ impl Odometry {
             s
         });
         Some((chosen, taken))
+    }
+
+    /// Per cell of a `grid` (columns, rows) over the image, the matches within `band`
+    /// (radians of epipolar angle) of the epipolar planes at the motion `params`
+    /// ([`basin_cell_counts`] of [`crate::separate::epipolar_at_least`]): the voters of the
+    /// region votes (`previous_basin_regions`, `competing_regions`).
+    fn cells_within(
+        &self,
+        obs: &FrameObservations,
+        params: &[f64],
+        band: f64,
+        grid: (usize, usize),
+    ) -> Vec<usize> {
+        let within = crate::separate::epipolar_at_least(
+            &self.rig,
+            &self.estimator.motion(params),
+            obs,
+            band,
+        );
+        basin_cell_counts(&self.rig, obs, &within, grid)
     }
 
     /// `odometry.previous_basin_handoff`: the separation's match memory and its tilt, yaw and
@@ -4745,6 +4756,16 @@ mod tests {
     /// A simulated scenario run under a configuration: each frame's reported parameters and
     /// the previous-basin counts at the end (the previous-basin tests).
     fn basin_run(cfg: momo_sim::SimConfig, text: &str) -> (Vec<Vec<f64>>, (usize, usize)) {
+        counted_run(cfg, text, Odometry::previous_basin_counts)
+    }
+
+    /// Every frame's motion of a simulated sequence under the configuration `text`, and the
+    /// run's `counts` at its end.
+    fn counted_run(
+        cfg: momo_sim::SimConfig,
+        text: &str,
+        counts: fn(&Odometry) -> (usize, usize),
+    ) -> (Vec<Vec<f64>>, (usize, usize)) {
         let sim = momo_sim::simulate(&cfg).expect("the scenario simulates");
         let seq = &sim.sequence;
         let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
@@ -4754,7 +4775,7 @@ mod tests {
             vo.process(&seq.frames[k], seq.arc_length(k));
             params.push(vo.previous_params().to_vec());
         }
-        (params, vo.previous_basin_counts())
+        (params, counts(&vo))
     }
 
     #[test]
@@ -4999,18 +5020,9 @@ mod tests {
     fn the_competing_region_vote_acts_on_a_single_camera_only_where_on() {
         use momo_sim::SimConfig;
         let run = |cfg: SimConfig, text: &str| {
-            let sim = momo_sim::simulate(&cfg).expect("the scenario simulates");
-            let seq = &sim.sequence;
             // A low competing-motion share, so that the short sequence has competing motions.
             let text = format!("[trust]\ncompeting_min_fraction = 0.02\n{text}");
-            let config = crate::Config::from_toml_str(&text, "t.toml").expect("a valid config");
-            let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
-            let mut params = Vec::new();
-            for k in 1..seq.num_frames() {
-                vo.process(&seq.frames[k], seq.arc_length(k));
-                params.push(vo.previous_params().to_vec());
-            }
-            (params, vo.competing_region_counts())
+            counted_run(cfg, &text, Odometry::competing_region_counts)
         };
         let mono = || SimConfig {
             frames: 61,
