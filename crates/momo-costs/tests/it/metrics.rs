@@ -557,3 +557,79 @@ fn angle_plane_ml_rig_is_angle_plane_ml_on_a_rig_of_one_focal_length() {
         Some(450.0)
     );
 }
+
+/// The stiff direction behind the `ill_conditioned` frames (docs/RESULTS.md, thirty-second
+/// session, stiff46): `AnglePlane`'s `r = f1ᵀ E f0 / ‖E f0‖` is the sine of the angle between
+/// `f1` and the plane through the baseline `t` and `f0`; as the epipole approaches `f0` that
+/// plane's orientation is set by the direction of approach alone, so `∂r/∂t` grows as
+/// `1 / (|t| sin∠(t, f0))` and `r` of *any* `f1` can be made 0 there. The configuration is
+/// the reproduction's (simulated moving traffic, seed 2, frame 43): a gross outlier (its frame-k
+/// pixel 605 px away) whose `f0` the first stage's epipole converged onto, 8e-8 rad away, where
+/// its residual is 2e-6 instead of 0.6 and its derivative 1e7 (the normal matrix's eigenvalue
+/// 3.9e14 against the data's 0.01-2.5). `AnglePlaneMl` divides by the residual's standard
+/// deviation, which holds `f0`'s noise (`∇₀r`, of the same order `1 / sin∠(t, f0)`): its
+/// derivative stays bounded at the epipole.
+#[test]
+fn angle_plane_is_singular_at_the_epipole_angle_plane_ml_is_not() {
+    use momo_core::{CameraModel, Pinhole};
+    use momo_costs::AnglePlaneMl;
+    type D = DualSVec64<3>;
+    let cam = Camera::Pinhole(Pinhole {
+        fx: 718.856,
+        fy: 718.856,
+        cx: 607.1928,
+        cy: 185.2157,
+        width: 1241.0,
+        height: 376.0,
+    });
+    let (px0, px1) = (
+        Vector2::new(623.8198231998132, 161.91677777937818),
+        Vector2::new(18.549946271238767, 129.53410132372636),
+    );
+    let o = Observation {
+        px0,
+        px1,
+        f0: cam.unproject(&px0).unwrap(),
+        f1: cam.unproject(&px1).unwrap(),
+    };
+    // Directions at f0: along the great circle through f0 and f1 (on it the epipolar plane
+    // holds f1: r = 0) and across it.
+    let along = (o.f1 - o.f0 * o.f1.dot(&o.f0)).normalize();
+    let across = o.f0.cross(&along);
+    // The epipole `angle` rad from f0 towards `dir`, |t| = 0.47 m; the residual and the norm
+    // of its derivative with respect to `t`.
+    let at = |metric: &dyn Fn(&Pose<D>, &mut [D]), dir: Vector3<f64>, angle: f64| -> (f64, f64) {
+        let t = so3_exp(&(o.f0.cross(&dir) * angle)) * o.f0 * 0.47;
+        let td = Vector3::new(
+            D::from_re(t.x).derivative(0),
+            D::from_re(t.y).derivative(1),
+            D::from_re(t.z).derivative(2),
+        );
+        let c = Pose::new(nalgebra::Matrix3::identity().map(D::from_re), td);
+        let mut out = [D::from_re(0.0)];
+        metric(&c, &mut out);
+        let g = out[0].eps.0.map_or(0.0, |e| e.norm());
+        (out[0].re, g)
+    };
+    let plain = |c: &Pose<D>, out: &mut [D]| {
+        AnglePlane.residuals(&AnglePlane.prepare(&cam, c), &o, out);
+    };
+    let ml = |c: &Pose<D>, out: &mut [D]| {
+        AnglePlaneMl.residuals(&AnglePlaneMl.prepare(&cam, c), &o, out);
+    };
+    // The fan: 8e-8 rad from f0 the outlier's residual is 0 or ~0.6 by the direction alone.
+    let (r_on, g_near) = at(&plain, along, 8e-8);
+    let (r_off, _) = at(&plain, across, 8e-8);
+    assert!(r_on.abs() < 1e-6, "angle_plane on the circle: {r_on}");
+    assert!(r_off.abs() > 0.1, "angle_plane across: {r_off}");
+    // The derivative grows as 1 / angle: 1e-2 / 8e-8 = 1.25e5 times.
+    let (_, g_far) = at(&plain, along, 1e-2);
+    assert!(g_near > 1e6 && g_near > 1e4 * g_far, "{g_near} vs {g_far}");
+    // AnglePlaneMl: bounded there (within a factor 10 of its value 1e-2 away).
+    let (_, m_far) = at(&ml, along, 1e-2);
+    let (_, m_near) = at(&ml, along, 8e-8);
+    assert!(
+        m_near.is_finite() && m_near < 10.0 * m_far,
+        "{m_near} vs {m_far}"
+    );
+}
