@@ -300,6 +300,14 @@ pub struct OdometryOptions {
     /// continues the history where the estimate jumped to a cut-in car's, while a bus that
     /// covers most of the image moves far from it.
     pub competing_region_continuing: bool,
+    /// The frames `competing_region_continuing` looks back to (default 1: the previous frame
+    /// only; 0 counts as 1): the competing motion passes where its rotation is closer than the
+    /// frame's own to at least one of the last `K` frames' motions. After a cut-in car took the
+    /// majority, one frame whose estimate is neither the car's nor the static world's
+    /// (dev2 03 s34 frame 74) would otherwise make the next frames' static motion look like a
+    /// jump; a bus whose motion is far from every recent frame's is still refused
+    /// (docs/RESULTS.md §9, thirty-second session, cutin46).
+    pub competing_region_continuing_frames: usize,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -574,6 +582,7 @@ impl Default for OdometryOptions {
             competing_region_refit: false,
             competing_region_concentration: 0.0,
             competing_region_continuing: false,
+            competing_region_continuing_frames: 1,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,

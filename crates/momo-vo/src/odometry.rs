@@ -229,6 +229,10 @@ pub struct Odometry {
     /// The last moving frames' reported tilts `(ω_x, ω_y)` (radians), newest last
     /// (`odometry.decide_by_road_tilt_frames`; empty where `decide_by_road_tilt` is off).
     recent_tilts: std::collections::VecDeque<[f64; 2]>,
+    /// The last frames' motions (full parameters, newest last), at most
+    /// `odometry.competing_region_continuing_frames`: the references of
+    /// `competing_region_continuing`.
+    recent_motions: std::collections::VecDeque<Vec<f64>>,
     /// Running mean of the soft manifold's prior residuals over the moving frames
     /// (`odometry.soft_prior_centring_frames`; empty if off or the model is hard).
     soft_center: Vec<f64>,
@@ -396,6 +400,7 @@ impl Odometry {
             prior_ready: false,
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
+            recent_motions: std::collections::VecDeque::new(),
             soft_center,
             soft_count: 0,
             soft_inv_scale,
@@ -1060,6 +1065,7 @@ impl Odometry {
         self.prior_ready = false;
         self.trusted_streak = 0;
         self.recent_tilts.clear();
+        self.recent_motions.clear();
         self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
             let neutral = self
                 .estimator
@@ -1857,6 +1863,16 @@ impl Odometry {
         {
             self.previous[i] = l;
         }
+        // `competing_region_continuing`'s references: the last frames' motions.
+        let keep = self
+            .config
+            .odometry
+            .competing_region_continuing_frames
+            .max(1);
+        self.recent_motions.push_back(self.previous.clone());
+        while self.recent_motions.len() > keep {
+            self.recent_motions.pop_front();
+        }
         diag.time_us = start.elapsed().as_secs_f64() * 1e6;
         FrameResult {
             motion,
@@ -2464,14 +2480,17 @@ impl Odometry {
                 return Some((sol.clone(), false));
             }
         }
-        // `competing_region_continuing`: the competing motion's rotation closer to the previous
-        // frame's than the frame's own.
+        // `competing_region_continuing`: the competing motion's rotation closer than the frame's
+        // own to the previous frame's (`competing_region_continuing_frames = K`: to at least one
+        // of the last `K` frames').
         if o.competing_region_continuing {
-            let r_prev = self.estimator.motion(&self.previous).rotation;
-            let away = |p: &[f64]| {
-                so3_log(&(r_prev.transpose() * self.estimator.motion(p).rotation)).norm()
+            let rotation = |p: &[f64]| self.estimator.motion(p).rotation;
+            let references: Vec<Matrix3<f64>> = if o.competing_region_continuing_frames > 1 {
+                self.recent_motions.iter().map(|m| rotation(m)).collect()
+            } else {
+                vec![rotation(&self.previous)]
             };
-            if away(params) >= away(&sol.params) {
+            if !continues_any(&references, &rotation(&sol.params), &rotation(params)) {
                 return Some((sol.clone(), false));
             }
         }
@@ -3633,6 +3652,21 @@ fn basin_cell_counts(
         }
     }
     counts
+}
+
+/// The continuing test of `odometry.competing_region_continuing`: whether the competing
+/// motion's rotation `competing` is closer than the frame's own `own` to at least one of the
+/// `references` (the last frames' rotations; geodesic distance `|log(R_refᵀ R)|`). False where
+/// there is no reference.
+fn continues_any(
+    references: &[Matrix3<f64>],
+    own: &Matrix3<f64>,
+    competing: &Matrix3<f64>,
+) -> bool {
+    references.iter().any(|r| {
+        let away = |x: &Matrix3<f64>| so3_log(&(r.transpose() * x)).norm();
+        away(competing) < away(own)
+    })
 }
 
 /// The cameras' vote of `Odometry::previous_basin`: `alt` wins over `current` (per camera the
@@ -5010,6 +5044,58 @@ mod tests {
                 "{bad}"
             );
         }
+    }
+
+    /// `odometry.competing_region_continuing_frames`: the continuing test looks back over the
+    /// last `K` frames. dev2 03 s34 in yaw only: the frame before the cut-in's run followed the
+    /// static world (a turn, -0.011 rad), one frame ended on neither motion (-0.001), the frame's
+    /// own motion is the cut-in car's (+0.006) and the competing one the static world's turn
+    /// (-0.016). From the last frame alone the car's motion looks continuing; with the frame
+    /// before it the static world's does. A bus's motion far from every reference never passes.
+    /// The option defaults to 1 (the previous frame only) and the driver keeps `K` motions.
+    #[test]
+    fn the_continuing_test_looks_back_over_the_last_frames() {
+        let yaw = |z: f64| {
+            let (s, c) = z.sin_cos();
+            Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+        };
+        let (before, neither, car, stat) = (yaw(-0.011), yaw(-0.001), yaw(0.006), yaw(-0.016));
+        assert!(!continues_any(&[neither], &car, &stat));
+        assert!(continues_any(&[before, neither], &car, &stat));
+        assert!(!continues_any(&[], &car, &stat));
+        // The bus: the frame's own motion is the static world's, the competing one 4 deg away.
+        let bus = yaw(-0.011 + 0.07);
+        assert!(!continues_any(
+            &[before, neither, yaw(-0.012)],
+            &yaw(-0.012),
+            &bus
+        ));
+        assert_eq!(
+            crate::Config::default()
+                .odometry
+                .competing_region_continuing_frames,
+            1
+        );
+        use momo_sim::SimConfig;
+        let mono = || SimConfig {
+            frames: 21,
+            seed: 3,
+            ..SimConfig::moving_traffic()
+        };
+        let text = "[odometry]\ncompeting_region_continuing_frames = 3\n";
+        let sim = momo_sim::simulate(&mono()).expect("the scenario simulates");
+        let seq = &sim.sequence;
+        let config = crate::Config::from_toml_str(text, "t.toml").expect("a valid config");
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
+        for k in 1..seq.num_frames() {
+            vo.process(&seq.frames[k], seq.arc_length(k));
+            assert!(vo.recent_motions.len() <= 3);
+            assert_eq!(
+                vo.recent_motions.back().map(Vec::as_slice),
+                Some(vo.previous_params())
+            );
+        }
+        assert_eq!(vo.recent_motions.len(), 3);
     }
 
     /// `odometry.competing_regions`: off by default (never votes); on, it votes on the single
