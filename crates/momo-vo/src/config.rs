@@ -306,7 +306,7 @@ pub struct OdometryOptions {
     /// majority, one frame whose estimate is neither the car's nor the static world's
     /// (dev2 03 s34 frame 74) would otherwise make the next frames' static motion look like a
     /// jump; a bus whose motion is far from every recent frame's is still refused
-    /// (docs/RESULTS.md §9, thirty-second session, cutin46).
+    /// (docs/RESULTS.md, thirty-second session, cutin46).
     pub competing_region_continuing_frames: usize,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
