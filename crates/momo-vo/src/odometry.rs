@@ -200,6 +200,9 @@ pub struct Odometry {
     previous_omega: Option<nalgebra::Vector3<f64>>,
     /// The previous frame fired `trust.support_change_share` (whatever its status).
     support_change_fired: bool,
+    /// The frame and full parameters of the last competing motion found on a moving frame
+    /// (`trust.competing_recheck_frames`).
+    last_competing: Option<(usize, Vec<f64>)>,
     scale_observable: bool,
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
@@ -387,6 +390,7 @@ impl Odometry {
             previous_yaw: None,
             previous_omega: None,
             support_change_fired: false,
+            last_competing: None,
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
@@ -1059,6 +1063,7 @@ impl Odometry {
         self.previous_yaw = None;
         self.previous_omega = None;
         self.support_change_fired = false;
+        self.last_competing = None;
         self.frame = 0;
         self.inlier_ratio_average = None;
         self.inlier_share_peak = None;
@@ -1746,6 +1751,9 @@ impl Odometry {
             }
         };
 
+        // `trust.competing_recheck_frames`: the competing-motions check once more from more
+        // starts (report only: applied below, after the frame's state).
+        let recheck = self.competing_recheck(obs, &params, standstill, &diag);
         if let Some(i) = arc_index
             && params[i].abs() > self.config.odometry.standstill_arc_length
         {
@@ -1846,6 +1854,11 @@ impl Odometry {
                 self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
             }
             self.previous_yaw = moving.then_some(yaw);
+        }
+        // The competing motion found by the recheck, report only: the mixture's covariance and,
+        // where it dominates, the flag.
+        if let Some((b, w)) = recheck {
+            apply_recheck(&params, &b, w, &mut diag);
         }
         // Too small a support for the static scene (`trust.min_inlier_share`), report only.
         let share = self.config.trust.min_inlier_share;
@@ -3283,6 +3296,21 @@ impl Odometry {
         sol: &FrameSolution,
         outside: Option<Vec<Vec<bool>>>,
     ) -> Option<(Vec<f64>, f64)> {
+        self.competing_motion_from(obs, &sol.params, &sol.free, outside, None)
+    }
+
+    /// [`Odometry::competing_motion`] of the motion `params` (free parameters `free`), fitted
+    /// from `extra_starts` where given (full parameter vectors) instead of from the previous
+    /// frame's motion and straight ahead.
+    fn competing_motion_from(
+        &self,
+        obs: &FrameObservations,
+        params: &[f64],
+        free: &[usize],
+        outside: Option<Vec<Vec<bool>>>,
+        extra_starts: Option<Vec<Vec<f64>>>,
+    ) -> Option<(Vec<f64>, f64)> {
+        let sol = SolParams { params, free };
         let t = &self.config.trust;
         let n = obs.len();
         if t.competing_min_fraction <= 0.0 || n == 0 {
@@ -3295,7 +3323,7 @@ impl Odometry {
         let outside = outside.unwrap_or_else(|| {
             crate::separate::epipolar_at_least(
                 &self.rig,
-                &self.estimator.motion(&sol.params),
+                &self.estimator.motion(sol.params),
                 obs,
                 t.competing_threshold,
             )
@@ -3319,19 +3347,25 @@ impl Odometry {
         }
         let n_params = self.estimator.param_names().len();
         let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
-        let mut ahead = self.estimator.initial_params(
-            self.estimator
-                .arc_length_index()
-                .map_or(1.0, |i| sol.params[i]),
-        );
-        if let Some(i) = self.estimator.arc_length_index() {
-            ahead[i] = sol.params[i];
-        }
-        let mut previous = self.previous.clone();
-        if let Some(i) = self.estimator.arc_length_index() {
-            previous[i] = sol.params[i];
-        }
-        let b = [previous, ahead]
+        let starts = match extra_starts {
+            Some(starts) => starts,
+            None => {
+                let mut ahead = self.estimator.initial_params(
+                    self.estimator
+                        .arc_length_index()
+                        .map_or(1.0, |i| sol.params[i]),
+                );
+                if let Some(i) = self.estimator.arc_length_index() {
+                    ahead[i] = sol.params[i];
+                }
+                let mut previous = self.previous.clone();
+                if let Some(i) = self.estimator.arc_length_index() {
+                    previous[i] = sol.params[i];
+                }
+                vec![previous, ahead]
+            }
+        };
+        let b = starts
             .iter()
             .filter_map(|s| self.solve_once(&rest, s, &fixed, false))
             .min_by(|x, y| x.report.final_cost.total_cmp(&y.report.final_cost))?;
@@ -3351,6 +3385,70 @@ impl Odometry {
         let in_a = n - n_out;
         let w = in_b as f64 / (in_a + in_b) as f64;
         Some((sol.free.iter().map(|&i| b.params[i]).collect(), w))
+    }
+
+    /// `trust.competing_recheck_frames`: on a moving frame reported `estimated` without a
+    /// competing motion, the competing-motions check at the reported motion `params` once more,
+    /// fitted from the last competing motion of the previous `K` frames (this frame's arc
+    /// length) and from the previous frame's motion turned by `odometry.restart_yaw_offsets`.
+    /// Returns the competitor's free parameters and weight; records every moving frame's
+    /// competing motion (the check's or this one's) for the next frames. `None` where off.
+    fn competing_recheck(
+        &mut self,
+        obs: &FrameObservations,
+        params: &[f64],
+        standstill: bool,
+        diag: &FrameDiagnostics,
+    ) -> Option<(Vec<f64>, f64)> {
+        let k = self.config.trust.competing_recheck_frames;
+        if k == 0 || standstill {
+            return None;
+        }
+        let found = diag.competing.as_ref().map(|c| c.0.clone());
+        let moving = matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak);
+        let eligible = moving
+            && diag.status == FrameStatus::Estimated
+            && found.is_none()
+            && !diag.free.is_empty()
+            && diag.covariance.len() == diag.free.len().pow(2)
+            && diag.covariance.iter().all(|v| v.is_finite());
+        let mut result = None;
+        if eligible {
+            let arc = self.estimator.arc_length_index();
+            let with_arc = |mut p: Vec<f64>| {
+                if let Some(i) = arc {
+                    p[i] = params[i];
+                }
+                p
+            };
+            let mut starts: Vec<Vec<f64>> = self
+                .last_competing
+                .as_ref()
+                .filter(|(f, p)| self.frame.saturating_sub(*f) <= k && p.len() == params.len())
+                .map(|(_, p)| with_arc(p.clone()))
+                .into_iter()
+                .collect();
+            // The previous motion turned by the restart offsets (not straight ahead, which
+            // the check above tried already).
+            let previous = with_arc(self.previous.clone());
+            starts.extend(self.restart_points(&previous).into_iter().skip(1));
+            if !starts.is_empty() {
+                result = self.competing_motion_from(obs, params, &diag.free, None, Some(starts));
+            }
+        }
+        let recorded = found.or_else(|| {
+            result.as_ref().map(|(b, _)| {
+                let mut all = params.to_vec();
+                for (&i, v) in diag.free.iter().zip(b) {
+                    all[i] = *v;
+                }
+                all
+            })
+        });
+        if let Some(p) = recorded {
+            self.last_competing = Some((self.frame, p));
+        }
+        result
     }
 
     /// The inputs of [`trust::calibrated_covariance`] for a solution.
@@ -3967,6 +4065,42 @@ fn subset_constants(constants: &[f64], m: usize, mask: &[Vec<bool>]) -> Option<V
             .flat_map(|(_, c)| c.iter().copied())
             .collect(),
     )
+}
+
+/// The parameters of a solution that [`Odometry::competing_motion_from`] reads.
+struct SolParams<'a> {
+    params: &'a [f64],
+    free: &'a [usize],
+}
+
+/// `trust.competing_recheck_frames`, report only: the reported covariance of the motion
+/// `params` becomes the mixture with the competitor `b` (free parameters, weight `w`),
+/// `Σ + w (1 − w) d dᵀ` ([`trust::mixture_covariance`]), the competitor is recorded in the
+/// diagnostics' `competing`, and an `estimated` frame whose covariance the mixture term
+/// dominates ([`trust::mixture_dominates`]) is flagged `weak` / `competing_motions`.
+fn apply_recheck(params: &[f64], b: &[f64], w: f64, diag: &mut FrameDiagnostics) {
+    let k = diag.free.len();
+    if b.len() != k || diag.covariance.len() != k * k {
+        return;
+    }
+    // The diagnostics keep the covariance row by row (`fill_diagnostics`).
+    let cov = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
+    let a: Vec<f64> = diag.free.iter().map(|&i| params[i]).collect();
+    if trust::mixture_dominates(&cov, &a, b, w) {
+        flag_weak_report_only(diag, Reason::CompetingMotions);
+    }
+    let mixed = trust::mixture_covariance(&cov, &a, b, w);
+    for (j, &i) in diag.free.iter().enumerate() {
+        if let Some(s) = diag.param_sigmas.get_mut(i) {
+            *s = mixed[(j, j)].max(0.0).sqrt();
+        }
+    }
+    diag.covariance = mixed.transpose().iter().copied().collect();
+    let mut all = params.to_vec();
+    for (&i, v) in diag.free.iter().zip(b) {
+        all[i] = *v;
+    }
+    diag.competing = Some((all, w));
 }
 
 /// A report-only flag (`trust.support_change_share`, `trust.yaw_change`,

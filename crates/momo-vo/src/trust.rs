@@ -357,6 +357,22 @@ pub struct TrustOptions {
     /// [`TrustOptions::support_change_share`], the next moving frame is flagged too while its
     /// share of inliers is below this (0: no hold). Default 0.12.
     pub support_change_hold_share: f64,
+    /// The competing-motions check once more, report only, with more starts (`K` frames; 0:
+    /// off, the default). On a moving frame reported `estimated` where the check above found
+    /// no second motion, a second motion is fitted to the matches outside the reported
+    /// motion's support (epipolar angle above [`TrustOptions::competing_threshold`]) from the
+    /// last competing motion of the previous `K` frames (with this frame's arc length) and
+    /// from the previous frame's motion turned by `odometry.restart_yaw_offsets`, instead of
+    /// from the previous motion and straight ahead only. With few matches a lead vehicle holds
+    /// most of the support and the static matches left outside lie tens of loss scales from
+    /// both default starts: their robust fit slides back onto the vehicle's remnants and the
+    /// check misses the static world that the neighbouring frames found. Where the refit
+    /// explains [`TrustOptions::competing_min_fraction`] of the matches, the reported
+    /// covariance becomes the two motions' mixture `Σ + w (1 − w) d dᵀ`
+    /// ([`mixture_covariance`]) and, where that term dominates ([`mixture_dominates`]), the
+    /// frame is flagged `weak` / `competing_motions`. Applied after the frame's state is
+    /// updated (as [`TrustOptions::yaw_change`]): every pose is the one without it.
+    pub competing_recheck_frames: usize,
 }
 
 impl Default for TrustOptions {
@@ -405,6 +421,7 @@ impl Default for TrustOptions {
             support_change_yaw: 0.00873,
             support_change_tilt: 0.0157,
             support_change_hold_share: 0.12,
+            competing_recheck_frames: 0,
         }
     }
 }

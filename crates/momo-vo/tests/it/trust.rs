@@ -1443,3 +1443,64 @@ fn an_estimated_frame_reports_a_finite_covariance() {
     // The reproduction's frame stays in the test: without it the assertions above hold trivially.
     assert!(flagged >= 1, "no ill-conditioned frame in the reproduction");
 }
+
+/// `trust.competing_recheck_frames` (report only): with few matches (100 per frame pair, a
+/// bus holding most of them) the competing-motions check misses the static world on some
+/// `estimated` frames; the recheck from more starts finds it there. The run with the recheck
+/// is the run without it except on `estimated` frames where the check found no competitor:
+/// there, where the recheck finds one, the diagnostics name it (`competing`), the covariance
+/// is the mixture's (no variance smaller) and the frame is `weak` / `competing_motions` or
+/// still `estimated`; every pose is identical.
+#[test]
+fn the_competing_recheck_widens_only_estimated_frames_and_changes_no_pose() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 120;
+    traffic.seed = 4;
+    traffic.matches_per_camera = 100;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |k: usize| {
+        let mut config = Config::default();
+        config.trust.competing_recheck_frames = k;
+        process_all(seq, config)
+    };
+    let (off, on) = (run(0), run(5));
+    let mut rechecked = 0;
+    for (k, (a, b)) in off.iter().zip(&on).enumerate() {
+        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
+        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
+        if a.1.covariance == b.1.covariance {
+            assert_eq!(
+                (a.1.status, a.1.reason),
+                (b.1.status, b.1.reason),
+                "frame {k}"
+            );
+            assert_eq!(a.1.competing, b.1.competing, "frame {k}");
+            continue;
+        }
+        rechecked += 1;
+        assert_eq!(a.1.status, FrameStatus::Estimated, "frame {k}");
+        assert!(a.1.competing.is_none(), "frame {k}");
+        let (b_params, w) = b.1.competing.as_ref().expect("a competitor");
+        assert!(
+            *w > 0.0 && *w < 1.0 && b_params.len() == a.1.params.len(),
+            "frame {k}"
+        );
+        match b.1.status {
+            FrameStatus::Estimated => assert_eq!(b.1.reason, a.1.reason, "frame {k}"),
+            FrameStatus::Weak => {
+                assert_eq!(b.1.reason, Some(Reason::CompetingMotions), "frame {k}")
+            }
+            s => panic!("frame {k}: status {s:?}"),
+        }
+        let n = a.1.free.len();
+        for j in 0..n {
+            assert!(
+                b.1.covariance[j * n + j] >= a.1.covariance[j * n + j],
+                "frame {k}"
+            );
+        }
+    }
+    eprintln!("rechecked {rechecked} frames");
+    assert!(rechecked >= 1, "the recheck found no competitor");
+}
