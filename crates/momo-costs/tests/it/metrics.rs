@@ -571,17 +571,10 @@ fn angle_plane_ml_rig_is_angle_plane_ml_on_a_rig_of_one_focal_length() {
 /// derivative stays bounded at the epipole.
 #[test]
 fn angle_plane_is_singular_at_the_epipole_angle_plane_ml_is_not() {
-    use momo_core::{CameraModel, Pinhole};
+    use momo_core::CameraModel;
     use momo_costs::AnglePlaneMl;
     type D = DualSVec64<3>;
-    let cam = Camera::Pinhole(Pinhole {
-        fx: 718.856,
-        fy: 718.856,
-        cx: 607.1928,
-        cy: 185.2157,
-        width: 1241.0,
-        height: 376.0,
-    });
+    let cam = Camera::Pinhole(canned::kitti_pinhole());
     let (px0, px1) = (
         Vector2::new(623.8198231998132, 161.91677777937818),
         Vector2::new(18.549946271238767, 129.53410132372636),
