@@ -308,6 +308,15 @@ pub struct OdometryOptions {
     /// jump; a bus whose motion is far from every recent frame's is still refused
     /// (docs/RESULTS.md, thirty-second session, cutin46).
     pub competing_region_continuing_frames: usize,
+    /// `competing_regions` takes the competing motion only where the two motions differ mainly
+    /// in yaw: `|Δψ| ≥ r · √(Δφ² + Δθ²)` for the rotation between them
+    /// (`log(R_ownᵀ R_competing)` in the vehicle frame: roll `Δφ`, pitch `Δθ`, yaw `Δψ`; 0: no
+    /// such guard, the default). Traffic moves in the road plane, so the motion of a cut-in
+    /// car or a lead vehicle differs from the static world's in yaw and heading; two motions
+    /// that differ mainly in pitch are the two ends of the pitch–climb ridge of a slow,
+    /// steep start (KITTI 08's first 100 frames), which no region count tells apart
+    /// (docs/RESULTS.md, thirty-third session).
+    pub competing_region_yaw_ratio: f64,
     /// Widen a frame's soft prior where its own data conflict with it (0: off, the default):
     /// where the data's view of a soft-prior residual ([`crate::Odometry::soft_prior_sigma`]
     /// has the notation: innovation `d_r = q_d,r − c_r`, data variance `v_r`) gives
@@ -583,6 +592,7 @@ impl Default for OdometryOptions {
             competing_region_concentration: 0.0,
             competing_region_continuing: false,
             competing_region_continuing_frames: 1,
+            competing_region_yaw_ratio: 0.0,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,
@@ -1288,6 +1298,10 @@ impl Config {
                 o.previous_basin_mono_band,
             ),
             ("odometry.competing_region_band", o.competing_region_band),
+            (
+                "odometry.competing_region_yaw_ratio",
+                o.competing_region_yaw_ratio,
+            ),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 bad(
