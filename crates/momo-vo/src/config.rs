@@ -270,7 +270,8 @@ pub struct OdometryOptions {
     /// (default false: the rig's behaviour of the twenty-ninth session).
     pub previous_basin_handoff: bool,
     /// The competing motion voted by image regions on a single camera (`[cols, rows]` of a
-    /// coarse grid over the image, `[0, 0]`: off, the default; a rig is never touched): where
+    /// coarse grid over the image, default `[3, 2]` since the thirty-third session, `[0, 0]`:
+    /// off; a rig is never touched): where
     /// the covariance's check found a competing motion ([`FrameDiagnostics::competing`]), its
     /// motion replaces the frame's where the cells of the grid vote for it as in
     /// `previous_basin_regions` (per cell the matches within `competing_region_band` of the
@@ -281,7 +282,7 @@ pub struct OdometryOptions {
     ///
     /// [`FrameDiagnostics::competing`]: crate::odometry::FrameDiagnostics::competing
     pub competing_regions: [usize; 2],
-    /// The margin of `competing_regions`' vote (default 3, at least 1).
+    /// The margin of `competing_regions`' vote (default 2, at least 1).
     pub competing_region_votes: usize,
     /// The band of `competing_regions`' per-cell count (radians of epipolar angle; default
     /// 0.0028).
@@ -292,16 +293,16 @@ pub struct OdometryOptions {
     pub competing_region_refit: bool,
     /// `competing_regions` votes only where the frame's own motion is concentrated in the
     /// image: the share of its matches within the band that lie in its fullest third of the
-    /// cells (`ceil(cells / 3)`) is at least this (0: no such guard, the default; a compact
+    /// cells (`ceil(cells / 3)`) is at least this (default 0.85; 0: no such guard; a compact
     /// object holds most of its support, the static world spreads over the image).
     pub competing_region_concentration: f64,
     /// `competing_regions` takes the competing motion only where its rotation is closer to the
-    /// previous frame's than the frame's own (default false): the static world's motion
+    /// previous frame's than the frame's own (default true): the static world's motion
     /// continues the history where the estimate jumped to a cut-in car's, while a bus that
     /// covers most of the image moves far from it.
     pub competing_region_continuing: bool,
-    /// The frames `competing_region_continuing` looks back to (default 1: the previous frame
-    /// only; 0 counts as 1): the competing motion passes where its rotation is closer than the
+    /// The frames `competing_region_continuing` looks back to (default 3; 1: the previous
+    /// frame only; 0 counts as 1): the competing motion passes where its rotation is closer than the
     /// frame's own to at least one of the last `K` frames' motions. After a cut-in car took the
     /// majority, one frame whose estimate is neither the car's nor the static world's
     /// (dev2 03 s34 frame 74) would otherwise make the next frames' static motion look like a
@@ -310,8 +311,8 @@ pub struct OdometryOptions {
     pub competing_region_continuing_frames: usize,
     /// `competing_regions` takes the competing motion only where the two motions differ mainly
     /// in yaw: `|Δψ| ≥ r · √(Δφ² + Δθ²)` for the rotation between them
-    /// (`log(R_ownᵀ R_competing)` in the vehicle frame: roll `Δφ`, pitch `Δθ`, yaw `Δψ`; 0: no
-    /// such guard, the default). Traffic moves in the road plane, so the motion of a cut-in
+    /// (`log(R_ownᵀ R_competing)` in the vehicle frame: roll `Δφ`, pitch `Δθ`, yaw `Δψ`;
+    /// default 1; 0: no such guard). Traffic moves in the road plane, so the motion of a cut-in
     /// car or a lead vehicle differs from the static world's in yaw and heading; two motions
     /// that differ mainly in pitch are the two ends of the pitch–climb ridge of a slow,
     /// steep start (KITTI 08's first 100 frames), which no region count tells apart
@@ -585,14 +586,16 @@ impl Default for OdometryOptions {
             previous_basin_mono_next_votes: 0,
             previous_basin_mono_band: 0.0028,
             previous_basin_handoff: false,
-            competing_regions: [0, 0],
-            competing_region_votes: 3,
+            // Since the thirty-third session (docs/RESULTS.md §9, thirty-third session): the
+            // vote with its three guards; no effect on a rig.
+            competing_regions: [3, 2],
+            competing_region_votes: 2,
             competing_region_band: 0.0028,
             competing_region_refit: false,
-            competing_region_concentration: 0.0,
-            competing_region_continuing: false,
-            competing_region_continuing_frames: 1,
-            competing_region_yaw_ratio: 0.0,
+            competing_region_concentration: 0.85,
+            competing_region_continuing: true,
+            competing_region_continuing_frames: 3,
+            competing_region_yaw_ratio: 1.0,
             soft_prior_conflict_widening: 4.0,
             soft_prior_conflict_residuals: vec![1],
             soft_prior_conflict_on_support: true,

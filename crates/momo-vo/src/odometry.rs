@@ -5192,7 +5192,8 @@ mod tests {
     /// own motion is the cut-in car's (+0.006) and the competing one the static world's turn
     /// (-0.016). From the last frame alone the car's motion looks continuing; with the frame
     /// before it the static world's does. A bus's motion far from every reference never passes.
-    /// The option defaults to 1 (the previous frame only) and the driver keeps `K` motions.
+    /// The option defaults to 3 (since the thirty-third session) and the driver keeps `K`
+    /// motions.
     #[test]
     fn the_continuing_test_looks_back_over_the_last_frames() {
         let yaw = |z: f64| {
@@ -5214,7 +5215,7 @@ mod tests {
             crate::Config::default()
                 .odometry
                 .competing_region_continuing_frames,
-            1
+            3
         );
         use momo_sim::SimConfig;
         let mono = || SimConfig {
@@ -5246,7 +5247,7 @@ mod tests {
     /// KITTI 08 s3 frame 87, the two ends of the pitch–climb ridge (pitch differs by 0.018
     /// rad, yaw by 0.005), is refused. Off by default; on a run, an unreachable ratio takes
     /// nothing and keeps the unguarded vote's untaken motions; a negative or NaN ratio is
-    /// rejected.
+    /// rejected. The default (since the thirty-third session) is 1.
     #[test]
     fn the_yaw_guard_refuses_motions_that_differ_mainly_in_pitch() {
         use momo_core::so3_exp;
@@ -5264,12 +5265,12 @@ mod tests {
         assert!(!yaw_dominant(&r(0.0, 0.01, 0.0), &r(0.0, -0.01, 0.0), 1e-6));
         assert_eq!(
             crate::Config::default().odometry.competing_region_yaw_ratio,
-            0.0
+            1.0
         );
         use momo_sim::SimConfig;
         let run = |text: &str| {
             let text = format!(
-                "[trust]\ncompeting_min_fraction = 0.02\n[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\n{text}"
+                "[trust]\ncompeting_min_fraction = 0.02\n[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\ncompeting_region_concentration = 0.0\ncompeting_region_continuing = false\n{text}"
             );
             let cfg = SimConfig {
                 frames: 61,
@@ -5278,7 +5279,7 @@ mod tests {
             };
             counted_run(cfg, &text, Odometry::competing_region_counts)
         };
-        let (unguarded, counts) = run("");
+        let (unguarded, counts) = run("competing_region_yaw_ratio = 0.0\n");
         let (guarded, guarded_counts) = run("competing_region_yaw_ratio = 1e12\n");
         assert_eq!(guarded_counts, (counts.0, 0));
         assert_eq!(counts.1 == 0, unguarded == guarded);
@@ -5291,10 +5292,11 @@ mod tests {
         }
     }
 
-    /// `odometry.competing_regions`: off by default (never votes); on, it votes on the single
-    /// camera's frames with a competing motion; an unreachable margin takes none and keeps the
-    /// default's motions; a plain majority takes some and changes the motions; a rig is never
-    /// touched; a negative or NaN band is rejected.
+    /// `odometry.competing_regions` (on by default since the thirty-third session): off
+    /// (`[0, 0]`) it never votes; on, it votes on the single camera's frames with a competing
+    /// motion; an unreachable margin takes none and keeps the motions of the vote turned off;
+    /// on this scene even a plain majority takes none; a rig is never touched; a negative or
+    /// NaN band is rejected.
     #[test]
     fn the_competing_region_vote_acts_on_a_single_camera_only_where_on() {
         use momo_sim::SimConfig;
@@ -5308,8 +5310,8 @@ mod tests {
             seed: 3,
             ..SimConfig::moving_traffic()
         };
-        assert_eq!(crate::Config::default().odometry.competing_regions, [0, 0]);
-        let (off, counts) = run(mono(), "[odometry]\n");
+        assert_eq!(crate::Config::default().odometry.competing_regions, [3, 2]);
+        let (off, counts) = run(mono(), "[odometry]\ncompeting_regions = [0, 0]\n");
         assert_eq!(counts, (0, 0));
         let (on, counts) = run(
             mono(),
@@ -5335,7 +5337,7 @@ mod tests {
             seed: 2,
             ..SimConfig::moving_traffic_surround()
         };
-        let (a, ca) = run(rig(), "[odometry]\n");
+        let (a, ca) = run(rig(), "[odometry]\ncompeting_regions = [0, 0]\n");
         let (b, cb) = run(
             rig(),
             "[odometry]\ncompeting_regions = [3, 2]\ncompeting_region_votes = 1\n",
