@@ -2496,23 +2496,20 @@ impl Odometry {
         // own to the previous frame's (`competing_region_continuing_frames = K`: to at least one
         // of the last `K` frames').
         let rotation = |p: &[f64]| self.estimator.motion(p).rotation;
+        let (own, other) = (rotation(&sol.params), rotation(params));
         if o.competing_region_continuing {
             let references: Vec<Matrix3<f64>> = if o.competing_region_continuing_frames > 1 {
                 self.recent_motions.iter().map(|m| rotation(m)).collect()
             } else {
                 vec![rotation(&self.previous)]
             };
-            if !continues_any(&references, &rotation(&sol.params), &rotation(params)) {
+            if !continues_any(&references, &own, &other) {
                 return Some((sol.clone(), false));
             }
         }
         // `competing_region_yaw_ratio`: the two motions differ mainly in yaw.
         if o.competing_region_yaw_ratio > 0.0
-            && !yaw_dominant(
-                &rotation(&sol.params),
-                &rotation(params),
-                o.competing_region_yaw_ratio,
-            )
+            && !yaw_dominant(&own, &other, o.competing_region_yaw_ratio)
         {
             return Some((sol.clone(), false));
         }
@@ -3441,13 +3438,9 @@ impl Odometry {
             }
         }
         let recorded = found.or_else(|| {
-            result.as_ref().map(|(b, _)| {
-                let mut all = params.to_vec();
-                for (&i, v) in diag.free.iter().zip(b) {
-                    all[i] = *v;
-                }
-                all
-            })
+            result
+                .as_ref()
+                .map(|(b, _)| with_free(params, &diag.free, b))
         });
         if let Some(p) = recorded {
             self.last_competing = Some((self.frame, p));
@@ -3523,11 +3516,7 @@ impl Odometry {
             None => (None, None, Vec::new()),
         };
         if let Some((b, w)) = &competing {
-            let mut all = sol.params.clone();
-            for (&i, v) in sol.free.iter().zip(b) {
-                all[i] = *v;
-            }
-            diag.competing = Some((all, *w));
+            diag.competing = Some((with_free(&sol.params, &sol.free, b), *w));
         }
         if let Some(cov) = status_cov.as_ref()
             && let Some((b, w)) = &competing
@@ -4102,11 +4091,17 @@ fn apply_recheck(params: &[f64], b: &[f64], w: f64, diag: &mut FrameDiagnostics)
         }
     }
     diag.covariance = mixed.transpose().iter().copied().collect();
+    diag.competing = Some((with_free(params, &diag.free, b), w));
+}
+
+/// The full parameters `params` with the free ones (indices `free`) replaced by `values`: a
+/// competing motion's full vector from its free parameters (the diagnostics' `competing`).
+fn with_free(params: &[f64], free: &[usize], values: &[f64]) -> Vec<f64> {
     let mut all = params.to_vec();
-    for (&i, v) in diag.free.iter().zip(b) {
+    for (&i, v) in free.iter().zip(values) {
         all[i] = *v;
     }
-    diag.competing = Some((all, w));
+    all
 }
 
 /// A report-only flag (`trust.support_change_share`, `trust.yaw_change`,
