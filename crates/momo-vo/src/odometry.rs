@@ -3408,7 +3408,9 @@ impl Odometry {
             return None;
         }
         let found = diag.competing.as_ref().map(|c| c.0.clone());
+        let max_matches = self.config.trust.competing_recheck_max_matches;
         let eligible = diag.status == FrameStatus::Estimated
+            && (max_matches == 0 || obs.len() <= max_matches)
             && found.is_none()
             && !diag.free.is_empty()
             && diag.covariance.len() == diag.free.len().pow(2)

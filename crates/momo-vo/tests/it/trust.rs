@@ -1504,3 +1504,48 @@ fn the_competing_recheck_widens_only_estimated_frames_and_changes_no_pose() {
     eprintln!("rechecked {rechecked} frames");
     assert!(rechecked >= 1, "the recheck found no competitor");
 }
+
+/// `trust.competing_recheck_max_matches`: the recheck runs only on frames with at most that
+/// many matches (by default 5 frames back on frames with at most 150 matches). Below the frames' 100 matches the run is the run without the recheck,
+/// diagnostics and all; at or above it, the run is the ungated one's.
+#[test]
+fn the_competing_recheck_runs_only_on_frames_with_few_matches() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 120;
+    traffic.seed = 4;
+    traffic.matches_per_camera = 100;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let run = |k: usize, max_matches: usize| {
+        let mut config = Config::default();
+        config.trust.competing_recheck_frames = k;
+        config.trust.competing_recheck_max_matches = max_matches;
+        process_all(seq, config)
+    };
+    let key = |r: &(Pose<f64>, momo_vo::FrameDiagnostics)| {
+        (
+            r.0.rotation,
+            r.0.translation,
+            r.1.status,
+            r.1.reason,
+            r.1.covariance.clone(),
+            r.1.competing.clone(),
+        )
+    };
+    let same = |a: &[(Pose<f64>, momo_vo::FrameDiagnostics)],
+                b: &[(Pose<f64>, momo_vo::FrameDiagnostics)]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| key(x) == key(y))
+    };
+    let defaults = Config::default().trust;
+    assert_eq!(
+        (
+            defaults.competing_recheck_frames,
+            defaults.competing_recheck_max_matches
+        ),
+        (5, 150)
+    );
+    let (off, ungated) = (run(0, 0), run(5, 0));
+    assert!(!same(&off, &ungated), "the recheck changed nothing here");
+    assert!(same(&run(5, 10), &off));
+    assert!(same(&run(5, 100), &ungated));
+}
