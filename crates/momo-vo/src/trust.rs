@@ -359,8 +359,9 @@ pub struct TrustOptions {
     pub support_change_hold_share: f64,
     /// The competing-motions check once more, report only, with more starts (`K` frames; 0:
     /// off; default 5 since the thirty-fourth session, on frames with at most
-    /// [`TrustOptions::competing_recheck_max_matches`] = 150 matches). On a moving frame reported `estimated` where the check above found
-    /// no second motion, a second motion is fitted to the matches outside the reported
+    /// [`TrustOptions::competing_recheck_max_matches`] = 150 matches). On a moving frame
+    /// reported `estimated` where the check above found no second motion, a second motion is
+    /// fitted to the matches outside the reported
     /// motion's support (epipolar angle above [`TrustOptions::competing_threshold`]) from the
     /// last competing motion of the previous `K` frames (with this frame's arc length) and
     /// from the previous frame's motion turned by `odometry.restart_yaw_offsets`, instead of
@@ -375,9 +376,9 @@ pub struct TrustOptions {
     /// updated (as [`TrustOptions::yaw_change`]): every pose is the one without it.
     pub competing_recheck_frames: usize,
     /// With [`TrustOptions::competing_recheck_frames`]: recheck only frames with at most this
-    /// many matches (all cameras; 0: every frame; default 150). With few matches a vehicle can hold most
-    /// of a frame's support and leave the static world's matches to the check; with 300 the
-    /// recheck only widened correct frames (docs/RESULTS.md, thirty-second session, few46,
+    /// many matches (all cameras; 0: every frame; default 150). With few matches a vehicle can
+    /// hold most of a frame's support and leave the static world's matches to the check; with
+    /// 300 the recheck only widened correct frames (docs/RESULTS.md, thirty-second session, few46,
     /// and thirty-fourth session).
     pub competing_recheck_max_matches: usize,
 }

@@ -1444,6 +1444,28 @@ fn an_estimated_frame_reports_a_finite_covariance() {
     assert!(flagged >= 1, "no ill-conditioned frame in the reproduction");
 }
 
+/// The recheck tests' sequence: moving traffic, seed 4, 120 frames, 100 matches per frame pair.
+fn few_match_traffic() -> momo_io::Sequence {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 120;
+    traffic.seed = 4;
+    traffic.matches_per_camera = 100;
+    momo_sim::simulate(&traffic).expect("simulated").sequence
+}
+
+/// `seq` processed with `trust.competing_recheck_frames = k` and
+/// `trust.competing_recheck_max_matches = max_matches`, the rest default.
+fn recheck_run(
+    seq: &momo_io::Sequence,
+    k: usize,
+    max_matches: usize,
+) -> Vec<(Pose<f64>, momo_vo::FrameDiagnostics)> {
+    let mut config = Config::default();
+    config.trust.competing_recheck_frames = k;
+    config.trust.competing_recheck_max_matches = max_matches;
+    process_all(seq, config)
+}
+
 /// `trust.competing_recheck_frames` (report only): with few matches (100 per frame pair, a
 /// bus holding most of them) the competing-motions check misses the static world on some
 /// `estimated` frames; the recheck from more starts finds it there. The run with the recheck
@@ -1453,18 +1475,8 @@ fn an_estimated_frame_reports_a_finite_covariance() {
 /// still `estimated`; every pose is identical.
 #[test]
 fn the_competing_recheck_widens_only_estimated_frames_and_changes_no_pose() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 120;
-    traffic.seed = 4;
-    traffic.matches_per_camera = 100;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
-    let run = |k: usize| {
-        let mut config = Config::default();
-        config.trust.competing_recheck_frames = k;
-        process_all(seq, config)
-    };
-    let (off, on) = (run(0), run(5));
+    let seq = few_match_traffic();
+    let (off, on) = (recheck_run(&seq, 0, 0), recheck_run(&seq, 5, 0));
     let mut rechecked = 0;
     for (k, (a, b)) in off.iter().zip(&on).enumerate() {
         assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
@@ -1506,22 +1518,13 @@ fn the_competing_recheck_widens_only_estimated_frames_and_changes_no_pose() {
 }
 
 /// `trust.competing_recheck_max_matches`: the recheck runs only on frames with at most that
-/// many matches (by default 5 frames back on frames with at most 150 matches). Below the frames' 100 matches the run is the run without the recheck,
-/// diagnostics and all; at or above it, the run is the ungated one's.
+/// many matches (by default 5 frames back on frames with at most 150 matches). Below the
+/// frames' 100 matches the run is the run without the recheck, diagnostics and all; at or
+/// above it, the run is the ungated one's.
 #[test]
 fn the_competing_recheck_runs_only_on_frames_with_few_matches() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 120;
-    traffic.seed = 4;
-    traffic.matches_per_camera = 100;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
-    let run = |k: usize, max_matches: usize| {
-        let mut config = Config::default();
-        config.trust.competing_recheck_frames = k;
-        config.trust.competing_recheck_max_matches = max_matches;
-        process_all(seq, config)
-    };
+    let seq = few_match_traffic();
+    let run = |k: usize, max_matches: usize| recheck_run(&seq, k, max_matches);
     let key = |r: &(Pose<f64>, momo_vo::FrameDiagnostics)| {
         (
             r.0.rotation,
