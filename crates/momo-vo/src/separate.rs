@@ -363,6 +363,22 @@ pub struct SeparateOptions {
     /// the final B's digits everywhere; measured in docs/RESULTS.md ("Speed", twentieth session,
     /// rig34).
     pub candidate_subsample: usize,
+    /// The frame's match count (over all cameras) `N` at which the thresholds that count
+    /// matches or image cells hold as written (0: always as written): in a frame with
+    /// `n < N` matches, [`SeparateOptions::ground_admit_min`],
+    /// [`SeparateOptions::memory_vote_min`], [`SeparateOptions::ground_drop_min`] and the
+    /// multi-frame choice's [`HypothesesOptions::min_matches`] and
+    /// [`HypothesesOptions::track_min_labelled`] are scaled by `n / N` (rounded up, at least 1;
+    /// [`SeparateOptions::for_matches`]). The road scores count image cells with road points and
+    /// the memory's tests count labelled matches; both shrink with the frame's matches, so
+    /// thresholds chosen on 300-match frames shut the road and the memory out of the choice
+    /// in a frame of 100 (a bus crossing at constant flow, 60 of 100 matches, then looks like a
+    /// yaw). 0 (off) in [`SeparateOptions::default`], 300 in
+    /// [`SeparateOptions::competition_over_time`] (the default's separation, since the
+    /// thirty-fifth session: the frames those thresholds were chosen on hold 300 matches, so
+    /// they and every frame with more are solved as before); measured in docs/RESULTS.md §9
+    /// (thirty-fifth session, scale49).
+    pub count_reference: usize,
 }
 
 impl Default for SeparateOptions {
@@ -418,6 +434,7 @@ impl Default for SeparateOptions {
             candidate_by_road: false,
             candidate_forget_other: false,
             candidate_subsample: 0,
+            count_reference: 0,
         }
     }
 }
@@ -472,7 +489,9 @@ impl SeparateOptions {
     /// yaw jumps by more than 0.5 deg (or whose tilt jumps) without road is replaced by the
     /// previous motion re-solved on its support where that prediction's own road score beats
     /// the choice's and every alternative's (`hypotheses.predict_by_road = 0.00873`;
-    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). A
+    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). Since the
+    /// thirty-fifth session the counts of those tests shrink in a frame with fewer than 300
+    /// matches (`count_reference = 300`; docs/RESULTS.md §9, thirty-fifth session, scale49). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -494,6 +513,7 @@ impl SeparateOptions {
             ground_admit_own_share: 0.05,
             ground_drop: 0.4,
             candidate_by_road: true,
+            count_reference: 300,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
@@ -526,6 +546,26 @@ impl SeparateOptions {
         } else {
             self.own_share
         }
+    }
+
+    /// These options for a frame of `matches` matches over all cameras: with
+    /// [`SeparateOptions::count_reference`] `N > matches`, the count thresholds it names scaled
+    /// by `matches / N` (rounded up, at least 1); otherwise these options unchanged.
+    pub fn for_matches(&self, matches: usize) -> std::borrow::Cow<'_, Self> {
+        let reference = self.count_reference;
+        if reference == 0 || matches >= reference {
+            return std::borrow::Cow::Borrowed(self);
+        }
+        let scale = |t: usize| (t * matches).div_ceil(reference).max(1);
+        let mut o = self.clone();
+        o.ground_admit_min = scale(o.ground_admit_min);
+        o.memory_vote_min = scale(o.memory_vote_min);
+        o.ground_drop_min = scale(o.ground_drop_min);
+        if let Some(h) = o.hypotheses.as_mut() {
+            h.min_matches = scale(h.min_matches);
+            h.track_min_labelled = scale(h.track_min_labelled);
+        }
+        std::borrow::Cow::Owned(o)
     }
 
     /// The multi-frame choice's options where it is on ([`HypothesesOptions::enabled`]).
@@ -4332,6 +4372,52 @@ mod tests {
             }
             assert!(gap <= m.div_ceil(k), "{sizes:?} {k}: gap {gap}");
         }
+    }
+
+    /// `count_reference`: below the reference the five count thresholds shrink with the
+    /// frame's matches (rounded up, never below 1); at or above it, or with the option off,
+    /// the options are the same object, untouched.
+    #[test]
+    fn count_thresholds_scale_with_the_frames_matches() {
+        let bare = SeparateOptions::default();
+        assert!(matches!(
+            bare.for_matches(10),
+            std::borrow::Cow::Borrowed(_)
+        ));
+        let off: SeparateOptions = toml::from_str("count_reference = 0").expect("toml");
+        assert!(matches!(off.for_matches(10), std::borrow::Cow::Borrowed(_)));
+        let o: SeparateOptions = toml::from_str("").expect("toml");
+        assert_eq!(o, SeparateOptions::competition_over_time());
+        assert_eq!(o.count_reference, 300);
+        for n in [300, 301, 5000] {
+            assert!(
+                matches!(o.for_matches(n), std::borrow::Cow::Borrowed(_)),
+                "{n}"
+            );
+        }
+        let counts = |s: &SeparateOptions| {
+            let h = s.hypotheses.as_ref().expect("hypotheses");
+            [
+                s.ground_admit_min,
+                s.memory_vote_min,
+                s.ground_drop_min,
+                h.min_matches,
+                h.track_min_labelled,
+            ]
+        };
+        assert_eq!(counts(&o), [12, 20, 8, 10, 20]);
+        assert_eq!(counts(&o.for_matches(150)), [6, 10, 4, 5, 10]);
+        assert_eq!(counts(&o.for_matches(100)), [4, 7, 3, 4, 7]);
+        assert_eq!(counts(&o.for_matches(1)), [1, 1, 1, 1, 1]);
+        let scaled = o.for_matches(100).into_owned();
+        let back = SeparateOptions {
+            ground_admit_min: 12,
+            memory_vote_min: 20,
+            ground_drop_min: 8,
+            hypotheses: o.hypotheses.clone(),
+            ..scaled
+        };
+        assert_eq!(back, o, "nothing else changes");
     }
 
     /// `candidate_subsample`: larger than every set of matches outside A's support, the
