@@ -1627,7 +1627,7 @@ mod partial_tests {
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
              ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
-             ground_drop = 0.0\ncandidate_by_road = false\n\
+             ground_drop = 0.0\ncandidate_by_road = false\ncount_reference = 0\n\
              [odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )

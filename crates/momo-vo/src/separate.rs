@@ -560,9 +560,7 @@ impl SeparateOptions {
         let mut o = self.clone();
         o.ground_admit_min = scale(o.ground_admit_min);
         o.memory_vote_min = scale(o.memory_vote_min);
-        o.ground_drop_min = scale(o.ground_drop_min);
         if let Some(h) = o.hypotheses.as_mut() {
-            h.min_matches = scale(h.min_matches);
             h.track_min_labelled = scale(h.track_min_labelled);
         }
         std::borrow::Cow::Owned(o)
@@ -4406,9 +4404,9 @@ mod tests {
             ]
         };
         assert_eq!(counts(&o), [12, 20, 8, 10, 20]);
-        assert_eq!(counts(&o.for_matches(150)), [6, 10, 4, 5, 10]);
-        assert_eq!(counts(&o.for_matches(100)), [4, 7, 3, 4, 7]);
-        assert_eq!(counts(&o.for_matches(1)), [1, 1, 1, 1, 1]);
+        assert_eq!(counts(&o.for_matches(150)), [6, 10, 8, 10, 10]);
+        assert_eq!(counts(&o.for_matches(100)), [4, 7, 8, 10, 7]);
+        assert_eq!(counts(&o.for_matches(1)), [1, 1, 8, 10, 1]);
         let scaled = o.for_matches(100).into_owned();
         let back = SeparateOptions {
             ground_admit_min: 12,
