@@ -948,6 +948,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # memory_vote_ground times the other, the alternative replaces the first motion if\n\
          # its support's remembered-static share exceeds the first's by memory_vote (each\n\
          # with memory_vote_min labelled matches, the alternative's own matches own_share).\n\
+         # count_reference (0: off): in a frame with fewer matches (all cameras), the counts\n\
+         # ground_admit_min, memory_vote_min and the hypotheses' track_min_labelled scale with\n\
+         # the frame's matches (rounded up, at least 1).\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
@@ -1624,7 +1627,7 @@ mod partial_tests {
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
              ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
-             ground_drop = 0.0\ncandidate_by_road = false\n\
+             ground_drop = 0.0\ncandidate_by_road = false\ncount_reference = 0\n\
              [odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )

@@ -1361,6 +1361,9 @@ impl Odometry {
                     fixed: &fixed,
                     motion_prior: Some(&self.motion_prior),
                 };
+                // The count thresholds scaled to the frame's matches (`count_reference`).
+                let scaled = opts.for_matches(obs.len());
+                let opts: &crate::separate::SeparateOptions = &scaled;
                 // The quiet-frame fast path (`odometry.quiet_frames`): no alternative solves.
                 let quiet_opts;
                 let quiet = self.quiet(obs, &sol, opts);

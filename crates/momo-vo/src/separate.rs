@@ -363,6 +363,24 @@ pub struct SeparateOptions {
     /// the final B's digits everywhere; measured in docs/RESULTS.md ("Speed", twentieth session,
     /// rig34).
     pub candidate_subsample: usize,
+    /// The frame's match count (over all cameras) `N` at which the separation's evidence counts
+    /// hold as written (0: always as written): in a frame with `n < N` matches,
+    /// [`SeparateOptions::ground_admit_min`] (the ground cue's least road score, in image cells),
+    /// [`SeparateOptions::memory_vote_min`] and [`HypothesesOptions::track_min_labelled`] (the
+    /// least labelled matches of the memory's tests) are scaled by `n / N` (rounded up, at
+    /// least 1; [`SeparateOptions::for_matches`]). Road cells and labelled matches shrink with
+    /// the frame's matches, so counts chosen on 300-match frames shut the road and the memory
+    /// out of the choice in a frame of 100 (a bus crossing at constant flow, 60 of 100 matches,
+    /// then passes for a yaw). The two counts that decide whether a scene shows a road at all,
+    /// [`SeparateOptions::ground_drop_min`] and [`HypothesesOptions::min_matches`], stay as
+    /// written: scaled, a scene without a road (matches on the horizon row, random scene
+    /// points) reaches them by chance, and `ground_drop` or the road prediction act there
+    /// (four of `momo-vo`'s integration tests fail). 0 (off) in [`SeparateOptions::default`],
+    /// 300 in [`SeparateOptions::competition_over_time`] (the default's separation, since the
+    /// thirty-fifth session: the frames those counts were chosen on hold 300 matches, so they
+    /// and every frame with more are solved as before); measured in docs/RESULTS.md §9
+    /// (thirty-fifth session, scale49).
+    pub count_reference: usize,
 }
 
 impl Default for SeparateOptions {
@@ -418,6 +436,7 @@ impl Default for SeparateOptions {
             candidate_by_road: false,
             candidate_forget_other: false,
             candidate_subsample: 0,
+            count_reference: 0,
         }
     }
 }
@@ -472,7 +491,10 @@ impl SeparateOptions {
     /// yaw jumps by more than 0.5 deg (or whose tilt jumps) without road is replaced by the
     /// previous motion re-solved on its support where that prediction's own road score beats
     /// the choice's and every alternative's (`hypotheses.predict_by_road = 0.00873`;
-    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). A
+    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). Since the
+    /// thirty-fifth session the ground cue's and the memory's counts shrink in a frame with
+    /// fewer than 300 matches (`count_reference = 300`; docs/RESULTS.md §9, thirty-fifth
+    /// session, scale49). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -494,6 +516,7 @@ impl SeparateOptions {
             ground_admit_own_share: 0.05,
             ground_drop: 0.4,
             candidate_by_road: true,
+            count_reference: 300,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
@@ -526,6 +549,24 @@ impl SeparateOptions {
         } else {
             self.own_share
         }
+    }
+
+    /// These options for a frame of `matches` matches over all cameras: with
+    /// [`SeparateOptions::count_reference`] `N > matches`, the three counts it names scaled
+    /// by `matches / N` (rounded up, at least 1); otherwise these options unchanged.
+    pub fn for_matches(&self, matches: usize) -> std::borrow::Cow<'_, Self> {
+        let reference = self.count_reference;
+        if reference == 0 || matches >= reference {
+            return std::borrow::Cow::Borrowed(self);
+        }
+        let scale = |t: usize| (t * matches).div_ceil(reference).max(1);
+        let mut o = self.clone();
+        o.ground_admit_min = scale(o.ground_admit_min);
+        o.memory_vote_min = scale(o.memory_vote_min);
+        if let Some(h) = o.hypotheses.as_mut() {
+            h.track_min_labelled = scale(h.track_min_labelled);
+        }
+        std::borrow::Cow::Owned(o)
     }
 
     /// The multi-frame choice's options where it is on ([`HypothesesOptions::enabled`]).
@@ -4332,6 +4373,50 @@ mod tests {
             }
             assert!(gap <= m.div_ceil(k), "{sizes:?} {k}: gap {gap}");
         }
+    }
+
+    /// `count_reference`: below the reference the three evidence counts shrink with the
+    /// frame's matches (rounded up, never below 1) and the two road-visibility counts do not;
+    /// at or above it, or with the option off, the options are the same object, untouched.
+    #[test]
+    fn count_thresholds_scale_with_the_frames_matches() {
+        let bare = SeparateOptions::default();
+        assert!(matches!(
+            bare.for_matches(10),
+            std::borrow::Cow::Borrowed(_)
+        ));
+        let off: SeparateOptions = toml::from_str("count_reference = 0").expect("toml");
+        assert!(matches!(off.for_matches(10), std::borrow::Cow::Borrowed(_)));
+        let o: SeparateOptions = toml::from_str("").expect("toml");
+        assert_eq!(o, SeparateOptions::competition_over_time());
+        assert_eq!(o.count_reference, 300);
+        for n in [300, 301, 5000] {
+            assert!(
+                matches!(o.for_matches(n), std::borrow::Cow::Borrowed(_)),
+                "{n}"
+            );
+        }
+        let counts = |s: &SeparateOptions| {
+            let h = s.hypotheses.as_ref().expect("hypotheses");
+            [
+                s.ground_admit_min,
+                s.memory_vote_min,
+                s.ground_drop_min,
+                h.min_matches,
+                h.track_min_labelled,
+            ]
+        };
+        assert_eq!(counts(&o), [12, 20, 8, 10, 20]);
+        assert_eq!(counts(&o.for_matches(150)), [6, 10, 8, 10, 10]);
+        assert_eq!(counts(&o.for_matches(100)), [4, 7, 8, 10, 7]);
+        assert_eq!(counts(&o.for_matches(1)), [1, 1, 8, 10, 1]);
+        let mut back = o.for_matches(100).into_owned();
+        back.ground_admit_min = 12;
+        back.memory_vote_min = 20;
+        if let Some(h) = back.hypotheses.as_mut() {
+            h.track_min_labelled = 20;
+        }
+        assert_eq!(back, o, "nothing else changes");
     }
 
     /// `candidate_subsample`: larger than every set of matches outside A's support, the
