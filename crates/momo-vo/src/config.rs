@@ -949,8 +949,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # its support's remembered-static share exceeds the first's by memory_vote (each\n\
          # with memory_vote_min labelled matches, the alternative's own matches own_share).\n\
          # count_reference (0: off): in a frame with fewer matches (all cameras), the counts\n\
-         # ground_admit_min, memory_vote_min and the hypotheses' track_min_labelled scale with\n\
-         # the frame's matches (rounded up, at least 1).\n\
+         # ground_admit_min, memory_vote_min and the hypotheses' min_matches and\n\
+         # track_min_labelled scale with the frame's matches (rounded up, at least 1); the\n\
+         # road guard's gate (whether the scene shows a road) keeps min_matches as written.\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),

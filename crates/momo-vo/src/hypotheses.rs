@@ -380,6 +380,13 @@ pub struct HypothesesOptions {
     /// same road evidence then picks it. Off (`false`: `P` only, against every alternative;
     /// twenty-seventh session, tail41).
     pub predict_by_road_alternatives: bool,
+    /// The least median road score of the recent frames at which a scene shows a road at all,
+    /// for [`HypothesisTracker::road_lost`] (`None`: [`HypothesesOptions::min_matches`]). Set
+    /// only by [`crate::separate::SeparateOptions::for_matches`], which scales `min_matches`
+    /// to the frame's matches but keeps this gate as written: scaled, a scene without a road
+    /// reaches it by chance. Not a config field.
+    #[serde(skip)]
+    pub road_visible_min: Option<usize>,
 }
 
 /// The reference tilt of the recent frames ([`HypothesesOptions::tilt_reference`]).
@@ -432,6 +439,7 @@ impl Default for HypothesesOptions {
             predict_by_road_ratio: 1.0,
             predict_by_road_prior: false,
             predict_by_road_alternatives: false,
+            road_visible_min: None,
         }
     }
 }
@@ -1301,7 +1309,7 @@ impl HypothesisTracker {
                 self.road_scores.iter().copied(),
                 score_a,
                 opts.yaw_history_predict_road_drop,
-                opts.min_matches,
+                opts.road_visible_min.unwrap_or(opts.min_matches),
             )
     }
 

@@ -367,19 +367,22 @@ pub struct SeparateOptions {
     /// hold as written (0: always as written): in a frame with `n < N` matches,
     /// [`SeparateOptions::ground_admit_min`] (the ground cue's least road score, in image cells),
     /// [`SeparateOptions::memory_vote_min`] and [`HypothesesOptions::track_min_labelled`] (the
-    /// least labelled matches of the memory's tests) are scaled by `n / N` (rounded up, at
-    /// least 1; [`SeparateOptions::for_matches`]). Road cells and labelled matches shrink with
-    /// the frame's matches, so counts chosen on 300-match frames shut the road and the memory
-    /// out of the choice in a frame of 100 (a bus crossing at constant flow, 60 of 100 matches,
-    /// then passes for a yaw). The two counts that decide whether a scene shows a road at all,
-    /// [`SeparateOptions::ground_drop_min`] and [`HypothesesOptions::min_matches`], stay as
-    /// written: scaled, a scene without a road (matches on the horizon row, random scene
-    /// points) reaches them by chance, and `ground_drop` or the road prediction act there
-    /// (four of `momo-vo`'s integration tests fail). 0 (off) in [`SeparateOptions::default`],
-    /// 300 in [`SeparateOptions::competition_over_time`] (the default's separation, since the
+    /// least labelled matches of the memory's tests) and [`HypothesesOptions::min_matches`] (the
+    /// least road score of the road's tests in the multi-frame choice) are scaled by `n / N`
+    /// (rounded up, at least 1; [`SeparateOptions::for_matches`]). Road cells and labelled
+    /// matches shrink with the frame's matches, so counts chosen on 300-match frames shut the
+    /// road and the memory out of the choice in a frame of 100 (a bus crossing at constant flow,
+    /// 60 of 100 matches, then passes for a yaw). The two gates that decide whether a scene
+    /// shows a road at all stay as written: [`SeparateOptions::ground_drop_min`] and the road
+    /// guard's [`HypothesesOptions::road_visible_min`] (`min_matches` as written); scaled, a
+    /// scene without a road (matches on the horizon row, random scene points) passes them by
+    /// chance, and `ground_drop` or the road guard act there (four of `momo-vo`'s integration
+    /// tests fail). 0 (off) in [`SeparateOptions::default`], 300 in
+    /// [`SeparateOptions::competition_over_time`] (the default's separation, since the
     /// thirty-fifth session: the frames those counts were chosen on hold 300 matches, so they
-    /// and every frame with more are solved as before); measured in docs/RESULTS.md §9
-    /// (thirty-fifth session, scale49).
+    /// and every frame with more are solved as before; `min_matches` scaled too since the
+    /// thirty-sixth); measured in docs/RESULTS.md §9 (thirty-fifth session, scale49, and
+    /// thirty-sixth, scale50).
     pub count_reference: usize,
 }
 
@@ -552,8 +555,10 @@ impl SeparateOptions {
     }
 
     /// These options for a frame of `matches` matches over all cameras: with
-    /// [`SeparateOptions::count_reference`] `N > matches`, the three counts it names scaled
-    /// by `matches / N` (rounded up, at least 1); otherwise these options unchanged.
+    /// [`SeparateOptions::count_reference`] `N > matches`, the four counts it names scaled
+    /// by `matches / N` (rounded up, at least 1) and the road guard's gate
+    /// ([`HypothesesOptions::road_visible_min`]) held at `min_matches` as written; otherwise
+    /// these options unchanged.
     pub fn for_matches(&self, matches: usize) -> std::borrow::Cow<'_, Self> {
         let reference = self.count_reference;
         if reference == 0 || matches >= reference {
@@ -564,6 +569,8 @@ impl SeparateOptions {
         o.ground_admit_min = scale(o.ground_admit_min);
         o.memory_vote_min = scale(o.memory_vote_min);
         if let Some(h) = o.hypotheses.as_mut() {
+            h.road_visible_min = Some(h.road_visible_min.unwrap_or(h.min_matches));
+            h.min_matches = scale(h.min_matches);
             h.track_min_labelled = scale(h.track_min_labelled);
         }
         std::borrow::Cow::Owned(o)
@@ -4375,8 +4382,8 @@ mod tests {
         }
     }
 
-    /// `count_reference`: below the reference the three evidence counts shrink with the
-    /// frame's matches (rounded up, never below 1) and the two road-visibility counts do not;
+    /// `count_reference`: below the reference the four evidence counts shrink with the
+    /// frame's matches (rounded up, never below 1) and the two road-visibility gates do not;
     /// at or above it, or with the option off, the options are the same object, untouched.
     #[test]
     fn count_thresholds_scale_with_the_frames_matches() {
@@ -4407,14 +4414,21 @@ mod tests {
             ]
         };
         assert_eq!(counts(&o), [12, 20, 8, 10, 20]);
-        assert_eq!(counts(&o.for_matches(150)), [6, 10, 8, 10, 10]);
-        assert_eq!(counts(&o.for_matches(100)), [4, 7, 8, 10, 7]);
-        assert_eq!(counts(&o.for_matches(1)), [1, 1, 8, 10, 1]);
+        assert_eq!(counts(&o.for_matches(150)), [6, 10, 8, 5, 10]);
+        assert_eq!(counts(&o.for_matches(100)), [4, 7, 8, 4, 7]);
+        assert_eq!(counts(&o.for_matches(1)), [1, 1, 8, 1, 1]);
+        let road_gate =
+            |s: &SeparateOptions| s.hypotheses.as_ref().and_then(|h| h.road_visible_min);
+        assert_eq!(road_gate(&o), None);
+        assert_eq!(road_gate(&o.for_matches(100)), Some(10));
+        assert_eq!(road_gate(&o.for_matches(1)), Some(10));
         let mut back = o.for_matches(100).into_owned();
         back.ground_admit_min = 12;
         back.memory_vote_min = 20;
         if let Some(h) = back.hypotheses.as_mut() {
+            h.min_matches = 10;
             h.track_min_labelled = 20;
+            h.road_visible_min = None;
         }
         assert_eq!(back, o, "nothing else changes");
     }
