@@ -495,9 +495,9 @@ impl SeparateOptions {
     /// previous motion re-solved on its support where that prediction's own road score beats
     /// the choice's and every alternative's (`hypotheses.predict_by_road = 0.00873`;
     /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). Since the
-    /// thirty-fifth session the ground cue's and the memory's counts shrink in a frame with
-    /// fewer than 300 matches (`count_reference = 300`; docs/RESULTS.md §9, thirty-fifth
-    /// session, scale49). A
+    /// thirty-fifth session the ground cue's, the memory's and (since the thirty-sixth) the
+    /// road tests' counts shrink in a frame with fewer than 300 matches (`count_reference =
+    /// 300`; docs/RESULTS.md §9, thirty-fifth session, scale49, and thirty-sixth, scale50). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9

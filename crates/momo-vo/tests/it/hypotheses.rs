@@ -159,7 +159,7 @@ fn the_ground_cue_admits_the_static_motion_against_a_co_moving_bus() {
 /// choose.
 #[test]
 fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
-    use crate::support::rotation_errors;
+    use crate::support::{median, rotation_errors};
     use momo_sim::{SimConfig, simulate};
     let errors = |sim: &momo_sim::Simulation, toml: &str| {
         rotation_errors(
@@ -167,20 +167,18 @@ fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
             Config::from_toml_str(toml, "test").expect("valid config"),
         )
     };
-    let as_written = "[odometry.separate]\ncount_reference = 0\n";
-    let sim = simulate(&SimConfig {
-        frames: 60,
-        seed: 2,
-        matches_per_camera: 100,
-        ..SimConfig::moving_traffic()
-    })
-    .expect("simulation");
-    let above = |e: &[f64]| e.iter().filter(|x| **x > 1.0).count();
-    let median = |e: &[f64]| {
-        let mut s = e.to_vec();
-        s.sort_by(f64::total_cmp);
-        s[s.len() / 2]
+    let with_100_matches = |seed: u64, scene: SimConfig| {
+        simulate(&SimConfig {
+            frames: 60,
+            seed,
+            matches_per_camera: 100,
+            ..scene
+        })
+        .expect("simulation")
     };
+    let as_written = "[odometry.separate]\ncount_reference = 0\n";
+    let sim = with_100_matches(2, SimConfig::moving_traffic());
+    let above = |e: &[f64]| e.iter().filter(|x| **x > 1.0).count();
     let (written, scaled) = (errors(&sim, as_written), errors(&sim, ""));
     assert!(
         above(&written) >= 3,
@@ -194,13 +192,7 @@ fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
         median(&scaled),
         median(&written)
     );
-    let sim = simulate(&SimConfig {
-        frames: 60,
-        seed: 1,
-        matches_per_camera: 100,
-        ..SimConfig::clean_pinhole()
-    })
-    .expect("simulation");
+    let sim = with_100_matches(1, SimConfig::clean_pinhole());
     assert_eq!(
         errors(&sim, as_written),
         errors(&sim, ""),

@@ -142,9 +142,14 @@ pub fn rotation_errors(sim: &momo_sim::Simulation, config: momo_vo::Config) -> V
 /// The median frame-to-frame rotation error (deg) of the odometry with `config` over a
 /// simulated sequence (every frame pair after the first frame).
 pub fn median_rotation_error(sim: &momo_sim::Simulation, config: momo_vo::Config) -> f64 {
-    let mut errors = rotation_errors(sim, config);
-    errors.sort_by(f64::total_cmp);
-    errors[errors.len() / 2]
+    median(&rotation_errors(sim, config))
+}
+
+/// The median of `values` (the upper one of an even count).
+pub fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
 /// The sixteenth session's defaults as a configuration file, with `separate` (lines of
