@@ -952,6 +952,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # ground_admit_min, memory_vote_min and the hypotheses' min_matches and\n\
          # track_min_labelled scale with the frame's matches (rounded up, at least 1); the\n\
          # road guard's gate (whether the scene shows a road) keeps min_matches as written.\n\
+         # second_soft_prior (0: off): the second motion is solved under the frame prior's\n\
+         # learnt soft part (centre, sigmas) where a learnt centre of the residuals\n\
+         # second_soft_prior_residuals is more than that many model sigmas from 0.\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
@@ -1629,6 +1632,7 @@ mod partial_tests {
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
              ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
              ground_drop = 0.0\ncandidate_by_road = false\ncount_reference = 0\n\
+             second_soft_prior = 0.0\n\
              [odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )

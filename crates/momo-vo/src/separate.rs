@@ -363,6 +363,27 @@ pub struct SeparateOptions {
     /// the final B's digits everywhere; measured in docs/RESULTS.md ("Speed", twentieth session,
     /// rig34).
     pub candidate_subsample: usize,
+    /// The second motion B's solves keep the frame prior's learnt soft part where the learnt
+    /// centre is this many model sigmas (`T`) or more from the model's 0 (0: off). B is solved
+    /// without the frame's motion prior (it may be another object's motion): a soft model's
+    /// prior then falls back to its model centre 0 at the model's sigma. Where the odometry has
+    /// learnt that the vehicle's motion sits elsewhere (KITTI 08's slow start: the ground
+    /// truth's chord climbs by about 0.2 rad, 18 model sigmas, relative to a level body), every
+    /// B is pinned near climb 0, so no candidate reaches the static world's motion once a vehicle
+    /// holds the first motion. With `T > 0`, where any residual listed in
+    /// [`SeparateOptions::second_soft_prior_residuals`] has a learnt centre `|c_i| > T`
+    /// ([`MotionPrior::soft_center`], model sigma units), B's solves (its starts and, with
+    /// [`SeparateOptions::candidate_subsample`], its refit) take the frame prior's soft centre,
+    /// learnt sigmas, Cauchy scales and unit, and still no per-parameter or rotation-change prior
+    /// ([`second_motion_prior`]). The other candidates (the road's alternative, the static-label
+    /// motion, the predictions) stay without a prior. Off here; 1 in
+    /// [`SeparateOptions::competition_over_time`] (the default's separation, since the
+    /// thirty-eighth session); measured in docs/RESULTS.md §9 (thirty-eighth session, softb52).
+    pub second_soft_prior: f64,
+    /// The soft prior residuals whose learnt centre [`SeparateOptions::second_soft_prior`]
+    /// tests (indices into [`momo_core::Manifold::prior_residuals`]; `[1]`, the soft single
+    /// track's climb; an index the model does not have is never met).
+    pub second_soft_prior_residuals: Vec<usize>,
     /// The frame's match count (over all cameras) `N` at which the separation's evidence counts
     /// hold as written (0: always as written): in a frame with `n < N` matches,
     /// [`SeparateOptions::ground_admit_min`] (the ground cue's least road score, in image cells),
@@ -439,6 +460,8 @@ impl Default for SeparateOptions {
             candidate_by_road: false,
             candidate_forget_other: false,
             candidate_subsample: 0,
+            second_soft_prior: 0.0,
+            second_soft_prior_residuals: vec![1],
             count_reference: 0,
         }
     }
@@ -519,6 +542,7 @@ impl SeparateOptions {
             ground_admit_own_share: 0.05,
             ground_drop: 0.4,
             candidate_by_road: true,
+            second_soft_prior: 1.0,
             count_reference: 300,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
@@ -675,6 +699,11 @@ impl SeparateOptions {
         if (1..12).contains(&self.candidate_subsample) {
             return Err(
                 "odometry.separate.candidate_subsample must be 0 (off) or at least 12".into(),
+            );
+        }
+        if !(self.second_soft_prior.is_finite() && self.second_soft_prior >= 0.0) {
+            return Err(
+                "odometry.separate.second_soft_prior must be 0 (off) or a positive number".into(),
             );
         }
         if !(0.0..=1.0).contains(&self.memory_vote) {
@@ -897,6 +926,31 @@ fn implausibility(ctx: &SolveContext<'_>, params: &[f64]) -> Option<f64> {
     d.is_finite().then_some(d)
 }
 
+/// The motion prior of the second motion B's solves ([`SeparateOptions::second_soft_prior`]):
+/// the frame prior's learnt soft part (centre, learnt sigmas, Cauchy scales, unit; no
+/// per-parameter and no rotation-change prior) where a listed residual's learnt centre is more
+/// than `second_soft_prior` model sigmas from 0; `None` (B solved without a prior, as before
+/// the thirty-eighth session) where the option is off, the frame has no prior or no learnt
+/// centre, or every listed centre is within the threshold.
+pub fn second_motion_prior(
+    prior: Option<&MotionPrior>,
+    opts: &SeparateOptions,
+) -> Option<MotionPrior> {
+    let prior = prior?;
+    let far = opts
+        .second_soft_prior_residuals
+        .iter()
+        .filter_map(|&r| prior.soft_center.get(r))
+        .any(|c| c.abs() > opts.second_soft_prior);
+    (opts.second_soft_prior > 0.0 && far).then(|| MotionPrior {
+        soft_center: prior.soft_center.clone(),
+        soft_inv_scale: prior.soft_inv_scale.clone(),
+        soft_cauchy: prior.soft_cauchy.clone(),
+        scale: prior.scale,
+        ..MotionPrior::default()
+    })
+}
+
 fn count(mask: &[Vec<bool>]) -> usize {
     mask.iter().flatten().filter(|k| **k).count()
 }
@@ -944,6 +998,18 @@ impl SolveContext<'_> {
         loss: &dyn RobustLoss,
         prior: bool,
     ) -> Option<FrameSolution> {
+        let prior = if prior { self.motion_prior } else { None };
+        self.solve_with_prior(obs, init, loss, prior)
+    }
+
+    /// [`SolveContext::solve`] under the motion prior `prior` (`None`: none).
+    pub(crate) fn solve_with_prior(
+        &self,
+        obs: &FrameObservations,
+        init: &[f64],
+        loss: &dyn RobustLoss,
+        prior: Option<&MotionPrior>,
+    ) -> Option<FrameSolution> {
         let req = SolveRequest {
             rig: self.rig,
             observations: obs,
@@ -952,7 +1018,7 @@ impl SolveContext<'_> {
             initial: init,
             fixed: self.fixed,
             rotation_only: false,
-            motion_prior: if prior { self.motion_prior } else { None },
+            motion_prior: prior,
         };
         self.estimator.solve(&req).ok().filter(|s| {
             s.report.termination != Termination::NumericalFailure
@@ -1115,13 +1181,16 @@ fn separate_with(
         let sub = (opts.candidate_subsample > 0 && count(&rest_mask) > opts.candidate_subsample)
             .then(|| subset(obs, &spread_subsample(&rest_mask, opts.candidate_subsample)));
         let b_obs = sub.as_ref().unwrap_or(&rest);
+        // `second_soft_prior`: B's solves under the frame prior's learnt soft part, or none.
+        let b_prior = second_motion_prior(ctx.motion_prior, opts);
         // A B of the subsample re-solved on all of `rest` from its solution (the subsample's
         // solution where that fails); B itself without the subsample.
         let refit = |b: FrameSolution| -> FrameSolution {
             if sub.is_none() {
                 return b;
             }
-            cctx.solve(&rest, &b.params, ctx.loss, false).unwrap_or(b)
+            cctx.solve_with_prior(&rest, &b.params, ctx.loss, b_prior.as_ref())
+                .unwrap_or(b)
         };
         // B's support where it passes the tests.
         let tested = |b: &FrameSolution| -> Option<Vec<Vec<bool>>> {
@@ -1141,7 +1210,7 @@ fn separate_with(
                 .min_by(|x, y| x.1.total_cmp(&y.1))
                 .map(|(i, _)| i)
         {
-            let sol = cctx.solve(b_obs, &starts[i], ctx.loss, false);
+            let sol = cctx.solve_with_prior(b_obs, &starts[i], ctx.loss, b_prior.as_ref());
             // `candidate_screen`: a B far from being kept ends the search.
             let far = screen
                 && sol.as_ref().is_some_and(|b| {
@@ -1174,7 +1243,7 @@ fn separate_with(
             for (i, s) in starts.iter().enumerate() {
                 let sol = match &mut first_try {
                     Some((j, sol)) if *j == i => sol.take(),
-                    _ => cctx.solve(b_obs, s, ctx.loss, false),
+                    _ => cctx.solve_with_prior(b_obs, s, ctx.loss, b_prior.as_ref()),
                 };
                 sols.extend(sol);
             }
@@ -4380,6 +4449,60 @@ mod tests {
             }
             assert!(gap <= m.div_ceil(k), "{sizes:?} {k}: gap {gap}");
         }
+    }
+
+    /// `second_soft_prior`: B's prior is the frame prior's learnt soft part where a listed
+    /// residual's learnt centre is beyond the threshold, and no prior otherwise.
+    #[test]
+    fn second_motion_prior_keeps_the_learnt_soft_part_only_beyond_the_threshold() {
+        let level = MotionPrior {
+            center: vec![0.0; 6],
+            inv_sigma: vec![10.0; 6],
+            rotation_center: [0.001, 0.002, 0.003],
+            rotation_inv_sigma: 57.0,
+            soft_center: vec![3.0, 0.5],
+            soft_inv_scale: vec![1.0, 0.1],
+            soft_cauchy: vec![0.0, 5.0],
+            scale: 0.002,
+        };
+        let on = SeparateOptions::competition_over_time();
+        assert_eq!(on.second_soft_prior, 1.0);
+        assert_eq!(on.second_soft_prior_residuals, vec![1]);
+        // The climb's learnt centre (residual 1) is within 1 model sigma: no prior, although
+        // the side slip's (residual 0, not listed) is 3 sigmas out.
+        assert!(second_motion_prior(Some(&level), &on).is_none());
+        let climbing = MotionPrior {
+            soft_center: vec![0.2, -18.0],
+            ..level.clone()
+        };
+        let b = second_motion_prior(Some(&climbing), &on).expect("beyond the threshold");
+        assert_eq!(b.soft_center, climbing.soft_center);
+        assert_eq!(b.soft_inv_scale, climbing.soft_inv_scale);
+        assert_eq!(b.soft_cauchy, climbing.soft_cauchy);
+        assert_eq!(b.scale, climbing.scale);
+        // No per-parameter and no rotation-change prior: B may be another object's motion.
+        assert!(b.center.is_empty() && b.inv_sigma.is_empty() && b.rotation_inv_sigma == 0.0);
+        // Off, without a frame prior, without a learnt centre, or with no listed residual the
+        // model has: no prior, as before the option.
+        let off = SeparateOptions::default();
+        assert_eq!(off.second_soft_prior, 0.0);
+        assert!(second_motion_prior(Some(&climbing), &off).is_none());
+        assert!(second_motion_prior(None, &on).is_none());
+        let unlearnt = MotionPrior {
+            soft_center: Vec::new(),
+            ..climbing.clone()
+        };
+        assert!(second_motion_prior(Some(&unlearnt), &on).is_none());
+        let elsewhere = SeparateOptions {
+            second_soft_prior_residuals: vec![0, 7],
+            ..on.clone()
+        };
+        assert!(second_motion_prior(Some(&climbing), &elsewhere).is_none());
+        // Read from a config's section, and refused where negative or not finite.
+        let o: SeparateOptions = toml::from_str("second_soft_prior = 2.5").expect("toml");
+        assert!(o.validate().is_ok() && o.second_soft_prior == 2.5);
+        let bad: SeparateOptions = toml::from_str("second_soft_prior = -1.0").expect("toml");
+        assert!(bad.validate().unwrap_err().contains("second_soft_prior"));
     }
 
     /// `count_reference`: below the reference the four evidence counts shrink with the
