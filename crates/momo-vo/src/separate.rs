@@ -364,13 +364,13 @@ pub struct SeparateOptions {
     /// rig34).
     pub candidate_subsample: usize,
     /// The second motion B's solves keep the frame prior's learnt soft part where the learnt
-    /// centre is this many model sigmas (`T`) or more from the model's 0 (0: off). B is solved
+    /// centre is more than this many model sigmas (`T`) from the model's 0 (0: off). B is solved
     /// without the frame's motion prior (it may be another object's motion): a soft model's
     /// prior then falls back to its model centre 0 at the model's sigma. Where the odometry has
     /// learnt that the vehicle's motion sits elsewhere (KITTI 08's slow start: the ground
     /// truth's chord climbs by about 0.2 rad, 18 model sigmas, relative to a level body), every
-    /// B is pinned near climb 0, so no candidate reaches the static world's motion once a vehicle
-    /// holds the first motion. With `T > 0`, where any residual listed in
+    /// B is pinned near climb 0 (dev3 08 s46: no candidate within 0.5 deg of the static
+    /// matches' motion while a vehicle held the first motion). With `T > 0`, where any residual listed in
     /// [`SeparateOptions::second_soft_prior_residuals`] has a learnt centre `|c_i| > T`
     /// ([`MotionPrior::soft_center`], model sigma units), B's solves (its starts and, with
     /// [`SeparateOptions::candidate_subsample`], its refit) take the frame prior's soft centre,
@@ -4482,8 +4482,8 @@ mod tests {
         assert_eq!(b.scale, climbing.scale);
         // No per-parameter and no rotation-change prior: B may be another object's motion.
         assert!(b.center.is_empty() && b.inv_sigma.is_empty() && b.rotation_inv_sigma == 0.0);
-        // Off, without a frame prior, without a learnt centre, or with no listed residual the
-        // model has: no prior, as before the option.
+        // Off, without a frame prior, without a learnt centre, or where every listed residual
+        // is within the threshold (0: 0.2) or absent (7): no prior, as before the option.
         let off = SeparateOptions::default();
         assert_eq!(off.second_soft_prior, 0.0);
         assert!(second_motion_prior(Some(&climbing), &off).is_none());
