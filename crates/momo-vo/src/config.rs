@@ -955,6 +955,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # second_soft_prior (0: off): the second motion is solved under the frame prior's\n\
          # learnt soft part (centre, sigmas) where a learnt centre of the residuals\n\
          # second_soft_prior_residuals is more than that many model sigmas from 0.\n\
+         # yaw_votes (0: off): that many modes of the matches' one-point yaw votes (the\n\
+         # previous motion turned by -yaw_votes_range..yaw_votes_range in yaw_votes_step,\n\
+         # radians; informative matches only, yaw_votes_min votes) become alternatives.\n\
          # enabled = false: off. Fields this section omits keep the default's values; a\n\
          # [odometry.separate.hypotheses] section replaces the default's choice as a whole.",
     ),
@@ -1632,7 +1635,7 @@ mod partial_tests {
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_first = false\n\
              ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
              ground_drop = 0.0\ncandidate_by_road = false\ncount_reference = 0\n\
-             second_soft_prior = 0.0\n\
+             second_soft_prior = 0.0\nyaw_votes = 0\n\
              [odometry.separate.hypotheses]\nenabled = false\n",
             "b.toml",
         )

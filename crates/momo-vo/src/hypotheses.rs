@@ -252,6 +252,17 @@ pub struct HypothesesOptions {
     /// The replacement of an A whose yaw jumped from the recent frames' by an alternative that
     /// continues them ([`HypothesesOptions::yaw_history_frames`]).
     pub yaw_history_replace: bool,
+    /// The yaw history of [`HypothesesOptions::yaw_history_frames`] holds each frame's
+    /// *reported* motion (after the final stage and the driver's later choices:
+    /// `odometry.decide_by_road`, the previous-basin and competing-region rules; the odometry
+    /// replaces the last recorded yaw, [`HypothesisTracker::set_last_yaw`]) instead of the
+    /// separation's chosen motion. Where the separation keeps an A that follows a cut-in car
+    /// and the final stage (under the rotation prior) still reports the static world's motion,
+    /// the history otherwise carries the object's yaw into the next frame, and an A that stays
+    /// on the object does not jump from it. Off in `HypothesesOptions::default()` and in the
+    /// default configuration (`SeparateOptions::competition_over_time`); measured with
+    /// `odometry.separate.yaw_votes` in docs/RESULTS.md §9 (thirty-ninth session, votes53).
+    pub yaw_history_final: bool,
     /// The statistic of the recent tilts ([`HypothesesOptions::tilt_reference_frames`]):
     /// their median (`"median"`, default; `K = 1`: the previous frame's) or their minimum
     /// (`"minimum"`).
@@ -428,6 +439,7 @@ impl Default for HypothesesOptions {
             yaw_history_frames: 0,
             yaw_history_margin: 0.0,
             yaw_history_replace: false,
+            yaw_history_final: false,
             tilt_replace_roadless: false,
             tilt_weak_road_frames: 0,
             yaw_history_predict: 0.0,
@@ -1282,6 +1294,15 @@ impl HypothesisTracker {
         self.yaws.push_back(yaw);
         while self.yaws.len() > k {
             self.yaws.pop_front();
+        }
+    }
+
+    /// Replaces the last recorded yaw ([`HypothesisTracker::record_yaw`]) by `yaw`
+    /// ([`HypothesesOptions::yaw_history_final`]: the frame's reported motion's yaw); nothing
+    /// where no yaw is recorded or `yaw` is not finite.
+    pub fn set_last_yaw(&mut self, opts: &HypothesesOptions, yaw: f64) {
+        if yaw.is_finite() && self.yaws.pop_back().is_some() {
+            self.record_yaw(opts, yaw);
         }
     }
 

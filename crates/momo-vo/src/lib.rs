@@ -34,6 +34,7 @@ pub mod separate;
 mod stats;
 pub mod stereo_scale;
 pub mod trust;
+pub mod yaw_votes;
 
 pub use baseline::{FivePointBaseline, MotionDriver};
 pub use batch::{BatchError, FramePair, estimate_batch};

@@ -1871,6 +1871,20 @@ impl Odometry {
         // An estimated frame reports a finite covariance, or says that it has none
         // (`ill_conditioned`, infinite sigmas), report only: after the state above.
         flag_ill_conditioned(&mut diag);
+        // `separate.hypotheses.yaw_history_final`: the yaw history holds the reported motion.
+        if !standstill
+            && let Some(h) = self
+                .config
+                .odometry
+                .separate
+                .as_ref()
+                .filter(|s| s.enabled)
+                .and_then(|s| s.hypotheses())
+                .filter(|h| h.yaw_history_final)
+        {
+            let yaw = so3_log(&self.estimator.motion(&params).rotation).z;
+            self.hypotheses.set_last_yaw(h, yaw);
+        }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
@@ -2729,18 +2743,14 @@ impl Odometry {
     fn restart_points(&self, init: &[f64]) -> Vec<Vec<f64>> {
         let arc = self.estimator.arc_length_index().map_or(1.0, |i| init[i]);
         let mut starts = vec![self.estimator.initial_params(arc)];
-        let base = self.estimator.motion(init);
-        for &dy in &self.config.odometry.restart_yaw_offsets {
-            let (s, c) = dy.sin_cos();
-            let rz = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
-            let turned = Pose::new(rz * base.rotation, rz * base.translation);
-            if let Some(mut p) = self.estimator.params_from_motion(&turned) {
-                if let Some(i) = self.estimator.arc_length_index() {
-                    p[i] = arc; // keep the (possibly fixed) arc length
-                }
-                starts.push(p);
-            }
-        }
+        // The previous motion turned, its (possibly fixed) arc length kept.
+        starts.extend(
+            self.config
+                .odometry
+                .restart_yaw_offsets
+                .iter()
+                .filter_map(|&dy| crate::yaw_votes::turned(self.estimator.as_ref(), init, dy)),
+        );
         starts
     }
 

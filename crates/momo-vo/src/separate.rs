@@ -405,6 +405,36 @@ pub struct SeparateOptions {
     /// thirty-sixth); measured in docs/RESULTS.md §9 (thirty-fifth session, scale49, and
     /// thirty-sixth, scale50).
     pub count_reference: usize,
+    /// Candidates from the matches' yaw votes ([`crate::yaw_votes`]; 0: off, else the most
+    /// modes used): the previous frame's motion turned about the vehicle's vertical axis by
+    /// each offset `δ` of a grid ([`SeparateOptions::yaw_votes_range`],
+    /// [`SeparateOptions::yaw_votes_step`]); every match votes for the offset of its least
+    /// epipolar angle where that is below [`SeparateOptions::threshold`] and its angle varies
+    /// by more than [`SeparateOptions::yaw_votes_informative`] over the grid; the votes are
+    /// summed over ±2 grid steps. Each of the strongest modes with at least
+    /// [`SeparateOptions::yaw_votes_min`] votes (at least 5 steps from a stronger one kept, and
+    /// more than 3 steps from A's own yaw offset) gives one alternative: its turned motion
+    /// re-solved (robust loss, without the motion prior) on its support, kept where it is
+    /// *distinct* from A as C and M are (its own matches, outside A's support, at least a third
+    /// of `min_fraction`'s count, and its support at least that count). It then competes as every
+    /// alternative does. At the start of a turn behind a bus or a cut-in car the objects hold
+    /// most of the matches and the sequential fit B (on the matches outside A's support) lands
+    /// on them or between the motions; the static world's informative matches still vote
+    /// together, for a larger yaw. Solved only where an alternative could still be kept (the
+    /// same pre-tests as B's). 0 (off) in [`SeparateOptions::default`] and in
+    /// [`SeparateOptions::competition_over_time`] (the default's separation); measured in
+    /// docs/RESULTS.md §9 (thirty-ninth session, votes53).
+    pub yaw_votes: usize,
+    /// The grid's half-range (radians; 3 deg).
+    pub yaw_votes_range: f64,
+    /// The grid's step (radians; 0.1 deg).
+    pub yaw_votes_step: f64,
+    /// The least variation of a match's epipolar angle over the grid for it to vote (radians):
+    /// a match near the focus of expansion or on a far point fits every offset.
+    pub yaw_votes_informative: f64,
+    /// The least votes (summed over the window) of a mode; not scaled by
+    /// [`SeparateOptions::count_reference`].
+    pub yaw_votes_min: usize,
 }
 
 impl Default for SeparateOptions {
@@ -463,6 +493,11 @@ impl Default for SeparateOptions {
             second_soft_prior: 0.0,
             second_soft_prior_residuals: vec![1],
             count_reference: 0,
+            yaw_votes: 0,
+            yaw_votes_range: 3f64.to_radians(),
+            yaw_votes_step: 0.1f64.to_radians(),
+            yaw_votes_informative: 0.008,
+            yaw_votes_min: 12,
         }
     }
 }
@@ -704,6 +739,26 @@ impl SeparateOptions {
         if !(self.second_soft_prior.is_finite() && self.second_soft_prior >= 0.0) {
             return Err(
                 "odometry.separate.second_soft_prior must be 0 (off) or a positive number".into(),
+            );
+        }
+        if !(self.yaw_votes_range.is_finite()
+            && self.yaw_votes_range > 0.0
+            && self.yaw_votes_range <= std::f64::consts::FRAC_PI_2)
+        {
+            return Err("odometry.separate.yaw_votes_range must be in (0, pi/2] radians".into());
+        }
+        if !(self.yaw_votes_step.is_finite()
+            && self.yaw_votes_step > 0.0
+            && self.yaw_votes_range / self.yaw_votes_step <= 1000.0)
+        {
+            return Err(
+                "odometry.separate.yaw_votes_step must be positive, at least yaw_votes_range / 1000"
+                    .into(),
+            );
+        }
+        if !(self.yaw_votes_informative.is_finite() && self.yaw_votes_informative >= 0.0) {
+            return Err(
+                "odometry.separate.yaw_votes_informative must be a non-negative number".into(),
             );
         }
         if !(0.0..=1.0).contains(&self.memory_vote) {
@@ -1340,6 +1395,44 @@ fn separate_with(
             let sup_m = support(&m.params);
             if distinct(&sup_m, &chosen.1) {
                 alternatives.push((m, sup_m));
+            }
+        }
+    }
+    // V: the modes of the matches' yaw votes (`yaw_votes`), each turned motion re-solved on
+    // its support.
+    if opts.yaw_votes > 0
+        && admissible
+        && distinct_possible
+        && let Some(previous) = starts.first()
+    {
+        let vopts = crate::yaw_votes::YawVoteOptions {
+            range: opts.yaw_votes_range,
+            step: opts.yaw_votes_step,
+            informative: opts.yaw_votes_informative,
+            threshold,
+            window: 2,
+            min_votes: opts.yaw_votes_min,
+            separation: 5,
+        };
+        let (offsets, hist) =
+            crate::yaw_votes::votes(ctx.rig, ctx.estimator, obs, previous, None, &vopts);
+        // A's own yaw offset: a mode there is A.
+        let yaw_a = yaw_of(ctx, &chosen.0.params) - yaw_of(ctx, previous);
+        let modes = crate::yaw_votes::modes(&offsets, &hist, &vopts, |x| {
+            (x - yaw_a).abs() < 3.0 * vopts.step
+        });
+        for mode in modes.into_iter().take(opts.yaw_votes) {
+            let Some(start) = crate::yaw_votes::turned(ctx.estimator, previous, mode.offset) else {
+                continue;
+            };
+            let sup0 = support(&start);
+            if count(&sup0) >= 12
+                && let Some(v) = cctx.solve(&subset(obs, &sup0), &start, ctx.loss, false)
+            {
+                let sup_v = support(&v.params);
+                if distinct(&sup_v, &chosen.1) {
+                    alternatives.push((v, sup_v));
+                }
             }
         }
     }
@@ -4508,6 +4601,55 @@ mod tests {
     /// `count_reference`: below the reference the four evidence counts shrink with the
     /// frame's matches (rounded up, never below 1) and the two road-visibility gates do not;
     /// at or above it, or with the option off, the options are the same object, untouched.
+    /// `yaw_votes` and `yaw_history_final`: off in the default's separation and in the bare
+    /// one (measured in docs/RESULTS.md §9, thirty-ninth session, votes53); the grid's options
+    /// are checked.
+    #[test]
+    fn yaw_votes_options_default_and_validate() {
+        let default = SeparateOptions::competition_over_time();
+        assert_eq!(default.yaw_votes, 0);
+        assert!(default.hypotheses().is_some_and(|h| !h.yaw_history_final));
+        assert_eq!(SeparateOptions::default().yaw_votes, 0);
+        assert!(!HypothesesOptions::default().yaw_history_final);
+        let on = SeparateOptions {
+            yaw_votes: 2,
+            ..default
+        };
+        assert!(on.validate().is_ok());
+        for (bad, name) in [
+            (
+                SeparateOptions {
+                    yaw_votes_range: 0.0,
+                    ..on.clone()
+                },
+                "yaw_votes_range",
+            ),
+            (
+                SeparateOptions {
+                    yaw_votes_range: 2.0,
+                    ..on.clone()
+                },
+                "yaw_votes_range",
+            ),
+            (
+                SeparateOptions {
+                    yaw_votes_step: 1e-6,
+                    ..on.clone()
+                },
+                "yaw_votes_step",
+            ),
+            (
+                SeparateOptions {
+                    yaw_votes_informative: f64::NAN,
+                    ..on.clone()
+                },
+                "yaw_votes_informative",
+            ),
+        ] {
+            assert!(bad.validate().unwrap_err().contains(name), "{name}");
+        }
+    }
+
     #[test]
     fn count_thresholds_scale_with_the_frames_matches() {
         let bare = SeparateOptions::default();
