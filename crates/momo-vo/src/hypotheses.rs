@@ -259,9 +259,11 @@ pub struct HypothesesOptions {
     /// separation's chosen motion. Where the separation keeps an A that follows a cut-in car
     /// and the final stage (under the rotation prior) still reports the static world's motion,
     /// the history otherwise carries the object's yaw into the next frame, and an A that stays
-    /// on the object does not jump from it. Off in `HypothesesOptions::default()` and in the
-    /// default configuration (`SeparateOptions::competition_over_time`); measured with
-    /// `odometry.separate.yaw_votes` in docs/RESULTS.md §9 (thirty-ninth session, votes53).
+    /// on the object does not jump from it. Off in `HypothesesOptions::default()` (so a
+    /// written `[odometry.separate.hypotheses]` section gets false unless it sets it); on in the
+    /// default configuration (`SeparateOptions::competition_over_time`) since the thirty-ninth
+    /// session, with `odometry.separate.yaw_votes` (docs/RESULTS.md §9, thirty-ninth session,
+    /// votes53).
     pub yaw_history_final: bool,
     /// The statistic of the recent tilts ([`HypothesesOptions::tilt_reference_frames`]):
     /// their median (`"median"`, default; `K = 1`: the previous frame's) or their minimum

@@ -178,8 +178,13 @@ fn the_learnt_parallax_cap_leaves_near_mismatches_out_where_the_band_says_so() {
         c.seed = 23;
         c
     };
-    let off = run_on(cfg(), &format!("learnt_parallax_cap = 0.0\n{BEFORE_21}"));
-    let on = run_on(cfg(), BEFORE_21);
+    // Without the separation's yaw votes (the default since the thirty-ninth session): on this
+    // drive one of their alternatives is kept in frame 121, whose final stage then runs on 140
+    // of the ~210 static matches, and the learnt cap's later frames move with it (with the
+    // votes on: excess 1.073 without the cap, 1.067 with it).
+    let before = format!("{BEFORE_21}[odometry.separate]\nyaw_votes = 0\n");
+    let off = run_on(cfg(), &format!("learnt_parallax_cap = 0.0\n{before}"));
+    let on = run_on(cfg(), &before);
     let excess = |v: &[(f64, f64)]| v.iter().map(|x| x.0).sum::<f64>() / v.len() as f64;
     let err = |v: &[(f64, f64)]| median(v.iter().map(|x| x.1).collect());
     let (x_off, x_on) = (excess(&off), excess(&on));

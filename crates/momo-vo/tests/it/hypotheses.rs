@@ -156,7 +156,9 @@ fn the_ground_cue_admits_the_static_motion_against_a_co_moving_bus() {
 /// (`count_reference = 0`) the bus's frames 1, 2, 5, 46 and 50 are above 1 deg and the median
 /// error is 0.200 deg; scaled, none is (median 0.106 deg). On a static scene with 100 matches
 /// the estimates are the same: the counts act only where the separation has a second motion to
-/// choose.
+/// choose. Both runs without the yaw votes (`yaw_votes = 0`; the default since the
+/// thirty-ninth session, measured after this test): with them frame 46 of the scaled run is at
+/// 1.09 deg (a few-match lock-in moved; docs/RESULTS.md §9, thirty-ninth session, votes53).
 #[test]
 fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
     use crate::support::{median, rotation_errors};
@@ -176,10 +178,11 @@ fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
         })
         .expect("simulation")
     };
-    let as_written = "[odometry.separate]\ncount_reference = 0\n";
+    let as_written = "[odometry.separate]\ncount_reference = 0\nyaw_votes = 0\n";
+    let scaled_counts = "[odometry.separate]\nyaw_votes = 0\n";
     let sim = with_100_matches(2, SimConfig::moving_traffic());
     let above = |e: &[f64]| e.iter().filter(|x| **x > 1.0).count();
-    let (written, scaled) = (errors(&sim, as_written), errors(&sim, ""));
+    let (written, scaled) = (errors(&sim, as_written), errors(&sim, scaled_counts));
     assert!(
         above(&written) >= 3,
         "with the counts as written the bus frames are above 1 deg: {}",
@@ -195,7 +198,7 @@ fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
     let sim = with_100_matches(1, SimConfig::clean_pinhole());
     assert_eq!(
         errors(&sim, as_written),
-        errors(&sim, ""),
+        errors(&sim, scaled_counts),
         "a static scene is not changed"
     );
 }

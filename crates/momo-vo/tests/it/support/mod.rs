@@ -155,13 +155,16 @@ pub fn median(values: &[f64]) -> f64 {
 /// The sixteenth session's defaults as a configuration file, with `separate` (lines of
 /// `[odometry.separate]`, each ending in a newline) added: the seventeenth session's default
 /// changes (`soft_prior_conflict_widening`, `ground_drop`, `ground_admit_own_share`,
-/// `hypotheses.track_decay`) off, for tests whose claim was measured against those defaults.
+/// `hypotheses.track_decay`) and the thirty-ninth's (`yaw_votes`; `hypotheses.yaw_history_final`
+/// is off in a written hypotheses section) off, for tests whose claim was measured against
+/// those defaults.
 pub fn sixteenth_session_defaults(separate: &str) -> String {
     let mut s =
         String::from("[odometry]\nsoft_prior_conflict_widening = 0.0\n[odometry.separate]\n");
     for (key, line) in [
         ("ground_drop", "ground_drop = 0.0\n"),
         ("ground_admit_own_share", "ground_admit_own_share = 0.0\n"),
+        ("yaw_votes", "yaw_votes = 0\n"),
     ] {
         if !separate.contains(key) {
             s.push_str(line);
