@@ -1301,7 +1301,9 @@ impl HypothesisTracker {
 
     /// Replaces the last recorded yaw ([`HypothesisTracker::record_yaw`]) by `yaw`
     /// ([`HypothesesOptions::yaw_history_final`]: the frame's reported motion's yaw); nothing
-    /// where no yaw is recorded or `yaw` is not finite.
+    /// where no yaw is recorded or `yaw` is not finite. In a frame where the separation recorded
+    /// no yaw of its own the previous frame's entry is the one replaced: with
+    /// `yaw_history_frames = 1` (the default) that is the same as recording the frame's yaw.
     pub fn set_last_yaw(&mut self, opts: &HypothesesOptions, yaw: f64) {
         if yaw.is_finite() && self.yaws.pop_back().is_some() {
             self.record_yaw(opts, yaw);
