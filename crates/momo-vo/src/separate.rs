@@ -421,10 +421,11 @@ pub struct SeparateOptions {
     /// most of the matches and the sequential fit B (on the matches outside A's support) lands
     /// on them or between the motions; the static world's informative matches still vote
     /// together, for a larger yaw. Solved only where an alternative could still be kept (the
-    /// same pre-tests as B's). 0 (off) in [`SeparateOptions::default`], 2 in
-    /// [`SeparateOptions::competition_over_time`] (the default's separation, since the
-    /// thirty-ninth session, with [`HypothesesOptions::yaw_history_final`]); measured in
-    /// docs/RESULTS.md §9 (thirty-ninth session, votes53).
+    /// same pre-tests as B's). 0 (off) in [`SeparateOptions::default`], 3 in
+    /// [`SeparateOptions::competition_over_time`] (the default's separation: 2 since the
+    /// thirty-ninth session, with [`HypothesesOptions::yaw_history_final`], 3 since the
+    /// fortieth, where a turn's static mode was the third strongest); measured in
+    /// docs/RESULTS.md §9 (thirty-ninth session, votes53; fortieth, votes55).
     pub yaw_votes: usize,
     /// The grid's half-range (radians; 3 deg).
     pub yaw_votes_range: f64,
@@ -580,7 +581,7 @@ impl SeparateOptions {
             candidate_by_road: true,
             second_soft_prior: 1.0,
             count_reference: 300,
-            yaw_votes: 2,
+            yaw_votes: 3,
             hypotheses: Some(HypothesesOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
@@ -4609,12 +4610,12 @@ mod tests {
     /// `count_reference`: below the reference the four evidence counts shrink with the
     /// frame's matches (rounded up, never below 1) and the two road-visibility gates do not;
     /// at or above it, or with the option off, the options are the same object, untouched.
-    /// `yaw_votes` and `yaw_history_final`: on in the default's separation (2 modes), off in
+    /// `yaw_votes` and `yaw_history_final`: on in the default's separation (3 modes), off in
     /// the bare one; the grid's options are checked.
     #[test]
     fn yaw_votes_options_default_and_validate() {
         let on = SeparateOptions::competition_over_time();
-        assert_eq!(on.yaw_votes, 2);
+        assert_eq!(on.yaw_votes, 3);
         assert!(on.hypotheses().is_some_and(|h| h.yaw_history_final));
         assert!(on.validate().is_ok());
         assert_eq!(SeparateOptions::default().yaw_votes, 0);
