@@ -21,6 +21,9 @@
 #                  visible, 10th percentile 42; 142 where none are)
 #        few100    the same with 100 matches (static: median 33 where objects are visible, 95
 #                  where none are)
+#        few250    the same with 250 matches (added in the 41st session)
+#        many400   the same with 400 matches: denser matching than the scenario's 300 (added in
+#                  the 41st session)
 #        few150h, few100h  few150 / few100 on seeds 6-10 (added in the 35th session; keep for
 #                  confirmation: choose nothing on them)
 #        static    clean_pinhole and outliers along KITTI 00-10, seeds 1-3
@@ -135,8 +138,9 @@ list_set() {
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
         done; done ;;
-    few200 | few150 | few100 | few150h | few100h)
+    few250 | few200 | few150 | few100 | few150h | few100h | many400)
         n="${s#few}"
+        n="${n#many}"
         seeds="1 2 3 4 5"
         [[ "$n" == *h ]] && n="${n%h}" && seeds="6 7 8 9 10"
         for t in $trajs drive; do for seed in $seeds; do

@@ -2591,7 +2591,7 @@ impl Odometry {
 
     /// The final stage's matches after the support's neighbourhood test
     /// (`odometry.final_fit.neighbour_share`, [`crate::final_fit::neighbour_kept`]) on a rig of
-    /// several cameras: the matches `next` hands the stage less the support's members whose
+    /// at least `neighbour_min_cameras` cameras (by default several): the matches `next` hands the stage less the support's members whose
     /// neighbours are mostly outside it (at `from`), as [`crate::separate::NextStage::FinalFitOn`];
     /// `None` where the test is off, leaves nothing out or would leave fewer than half.
     fn neighbour_stage(
@@ -2604,7 +2604,10 @@ impl Odometry {
         competing: bool,
     ) -> Option<crate::separate::NextStage> {
         let opts = &self.config.odometry.final_fit;
-        if !(opts.enabled && opts.neighbour_share > 0.0 && self.rig.len() > 1) {
+        if !(opts.enabled
+            && opts.neighbour_share > 0.0
+            && self.rig.len() >= opts.neighbour_min_cameras)
+        {
             return None;
         }
         let given: Vec<Vec<bool>> = match next {
