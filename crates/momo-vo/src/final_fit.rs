@@ -235,6 +235,15 @@ pub struct FinalFitOptions {
     /// or within 3 sigma), so not the default (docs/RESULTS.md §9, forty-first session,
     /// nbmono56).
     pub neighbour_min_cameras: usize,
+    /// Where the neighbourhood test changed the final stage's matches, the stage runs on the
+    /// matches it was given too, and the frame keeps that run where the two motions' rotations
+    /// differ by more than this angle (radians; 0: off, the default). A test that took the
+    /// static anchor of a region out lets a car's motion win the reduced stage; the guard
+    /// keeps most of the test's gain on one camera (forty-first session, nbmono56:
+    /// `neighbour_min_cameras = 1` with 0.001745, 0.1 deg: frames above 1 deg 16 -> 4 on the
+    /// six mono 300-match sets, median efficiency 1.075-1.18; docs/RESULTS.md §9). Costs a
+    /// second solve of the stage in every frame the test changed.
+    pub neighbour_guard: f64,
     /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0.5 by default since the
     /// twenty-ninth session, 0: off): after the final stage, a match that the separation's mask (or the neighbourhood test) did not
     /// hand to it is added where, at the stage's final motion, its residual is within
@@ -306,6 +315,7 @@ impl Default for FinalFitOptions {
             neighbour_share: 0.375,
             neighbour_count: 8,
             neighbour_min_cameras: 2,
+            neighbour_guard: 0.0,
             // Since the twenty-ninth session (docs/RESULTS.md §9, twenty-ninth session,
             // readmit43 and lead): no effect on a single camera.
             readmit_share: 0.5,
@@ -441,6 +451,12 @@ impl FinalFitOptions {
         }
         if self.neighbour_min_cameras == 0 {
             return Err("odometry.final_fit.neighbour_min_cameras must be at least 1".into());
+        }
+        if !(self.neighbour_guard.is_finite() && self.neighbour_guard >= 0.0) {
+            return Err(format!(
+                "odometry.final_fit.neighbour_guard must be a finite angle >= 0, found {}",
+                self.neighbour_guard
+            ));
         }
         if !(0.0..=1.0).contains(&self.readmit_share) {
             return Err(format!(
@@ -2294,6 +2310,14 @@ mod tests {
                 .contains("neighbour_min_cameras")
         );
         assert_eq!(FinalFitOptions::default().neighbour_min_cameras, 2);
+        for guard in [-0.1, f64::NAN, f64::INFINITY] {
+            let bad = FinalFitOptions {
+                neighbour_guard: guard,
+                ..FinalFitOptions::default()
+            };
+            assert!(bad.validate().unwrap_err().contains("neighbour_guard"));
+        }
+        assert_eq!(FinalFitOptions::default().neighbour_guard, 0.0);
         let one: FinalFitOptions = toml::from_str("neighbour_min_cameras = 1").unwrap();
         assert_eq!((one.neighbour_min_cameras, one.neighbour_share), (1, 0.375));
         for share in [-0.1, 1.5, f64::NAN] {

@@ -1455,17 +1455,20 @@ impl Odometry {
                     let first = self.config.odometry.final_fit.enabled.then(|| sol.clone());
                     // The first stage's solution for the re-admission (`final_fit.readmit_share`).
                     let before_stage = self.readmit_on().then(|| sol.clone());
-                    // The support's neighbourhood test (`final_fit.neighbour_share`).
-                    let next_stage = self
-                        .neighbour_stage(
-                            obs,
-                            &next_stage,
-                            &sol.params,
-                            &fixed,
-                            diag.scale,
-                            competing,
-                        )
-                        .unwrap_or(next_stage);
+                    // The support's neighbourhood test (`final_fit.neighbour_share`); with
+                    // `neighbour_guard`, the matches it was given and the stage's start.
+                    let reduced = self.neighbour_stage(
+                        obs,
+                        &next_stage,
+                        &sol.params,
+                        &fixed,
+                        diag.scale,
+                        competing,
+                    );
+                    let guard = (reduced.is_some()
+                        && self.config.odometry.final_fit.neighbour_guard > 0.0)
+                        .then(|| (next_stage.clone(), sol.clone()));
+                    let next_stage = reduced.unwrap_or(next_stage);
                     let (mut tally, mut support);
                     (sol, tally, support) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
@@ -1499,6 +1502,19 @@ impl Odometry {
                             )
                         }
                     };
+                    // `neighbour_guard`: the stage on the matches the test was given, where the
+                    // reduced stage's rotation moved away from it.
+                    if let Some((given, start)) = guard {
+                        let (alt, alt_tally, alt_support) =
+                            self.guard_stage(obs, &given, start, &fixed, diag.scale, competing);
+                        let ra = self.estimator.motion(&alt.params).rotation;
+                        let rb = self.estimator.motion(&sol.params).rotation;
+                        if so3_log(&(ra.transpose() * rb)).norm()
+                            > self.config.odometry.final_fit.neighbour_guard
+                        {
+                            (sol, tally, support) = (alt, alt_tally, alt_support);
+                        }
+                    }
                     // Re-admission at the final motion (`final_fit.readmit_share`).
                     if let Some(before) = before_stage
                         && let Some(again) = self.readmit_stage(
@@ -2633,6 +2649,32 @@ impl Odometry {
         let (before, after) = (n(&given), n(&reduced));
         (after < before && 2 * after >= before)
             .then_some(crate::separate::NextStage::FinalFitOn(reduced))
+    }
+
+    /// The final stage on the matches `given` handed the neighbourhood test, from `start`
+    /// (`odometry.final_fit.neighbour_guard`): its solution, parallax tally and support among
+    /// all the frame's matches.
+    fn guard_stage(
+        &self,
+        obs: &FrameObservations,
+        given: &crate::separate::NextStage,
+        start: FrameSolution,
+        fixed: &[bool],
+        scale: ScaleSource,
+        competing: bool,
+    ) -> (
+        FrameSolution,
+        Option<crate::final_fit::ParallaxTally>,
+        crate::final_fit::SupportMask,
+    ) {
+        let mask: Vec<Vec<bool>> = match given {
+            crate::separate::NextStage::FinalFitOn(m) => m.clone(),
+            _ => obs.per_camera.iter().map(|m| vec![true; m.len()]).collect(),
+        };
+        let chosen = crate::separate::subset(obs, &mask);
+        let (sol, tally, kept) =
+            self.final_fit(&chosen, start, fixed, scale, competing, None, None);
+        (sol, tally, kept.map(|k| superset_mask(&mask, &k)))
     }
 
     /// Whether the re-admission (`odometry.final_fit.readmit_share`) is on: a rig of several

@@ -557,6 +557,29 @@ fn the_neighbourhood_test_leaves_object_matches_out_of_a_rigs_support() {
 }
 
 #[test]
+fn the_neighbourhood_guard_keeps_the_given_stage_where_the_rotation_moved() {
+    // `final_fit.neighbour_guard`: an angle no rotation reaches changes nothing, bit for bit;
+    // a tiny one takes the stage on the given matches wherever the test moved the rotation at
+    // all, so the frames' motions change and more object matches stay in the support.
+    let mut cfg = SimConfig::scenario("moving_traffic").expect("a listed scenario");
+    cfg.frames = 31;
+    cfg.seed = 3;
+    let on = support_by_label(&cfg, "neighbour_min_cameras = 1");
+    let wide = support_by_label(&cfg, "neighbour_min_cameras = 1\nneighbour_guard = 3.0");
+    let tight = support_by_label(&cfg, "neighbour_min_cameras = 1\nneighbour_guard = 1e-12");
+    eprintln!(
+        "object matches in the support: test {}, guard 3 rad {}, guard 1e-12 rad {}",
+        on.1, wide.1, tight.1
+    );
+    assert_eq!(on.2, wide.2, "a guard no rotation reaches changes nothing");
+    assert_ne!(
+        on.2, tight.2,
+        "a tiny guard keeps the given stage somewhere"
+    );
+    assert!(tight.1 > on.1, "objects: {} guarded, {} not", tight.1, on.1);
+}
+
+#[test]
 fn the_neighbourhood_test_on_one_camera_with_neighbour_min_cameras_1() {
     // `final_fit.neighbour_min_cameras = 1` applies the test to a single camera: on the mono
     // moving-traffic scenario (built-in drive, 30 frame pairs, seed 3; measured: objects 357 ->
