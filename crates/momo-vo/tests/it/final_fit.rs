@@ -516,6 +516,27 @@ fn support_by_label(cfg: &SimConfig, final_fit: &str) -> (usize, usize, Vec<Vec<
     (statics, objects, bits)
 }
 
+/// The neighbourhood test's effect on the support (`on` against `off`, as
+/// [`support_by_label`] counts them): fewer than 0.8 x the object matches, more than 0.8 x the
+/// static ones.
+fn assert_objects_leave_and_static_stay(
+    on: &(usize, usize, Vec<Vec<u64>>),
+    off: &(usize, usize, Vec<Vec<u64>>),
+) {
+    assert!(
+        (on.1 as f64) < 0.8 * off.1 as f64,
+        "objects in the support: {} with the test, {} without",
+        on.1,
+        off.1
+    );
+    assert!(
+        (on.0 as f64) > 0.8 * off.0 as f64,
+        "static matches in the support: {} with the test, {} without",
+        on.0,
+        off.0
+    );
+}
+
 #[test]
 fn the_neighbourhood_test_leaves_object_matches_out_of_a_rigs_support() {
     // `final_fit.neighbour_share = 0.375` on the four-camera rig with traffic all around
@@ -536,18 +557,7 @@ fn the_neighbourhood_test_leaves_object_matches_out_of_a_rigs_support() {
         "static / object matches in the support: off {} / {}, on {} / {}",
         off.0, off.1, on.0, on.1
     );
-    assert!(
-        (on.1 as f64) < 0.8 * off.1 as f64,
-        "objects in the support: {} with the test, {} without",
-        on.1,
-        off.1
-    );
-    assert!(
-        (on.0 as f64) > 0.8 * off.0 as f64,
-        "static matches in the support: {} with the test, {} without",
-        on.0,
-        off.0
-    );
+    assert_objects_leave_and_static_stay(&on, &off);
     let mut mono = SimConfig::outliers();
     mono.frames = 31;
     mono.seed = 3;
@@ -600,18 +610,7 @@ fn the_neighbourhood_test_on_one_camera_with_neighbour_min_cameras_1() {
         off.2, default.2,
         "one camera by default: the motions are the same"
     );
-    assert!(
-        (on.1 as f64) < 0.8 * off.1 as f64,
-        "objects in the support: {} with the test, {} without",
-        on.1,
-        off.1
-    );
-    assert!(
-        (on.0 as f64) > 0.8 * off.0 as f64,
-        "static matches in the support: {} with the test, {} without",
-        on.0,
-        off.0
-    );
+    assert_objects_leave_and_static_stay(&on, &off);
 }
 
 #[test]
