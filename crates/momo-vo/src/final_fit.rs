@@ -229,7 +229,7 @@ pub struct FinalFitOptions {
     pub neighbour_count: usize,
     /// The fewest cameras a rig needs for `neighbour_share` to apply (default 2: a rig of
     /// several cameras; at least 1). 1 applies it to a single camera too: on the mono
-    /// moving-traffic family it takes the median efficiency from 1.24-1.35 to 1.04-1.13 per set
+    /// moving-traffic family it takes the median efficiency from 1.23-1.35 to 1.04-1.13 per set
     /// (about 97 % of the sequences better), but lets a car's motion hold on for a few more
     /// frames (frames above 1 deg 2 -> 16 over 600 sequences, 10 of them in one; all flagged
     /// or within 3 sigma), so not the default (docs/RESULTS.md §9, forty-first session,
@@ -242,7 +242,8 @@ pub struct FinalFitOptions {
     /// keeps most of the test's gain on one camera (forty-first session, nbmono56:
     /// `neighbour_min_cameras = 1` with 0.001745, 0.1 deg: frames above 1 deg 16 -> 4 on the
     /// six mono 300-match sets, median efficiency 1.075-1.18; docs/RESULTS.md §9). Costs a
-    /// second solve of the stage in every frame the test changed.
+    /// second solve of the stage in every frame the test changed. Where it keeps that run, the
+    /// given matches are the stage's for the re-admission too (on a rig; not measured there).
     pub neighbour_guard: f64,
     /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0.5 by default since the
     /// twenty-ninth session, 0: off): after the final stage, a match that the separation's mask (or the neighbourhood test) did not

@@ -1468,7 +1468,7 @@ impl Odometry {
                     let guard = (reduced.is_some()
                         && self.config.odometry.final_fit.neighbour_guard > 0.0)
                         .then(|| (next_stage.clone(), sol.clone()));
-                    let next_stage = reduced.unwrap_or(next_stage);
+                    let mut next_stage = reduced.unwrap_or(next_stage);
                     let (mut tally, mut support);
                     (sol, tally, support) = match &next_stage {
                         crate::separate::NextStage::FinalFitOn(mask) => {
@@ -1503,7 +1503,8 @@ impl Odometry {
                         }
                     };
                     // `neighbour_guard`: the stage on the matches the test was given, where the
-                    // reduced stage's rotation moved away from it.
+                    // reduced stage's rotation moved away from it (then the given matches are
+                    // the stage's, for the re-admission too).
                     if let Some((given, start)) = guard {
                         let (alt, alt_tally, alt_support) =
                             self.guard_stage(obs, &given, start, &fixed, diag.scale, competing);
@@ -1513,6 +1514,7 @@ impl Odometry {
                             > self.config.odometry.final_fit.neighbour_guard
                         {
                             (sol, tally, support) = (alt, alt_tally, alt_support);
+                            next_stage = given;
                         }
                     }
                     // Re-admission at the final motion (`final_fit.readmit_share`).
@@ -2607,8 +2609,9 @@ impl Odometry {
 
     /// The final stage's matches after the support's neighbourhood test
     /// (`odometry.final_fit.neighbour_share`, [`crate::final_fit::neighbour_kept`]) on a rig of
-    /// at least `neighbour_min_cameras` cameras (by default several): the matches `next` hands the stage less the support's members whose
-    /// neighbours are mostly outside it (at `from`), as [`crate::separate::NextStage::FinalFitOn`];
+    /// at least `neighbour_min_cameras` cameras (by default several): the matches `next` hands
+    /// the stage less the support's members whose neighbours are mostly outside it (at `from`),
+    /// as [`crate::separate::NextStage::FinalFitOn`];
     /// `None` where the test is off, leaves nothing out or would leave fewer than half.
     fn neighbour_stage(
         &self,
