@@ -2629,13 +2629,7 @@ impl Odometry {
         {
             return None;
         }
-        let given: Vec<Vec<bool>> = match next {
-            crate::separate::NextStage::FinalFitOn(m) => m.clone(),
-            crate::separate::NextStage::FinalFit => {
-                obs.per_camera.iter().map(|m| vec![true; m.len()]).collect()
-            }
-            crate::separate::NextStage::Done => return None,
-        };
+        let given = next.given(obs)?;
         let fixed = self.stage_fixed(fixed, scale);
         let ctx = self.final_fit_context(&fixed, competing);
         let chosen = crate::separate::subset(obs, &given);
@@ -2656,7 +2650,8 @@ impl Odometry {
 
     /// The final stage on the matches `given` handed the neighbourhood test, from `start`
     /// (`odometry.final_fit.neighbour_guard`): its solution, parallax tally and support among
-    /// all the frame's matches.
+    /// all the frame's matches. The stage computes its match constants and first support
+    /// itself (no cached ones, as in [`Self::previous_basin`]): those caches save work only.
     fn guard_stage(
         &self,
         obs: &FrameObservations,
@@ -2670,10 +2665,7 @@ impl Odometry {
         Option<crate::final_fit::ParallaxTally>,
         crate::final_fit::SupportMask,
     ) {
-        let mask: Vec<Vec<bool>> = match given {
-            crate::separate::NextStage::FinalFitOn(m) => m.clone(),
-            _ => obs.per_camera.iter().map(|m| vec![true; m.len()]).collect(),
-        };
+        let mask = given.given(obs).unwrap_or_default();
         let chosen = crate::separate::subset(obs, &mask);
         let (sol, tally, kept) =
             self.final_fit(&chosen, start, fixed, scale, competing, None, None);

@@ -889,6 +889,19 @@ pub enum NextStage {
     FinalFitOn(Vec<Vec<bool>>),
 }
 
+impl NextStage {
+    /// The matches the final stage is handed (per camera, per match of `obs`): all of them
+    /// for [`NextStage::FinalFit`], the mask for [`NextStage::FinalFitOn`]; None for
+    /// [`NextStage::Done`].
+    pub fn given(&self, obs: &FrameObservations) -> Option<Vec<Vec<bool>>> {
+        match self {
+            Self::Done => None,
+            Self::FinalFit => Some(obs.per_camera.iter().map(|m| vec![true; m.len()]).collect()),
+            Self::FinalFitOn(m) => Some(m.clone()),
+        }
+    }
+}
+
 /// A candidate motion and its support (per camera, per match).
 type Candidate = (FrameSolution, Vec<Vec<bool>>);
 
