@@ -44,6 +44,11 @@ pub const MAD_TO_SIGMA: f64 = 1.482_602_218_505_602;
 /// Fewest matches in the support for a refit (fewer: the first stage's solution stays).
 pub const MIN_SUPPORT: usize = 8;
 
+/// The default of [`FinalFitOptions::neighbour_guard`]: 0.1 deg in radians (forty-first
+/// session, nbmono56: chosen on four sequences among 0.1, 0.2 and 0.4 deg; default since the
+/// forty-second).
+pub const NEIGHBOUR_GUARD_DEFAULT: f64 = 0.001_745_33;
+
 /// Options of the final stage (`[odometry.final_fit]` in the TOML config).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -215,35 +220,40 @@ pub struct FinalFitOptions {
     /// twenty-first session). The static scenes along KITTI are never flagged. Default true
     /// since the twenty-first session (false before).
     pub learnt_never_after_flag: bool,
-    /// The support's neighbourhood test on a rig of several cameras ([`neighbour_kept`]; 0:
-    /// off; default 0.375 since the twenty-eighth session): a match of the support whose `neighbour_count` nearest matches of
+    /// The support's neighbourhood test ([`neighbour_kept`]; 0: off; default 0.375 since the
+    /// twenty-eighth session on a rig of several cameras, since the forty-second on one camera
+    /// too): a match of the support whose `neighbour_count` nearest matches of
     /// the same camera (first-image pixels, all the frame's matches) lie in the support less
     /// often than this share is left out, and the stage runs again on the rest. An object's
     /// matches cluster in the image; those whose flow happens to fit the static epipolar
     /// geometry pass the residual test while their neighbours on the same object do not
     /// (docs/RESULTS.md §9, twenty-eighth session, support42). Not applied where fewer than
     /// half of the matches the stage was given would remain, nor on a rig of fewer than
-    /// `neighbour_min_cameras` cameras (by default: one camera, no effect).
+    /// `neighbour_min_cameras` cameras (by default 1: every rig).
     pub neighbour_share: f64,
     /// The neighbours counted by `neighbour_share` (default 8).
     pub neighbour_count: usize,
-    /// The fewest cameras a rig needs for `neighbour_share` to apply (default 2: a rig of
-    /// several cameras; at least 1). 1 applies it to a single camera too: on the mono
-    /// moving-traffic family it takes the median efficiency from 1.23-1.35 to 1.04-1.13 per set
-    /// (about 97 % of the sequences better), but lets a car's motion hold on for a few more
-    /// frames (frames above 1 deg 2 -> 16 over 600 sequences, 10 of them in one; all flagged
-    /// or within 3 sigma), so not the default (docs/RESULTS.md §9, forty-first session,
-    /// nbmono56).
+    /// The fewest cameras a rig needs for `neighbour_share` to apply (at least 1; default 1
+    /// since the forty-second session, 2 before: a rig of several cameras). On one camera the
+    /// test alone takes the mono moving-traffic family's median efficiency from 1.23-1.35 to
+    /// 1.04-1.13 per set, but lets a car's motion hold on for a few more frames (frames above
+    /// 1 deg 2 -> 16 over 600 sequences, 10 of them in one; forty-first session, nbmono56);
+    /// with `neighbour_guard` at its default the frames above 1 deg are as many as without the
+    /// test over 840 sequences (5 and 5) at median efficiencies 1.06-1.18 (docs/RESULTS.md §9,
+    /// forty-second session, nbdef57).
     pub neighbour_min_cameras: usize,
     /// Where the neighbourhood test changed the final stage's matches, the stage runs on the
     /// matches it was given too, and the frame keeps that run where the two motions' rotations
-    /// differ by more than this angle (radians; 0: off, the default). A test that took the
+    /// differ by more than this angle (radians; 0: off; default 0.001745, 0.1 deg, since the
+    /// forty-second session, 0 before). A test that took the
     /// static anchor of a region out lets a car's motion win the reduced stage; the guard
     /// keeps most of the test's gain on one camera (forty-first session, nbmono56:
     /// `neighbour_min_cameras = 1` with 0.001745, 0.1 deg: frames above 1 deg 16 -> 4 on the
     /// six mono 300-match sets, median efficiency 1.075-1.18; docs/RESULTS.md §9). Costs a
     /// second solve of the stage in every frame the test changed. Where it keeps that run, the
-    /// given matches are the stage's for the re-admission too (on a rig; not measured there).
+    /// given matches are the stage's for the re-admission too. On the surround-rig traffic
+    /// sets (180 sequences) it changes the mean efficiency by at most 0.0007 and no frame
+    /// above 1 deg (forty-second session, nbdef57).
     pub neighbour_guard: f64,
     /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0.5 by default since the
     /// twenty-ninth session, 0: off): after the final stage, a match that the separation's mask (or the neighbourhood test) did not
@@ -315,8 +325,8 @@ impl Default for FinalFitOptions {
             // support42 and lead): no effect on a single camera.
             neighbour_share: 0.375,
             neighbour_count: 8,
-            neighbour_min_cameras: 2,
-            neighbour_guard: 0.0,
+            neighbour_min_cameras: 1,
+            neighbour_guard: NEIGHBOUR_GUARD_DEFAULT,
             // Since the twenty-ninth session (docs/RESULTS.md §9, twenty-ninth session,
             // readmit43 and lead): no effect on a single camera.
             readmit_share: 0.5,
@@ -2310,7 +2320,7 @@ mod tests {
                 .unwrap_err()
                 .contains("neighbour_min_cameras")
         );
-        assert_eq!(FinalFitOptions::default().neighbour_min_cameras, 2);
+        assert_eq!(FinalFitOptions::default().neighbour_min_cameras, 1);
         for guard in [-0.1, f64::NAN, f64::INFINITY] {
             let bad = FinalFitOptions {
                 neighbour_guard: guard,
@@ -2318,9 +2328,12 @@ mod tests {
             };
             assert!(bad.validate().unwrap_err().contains("neighbour_guard"));
         }
-        assert_eq!(FinalFitOptions::default().neighbour_guard, 0.0);
-        let one: FinalFitOptions = toml::from_str("neighbour_min_cameras = 1").unwrap();
-        assert_eq!((one.neighbour_min_cameras, one.neighbour_share), (1, 0.375));
+        assert_eq!(
+            FinalFitOptions::default().neighbour_guard,
+            NEIGHBOUR_GUARD_DEFAULT
+        );
+        let two: FinalFitOptions = toml::from_str("neighbour_min_cameras = 2").unwrap();
+        assert_eq!((two.neighbour_min_cameras, two.neighbour_share), (2, 0.375));
         for share in [-0.1, 1.5, f64::NAN] {
             let bad = FinalFitOptions {
                 readmit_share: share,

@@ -2609,7 +2609,7 @@ impl Odometry {
 
     /// The final stage's matches after the support's neighbourhood test
     /// (`odometry.final_fit.neighbour_share`, [`crate::final_fit::neighbour_kept`]) on a rig of
-    /// at least `neighbour_min_cameras` cameras (by default several): the matches `next` hands
+    /// at least `neighbour_min_cameras` cameras (by default one): the matches `next` hands
     /// the stage less the support's members whose neighbours are mostly outside it (at `from`),
     /// as [`crate::separate::NextStage::FinalFitOn`];
     /// `None` where the test is off, leaves nothing out or would leave fewer than half.

@@ -842,8 +842,16 @@ fn the_undefined_cells_solver_changes_only_their_covariances() {
 #[test]
 fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
     const CHI2_3_95: f64 = 7.814_727_903_251_178;
-    let drop = || {
+    // As measured: before the neighbourhood test ran on one camera (the default since the
+    // forty-second session), which leaves fewer frames in a compromise: with it 98.8 % inside
+    // against 94.3 % with the old trigger.
+    let before = || {
         let mut c = Config::default();
+        c.odometry.final_fit.neighbour_min_cameras = 2;
+        c
+    };
+    let drop = || {
+        let mut c = before();
         c.trust.jackknife_support_drop = 0.7;
         c.trust.jackknife_solves = 1;
         c
@@ -870,7 +878,7 @@ fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
             }
             (inside, scored)
         };
-        let ((a, n), (b, m)) = (run(Config::default()), run(drop()));
+        let ((a, n), (b, m)) = (run(before()), run(drop()));
         eprintln!(
             "seed {seed}: inside the 95 % bound {a} / {b} of {n} frames (every frame / where the share dropped)"
         );
@@ -973,8 +981,15 @@ fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
     let seq = &sim.sequence;
     let run = |config: Config| process_all(seq, config);
     const RHO: f64 = 0.5;
-    let base = run(Config::default());
-    let mut memory = Config::default();
+    // As measured: before the neighbourhood test ran on one camera (the default since the
+    // forty-second session, which leaves fewer than ten plain pairs in these 60 frames).
+    let before = || {
+        let mut c = Config::default();
+        c.odometry.final_fit.neighbour_min_cameras = 2;
+        c
+    };
+    let base = run(before());
+    let mut memory = before();
     memory.trust.covariance_memory = RHO;
     let with = run(memory);
     // The smallest eigenvalue of `a - s b`, relative to the largest of `a`.
@@ -1259,9 +1274,11 @@ fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
         assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
         assert_eq!(a.0.translation, b.0.translation, "frame {k}");
         assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
-        let below = a.1.status == FrameStatus::Estimated
-            && a.1.matches > 0
-            && (a.1.inliers as f64) < median * a.1.matches as f64;
+        // `ill_conditioned` is the last report-only flag: the rule flags such a frame first.
+        let estimated =
+            a.1.status == FrameStatus::Estimated || a.1.reason == Some(Reason::IllConditioned);
+        let below =
+            estimated && a.1.matches > 0 && (a.1.inliers as f64) < median * a.1.matches as f64;
         if below {
             assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
             assert_eq!(b.1.reason, Some(Reason::LowSupport), "frame {k}");
@@ -1409,7 +1426,11 @@ fn an_estimated_frame_reports_a_finite_covariance() {
     traffic.frames = 60;
     traffic.seed = 2;
     let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let out = process_all(&sim.sequence, Config::default());
+    // The reproduction as found: before the neighbourhood test ran on one camera (the default
+    // since the forty-second session, under which frame 43 is well conditioned).
+    let mut config = Config::default();
+    config.odometry.final_fit.neighbour_min_cameras = 2;
+    let out = process_all(&sim.sequence, config);
     let mut flagged = 0;
     for (k, (_, d)) in out.iter().enumerate() {
         let k2 = d.free.len() * d.free.len();

@@ -172,5 +172,7 @@ pub fn sixteenth_session_defaults(separate: &str) -> String {
     }
     s.push_str(separate);
     s.push_str("[odometry.separate.hypotheses]\nspread_grid = [16, 8]\ntrack_decay = 0.0\n");
+    // The neighbourhood test on one camera (default since the forty-second session) off.
+    s.push_str("[odometry.final_fit]\nneighbour_min_cameras = 2\n");
     s
 }
