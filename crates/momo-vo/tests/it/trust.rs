@@ -44,6 +44,14 @@ fn warmed_up(
     vo
 }
 
+/// The default as before the neighbourhood test ran on one camera (the default since the
+/// forty-second session): for the tests whose reproductions and margins were measured then.
+fn before_one_camera_test() -> Config {
+    let mut c = Config::default();
+    c.odometry.final_fit.neighbour_min_cameras = 2;
+    c
+}
+
 /// A held frame: the previous motion, infinite standard deviations of the free parameters.
 fn assert_held(r: &momo_vo::FrameResult, previous: &Pose<f64>, reason: Reason) {
     let d = &r.diagnostics;
@@ -845,11 +853,7 @@ fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
     // As measured: before the neighbourhood test ran on one camera (the default since the
     // forty-second session), which leaves fewer frames in a compromise: with it 98.8 % inside
     // against 94.3 % with the old trigger.
-    let before = || {
-        let mut c = Config::default();
-        c.odometry.final_fit.neighbour_min_cameras = 2;
-        c
-    };
+    let before = before_one_camera_test;
     let drop = || {
         let mut c = before();
         c.trust.jackknife_support_drop = 0.7;
@@ -983,11 +987,7 @@ fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
     const RHO: f64 = 0.5;
     // As measured: before the neighbourhood test ran on one camera (the default since the
     // forty-second session, which leaves fewer than ten plain pairs in these 60 frames).
-    let before = || {
-        let mut c = Config::default();
-        c.odometry.final_fit.neighbour_min_cameras = 2;
-        c
-    };
+    let before = before_one_camera_test;
     let base = run(before());
     let mut memory = before();
     memory.trust.covariance_memory = RHO;
@@ -1428,9 +1428,7 @@ fn an_estimated_frame_reports_a_finite_covariance() {
     let sim = momo_sim::simulate(&traffic).expect("simulated");
     // The reproduction as found: before the neighbourhood test ran on one camera (the default
     // since the forty-second session, under which frame 43 is well conditioned).
-    let mut config = Config::default();
-    config.odometry.final_fit.neighbour_min_cameras = 2;
-    let out = process_all(&sim.sequence, config);
+    let out = process_all(&sim.sequence, before_one_camera_test());
     let mut flagged = 0;
     for (k, (_, d)) in out.iter().enumerate() {
         let k2 = d.free.len() * d.free.len();
