@@ -1354,13 +1354,14 @@ pub fn neighbour_kept(
             if n <= count || count == 0 {
                 return g.clone();
             }
+            let near = PixelNeighbours::new(ms);
             let mut d: Vec<(f64, usize)> = Vec::with_capacity(n);
             (0..n)
                 .map(|i| {
                     if !(g[i] && s[i]) {
                         return g[i];
                     }
-                    let members = nearest_members(ms, i, count, |j| s[j], &mut d);
+                    let members = near.members(ms, i, count, |j| s[j], &mut d);
                     members as f64 >= share * count as f64
                 })
                 .collect()
@@ -1368,10 +1369,139 @@ pub fn neighbour_kept(
         .collect()
 }
 
-/// How many of match `i`'s `count` nearest other matches of its camera `ms` (by first-image
-/// pixel) satisfy `member`: the count both [`neighbour_kept`] and [`readmit_kept`] test. `d` is
-/// scratch space reused across matches; `count` must be in `1..ms.len()`.
-fn nearest_members(
+/// The nearest other matches of one camera's match by first-image pixel, for the count both
+/// [`neighbour_kept`] and [`readmit_kept`] test. "Nearest" orders by squared pixel distance
+/// ([`pixel_distance2`]) and then by index, so ties (equal distances, common with integer
+/// pixels) have one answer.
+///
+/// A sweep over the matches sorted by first-image `x`: from the match outwards, taking the side
+/// whose next match is nearer in `x`, and closing a side where `dx²` alone exceeds the
+/// `count`-th best squared distance so far. Floating-point subtraction and squaring are
+/// monotone, so no match past a closed side can be nearer: the answer is the exhaustive scan's
+/// ([`nearest_members_exhaustive`], which a camera with a non-finite pixel falls back to), at
+/// the cost of the matches in a strip about twice the `count`-th distance wide instead of all
+/// of them.
+struct PixelNeighbours {
+    /// First-image pixels (`x`, `y`) and index of the matches, by `x` (then index); empty where
+    /// a pixel is not finite.
+    sorted: Vec<(f64, f64, usize)>,
+    /// Each match's place in `sorted`.
+    place: Vec<usize>,
+}
+
+/// The squared distance between two first-image pixels, as both neighbour searches compute it.
+fn pixel_distance2(a: &nalgebra::Vector2<f64>, b: &nalgebra::Vector2<f64>) -> f64 {
+    let (dx, dy) = (a.x - b.x, a.y - b.y);
+    dx * dx + dy * dy
+}
+
+impl PixelNeighbours {
+    fn new(ms: &[momo_core::Observation]) -> Self {
+        let finite = ms
+            .iter()
+            .all(|o| o.px0.x.is_finite() && o.px0.y.is_finite());
+        if !finite {
+            return Self {
+                sorted: Vec::new(),
+                place: Vec::new(),
+            };
+        }
+        let mut sorted: Vec<(f64, f64, usize)> = ms
+            .iter()
+            .enumerate()
+            .map(|(j, o)| (o.px0.x, o.px0.y, j))
+            .collect();
+        sorted.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+        let mut place = vec![0; ms.len()];
+        for (k, &(_, _, j)) in sorted.iter().enumerate() {
+            place[j] = k;
+        }
+        Self { sorted, place }
+    }
+
+    /// How many of match `i`'s `count` nearest other matches of `ms` (the matches this was
+    /// built from) satisfy `member`. `best` is scratch space reused across matches; `count`
+    /// must be in `1..ms.len()`.
+    fn members(
+        &self,
+        ms: &[momo_core::Observation],
+        i: usize,
+        count: usize,
+        member: impl Fn(usize) -> bool,
+        best: &mut Vec<(f64, usize)>,
+    ) -> usize {
+        if self.sorted.len() != ms.len() {
+            return nearest_members_exhaustive(ms, i, count, member, best);
+        }
+        debug_assert!((1..ms.len()).contains(&count), "count {count} of {}", ms.len());
+        let sorted = &self.sorted[..];
+        let p = ms[i].px0;
+        // `best`: the `count` nearest so far, ascending by (squared distance, index); places
+        // not filled yet hold an infinite distance.
+        best.clear();
+        best.resize(count, (f64::INFINITY, usize::MAX));
+        let offer = |best: &mut [(f64, usize)], k: usize| {
+            let (x, y, j) = sorted[k];
+            let (dx, dy) = (x - p.x, y - p.y);
+            let d = dx * dx + dy * dy;
+            let nearer = |w: (f64, usize)| d < w.0 || (d == w.0 && j < w.1);
+            let mut at = best.len() - 1;
+            if !nearer(best[at]) {
+                return;
+            }
+            while at > 0 && nearer(best[at - 1]) {
+                best[at] = best[at - 1];
+                at -= 1;
+            }
+            best[at] = (d, j);
+        };
+        // The first `count` by `dx` from both sides, then each side on its own until `dx²`
+        // passes the bound (the loops' branches are then mostly predictable).
+        let (mut left, mut right) = (self.place[i], self.place[i] + 1);
+        for _ in 0..count {
+            let dl = if left > 0 {
+                p.x - sorted[left - 1].0
+            } else {
+                f64::INFINITY
+            };
+            let dr = if right < sorted.len() {
+                sorted[right].0 - p.x
+            } else {
+                f64::INFINITY
+            };
+            if dr < dl {
+                offer(best, right);
+                right += 1;
+            } else {
+                left -= 1;
+                offer(best, left);
+            }
+        }
+        let last = count - 1;
+        while right < sorted.len() {
+            let dx = sorted[right].0 - p.x;
+            if dx * dx > best[last].0 {
+                break;
+            }
+            offer(best, right);
+            right += 1;
+        }
+        while left > 0 {
+            let dx = p.x - sorted[left - 1].0;
+            if dx * dx > best[last].0 {
+                break;
+            }
+            left -= 1;
+            offer(best, left);
+        }
+        best.iter().filter(|(_, j)| member(*j)).count()
+    }
+}
+
+/// How many of match `i`'s `count` nearest other matches of its camera `ms` satisfy `member`,
+/// by scanning them all: the reference [`PixelNeighbours`] must equal, and its fallback where a
+/// pixel is not finite. `d` is scratch space; `count` must be in `1..ms.len()`.
+fn nearest_members_exhaustive(
     ms: &[momo_core::Observation],
     i: usize,
     count: usize,
@@ -1383,9 +1513,9 @@ fn nearest_members(
         ms.iter()
             .enumerate()
             .filter(|(j, _)| *j != i)
-            .map(|(j, o)| ((o.px0 - ms[i].px0).norm_squared(), j)),
+            .map(|(j, o)| (pixel_distance2(&o.px0, &ms[i].px0), j)),
     );
-    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0));
+    d.select_nth_unstable_by(count - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     d[..count].iter().filter(|(_, j)| member(*j)).count()
 }
 
@@ -1481,13 +1611,14 @@ pub fn readmit_kept(
                 return g.clone();
             }
             let member = |j: usize| g[j] && p[j];
+            let near = PixelNeighbours::new(ms);
             let mut d: Vec<(f64, usize)> = Vec::with_capacity(n);
             (0..n)
                 .map(|i| {
                     if g[i] || !p[i] {
                         return g[i];
                     }
-                    let members = nearest_members(ms, i, count, member, &mut d);
+                    let members = near.members(ms, i, count, member, &mut d);
                     members as f64 >= share * count as f64
                 })
                 .collect()
@@ -2233,6 +2364,53 @@ mod tests {
         );
         // A share of 0 keeps every given match.
         assert_eq!(neighbour_kept(&obs, &given, &support, 8, 0.0), given);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// The sweep over `x` counts the same nearest members as the exhaustive scan, on
+        /// scattered sub-pixel matches, on integer pixels with many equal distances and repeated
+        /// pixels, and on a compact cluster beside a spread scene; a non-finite pixel falls back
+        /// to the scan.
+        #[test]
+        fn the_pixel_sweep_counts_what_the_exhaustive_scan_counts(
+            points in proptest::collection::vec((0.0..1242.0f64, 0.0..375.0f64), 2..120),
+            integer in proptest::bool::ANY,
+            cluster in 0usize..40,
+            members in proptest::collection::vec(proptest::bool::ANY, 160),
+            count in 1usize..12,
+            nan in proptest::bool::ANY,
+        ) {
+            let mut ms: Vec<_> = points
+                .iter()
+                .map(|&(u, v)| if integer { at((u / 40.0).round(), (v / 40.0).round()) } else { at(u, v) })
+                .collect();
+            ms.extend((0..cluster).map(|k| at(600.0 + (k % 5) as f64, 200.0 + (k / 5) as f64)));
+            if nan {
+                ms[0].px0.x = f64::NAN;
+            }
+            let count = count.min(ms.len() - 1);
+            let member = |j: usize| members[j % members.len()];
+            let near = PixelNeighbours::new(&ms);
+            proptest::prop_assert_eq!(near.sorted.is_empty(), nan);
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            for i in 0..ms.len() {
+                if nan && i == 0 {
+                    continue;
+                }
+                let swept = near.members(&ms, i, count, member, &mut a);
+                let scanned = nearest_members_exhaustive(&ms, i, count, member, &mut b);
+                proptest::prop_assert_eq!(swept, scanned, "match {}", i);
+                if !nan {
+                    // The same neighbours, not only as many members.
+                    let mut s: Vec<usize> = b[..count].iter().map(|(_, j)| *j).collect();
+                    s.sort_unstable();
+                    let mut w: Vec<usize> = a.iter().map(|(_, j)| *j).collect();
+                    w.sort_unstable();
+                    proptest::prop_assert_eq!(w, s, "match {}", i);
+                }
+            }
+        }
     }
 
     #[test]
