@@ -1433,7 +1433,11 @@ impl PixelNeighbours {
         if self.sorted.len() != ms.len() {
             return nearest_members_exhaustive(ms, i, count, member, best);
         }
-        debug_assert!((1..ms.len()).contains(&count), "count {count} of {}", ms.len());
+        debug_assert!(
+            (1..ms.len()).contains(&count),
+            "count {count} of {}",
+            ms.len()
+        );
         let sorted = &self.sorted[..];
         let p = ms[i].px0;
         // `best`: the `count` nearest so far, ascending by (squared distance, index); places
