@@ -1374,9 +1374,9 @@ pub fn neighbour_kept(
 /// ([`pixel_distance2`]) and then by index, so ties (equal distances, common with integer
 /// pixels) have one answer.
 ///
-/// A sweep over the matches sorted by first-image `x`: from the match outwards, taking the side
-/// whose next match is nearer in `x`, and closing a side where `dx²` alone exceeds the
-/// `count`-th best squared distance so far. Floating-point subtraction and squaring are
+/// A sweep over the matches sorted by first-image `x`: the `count` matches nearest in `x` (from
+/// both sides), then each side outwards until `dx²` alone exceeds the `count`-th best squared
+/// distance so far. Floating-point subtraction and squaring are
 /// monotone, so no match past a closed side can be nearer: the answer is the exhaustive scan's
 /// ([`nearest_members_exhaustive`], which a camera with a non-finite pixel falls back to), at
 /// the cost of the matches in a strip about twice the `count`-th distance wide instead of all
