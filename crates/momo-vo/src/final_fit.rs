@@ -1361,7 +1361,7 @@ pub fn neighbour_kept(
                     if !(g[i] && s[i]) {
                         return g[i];
                     }
-                    let members = near.members(ms, i, count, |j| s[j], &mut d);
+                    let members = near.members(i, count, |j| s[j], &mut d);
                     members as f64 >= share * count as f64
                 })
                 .collect()
@@ -1381,11 +1381,17 @@ pub fn neighbour_kept(
 /// ([`nearest_members_exhaustive`], which a camera with a non-finite pixel falls back to), at
 /// the cost of the matches in a strip about twice the `count`-th distance wide instead of all
 /// of them.
-struct PixelNeighbours {
-    /// First-image pixels (`x`, `y`) and index of the matches, by `x` (then index); empty where
-    /// a pixel is not finite.
-    sorted: Vec<(f64, f64, usize)>,
-    /// Each match's place in `sorted`.
+struct PixelNeighbours<'a> {
+    ms: &'a [momo_core::Observation],
+    /// The matches by first-image `x` (then index); `None` where a pixel is not finite.
+    sorted: Option<ByX>,
+}
+
+/// A camera's matches sorted by first-image `x` (then index), for [`PixelNeighbours`].
+struct ByX {
+    /// First-image pixel and index of each match, in `x` order.
+    pixels: Vec<(nalgebra::Vector2<f64>, usize)>,
+    /// Each match's place in `pixels`.
     place: Vec<usize>,
 }
 
@@ -1395,59 +1401,49 @@ fn pixel_distance2(a: &nalgebra::Vector2<f64>, b: &nalgebra::Vector2<f64>) -> f6
     dx * dx + dy * dy
 }
 
-impl PixelNeighbours {
-    fn new(ms: &[momo_core::Observation]) -> Self {
+impl<'a> PixelNeighbours<'a> {
+    fn new(ms: &'a [momo_core::Observation]) -> Self {
         let finite = ms
             .iter()
             .all(|o| o.px0.x.is_finite() && o.px0.y.is_finite());
-        if !finite {
-            return Self {
-                sorted: Vec::new(),
-                place: Vec::new(),
-            };
-        }
-        let mut sorted: Vec<(f64, f64, usize)> = ms
-            .iter()
-            .enumerate()
-            .map(|(j, o)| (o.px0.x, o.px0.y, j))
-            .collect();
-        sorted.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
-        let mut place = vec![0; ms.len()];
-        for (k, &(_, _, j)) in sorted.iter().enumerate() {
-            place[j] = k;
-        }
-        Self { sorted, place }
+        let sorted = finite.then(|| {
+            let mut pixels: Vec<_> = ms.iter().enumerate().map(|(j, o)| (o.px0, j)).collect();
+            pixels.sort_unstable_by(|a, b| a.0.x.total_cmp(&b.0.x).then(a.1.cmp(&b.1)));
+            let mut place = vec![0; ms.len()];
+            for (k, &(_, j)) in pixels.iter().enumerate() {
+                place[j] = k;
+            }
+            ByX { pixels, place }
+        });
+        Self { ms, sorted }
     }
 
-    /// How many of match `i`'s `count` nearest other matches of `ms` (the matches this was
-    /// built from) satisfy `member`. `best` is scratch space reused across matches; `count`
-    /// must be in `1..ms.len()`.
+    /// How many of match `i`'s `count` nearest other matches satisfy `member`. `best` is
+    /// scratch space reused across matches; `count` must be in `1..ms.len()`.
     fn members(
         &self,
-        ms: &[momo_core::Observation],
         i: usize,
         count: usize,
         member: impl Fn(usize) -> bool,
         best: &mut Vec<(f64, usize)>,
     ) -> usize {
-        if self.sorted.len() != ms.len() {
+        let ms = self.ms;
+        let Some(ByX { pixels, place }) = &self.sorted else {
             return nearest_members_exhaustive(ms, i, count, member, best);
-        }
+        };
         debug_assert!(
             (1..ms.len()).contains(&count),
             "count {count} of {}",
             ms.len()
         );
-        let sorted = &self.sorted[..];
         let p = ms[i].px0;
         // `best`: the `count` nearest so far, ascending by (squared distance, index); places
         // not filled yet hold an infinite distance.
         best.clear();
         best.resize(count, (f64::INFINITY, usize::MAX));
         let offer = |best: &mut [(f64, usize)], k: usize| {
-            let (x, y, j) = sorted[k];
-            let (dx, dy) = (x - p.x, y - p.y);
-            let d = dx * dx + dy * dy;
+            let (q, j) = pixels[k];
+            let d = pixel_distance2(&q, &p);
             let nearer = |w: (f64, usize)| d < w.0 || (d == w.0 && j < w.1);
             let mut at = best.len() - 1;
             if !nearer(best[at]) {
@@ -1461,15 +1457,15 @@ impl PixelNeighbours {
         };
         // The first `count` by `dx` from both sides, then each side on its own until `dx²`
         // passes the bound (the loops' branches are then mostly predictable).
-        let (mut left, mut right) = (self.place[i], self.place[i] + 1);
+        let (mut left, mut right) = (place[i], place[i] + 1);
         for _ in 0..count {
             let dl = if left > 0 {
-                p.x - sorted[left - 1].0
+                p.x - pixels[left - 1].0.x
             } else {
                 f64::INFINITY
             };
-            let dr = if right < sorted.len() {
-                sorted[right].0 - p.x
+            let dr = if right < pixels.len() {
+                pixels[right].0.x - p.x
             } else {
                 f64::INFINITY
             };
@@ -1482,8 +1478,8 @@ impl PixelNeighbours {
             }
         }
         let last = count - 1;
-        while right < sorted.len() {
-            let dx = sorted[right].0 - p.x;
+        while right < pixels.len() {
+            let dx = pixels[right].0.x - p.x;
             if dx * dx > best[last].0 {
                 break;
             }
@@ -1491,7 +1487,7 @@ impl PixelNeighbours {
             right += 1;
         }
         while left > 0 {
-            let dx = p.x - sorted[left - 1].0;
+            let dx = p.x - pixels[left - 1].0.x;
             if dx * dx > best[last].0 {
                 break;
             }
@@ -1622,7 +1618,7 @@ pub fn readmit_kept(
                     if g[i] || !p[i] {
                         return g[i];
                     }
-                    let members = near.members(ms, i, count, member, &mut d);
+                    let members = near.members(i, count, member, &mut d);
                     members as f64 >= share * count as f64
                 })
                 .collect()
@@ -2396,13 +2392,13 @@ mod tests {
             let count = count.min(ms.len() - 1);
             let member = |j: usize| members[j % members.len()];
             let near = PixelNeighbours::new(&ms);
-            proptest::prop_assert_eq!(near.sorted.is_empty(), nan);
+            proptest::prop_assert_eq!(near.sorted.is_none(), nan);
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for i in 0..ms.len() {
                 if nan && i == 0 {
                     continue;
                 }
-                let swept = near.members(&ms, i, count, member, &mut a);
+                let swept = near.members(i, count, member, &mut a);
                 let scanned = nearest_members_exhaustive(&ms, i, count, member, &mut b);
                 proptest::prop_assert_eq!(swept, scanned, "match {}", i);
                 if !nan {
