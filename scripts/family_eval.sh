@@ -26,6 +26,11 @@
 #                  the 41st session)
 #        few150h, few100h  few150 / few100 on seeds 6-10 (added in the 35th session; keep for
 #                  confirmation: choose nothing on them)
+#        slow      moving_traffic along 28 segments of KITTI 00-10 that hold a stop or a slow
+#                  start (a run of 5+ frames below 0.3 m per frame; each segment from 15 frames
+#                  before it, 100 frames; `momo simulate --trajectory-start`), seeds 71-76
+#                  (added in the 44th session)
+#        slow200   the same with 200 matches, seeds 71-73
 #        static    clean_pinhole and outliers along KITTI 00-10, seeds 1-3
 #        static2   the same, seeds 4-6
 #        static3   the other scenarios without moving objects along KITTI 00-10, seeds 1-2
@@ -88,13 +93,15 @@ for b in "$momo" "$sim_momo"; do
 done
 export momo sim_momo cfg data frames
 
-# make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES [MATCHES]]: simulates one sequence unless it is
-# there (MATCHES: `momo simulate --matches`, default the scenario's).
+# make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES [MATCHES [START]]]: simulates one sequence unless
+# it is there (MATCHES: `momo simulate --matches`, default the scenario's, `-` for it; START:
+# `--trajectory-start`).
 make_seq() {
     local dir="$1" sc="$2" t="$3" seed="$4" n="${5:-$frames}" traj=() m=()
     [[ -f "$dir/bound.csv" ]] && return 0
     [[ "$t" != drive ]] && traj=(--trajectory "$data/kitti_odometry_gt/poses/$t.txt")
-    [[ -n "${6:-}" ]] && m=(--matches "$6")
+    [[ -n "${6:-}" && "${6:-}" != - ]] && m=(--matches "$6")
+    [[ -n "${7:-}" ]] && traj+=(--trajectory-start "$7")
     rm -rf "$dir"
     mkdir -p "$(dirname "$dir")"
     if ! "$sim_momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "${m[@]}" "$dir" \
@@ -145,6 +152,18 @@ list_set() {
         [[ "$n" == *h ]] && n="${n%h}" && seeds="6 7 8 9 10"
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/fewtraffic/moving_traffic_m${n}_${t}_s$seed moving_traffic $t $seed $frames $n"
+        done; done ;;
+    slow | slow200)
+        # The segments: trajectory:first pose (see the set's description above).
+        local segs="00:514 00:1366 00:1919 00:2225 00:3505 00:4399 02:1755 03:49 03:712
+            05:1513 05:1804 05:2068 05:2295 07:0 07:288 07:625 07:993 08:6 08:1580 08:1812
+            08:2120 08:2241 08:2460 08:3982 10:0 10:606 10:948 10:1108" seg m=300
+        seeds="$(seq 71 76)"
+        [[ "$s" == slow200 ]] && m=200 && seeds="71 72 73"
+        for seg in $segs; do for seed in $seeds; do
+            t="${seg%%:*}"
+            n="${seg#*:}"
+            echo "$sets_dir/slow/moving_traffic_m${m}_${t}_${n}_s$seed moving_traffic $t $seed 100 $m $n"
         done; done ;;
     static | static2)
         [[ "$s" == static ]] && seeds="1 2 3" || seeds="4 5 6"

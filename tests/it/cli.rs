@@ -356,3 +356,62 @@ fn trust_rejects_configurations_and_flags_untrusted_runs() {
         "the outputs are written"
     );
 }
+
+#[test]
+fn simulate_drives_a_segment_of_a_trajectory_from_its_start_pose() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let traj = tmp.path().join("traj.txt");
+    // Camera-0 poses 1 m apart along the optical axis, turning 1 deg about the vertical per pose.
+    let text: String = (0..8)
+        .map(|k| {
+            let a = (k as f64).to_radians();
+            let (s, c) = a.sin_cos();
+            format!(
+                "{c} 0 {s} {x} 0 1 0 0 {n} 0 {c} {z}\n",
+                n = -s,
+                x = 0.1 * k as f64,
+                z = k as f64
+            )
+        })
+        .collect();
+    std::fs::write(&traj, text).expect("write");
+    let sim = |dir: &Path, extra: &[&str]| {
+        momo()
+            .args([
+                "simulate",
+                "--scenario",
+                "clean_pinhole",
+                "-q",
+                "--trajectory",
+            ])
+            .arg(&traj)
+            .args(extra)
+            .arg(dir)
+            .output()
+            .expect("momo starts")
+    };
+    let (whole, part) = (tmp.path().join("whole"), tmp.path().join("part"));
+    assert!(sim(&whole, &["--frames", "8"]).status.success());
+    let o = sim(&part, &["--frames", "4", "--trajectory-start", "3"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |d: &Path| momo::io::read_poses(d.join("poses.txt")).expect("poses");
+    let (whole, part) = (read(&whole), read(&part));
+    assert_eq!(part.len(), 4);
+    // The segment starts at the origin and moves as the whole drive's poses 3-6 do.
+    assert!(part[0].translation.norm() < 1e-9);
+    for k in 1..4 {
+        let a = part[k - 1].inverse().compose(&part[k]);
+        let b = whole[k + 2].inverse().compose(&whole[k + 3]);
+        assert!((a.translation - b.translation).norm() < 1e-9, "pose {k}");
+        assert!((a.rotation - b.rotation).norm() < 1e-9, "pose {k}");
+    }
+    // A start that leaves fewer than two poses is an input error naming the file.
+    let o = sim(&tmp.path().join("none"), &["--trajectory-start", "7"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("traj.txt") && err.contains("--trajectory-start 7"),
+        "{err}"
+    );
+    assert!(!tmp.path().join("none").exists());
+}

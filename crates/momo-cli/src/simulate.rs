@@ -21,6 +21,11 @@ pub(crate) struct SimulateArgs {
     /// rig's camera 0. At most --frames frames.
     #[arg(long)]
     trajectory: Option<PathBuf>,
+    /// With --trajectory: start at this pose of the file (0-based), the drive's first pose
+    /// moved to the origin (C_k' = C_N⁻¹ · C_{N+k}): a segment of a long trajectory, e.g. a
+    /// stop at a junction.
+    #[arg(long, default_value_t = 0, requires = "trajectory")]
+    trajectory_start: usize,
     /// Number of frames.
     #[arg(long, default_value_t = 400)]
     frames: usize,
@@ -60,7 +65,16 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
                 path.display()
             )));
         }
-        cfg.camera_trajectory = Some(poses);
+        let start = args.trajectory_start;
+        if start + 1 >= poses.len() {
+            return Err(Failure::Input(anyhow::anyhow!(
+                "{}: --trajectory-start {start} leaves fewer than two of its {} poses",
+                path.display(),
+                poses.len()
+            )));
+        }
+        let origin = poses[start].inverse();
+        cfg.camera_trajectory = Some(poses[start..].iter().map(|p| origin.compose(p)).collect());
     }
     cfg.frames = args.frames;
     cfg.seed = args.seed;

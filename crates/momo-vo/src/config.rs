@@ -67,6 +67,15 @@ pub struct OdometryOptions {
     /// Below this arc length (metres per frame) the vehicle is at standstill: only the rotation
     /// is estimated (rotation-only residual), the translation is zero.
     pub standstill_arc_length: f64,
+    /// A standing vehicle does not turn: at a standstill the rotation-only solve starts at no
+    /// rotation (the model's start with zero arc length, not the previous motion) and tries the
+    /// restarts ([`OdometryOptions::restart_yaw_offsets`]) only where that solve fails. At a
+    /// standstill the static world's matches do not move in the image, while a passing bus or
+    /// crossing truck moves like a rotation of the camera; the restarts found that motion and
+    /// kept it where it holds more matches than the static scene (their lowest cost wins).
+    /// False: the previous motion as the start and the restarts where the inlier share is low,
+    /// as for a moving frame.
+    pub standstill_at_rest: bool,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,
     /// Arc length assumed before any is known when there is no odometry (metres per frame).
@@ -549,6 +558,7 @@ impl Default for OdometryOptions {
     fn default() -> Self {
         Self {
             standstill_arc_length: 0.01,
+            standstill_at_rest: false,
             min_matches: 8,
             initial_arc_length: 1.0,
             estimate_scale: true,

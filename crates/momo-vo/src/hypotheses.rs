@@ -249,6 +249,18 @@ pub struct HypothesesOptions {
     pub yaw_history_frames: usize,
     /// The margin `m` (radians) of [`HypothesesOptions::yaw_history_frames`].
     pub yaw_history_margin: f64,
+    /// The margin of [`HypothesesOptions::yaw_history_frames`] for a slow vehicle, `(m₀, k)`:
+    /// with the frame's arc length `s` (metres, from odometry) the margin is
+    /// `min(m, m₀ + k·s)` (radians; `k` in radians per metre). A car's yaw per frame changes
+    /// by `Δ(ω_z) ≈ s·Δκ + κ·Δs`: the curvature `κ` follows the steering, which turns at a
+    /// limited rate, so the slower the car the less its yaw per frame can change from one
+    /// frame to the next. Along KITTI 00-10's ground truth it changes by at most 0.26 deg
+    /// where `s < 0.1 m` and 0.39 deg where `s < 0.2 m` (99.9th percentiles 0.26 / 0.38 deg),
+    /// against up to about 1 deg at 0.3-1 m per frame, where the turns at junctions are. At a
+    /// drive's start behind a bus the bus's motion is a jump of half a degree that the fixed
+    /// `m` lets through. `(0, 0)` (default): the fixed `m` everywhere; either part 0 turns it
+    /// off, as does a frame without arc length.
+    pub yaw_history_slow_margin: (f64, f64),
     /// The replacement of an A whose yaw jumped from the recent frames' by an alternative that
     /// continues them ([`HypothesesOptions::yaw_history_frames`]).
     pub yaw_history_replace: bool,
@@ -440,6 +452,7 @@ impl Default for HypothesesOptions {
             tilt_reference: TiltReference::Median,
             yaw_history_frames: 0,
             yaw_history_margin: 0.0,
+            yaw_history_slow_margin: (0.0, 0.0),
             yaw_history_replace: false,
             yaw_history_final: false,
             tilt_replace_roadless: false,
@@ -540,6 +553,13 @@ impl HypothesesOptions {
                     .into(),
             );
         }
+        let (m0, k) = self.yaw_history_slow_margin;
+        if !(m0.is_finite() && m0 >= 0.0 && k.is_finite() && k >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.yaw_history_slow_margin must be two finite numbers >= 0"
+                    .into(),
+            );
+        }
         if !(self.tilt_reference_margin.is_finite() && self.tilt_reference_margin >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.tilt_reference_margin must be a finite number >= 0"
@@ -586,6 +606,10 @@ pub struct Hypothesis<'a> {
     pub support: &'a [Vec<bool>],
 }
 
+/// The reference yaw's standard deviations added (in quadrature) to the dynamic part of
+/// [`HypothesesOptions::yaw_history_slow_margin`].
+const SLOW_MARGIN_SIGMAS: f64 = 3.0;
+
 /// The state of the multi-frame choice (the accumulated evidence), kept by the odometry driver.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct HypothesisTracker {
@@ -611,9 +635,15 @@ pub struct HypothesisTracker {
     /// The recent frames' chosen motions' yaws, newest last
     /// ([`HypothesesOptions::yaw_history_frames`]).
     yaws: std::collections::VecDeque<f64>,
+    /// The standard deviations of [`HypothesisTracker::yaws`] (NaN: unknown), one each
+    /// ([`HypothesisTracker::set_last_yaw_sigma`]).
+    yaw_sigmas: std::collections::VecDeque<f64>,
     /// The recent frames' chosen motions' road scores, newest last
     /// ([`HypothesesOptions::yaw_history_predict_road_frames`]).
     road_scores: std::collections::VecDeque<usize>,
+    /// The current frame's arc length (metres, from odometry), for
+    /// [`HypothesesOptions::yaw_history_slow_margin`]; set by [`crate::separate::separate`].
+    pub arc_length: Option<f64>,
 }
 
 /// Per-match memory across frames by image position (issue 14): the second-image pixels
@@ -1252,6 +1282,7 @@ impl HypothesisTracker {
             self.record_tilt(opts, tilt);
         }
         if self.yaws.pop_back().is_some() {
+            self.yaw_sigmas.pop_back();
             self.record_yaw(opts, yaw);
         }
         if self.road_scores.pop_back().is_some() {
@@ -1294,8 +1325,22 @@ impl HypothesisTracker {
             return;
         }
         self.yaws.push_back(yaw);
+        self.yaw_sigmas.push_back(f64::NAN);
         while self.yaws.len() > k {
             self.yaws.pop_front();
+        }
+        while self.yaw_sigmas.len() > self.yaws.len() {
+            self.yaw_sigmas.pop_front();
+        }
+    }
+
+    /// Sets the standard deviation (radians) of the last recorded yaw: the frame's reported
+    /// covariance propagated to `ω_z`, for [`HypothesesOptions::yaw_history_slow_margin`].
+    /// A yaw recorded without one has an unknown sigma, and the slow margin does not apply
+    /// while it is in the history.
+    pub fn set_last_yaw_sigma(&mut self, sigma: f64) {
+        if let Some(s) = self.yaw_sigmas.back_mut() {
+            *s = sigma;
         }
     }
 
@@ -1306,6 +1351,7 @@ impl HypothesisTracker {
     /// `yaw_history_frames = 1` (the default) that is the same as recording the frame's yaw.
     pub fn set_last_yaw(&mut self, opts: &HypothesesOptions, yaw: f64) {
         if yaw.is_finite() && self.yaws.pop_back().is_some() {
+            self.yaw_sigmas.pop_back();
             self.record_yaw(opts, yaw);
         }
     }
@@ -1349,10 +1395,32 @@ impl HypothesisTracker {
     /// from the recent frames' reference yaw ([`HypothesisTracker::yaw_reference`]; a NaN yaw
     /// does); false before any frame was recorded or with the rule off.
     pub fn yaw_jumps(&self, opts: &HypothesesOptions, yaw: f64) -> bool {
+        let margin = self.yaw_margin(opts);
         opts.yaw_history_frames > 0
             && self
                 .yaw_reference()
-                .is_some_and(|r| !((yaw - r).abs() <= opts.yaw_history_margin))
+                .is_some_and(|r| !((yaw - r).abs() <= margin))
+    }
+
+    /// The margin of [`HypothesisTracker::yaw_jumps`] in the current frame:
+    /// [`HypothesesOptions::yaw_history_margin`], or less for a slow vehicle
+    /// ([`HypothesesOptions::yaw_history_slow_margin`]).
+    pub fn yaw_margin(&self, opts: &HypothesesOptions) -> f64 {
+        let (m0, k) = opts.yaw_history_slow_margin;
+        // The history's least certain yaw; NaN (unknown) turns the slow margin off.
+        let sigma = self
+            .yaw_sigmas
+            .iter()
+            .try_fold(0.0_f64, |a, s| s.is_finite().then(|| a.max(*s)));
+        match (self.arc_length, sigma) {
+            (Some(s), Some(sigma)) if m0 > 0.0 && k > 0.0 && s.is_finite() && s >= 0.0 => {
+                let dynamic = m0 + k * s;
+                let reference = SLOW_MARGIN_SIGMAS * sigma;
+                opts.yaw_history_margin
+                    .min((dynamic * dynamic + reference * reference).sqrt())
+            }
+            _ => opts.yaw_history_margin,
+        }
     }
 
     /// Whether a motion of tilt `tilt` rises more than
@@ -2401,5 +2469,64 @@ mod tests {
         };
         tracker.reset();
         assert!(tracker.memory.is_empty(), "a reset forgets the memory");
+    }
+    #[test]
+    fn the_slow_margin_narrows_the_yaw_history_for_a_slow_certain_history_only() {
+        let deg = 1.0_f64.to_radians();
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            yaw_history_slow_margin: (0.25 * deg, deg),
+            ..HypothesesOptions::default()
+        };
+        let mut tracker = HypothesisTracker::default();
+        tracker.record_yaw(&h, -0.4 * deg);
+        tracker.arc_length = Some(0.1);
+        // The recorded yaw has no sigma yet: the fixed margin.
+        assert_eq!(tracker.yaw_margin(&h), deg);
+        assert!(!tracker.yaw_jumps(&h, 0.1 * deg));
+        // A certain reference (0.03 deg): the dynamic part `0.25 + 1.0 · 0.1` deg with
+        // `3 σ` in quadrature; a half-degree jump at 0.1 m per frame is stopped, a change the
+        // car can make is not.
+        tracker.set_last_yaw_sigma(0.03 * deg);
+        let expected = (0.35_f64.powi(2) + 0.09_f64.powi(2)).sqrt() * deg;
+        assert!((tracker.yaw_margin(&h) - expected).abs() < 1e-12);
+        assert!(tracker.yaw_jumps(&h, 0.1 * deg));
+        assert!(!tracker.yaw_jumps(&h, -0.7 * deg));
+        // Faster, the margin widens up to the fixed one.
+        tracker.arc_length = Some(2.0);
+        assert_eq!(tracker.yaw_margin(&h), deg);
+        // An uncertain reference (0.5 deg): `3 σ` alone passes the fixed margin.
+        tracker.arc_length = Some(0.1);
+        tracker.set_last_yaw_sigma(0.5 * deg);
+        assert_eq!(tracker.yaw_margin(&h), deg);
+        // Without arc length, with a NaN sigma or with the option off: the fixed margin.
+        tracker.set_last_yaw_sigma(0.03 * deg);
+        tracker.arc_length = None;
+        assert_eq!(tracker.yaw_margin(&h), deg);
+        tracker.arc_length = Some(0.1);
+        tracker.set_last_yaw_sigma(f64::NAN);
+        assert_eq!(tracker.yaw_margin(&h), deg);
+        tracker.set_last_yaw_sigma(0.03 * deg);
+        let off = HypothesesOptions {
+            yaw_history_slow_margin: (0.0, deg),
+            ..h.clone()
+        };
+        assert_eq!(tracker.yaw_margin(&off), deg);
+        // A newly recorded yaw has no sigma until it is set.
+        tracker.record_yaw(&h, -0.5 * deg);
+        assert_eq!(tracker.yaw_margin(&h), deg);
+        // The options reject a negative or non-finite part.
+        for bad in [(-0.1, 1.0), (0.1, f64::NAN), (f64::INFINITY, 0.0)] {
+            let o = HypothesesOptions {
+                yaw_history_slow_margin: bad,
+                ..h.clone()
+            };
+            assert!(
+                o.validate()
+                    .unwrap_err()
+                    .contains("yaw_history_slow_margin")
+            );
+        }
     }
 }

@@ -1172,7 +1172,10 @@ impl Odometry {
         let standstill = arc_index.is_some_and(|i| {
             init[i].abs() < self.config.odometry.standstill_arc_length && fixed[i]
         });
-        if standstill && let Some(i) = arc_index {
+        if standstill && self.config.odometry.standstill_at_rest {
+            // `odometry.standstill_at_rest`: a standing vehicle does not turn.
+            init = self.estimator.initial_params(0.0);
+        } else if standstill && let Some(i) = arc_index {
             init[i] = 0.0;
         } else if self.after_standstill {
             // Moving off: the held direction of travel is arbitrary (it was not observable at
@@ -1902,6 +1905,11 @@ impl Odometry {
         {
             let yaw = so3_log(&self.estimator.motion(&params).rotation).z;
             self.hypotheses.set_last_yaw(h, yaw);
+            let (m0, k) = h.yaw_history_slow_margin;
+            if m0 > 0.0 && k > 0.0 {
+                let sigma = self.yaw_sigma(&params, &diag).unwrap_or(f64::NAN);
+                self.hypotheses.set_last_yaw_sigma(sigma);
+            }
         }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -2754,6 +2762,10 @@ impl Odometry {
         diag: &mut FrameDiagnostics,
     ) -> Option<FrameSolution> {
         let first = self.solve_once(obs, init, fixed, standstill);
+        // `odometry.standstill_at_rest`: no restarts at a standstill unless the solve failed.
+        if standstill && self.config.odometry.standstill_at_rest && first.is_some() {
+            return first;
+        }
         let ratio = |s: &FrameSolution| s.inliers() as f64 / obs.len().max(1) as f64;
         let threshold =
             self.config.odometry.restart_inlier_ratio * self.inlier_ratio_average.unwrap_or(0.0);
@@ -2903,6 +2915,36 @@ impl Odometry {
     /// the previous frame's motion `p` as an alternative, `Σ + w d dᵀ`, `d = p − a`. Called
     /// after the frame's state is updated: the next frame's prior, the after-flag widening
     /// and the separation's history see the frame as it was, so no pose changes.
+    /// The standard deviation (radians) of the yaw `ω_z` of the motion `params` under the
+    /// frame's reported covariance (over `diag.free`): `√(gᵀ Σ g)` with `g` the yaw's gradient by
+    /// central differences, so any motion model has one. `None` where the frame reports no
+    /// finite covariance.
+    fn yaw_sigma(&self, params: &[f64], diag: &FrameDiagnostics) -> Option<f64> {
+        let k = diag.free.len();
+        if k == 0 || diag.covariance.len() != k * k {
+            return None;
+        }
+        let yaw = |p: &[f64]| so3_log(&self.estimator.motion(p).rotation).z;
+        const STEP: f64 = 1e-6;
+        let g: Vec<f64> = diag
+            .free
+            .iter()
+            .map(|&i| {
+                let (mut hi, mut lo) = (params.to_vec(), params.to_vec());
+                hi[i] += STEP;
+                lo[i] -= STEP;
+                (yaw(&hi) - yaw(&lo)) / (2.0 * STEP)
+            })
+            .collect();
+        let mut v = 0.0;
+        for (a, ga) in g.iter().enumerate() {
+            for (b, gb) in g.iter().enumerate() {
+                v += ga * diag.covariance[a * k + b] * gb;
+            }
+        }
+        (v.is_finite() && v >= 0.0).then(|| v.sqrt())
+    }
+
     fn flag_yaw_change(&self, change: f64, params: &[f64], diag: &mut FrameDiagnostics) {
         let t = &self.config.trust;
         if t.yaw_change <= 0.0 || !(change.abs() > t.yaw_change) {
@@ -5419,5 +5461,116 @@ mod tests {
                 "{bad}"
             );
         }
+    }
+    #[test]
+    fn the_yaw_sigma_is_the_reported_covariance_on_the_yaw() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 6,
+            seed: 5,
+            ..SimConfig::outliers()
+        })
+        .expect("the outliers scenario simulates");
+        let seq = &sim.sequence;
+        let mut vo = Odometry::new(seq.rig.clone(), crate::Config::default()).expect("builds");
+        let mut checked = 0;
+        for k in 1..seq.num_frames() {
+            let d = vo.process(&seq.frames[k], seq.arc_length(k)).diagnostics;
+            // The default model's rotation parameters are `ω = log R` (vehicle frame): the
+            // yaw's sigma is `rot_z`'s.
+            let z = d.param_names.iter().position(|n| n == "rot_z");
+            let (Some(z), Some(sigma)) = (z, vo.yaw_sigma(&d.params, &d)) else {
+                continue;
+            };
+            let reported = d.param_sigmas[z];
+            if !reported.is_finite() {
+                continue;
+            }
+            assert!(
+                (sigma - reported).abs() <= 1e-4 * reported,
+                "{sigma} against {reported}"
+            );
+            checked += 1;
+        }
+        assert!(checked >= 4, "{checked} frames checked");
+        // No covariance, no sigma.
+        let mut d = vo.process(&seq.frames[1], seq.arc_length(1)).diagnostics;
+        d.covariance.clear();
+        assert!(vo.yaw_sigma(&d.params, &d).is_none());
+    }
+    /// A standstill frame of `rig`'s camera 0: `still` matches that do not move (the static
+    /// world seen by a standing vehicle) and `crossing` ones that move as if the camera had
+    /// turned by `yaw` about its vertical axis (a bus passing far ahead), 0.3 px of noise.
+    fn standstill_frame(
+        rig: &momo_core::Rig,
+        still: usize,
+        crossing: usize,
+        yaw: f64,
+    ) -> FrameObservations {
+        use momo_core::{CameraModel, Observation};
+        let cam = &rig.cameras()[0].model;
+        let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), yaw);
+        // Low-discrepancy positions and a deterministic noise of up to 0.3 px.
+        let frac = |x: f64| x - x.floor();
+        let per: Vec<Observation> = (0..still + crossing)
+            .filter_map(|k| {
+                // The crossing matches in the image's middle third, the still ones anywhere.
+                let (a, b) = (frac(k as f64 * 0.618_034), frac(k as f64 * 0.754_878));
+                let (u, v) = if k < still {
+                    (50.0 + 1140.0 * a, 40.0 + 290.0 * b)
+                } else {
+                    (420.0 + 400.0 * a, 120.0 + 180.0 * b)
+                };
+                let px0 = nalgebra::Vector2::new(u, v);
+                let f0 = cam.unproject(&px0)?;
+                let f1 = if k < still { f0 } else { turn * f0 };
+                let noise =
+                    0.3 * nalgebra::Vector2::new((k as f64 * 1.7).sin(), (k as f64 * 2.3).cos());
+                Observation::new(cam, px0, cam.project(&f1)? + noise)
+            })
+            .collect();
+        FrameObservations {
+            per_camera: vec![per],
+            cross_camera: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_standing_vehicle_at_rest_does_not_follow_a_passing_bus() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 6,
+            seed: 3,
+            ..SimConfig::clean_pinhole()
+        })
+        .expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        // The bus holds 60 % of the matches and moves like a turn of 1.5 deg.
+        let bus = 1.5_f64.to_radians();
+        let frame = standstill_frame(&seq.rig, 120, 180, bus);
+        let run = |at_rest: bool| {
+            let mut config = crate::Config::default();
+            config.odometry.standstill_at_rest = at_rest;
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("builds");
+            // Moving frames first: the driver's inlier average (the restarts' trigger).
+            for k in 1..seq.num_frames() {
+                vo.process(&seq.frames[k], seq.arc_length(k));
+            }
+            let d = vo.process(&frame, Some(0.0)).diagnostics;
+            assert_eq!(d.status, FrameStatus::Standstill);
+            let motion = vo.estimator.motion(&d.params);
+            (momo_core::so3_log(&motion.rotation).norm(), d)
+        };
+        let (turn, d) = run(true);
+        assert!(turn < 0.1_f64.to_radians(), "{} deg", turn.to_degrees());
+        assert_eq!(d.restarts, 0);
+        // Without it the restarts find the bus's flow and keep it: it holds more matches.
+        let (turn, d) = run(false);
+        assert!(d.restart_won);
+        assert!(
+            (turn - bus).abs() < 0.1_f64.to_radians(),
+            "{} deg",
+            turn.to_degrees()
+        );
     }
 }

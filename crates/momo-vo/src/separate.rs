@@ -1133,6 +1133,7 @@ fn separate_with(
     arc_length: Option<f64>,
     pretests: bool,
 ) -> (FrameSolution, SeparationOutcome, NextStage) {
+    tracker.arc_length = arc_length;
     let n = obs.len();
     let mut outcome = SeparationOutcome::default();
     // All matches capped per image cell (`cell_cap`): computed once, for A's re-solve
