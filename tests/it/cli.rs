@@ -361,17 +361,21 @@ fn trust_rejects_configurations_and_flags_untrusted_runs() {
 fn simulate_drives_a_segment_of_a_trajectory_from_its_start_pose() {
     let tmp = tempfile::tempdir().expect("tmp");
     let traj = tmp.path().join("traj.txt");
-    // Camera-0 poses 1 m apart along the optical axis, turning 1 deg about the vertical per pose.
+    // Camera-0 poses 1 m apart along the optical axis, turning 1 deg about the vertical per
+    // pose and pitched by 2 deg throughout: `R_k = R_y(k deg) R_x(2 deg)`.
+    let axis = |x: f64, y: f64| {
+        momo::core::so3_exp(&momo::core::nalgebra::Vector3::new(
+            x.to_radians(),
+            y.to_radians(),
+            0.0,
+        ))
+    };
     let text: String = (0..8)
         .map(|k| {
-            let a = (k as f64).to_radians();
-            let (s, c) = a.sin_cos();
-            format!(
-                "{c} 0 {s} {x} 0 1 0 0 {n} 0 {c} {z}\n",
-                n = -s,
-                x = 0.1 * k as f64,
-                z = k as f64
-            )
+            let r = axis(0.0, k as f64) * axis(2.0, 0.0);
+            let (x, z) = (0.1 * k as f64, k as f64);
+            let row = |i: usize| format!("{} {} {}", r[(i, 0)], r[(i, 1)], r[(i, 2)]);
+            format!("{} {x} {} 0 {} {z}\n", row(0), row(1), row(2))
         })
         .collect();
     std::fs::write(&traj, text).expect("write");

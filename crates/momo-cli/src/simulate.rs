@@ -21,9 +21,9 @@ pub(crate) struct SimulateArgs {
     /// rig's camera 0. At most --frames frames.
     #[arg(long)]
     trajectory: Option<PathBuf>,
-    /// With --trajectory: start at this pose of the file (0-based), the drive's first pose
-    /// moved to the origin (C_k' = C_N⁻¹ · C_{N+k}): a segment of a long trajectory, e.g. a
-    /// stop at a junction.
+    /// With --trajectory: start at this pose of the file (0-based), moved to the origin
+    /// (C_k' = C_N⁻¹ · C_{N+k}; the simulator levels every drive at its first pose): a segment
+    /// of a long trajectory, e.g. a stop at a junction.
     #[arg(long, default_value_t = 0, requires = "trajectory")]
     trajectory_start: usize,
     /// Number of frames.
