@@ -566,7 +566,7 @@ impl Default for OdometryOptions {
     fn default() -> Self {
         Self {
             standstill_arc_length: 0.01,
-            standstill_at_rest: false,
+            standstill_at_rest: true,
             standstill_still_angle: 0.006,
             min_matches: 8,
             initial_arc_length: 1.0,
@@ -940,7 +940,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # radians per frame, for every model; 0: none) and the centring of a soft model's prior\n\
          # (soft_prior_centring_frames: running mean over that many moving frames; 0: none;\n\
          # soft_prior_sigma_learning: its sigmas learnt from the same frames, at most\n\
-         # soft_prior_sigma_max times the model's).",
+         # soft_prior_sigma_max times the model's). standstill_at_rest: at a standstill the\n\
+         # rotation is solved from no rotation, without restarts, on the matches that turn by\n\
+         # less than standstill_still_angle radians (a standing vehicle does not turn).",
     ),
     (
         "odometry.final_fit",

@@ -250,16 +250,23 @@ pub struct HypothesesOptions {
     /// The margin `m` (radians) of [`HypothesesOptions::yaw_history_frames`].
     pub yaw_history_margin: f64,
     /// The margin of [`HypothesesOptions::yaw_history_frames`] for a slow vehicle, `(m₀, k)`:
-    /// with the frame's arc length `s` (metres, from odometry) the margin is
-    /// `min(m, m₀ + k·s)` (radians; `k` in radians per metre). A car's yaw per frame changes
-    /// by `Δ(ω_z) ≈ s·Δκ + κ·Δs`: the curvature `κ` follows the steering, which turns at a
-    /// limited rate, so the slower the car the less its yaw per frame can change from one
-    /// frame to the next. Along KITTI 00-10's ground truth it changes by at most 0.26 deg
-    /// where `s < 0.1 m` and 0.39 deg where `s < 0.2 m` (99.9th percentiles 0.26 / 0.38 deg),
-    /// against up to about 1 deg at 0.3-1 m per frame, where the turns at junctions are. At a
-    /// drive's start behind a bus the bus's motion is a jump of half a degree that the fixed
-    /// `m` lets through. `(0, 0)` (default): the fixed `m` everywhere; either part 0 turns it
-    /// off, as does a frame without arc length.
+    /// with the frame's arc length `s` (metres, from odometry) and `σ` the largest standard
+    /// deviation of the history's reported yaws (each frame's covariance on `ω_z`) the margin is
+    /// `min(m, √((m₀ + k·s)² + (3σ)²))` (radians; `k` in radians per metre). A car's yaw per
+    /// frame changes by `Δω_z ≈ s·Δκ + κ·Δs`: the curvature `κ` follows the steering, which
+    /// turns at a limited rate, so the slower the car the less its yaw per frame can change
+    /// from one frame to the next. Along KITTI 00-10's ground truth it changes by at most
+    /// 0.26 deg where `s < 0.1 m` and 0.39 deg where `s < 0.2 m`, against up to about 1 deg at
+    /// 0.3-1 m per frame, where the turns at junctions are. At a drive's start behind a bus the
+    /// bus's motion is a jump of half a degree that the fixed `m` lets through; where the
+    /// history itself is uncertain (a frame with competing motions reports a yaw sigma of a
+    /// degree or more) the `3σ` term gives the fixed margin back, so a history that is not
+    /// known to be right is not held. Needs [`HypothesesOptions::yaw_history_final`] (the
+    /// reported yaws carry the sigmas; without it none is known). `(0, 0)` in
+    /// `HypothesesOptions::default()` (a written `[odometry.separate.hypotheses]` section gets
+    /// it unless it sets it); either part 0 turns it off, as does a frame without arc length.
+    /// `(0.00436, 0.01745)` (0.25 deg + 1 deg per metre) in the default configuration since the
+    /// forty-fourth session (docs/RESULTS.md, slow59).
     pub yaw_history_slow_margin: (f64, f64),
     /// The replacement of an A whose yaw jumped from the recent frames' by an alternative that
     /// continues them ([`HypothesesOptions::yaw_history_frames`]).
@@ -635,9 +642,9 @@ pub struct HypothesisTracker {
     /// The recent frames' chosen motions' yaws, newest last
     /// ([`HypothesesOptions::yaw_history_frames`]).
     yaws: std::collections::VecDeque<f64>,
-    /// The standard deviations of [`HypothesisTracker::yaws`] (NaN: unknown), one each
+    /// The standard deviations of [`HypothesisTracker::yaws`] (`None`: unknown), one each
     /// ([`HypothesisTracker::set_last_yaw_sigma`]).
-    yaw_sigmas: std::collections::VecDeque<f64>,
+    yaw_sigmas: std::collections::VecDeque<Option<f64>>,
     /// The recent frames' chosen motions' road scores, newest last
     /// ([`HypothesesOptions::yaw_history_predict_road_frames`]).
     road_scores: std::collections::VecDeque<usize>,
@@ -1325,7 +1332,7 @@ impl HypothesisTracker {
             return;
         }
         self.yaws.push_back(yaw);
-        self.yaw_sigmas.push_back(f64::NAN);
+        self.yaw_sigmas.push_back(None);
         while self.yaws.len() > k {
             self.yaws.pop_front();
         }
@@ -1336,11 +1343,12 @@ impl HypothesisTracker {
 
     /// Sets the standard deviation (radians) of the last recorded yaw: the frame's reported
     /// covariance propagated to `ω_z`, for [`HypothesesOptions::yaw_history_slow_margin`].
-    /// A yaw recorded without one has an unknown sigma, and the slow margin does not apply
+    /// A yaw recorded without one (or with a non-finite one) has an unknown sigma, and the
+    /// slow margin does not apply
     /// while it is in the history.
     pub fn set_last_yaw_sigma(&mut self, sigma: f64) {
         if let Some(s) = self.yaw_sigmas.back_mut() {
-            *s = sigma;
+            *s = sigma.is_finite().then_some(sigma);
         }
     }
 
@@ -1407,11 +1415,11 @@ impl HypothesisTracker {
     /// ([`HypothesesOptions::yaw_history_slow_margin`]).
     pub fn yaw_margin(&self, opts: &HypothesesOptions) -> f64 {
         let (m0, k) = opts.yaw_history_slow_margin;
-        // The history's least certain yaw; NaN (unknown) turns the slow margin off.
+        // The history's least certain yaw; an unknown one turns the slow margin off.
         let sigma = self
             .yaw_sigmas
             .iter()
-            .try_fold(0.0_f64, |a, s| s.is_finite().then(|| a.max(*s)));
+            .try_fold(0.0_f64, |a, s| s.map(|s| a.max(s)));
         match (self.arc_length, sigma) {
             (Some(s), Some(sigma)) if m0 > 0.0 && k > 0.0 && s.is_finite() && s >= 0.0 => {
                 let dynamic = m0 + k * s;

@@ -593,6 +593,7 @@ impl SeparateOptions {
                 tilt_reference_margin: 0.01,
                 yaw_history_frames: 1,
                 yaw_history_margin: 0.01745,
+                yaw_history_slow_margin: (0.00436, 0.01745),
                 yaw_history_replace: true,
                 yaw_history_final: true,
                 tilt_weak_road_frames: 3,
