@@ -1344,8 +1344,7 @@ impl HypothesisTracker {
     /// Sets the standard deviation (radians) of the last recorded yaw: the frame's reported
     /// covariance propagated to `ω_z`, for [`HypothesesOptions::yaw_history_slow_margin`].
     /// A yaw recorded without one (or with a non-finite one) has an unknown sigma, and the
-    /// slow margin does not apply
-    /// while it is in the history.
+    /// slow margin does not apply while it is in the history.
     pub fn set_last_yaw_sigma(&mut self, sigma: f64) {
         if let Some(s) = self.yaw_sigmas.back_mut() {
             *s = sigma.is_finite().then_some(sigma);
