@@ -11,7 +11,10 @@ delta = rotvec(R_vc E R_vc^T) - rotvec(R_vc G R_vc^T) (E, G the estimated and tr
 rotations of camera 0), is scored against the reported covariance of the parameters
 rot_x, rot_y, rot_z (the first three of `covariance`, over the `free` parameters):
 NEES = delta^T Sigma^-1 delta (chi-square(3): mean 3, 95 % below 7.81) and z_i = |delta_i| / sigma_i.
-Prints the trust gap (frames above 1 deg neither flagged nor within 3 sigma on every axis) and,
+Prints the trust gap (frames above 1 deg neither flagged nor within 3 sigma on every axis; a
+frame is flagged where its status is neither `estimated` nor `standstill`: a standstill is a
+state of the vehicle, not a warning, and its covariance is as trusted as an estimated frame's)
+and,
 over all frames / frames flagged or not / by the share of object matches (labels.csv)
 / by the trust module's flags (competing motion, road alternative): frames, share inside the
 95 % bound, mean and median NEES, share of unflagged frames more than 3 sigma off on some axis
@@ -28,6 +31,8 @@ import sys
 import numpy as np
 
 CHI2_95 = 7.814727903251178
+# The statuses whose covariance a user trusts (the others flag the frame).
+TRUSTED = ("estimated", "standstill")
 
 
 def rotvec(r):
@@ -104,7 +109,7 @@ def summary(label, rows):
     nees = np.array([r["nees"] for r in rows])
     z = np.array([[abs(r["dx"]) / r["sx"], abs(r["dy"]) / r["sy"], abs(r["dz"]) / r["sz"]]
                   for r in rows])
-    unfl = np.array([r["status"] == "estimated" for r in rows])
+    unfl = np.array([r["status"] in TRUSTED for r in rows])
     over = (z.max(1) > 3) & unfl
     axes = " ".join(f"{a}={((z[:, i] > 3) & unfl).sum()}" for i, a in enumerate("xyz"))
     sharp = [max(r["sx"], r["sy"], r["sz"]) / r["bound"] for r in rows
@@ -130,17 +135,18 @@ def main():
             w.writeheader()
             w.writerows(rows)
     big = [r for r in rows if r["err"] > 1]
-    flagged = sum(r["status"] != "estimated" for r in big)
+    flagged = sum(r["status"] not in TRUSTED for r in big)
     within = sum(np.isfinite(r["sx"]) and max(abs(r["d" + a]) / r["s" + a] for a in "xyz") <= 3
                  for r in big)
-    gap = sum(r["status"] == "estimated" and not (
+    gap = sum(r["status"] in TRUSTED and not (
         np.isfinite(r["sx"]) and max(abs(r["d" + a]) / r["s" + a] for a in "xyz") <= 3)
         for r in big)
     print(f"sequences {len(names)} frames {len(rows)}; frames above 1 deg {len(big)}: flagged "
           f"{flagged}, within 3 sigma {within}, neither (the trust gap) {gap}")
     summary("all", rows)
     summary("estimated", [r for r in rows if r["status"] == "estimated"])
-    summary("flagged", [r for r in rows if r["status"] != "estimated"])
+    summary("standstill", [r for r in rows if r["status"] == "standstill"])
+    summary("flagged", [r for r in rows if r["status"] not in TRUSTED])
     for lo, hi in [(0, 0.1), (0.1, 0.3), (0.3, 0.5), (0.5, 1.01)]:
         summary(f"object share {lo}-{hi}", [r for r in rows if lo <= r["obj"] < hi])
     summary("competing", [r for r in rows if r["competing"]])
