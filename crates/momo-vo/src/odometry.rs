@@ -2783,7 +2783,10 @@ impl Odometry {
                 }
             }
         }
-        self.solve_with_restarts(obs, init, fixed, true, diag)
+        // All matches; the restarts only where that solve fails (it is then repeated once as
+        // their first start, and fails again).
+        self.solve_once(obs, init, fixed, true)
+            .or_else(|| self.solve_with_restarts(obs, init, fixed, true, diag))
     }
 
     fn solve_with_restarts(
@@ -2795,10 +2798,6 @@ impl Odometry {
         diag: &mut FrameDiagnostics,
     ) -> Option<FrameSolution> {
         let first = self.solve_once(obs, init, fixed, standstill);
-        // `odometry.standstill_at_rest`: no restarts at a standstill unless the solve failed.
-        if standstill && self.config.odometry.standstill_at_rest && first.is_some() {
-            return first;
-        }
         let ratio = |s: &FrameSolution| s.inliers() as f64 / obs.len().max(1) as f64;
         let threshold =
             self.config.odometry.restart_inlier_ratio * self.inlier_ratio_average.unwrap_or(0.0);
@@ -2940,14 +2939,6 @@ impl Odometry {
             || (self.support_change_fired && share < t.support_change_hold_share)
     }
 
-    /// The yaw's change against the previous frame's reported motion
-    /// (`trust.yaw_change` `J`, `trust.yaw_change_weight` `w`): where the change
-    /// `|Δω_z| = |ω_z − ω_z,prev|` exceeds `J` (a car's yaw rate changes smoothly, so one of
-    /// the two frames is wrong), the frame is
-    /// flagged `weak` / `yaw_change` if it was `estimated`, and its reported covariance adds
-    /// the previous frame's motion `p` as an alternative, `Σ + w d dᵀ`, `d = p − a`. Called
-    /// after the frame's state is updated: the next frame's prior, the after-flag widening
-    /// and the separation's history see the frame as it was, so no pose changes.
     /// The standard deviation (radians) of the yaw `ω_z` of the motion `params` under the
     /// frame's reported covariance (over `diag.free`): `√(gᵀ Σ g)` with `g` the yaw's gradient by
     /// central differences, so any motion model has one. `None` where the frame reports no
@@ -2978,6 +2969,14 @@ impl Odometry {
         (v.is_finite() && v >= 0.0).then(|| v.sqrt())
     }
 
+    /// The yaw's change against the previous frame's reported motion
+    /// (`trust.yaw_change` `J`, `trust.yaw_change_weight` `w`): where the change
+    /// `|Δω_z| = |ω_z − ω_z,prev|` exceeds `J` (a car's yaw rate changes smoothly, so one of
+    /// the two frames is wrong), the frame is
+    /// flagged `weak` / `yaw_change` if it was `estimated`, and its reported covariance adds
+    /// the previous frame's motion `p` as an alternative, `Σ + w d dᵀ`, `d = p − a`. Called
+    /// after the frame's state is updated: the next frame's prior, the after-flag widening
+    /// and the separation's history see the frame as it was, so no pose changes.
     fn flag_yaw_change(&self, change: f64, params: &[f64], diag: &mut FrameDiagnostics) {
         let t = &self.config.trust;
         if t.yaw_change <= 0.0 || !(change.abs() > t.yaw_change) {
