@@ -84,6 +84,19 @@ pub struct OdometryOptions {
     /// rocks; a bus passing at 8 px per frame (0.011 rad at f = 718 px) pulls the robust fit of
     /// all matches towards its flow, with a small formal sigma.
     pub standstill_still_angle: f64,
+    /// With [`OdometryOptions::standstill_at_rest`]: image-region balance of the standstill's
+    /// still matches (0: off): at most `max(2, ceil(c · m))` of them per image cell (the
+    /// `[odometry.separate] cell_cap_grid`, 16 x 8 by default), `m` the median count of the
+    /// occupied cells ([`crate::separate::cell_capped`]). A lead car that stands or creeps in
+    /// front of a standing vehicle holds most of the still matches in a few cells; its lateral
+    /// drift moves them like a yaw of the camera.
+    pub standstill_cell_cap: f64,
+    /// With [`OdometryOptions::standstill_at_rest`]: the standstill's reported covariance is
+    /// widened where the leave-one-cell-out jackknife of its rotation-only solve on the
+    /// matches it read is wider (`[trust] jackknife_grids`, `jackknife_min_ratio`), as a moving
+    /// frame's is where its support drops: an object inside the still cut biases the solve by
+    /// more than its formal covariance.
+    pub standstill_jackknife: bool,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,
     /// Arc length assumed before any is known when there is no odometry (metres per frame).
@@ -568,6 +581,8 @@ impl Default for OdometryOptions {
             standstill_arc_length: 0.01,
             standstill_at_rest: true,
             standstill_still_angle: 0.006,
+            standstill_cell_cap: 2.0,
+            standstill_jackknife: true,
             min_matches: 8,
             initial_arc_length: 1.0,
             estimate_scale: true,
@@ -942,7 +957,10 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # soft_prior_sigma_learning: its sigmas learnt from the same frames, at most\n\
          # soft_prior_sigma_max times the model's). standstill_at_rest: at a standstill the\n\
          # rotation is solved from no rotation, without restarts, on the matches that turn by\n\
-         # less than standstill_still_angle radians (a standing vehicle does not turn).",
+         # less than standstill_still_angle radians (a standing vehicle does not turn), at most\n\
+         # standstill_cell_cap times the median per image cell (a lead car holds many in a few\n\
+         # cells), its covariance widened by their leave-one-cell-out jackknife\n\
+         # (standstill_jackknife).",
     ),
     (
         "odometry.final_fit",
@@ -1258,6 +1276,12 @@ impl Config {
             bad(
                 &["odometry.standstill_still_angle"],
                 "odometry.standstill_still_angle must be a finite angle in 0..1 rad".into(),
+            );
+        }
+        if !finite_nonneg(o.standstill_cell_cap) {
+            bad(
+                &["odometry.standstill_cell_cap"],
+                "odometry.standstill_cell_cap must be a finite factor >= 0 (0: off)".into(),
             );
         }
         if !(finite_nonneg(o.standstill_arc_length) && o.standstill_arc_length <= MAX_ARC_LENGTH) {

@@ -1299,6 +1299,8 @@ impl Odometry {
             fixed[i] = true;
             diag.scale = ScaleSource::Held;
         }
+        // The matches the standstill's solve read, where it read a subset.
+        let mut at_rest_read = None;
         let result = if !enough {
             diag.status = if repeated > 0 {
                 FrameStatus::Degenerate
@@ -1312,6 +1314,10 @@ impl Odometry {
         } else {
             let sol = if standstill && self.config.odometry.standstill_at_rest {
                 self.solve_at_rest(obs, &init, &fixed, &mut diag)
+                    .map(|(sol, read)| {
+                        at_rest_read = read;
+                        sol
+                    })
             } else {
                 self.solve_with_restarts(obs, &init, &fixed, standstill, &mut diag)
             };
@@ -1623,6 +1629,13 @@ impl Odometry {
                     floor.as_ref(),
                     &mut diag,
                 );
+                if standstill
+                    && self.config.odometry.standstill_jackknife
+                    && self.config.odometry.standstill_at_rest
+                {
+                    let read = at_rest_read.as_ref().unwrap_or(obs);
+                    self.widen_standstill_by_jackknife(read, &sol, &fixed, &mut diag);
+                }
                 if !standstill && self.config.trust.covariance_memory > 0.0 {
                     self.covariance_memory = base.map(|c| (self.frame, sol.free.clone(), c));
                 }
@@ -2759,27 +2772,43 @@ impl Odometry {
 
     /// The standstill's rotation-only solve with `odometry.standstill_at_rest`: from `init`
     /// (no rotation) on the matches that do not move (`odometry.standstill_still_angle`) where
-    /// there are enough of them, else on all matches; the restarts only where that fails.
+    /// there are enough of them (capped per image cell with `odometry.standstill_cell_cap`),
+    /// else on all matches; the restarts only where that fails. Returns the solution and the
+    /// matches it read where they are not all of the frame's.
     fn solve_at_rest(
         &self,
         obs: &FrameObservations,
         init: &[f64],
         fixed: &[bool],
         diag: &mut FrameDiagnostics,
-    ) -> Option<FrameSolution> {
-        let cut = self.config.odometry.standstill_still_angle;
+    ) -> Option<(FrameSolution, Option<FrameObservations>)> {
+        let opts = &self.config.odometry;
+        let cut = opts.standstill_still_angle;
         if cut > 0.0 {
             let sin = cut.sin();
-            let still: Vec<Vec<bool>> = obs
+            let mut still: Vec<Vec<bool>> = obs
                 .per_camera
                 .iter()
                 .map(|ms| ms.iter().map(|o| o.f0.cross(&o.f1).norm() < sin).collect())
                 .collect();
             let n = still.iter().flatten().filter(|s| **s).count();
-            if n >= 12 && 10 * n >= obs.len() && n < obs.len() {
-                let sol = self.solve_once(&crate::separate::subset(obs, &still), init, fixed, true);
-                if sol.is_some() {
-                    return sol;
+            if n >= 12 && 10 * n >= obs.len() {
+                if opts.standstill_cell_cap > 0.0 {
+                    let grid = opts.separate.as_ref().map_or((16, 8), |s| s.cell_cap_grid);
+                    still = crate::separate::cell_capped(
+                        &self.rig,
+                        obs,
+                        &still,
+                        grid,
+                        opts.standstill_cell_cap,
+                    );
+                }
+                // (All of them: the frame's own.)
+                let read = (!still.iter().flatten().all(|s| *s))
+                    .then(|| crate::separate::subset(obs, &still));
+                if let Some(sol) = self.solve_once(read.as_ref().unwrap_or(obs), init, fixed, true)
+                {
+                    return Some((sol, read));
                 }
             }
         }
@@ -2787,6 +2816,42 @@ impl Odometry {
         // their first start, and fails again).
         self.solve_once(obs, init, fixed, true)
             .or_else(|| self.solve_with_restarts(obs, init, fixed, true, diag))
+            .map(|sol| (sol, None))
+    }
+
+    /// The standstill's leave-one-cell-out jackknife (`odometry.standstill_jackknife`): the
+    /// rotation-only solve repeated without each cell of every `[trust] jackknife_grids` grid
+    /// on the matches `read` it read, from its solution; the reported covariance widened where
+    /// that jackknife's is wider ([`trust::widen`], `trust.jackknife_min_ratio`).
+    fn widen_standstill_by_jackknife(
+        &self,
+        read: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+        diag: &mut FrameDiagnostics,
+    ) {
+        let k = sol.free.len();
+        if k == 0 || diag.covariance.len() != k * k {
+            return;
+        }
+        let t = &self.config.trust;
+        let mut cov = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
+        let before = cov.clone();
+        for &[gx, gy] in &t.jackknife_grids {
+            let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, read, (gx, gy))
+                .iter()
+                .filter_map(|o| self.solve_once(o, &sol.params, fixed, true))
+                .map(|s| sol.free.iter().map(|&i| s.params[i]).collect())
+                .collect();
+            if let Some(j) = trust::jackknife_covariance(&samples) {
+                cov = trust::widen(&cov, &j, t.jackknife_min_ratio);
+            }
+        }
+        for (j, &i) in sol.free.iter().enumerate() {
+            let added = (cov[(j, j)] - before[(j, j)]).max(0.0);
+            diag.param_sigmas[i] = (diag.param_sigmas[i].powi(2) + added).sqrt();
+        }
+        diag.covariance = cov.transpose().iter().copied().collect();
     }
 
     fn solve_with_restarts(
@@ -5540,6 +5605,24 @@ mod tests {
         yaw: f64,
         noise: f64,
     ) -> FrameObservations {
+        standstill_frame_in(
+            rig,
+            (still, crossing),
+            [420.0, 400.0, 120.0, 180.0],
+            yaw,
+            noise,
+        )
+    }
+
+    /// [`standstill_frame`] with the crossing matches in the image rectangle `[u, width, v,
+    /// height]` (pixels).
+    fn standstill_frame_in(
+        rig: &momo_core::Rig,
+        (still, crossing): (usize, usize),
+        [u0, w, v0, h]: [f64; 4],
+        yaw: f64,
+        noise: f64,
+    ) -> FrameObservations {
         use momo_core::{CameraModel, Observation};
         let cam = &rig.cameras()[0].model;
         let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), yaw);
@@ -5547,12 +5630,12 @@ mod tests {
         let frac = |x: f64| x - x.floor();
         let per: Vec<Observation> = (0..still + crossing)
             .filter_map(|k| {
-                // The crossing matches in the image's middle third, the still ones anywhere.
+                // The crossing matches in their rectangle, the still ones anywhere.
                 let (a, b) = (frac(k as f64 * 0.618_034), frac(k as f64 * 0.754_878));
                 let (u, v) = if k < still {
                     (50.0 + 1140.0 * a, 40.0 + 290.0 * b)
                 } else {
-                    (420.0 + 400.0 * a, 120.0 + 180.0 * b)
+                    (u0 + w * a, v0 + h * b)
                 };
                 let px0 = nalgebra::Vector2::new(u, v);
                 let f0 = cam.unproject(&px0)?;
@@ -5576,6 +5659,19 @@ mod tests {
         at_rest: bool,
         still_angle: f64,
     ) -> (f64, FrameDiagnostics) {
+        let (turn, _, d) = at_standstill_with(frame, |c| {
+            c.odometry.standstill_at_rest = at_rest;
+            c.odometry.standstill_still_angle = still_angle;
+        });
+        (turn, d)
+    }
+
+    /// [`at_standstill`] with the default configuration as `configure` leaves it: the
+    /// reported rotation angle, the yaw's reported sigma and the diagnostics.
+    fn at_standstill_with(
+        frame: &FrameObservations,
+        configure: impl FnOnce(&mut crate::Config),
+    ) -> (f64, Option<f64>, FrameDiagnostics) {
         use momo_sim::{SimConfig, simulate};
         let sim = simulate(&SimConfig {
             frames: 6,
@@ -5585,8 +5681,7 @@ mod tests {
         .expect("the clean scenario simulates");
         let seq = &sim.sequence;
         let mut config = crate::Config::default();
-        config.odometry.standstill_at_rest = at_rest;
-        config.odometry.standstill_still_angle = still_angle;
+        configure(&mut config);
         let mut vo = Odometry::new(seq.rig.clone(), config).expect("builds");
         for k in 1..seq.num_frames() {
             vo.process(&seq.frames[k], seq.arc_length(k));
@@ -5594,7 +5689,8 @@ mod tests {
         let d = vo.process(frame, Some(0.0)).diagnostics;
         assert_eq!(d.status, FrameStatus::Standstill);
         let motion = vo.estimator.motion(&d.params);
-        (momo_core::so3_log(&motion.rotation).norm(), d)
+        let sigma = vo.yaw_sigma(&d.params, &d);
+        (momo_core::so3_log(&motion.rotation).norm(), sigma, d)
     }
 
     #[test]
@@ -5625,5 +5721,64 @@ mod tests {
         let (still, _) = at_standstill(&frame, true, 0.006);
         assert!(all > 0.2 * deg, "{} deg", all.to_degrees());
         assert!(still < 0.1 * deg, "{} deg", still.to_degrees());
+    }
+
+    #[test]
+    fn a_lead_car_creeping_inside_the_still_cut_neither_biases_nor_hides_in_the_covariance() {
+        let rig = momo_sim::simulate(&momo_sim::SimConfig {
+            frames: 2,
+            ..momo_sim::SimConfig::clean_pinhole()
+        })
+        .expect("simulates")
+        .sequence
+        .rig;
+        let deg = 1.0_f64.to_radians();
+        // A lead car in 240 x 100 px ahead holds 200 of 290 matches and drifts sideways like a
+        // turn of 0.2 deg (2.5 px): inside the still cut (0.006 rad = 0.34 deg), with up to 1
+        // px of noise.
+        let frame = standstill_frame_in(
+            &rig,
+            (90, 200),
+            [500.0, 240.0, 150.0, 100.0],
+            0.2 * deg,
+            1.0,
+        );
+        let solve = |cap: f64, jackknife: bool| {
+            at_standstill_with(&frame, |c| {
+                c.odometry.standstill_cell_cap = cap;
+                c.odometry.standstill_jackknife = jackknife;
+            })
+        };
+        // The still matches alone: pulled most of the way to the car, with a sigma that
+        // puts the truth (no turn) beyond 3 sigma.
+        let (turn, sigma, _) = solve(0.0, false);
+        let sigma = sigma.expect("a covariance");
+        assert!(turn > 0.1 * deg, "{} deg", turn.to_degrees());
+        assert!(
+            turn > 3.0 * sigma,
+            "{} > 3 x {} deg",
+            turn.to_degrees(),
+            sigma.to_degrees()
+        );
+        // The jackknife over image cells alone widens the sigma to hold the error.
+        let (turn_jk, sigma_jk, _) = solve(0.0, true);
+        let sigma_jk = sigma_jk.expect("a covariance");
+        assert_eq!(turn_jk, turn);
+        assert!(
+            turn_jk < 3.0 * sigma_jk,
+            "{} < 3 x {} deg",
+            turn_jk.to_degrees(),
+            sigma_jk.to_degrees()
+        );
+        // Capped per image cell the car no longer outweighs the static scene.
+        let (capped, sigma_c, _) = solve(2.0, true);
+        let sigma_c = sigma_c.expect("a covariance");
+        assert!(capped < 0.5 * turn, "{} deg", capped.to_degrees());
+        assert!(
+            capped < 3.0 * sigma_c,
+            "{} < 3 x {} deg",
+            capped.to_degrees(),
+            sigma_c.to_degrees()
+        );
     }
 }

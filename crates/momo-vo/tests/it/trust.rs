@@ -140,6 +140,13 @@ fn absurd_arc_lengths_and_solver_options_are_rejected() {
         "{HEAD}{loss}{SOLVER}[trust]\nmax_rotation = 7.0\n"
     ));
     assert!(e.starts_with("cfg.toml:11: trust.max_rotation"), "{e}");
+    let e = config_error(&format!(
+        "{HEAD}{loss}{SOLVER}[odometry]\nstandstill_cell_cap = -1.0\n"
+    ));
+    assert!(
+        e.starts_with("cfg.toml:11: odometry.standstill_cell_cap"),
+        "{e}"
+    );
 }
 
 #[test]
