@@ -52,6 +52,11 @@
 #        rigdev    the same, seeds 7-12 (a second development set for the rig)
 #        rigblind  moving_traffic_surround_blind (the same with the front camera covered in frame
 #                  pairs 150-249, glare on the right camera in 300-349), seeds 1-3
+#   NO_ODOMETRY environment variable: 1 runs every simulated sequence without its odometry.csv
+#               (unknown scale; the sequences are read through links in OUT_DIR/SET/seqs, all
+#               files but odometry.csv). bound.csv is the bound with the arc length known, so
+#               efficiencies are against a bound that such a run cannot reach (added in the 45th
+#               session)
 #   MOMO        environment variable: the momo binary (default target/release/momo)
 #   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
 #   SIM_MOMO    environment variable: the momo binary that simulates missing sequences (default
@@ -218,6 +223,19 @@ for s in "${sets[@]}"; do
         awk '{ print $1 }' "$out/$s/list.spec" >"$out/$s/list"
         # shellcheck disable=SC2016
         xargs -P "$jobs" -L 1 bash -c 'make_seq "$@"' _ <"$out/$s/list.spec"
+        if [[ "${NO_ODOMETRY:-0}" == 1 ]]; then
+            # The same sequences without odometry.csv, through links.
+            rm -rf "$out/$s/seqs"
+            while read -r seq; do
+                d="$out/$s/seqs/$(basename "$seq")"
+                mkdir -p "$d"
+                for f in "$seq"/*; do
+                    [[ "$(basename "$f")" == odometry.csv ]] || ln -s "$(cd "$(dirname "$f")" && pwd)/$(basename "$f")" "$d/"
+                done
+                echo "$d"
+            done <"$out/$s/list" >"$out/$s/list.noodo"
+            mv "$out/$s/list.noodo" "$out/$s/list"
+        fi
     fi
     xargs -P "$jobs" -I{} bash -c 'run_one "$1" "$2"' _ {} "$out/$s/est" <"$out/$s/list" |
         sort >"$out/$s/rows.tsv"
