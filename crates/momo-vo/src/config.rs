@@ -97,6 +97,15 @@ pub struct OdometryOptions {
     /// frame's is where its support drops: an object inside the still cut biases the solve by
     /// more than its formal covariance.
     pub standstill_jackknife: bool,
+    /// Without odometry.csv and without cross-camera matches (a single camera: the scale is not
+    /// observable from the matches), the arc length held for each frame is the median of the
+    /// last this many frames' arc lengths from the road plane (`Odometry::road_arc_length`:
+    /// the arc length at which most of the motion's static matches stand on the road at the
+    /// camera's known height), from estimated frames; `odometry.initial_arc_length` until
+    /// there is one. 0: off (the arc length is estimated, or held, as before). The
+    /// separation's road cues read the road at the motion's metric scale; a wrong scale by 20 %
+    /// makes them pick a lead vehicle's motion.
+    pub road_scale_frames: usize,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,
     /// Arc length assumed before any is known when there is no odometry (metres per frame).
@@ -583,6 +592,7 @@ impl Default for OdometryOptions {
             standstill_still_angle: 0.006,
             standstill_cell_cap: 2.0,
             standstill_jackknife: true,
+            road_scale_frames: 0,
             min_matches: 8,
             initial_arc_length: 1.0,
             estimate_scale: true,
@@ -960,7 +970,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # less than standstill_still_angle radians (a standing vehicle does not turn), at most\n\
          # standstill_cell_cap times the median per image cell (a lead car holds many in a few\n\
          # cells), its covariance widened by their leave-one-cell-out jackknife\n\
-         # (standstill_jackknife).",
+         # (standstill_jackknife). road_scale_frames (opt-in): without odometry.csv, one camera\n\
+         # holds the median of the last N frames' arc lengths from the road plane.",
     ),
     (
         "odometry.final_fit",

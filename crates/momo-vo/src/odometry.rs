@@ -236,6 +236,9 @@ pub struct Odometry {
     /// `odometry.competing_region_continuing_frames`: the references of
     /// `competing_region_continuing`.
     recent_motions: std::collections::VecDeque<Vec<f64>>,
+    /// `odometry.road_scale_frames`: the last frames' arc lengths from the road plane
+    /// ([`Odometry::road_arc_length`]).
+    road_arc_lengths: std::collections::VecDeque<f64>,
     /// Running mean of the soft manifold's prior residuals over the moving frames
     /// (`odometry.soft_prior_centring_frames`; empty if off or the model is hard).
     soft_center: Vec<f64>,
@@ -405,6 +408,7 @@ impl Odometry {
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
+            road_arc_lengths: std::collections::VecDeque::new(),
             soft_center,
             soft_count: 0,
             soft_inv_scale,
@@ -1071,6 +1075,7 @@ impl Odometry {
         self.trusted_streak = 0;
         self.recent_tilts.clear();
         self.recent_motions.clear();
+        self.road_arc_lengths.clear();
         self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
             let neutral = self
                 .estimator
@@ -1155,6 +1160,17 @@ impl Odometry {
             (Some(i), None) if cross_scale => {
                 fixed[i] = true;
                 ScaleSource::Estimated
+            }
+            (Some(i), None)
+                if self.config.odometry.road_scale_frames > 0 && self.rig.len() == 1 =>
+            {
+                // `odometry.road_scale_frames`: the median of the last frames' road arc
+                // lengths, held for the solve (the initial arc length until there is one).
+                if let Some(l) = median(self.road_arc_lengths.iter().copied()) {
+                    init[i] = l;
+                }
+                fixed[i] = true;
+                ScaleSource::Held
             }
             (Some(i), None) => {
                 if !self.scale_observable {
@@ -1928,6 +1944,22 @@ impl Odometry {
                 self.hypotheses.set_last_yaw_sigma(sigma);
             }
         }
+        // `odometry.road_scale_frames`: this frame's arc length from the road plane.
+        let keep = self.config.odometry.road_scale_frames;
+        if keep > 0
+            && self.rig.len() == 1
+            && arc_length.is_none()
+            && !cross_scale
+            && !standstill
+            && diag.status == FrameStatus::Estimated
+            && let Some(i) = arc_index
+            && let Some(l) = self.road_arc_length(obs, &params, i)
+        {
+            self.road_arc_lengths.push_back(l);
+            while self.road_arc_lengths.len() > keep {
+                self.road_arc_lengths.pop_front();
+            }
+        }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
@@ -1950,6 +1982,65 @@ impl Odometry {
             motion,
             diagnostics: diag,
         }
+    }
+
+    /// The arc length at which the static world of the motion `params` stands on the road
+    /// (`odometry.road_scale_frames`): the matches within the separation's threshold of its
+    /// epipolar geometry are triangulated under `params` with the arc length (parameter
+    /// `arc_index`) on a log grid of 0.05-5 m (steps of 2 %); each arc length counts the
+    /// matches on the road plane ([`crate::hypotheses::ground_support`]: the camera's height is
+    /// known, so the road's depth fixes the scale). The answer is the geometric mean of the
+    /// contiguous run of arc lengths around the best count that count at least 80 % of it.
+    /// `None` where the best count is below [`ROAD_SCALE_MIN_MATCHES`], or without the
+    /// separation's hypotheses.
+    fn road_arc_length(
+        &self,
+        obs: &FrameObservations,
+        params: &[f64],
+        arc_index: usize,
+    ) -> Option<f64> {
+        let opts = self
+            .config
+            .odometry
+            .separate
+            .as_ref()
+            .filter(|o| o.enabled)?;
+        let h = opts.hypotheses()?;
+        let support: Vec<Vec<bool>> = crate::separate::epipolar_at_least(
+            &self.rig,
+            &self.estimator.motion(params),
+            obs,
+            opts.threshold,
+        )
+        .into_iter()
+        .map(|m| m.into_iter().map(|outside| !outside).collect())
+        .collect();
+        const STEP: f64 = 1.02;
+        let (lo, hi) = (0.05_f64, 5.0_f64);
+        let steps = ((hi / lo).ln() / STEP.ln()).ceil() as usize;
+        let mut at = params.to_vec();
+        let counts: Vec<(f64, usize)> = (0..=steps)
+            .map(|k| {
+                let l = lo * STEP.powi(k as i32);
+                at[arc_index] = l;
+                let motion = self.estimator.motion(&at);
+                (
+                    l,
+                    crate::hypotheses::ground_support(&self.rig, &motion, obs, &support, h),
+                )
+            })
+            .collect();
+        let (best, &(_, top)) = counts
+            .iter()
+            .enumerate()
+            .max_by_key(|(k, (_, c))| (*c, std::cmp::Reverse(*k)))?;
+        if top < ROAD_SCALE_MIN_MATCHES {
+            return None;
+        }
+        let near = |k: &usize| 5 * counts[*k].1 >= 4 * top;
+        let first = (0..=best).rev().take_while(near).last().unwrap_or(best);
+        let last = (best..counts.len()).take_while(near).last().unwrap_or(best);
+        Some((counts[first].0 * counts[last].0).sqrt())
     }
 
     /// The separation's road score of `params` ([`crate::hypotheses::score`]) on its own
@@ -3767,6 +3858,24 @@ impl Odometry {
             _ => None,
         }
     }
+}
+
+/// The fewest road matches of [`Odometry::road_arc_length`]'s best arc length.
+const ROAD_SCALE_MIN_MATCHES: usize = 12;
+
+/// The median of `values` (the mean of the middle two of an even count); `None` if empty.
+fn median(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let mut v: Vec<f64> = values.collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    Some(if v.len() % 2 == 0 {
+        0.5 * (v[m - 1] + v[m])
+    } else {
+        v[m]
+    })
 }
 
 /// The fewest labelled matches outside the support whose share [`quiet_memory`] reads (the
@@ -5721,6 +5830,47 @@ mod tests {
         let (still, _) = at_standstill(&frame, true, 0.006);
         assert!(all > 0.2 * deg, "{} deg", all.to_degrees());
         assert!(still < 0.1 * deg, "{} deg", still.to_degrees());
+    }
+
+    #[test]
+    fn without_odometry_one_camera_reads_its_arc_length_off_the_road() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 40,
+            seed: 5,
+            ..SimConfig::clean_pinhole()
+        })
+        .expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        let truth = seq.ground_truth.as_ref().expect("ground truth");
+        let run = |frames: usize| {
+            let mut config = crate::Config::default();
+            config.odometry.road_scale_frames = frames;
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("builds");
+            let i = vo.estimator.arc_length_index().expect("an arc length");
+            // The held arc length over the true one, from frame 10 (the road's history full).
+            let mut ratios: Vec<f64> = (1..seq.num_frames())
+                .map(|k| {
+                    let d = vo.process(&seq.frames[k], None).diagnostics;
+                    let true_arc = truth[k - 1].inverse().compose(&truth[k]).translation.norm();
+                    d.params[i] / true_arc
+                })
+                .skip(9)
+                .collect();
+            ratios.sort_by(f64::total_cmp);
+            (
+                ratios[0],
+                ratios[ratios.len() / 2],
+                ratios[ratios.len() - 1],
+            )
+        };
+        let (lo, mid, hi) = run(5);
+        assert!((mid - 1.0).abs() < 0.08, "median ratio {mid}");
+        assert!(lo > 0.85 && hi < 1.15, "ratios {lo}..{hi}");
+        // Off, the arc length is the initial one or the weakly observable estimate: not the
+        // truth.
+        let (_, off, _) = run(0);
+        assert!((off - 1.0).abs() > 0.15, "median ratio {off}");
     }
 
     #[test]
