@@ -126,17 +126,18 @@ pub(crate) fn print_summary(
         output.display()
     );
     note!(
-        "momo: trust: {} degenerate (motion held), {} weak (flagged); scale: {} from odometry, {} estimated, {} held, {} unobservable",
+        "momo: trust: {} degenerate (motion held), {} weak (flagged); scale: {} from odometry, {} estimated, {} from the road, {} held, {} unobservable",
         summary.degenerate,
         summary.weak,
         summary.scale_odometry,
         summary.scale_estimated,
+        summary.scale_road,
         summary.scale_held,
         summary.scale_unobservable
     );
     if summary.scale_never_measured() {
         note!(
-            "momo: warning: the scale was never measured (no odometry.csv and no frame where the rig made it observable): the trajectory's scale is arbitrary"
+            "momo: warning: the scale was never measured (no odometry.csv, no frame where the rig made it observable and none read off the road): the trajectory's scale is arbitrary"
         );
     }
 }

@@ -160,7 +160,7 @@ impl PyDiagnostics {
     fn status(&self) -> String {
         tag(&self.inner.status)
     }
-    /// Where the scale came from: `"odometry"`, `"estimated"`, `"held"` or `"unobservable"`.
+    /// Where the scale came from: `"odometry"`, `"estimated"`, `"road"`, `"held"` or `"unobservable"`.
     #[getter]
     fn scale_source(&self) -> String {
         tag(&self.inner.scale)

@@ -60,6 +60,9 @@ pub enum ScaleSource {
     /// `odometry.initial_arc_length` or the last value odometry gave, so the trajectory's scale
     /// is arbitrary.
     Unobservable,
+    /// No odometry, one camera, `odometry.road_scale_frames`: held at the median of the last
+    /// frames' arc lengths from the road plane ([`Odometry::road_arc_length`]).
+    Road,
 }
 
 /// Per-frame diagnostics (one row of `--diagnostics`).
@@ -1165,12 +1168,15 @@ impl Odometry {
                 if self.config.odometry.road_scale_frames > 0 && self.rig.len() == 1 =>
             {
                 // `odometry.road_scale_frames`: the median of the last frames' road arc
-                // lengths, held for the solve (the initial arc length until there is one).
-                if let Some(l) = median(self.road_arc_lengths.iter().copied()) {
-                    init[i] = l;
-                }
+                // lengths, held for the solve (the last arc length until there is one).
                 fixed[i] = true;
-                ScaleSource::Held
+                match crate::stats::median(self.road_arc_lengths.iter().copied()) {
+                    Some(l) => {
+                        init[i] = l;
+                        ScaleSource::Road
+                    }
+                    None => ScaleSource::Held,
+                }
             }
             (Some(i), None) => {
                 if !self.scale_observable {
@@ -3863,21 +3869,6 @@ impl Odometry {
 /// The fewest road matches of [`Odometry::road_arc_length`]'s best arc length.
 const ROAD_SCALE_MIN_MATCHES: usize = 12;
 
-/// The median of `values` (the mean of the middle two of an even count); `None` if empty.
-fn median(values: impl Iterator<Item = f64>) -> Option<f64> {
-    let mut v: Vec<f64> = values.collect();
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    Some(if v.len() % 2 == 0 {
-        0.5 * (v[m - 1] + v[m])
-    } else {
-        v[m]
-    })
-}
-
 /// The fewest labelled matches outside the support whose share [`quiet_memory`] reads (the
 /// separation's persistence uses the same count).
 const QUIET_MIN_LABELLED: usize = 8;
@@ -5852,6 +5843,9 @@ mod tests {
             let mut ratios: Vec<f64> = (1..seq.num_frames())
                 .map(|k| {
                     let d = vo.process(&seq.frames[k], None).diagnostics;
+                    if frames > 0 && k >= 10 {
+                        assert_eq!(d.scale, ScaleSource::Road, "frame {k}");
+                    }
                     let true_arc = truth[k - 1].inverse().compose(&truth[k]).translation.norm();
                     d.params[i] / true_arc
                 })

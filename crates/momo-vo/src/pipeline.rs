@@ -115,6 +115,8 @@ pub struct RunSummary {
     pub scale_held: usize,
     /// Frame pairs whose scale the rig can never observe.
     pub scale_unobservable: usize,
+    /// Frame pairs whose scale came from the road plane (`odometry.road_scale_frames`).
+    pub scale_road: usize,
     /// Frame pairs where an extra start won.
     pub restarts_won: usize,
     /// Sum of per-frame compute times, seconds.
@@ -140,7 +142,10 @@ impl RunSummary {
     /// Whether the scale was never measured: no frame pair took it from odometry or estimated
     /// it (the trajectory's scale is arbitrary).
     pub fn scale_never_measured(&self) -> bool {
-        self.frames > 1 && self.scale_odometry == 0 && self.scale_estimated == 0
+        self.frames > 1
+            && self.scale_odometry == 0
+            && self.scale_estimated == 0
+            && self.scale_road == 0
     }
 
     fn add(&mut self, d: &FrameDiagnostics) {
@@ -157,6 +162,7 @@ impl RunSummary {
             ScaleSource::Estimated => self.scale_estimated += 1,
             ScaleSource::Held => self.scale_held += 1,
             ScaleSource::Unobservable => self.scale_unobservable += 1,
+            ScaleSource::Road => self.scale_road += 1,
         }
         self.restarts_won += usize::from(d.restart_won);
         self.compute_seconds += d.time_us * 1e-6;

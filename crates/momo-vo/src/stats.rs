@@ -1,5 +1,6 @@
 //! Order statistics shared by the run's memories (the road score's drop,
-//! [`crate::ground_drop`]; the tilt reference, [`crate::hypotheses::HypothesisTracker::tilt_reference`]).
+//! [`crate::ground_drop`]; the tilt reference, [`crate::hypotheses::HypothesisTracker::tilt_reference`];
+//! the road arc lengths of `odometry.road_scale_frames`).
 
 /// The median of `values`: the middle value of an odd count, the mean of the two middle values
 /// of an even count; `None` if there are none. NaN sorts last ([`f64::total_cmp`]).
