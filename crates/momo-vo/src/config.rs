@@ -97,8 +97,8 @@ pub struct OdometryOptions {
     /// frame's is where its support drops: an object inside the still cut biases the solve by
     /// more than its formal covariance.
     pub standstill_jackknife: bool,
-    /// Without odometry.csv and without cross-camera matches (a single camera: the scale is not
-    /// observable from the matches), the arc length held for each frame is the median of the
+    /// On a single camera without odometry.csv (its matches observe the scale at most weakly,
+    /// through the lever arm in curves), the arc length held for each frame is the median of the
     /// last this many frames' arc lengths from the road plane (`Odometry::road_arc_length`:
     /// the arc length at which most of the motion's static matches stand on the road at the
     /// camera's known height), from estimated frames; `odometry.initial_arc_length` until

@@ -1164,9 +1164,7 @@ impl Odometry {
                 fixed[i] = true;
                 ScaleSource::Estimated
             }
-            (Some(i), None)
-                if self.config.odometry.road_scale_frames > 0 && self.rig.len() == 1 =>
-            {
+            (Some(i), None) if self.road_scale_on() => {
                 // `odometry.road_scale_frames`: the median of the last frames' road arc
                 // lengths, held for the solve (the last arc length until there is one).
                 fixed[i] = true;
@@ -1951,18 +1949,15 @@ impl Odometry {
             }
         }
         // `odometry.road_scale_frames`: this frame's arc length from the road plane.
-        let keep = self.config.odometry.road_scale_frames;
-        if keep > 0
-            && self.rig.len() == 1
+        if self.road_scale_on()
             && arc_length.is_none()
-            && !cross_scale
             && !standstill
             && diag.status == FrameStatus::Estimated
             && let Some(i) = arc_index
             && let Some(l) = self.road_arc_length(obs, &params, i)
         {
             self.road_arc_lengths.push_back(l);
-            while self.road_arc_lengths.len() > keep {
+            while self.road_arc_lengths.len() > self.config.odometry.road_scale_frames {
                 self.road_arc_lengths.pop_front();
             }
         }
@@ -1988,6 +1983,12 @@ impl Odometry {
             motion,
             diagnostics: diag,
         }
+    }
+
+    /// Whether `odometry.road_scale_frames` applies: on, and a single camera (no cross-camera
+    /// matches to measure the scale with).
+    fn road_scale_on(&self) -> bool {
+        self.config.odometry.road_scale_frames > 0 && self.rig.len() == 1
     }
 
     /// The arc length at which the static world of the motion `params` stands on the road
@@ -2932,8 +2933,8 @@ impl Odometry {
             return;
         }
         let t = &self.config.trust;
-        let mut cov = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
-        let before = cov.clone();
+        let before = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
+        let mut cov = before.clone();
         for &[gx, gy] in &t.jackknife_grids {
             let samples: Vec<Vec<f64>> = trust::leave_one_cell_out(&self.rig, read, (gx, gy))
                 .iter()
@@ -2944,11 +2945,7 @@ impl Odometry {
                 cov = trust::widen(&cov, &j, t.jackknife_min_ratio);
             }
         }
-        for (j, &i) in sol.free.iter().enumerate() {
-            let added = (cov[(j, j)] - before[(j, j)]).max(0.0);
-            diag.param_sigmas[i] = (diag.param_sigmas[i].powi(2) + added).sqrt();
-        }
-        diag.covariance = cov.transpose().iter().copied().collect();
+        report_widened(&before, cov, &sol.free, diag);
     }
 
     fn solve_with_restarts(
@@ -3186,11 +3183,7 @@ impl Odometry {
         let alternatives: Vec<&[f64]> = alternatives.iter().map(Vec::as_slice).collect();
         let cov = nalgebra::DMatrix::from_row_slice(k, k, &diag.covariance);
         let wide = trust::alternatives_covariance(&cov, &a, &alternatives, w);
-        for (j, &i) in free_params.iter().enumerate() {
-            let added = (wide[(j, j)] - cov[(j, j)]).max(0.0);
-            diag.param_sigmas[i] = (diag.param_sigmas[i].powi(2) + added).sqrt();
-        }
-        diag.covariance = wide.transpose().iter().copied().collect();
+        report_widened(&cov, wide, free_params, diag);
         true
     }
 
@@ -3864,6 +3857,22 @@ impl Odometry {
             _ => None,
         }
     }
+}
+
+/// Reports `wide`, a widening of the frame's reported covariance `cov` over the free parameters
+/// `free`: the covariance (row by row) and each sigma grown by the variance added on its
+/// diagonal (the sigmas may already hold more than `cov`, e.g. an arc length's own sigma).
+fn report_widened(
+    cov: &nalgebra::DMatrix<f64>,
+    wide: nalgebra::DMatrix<f64>,
+    free: &[usize],
+    diag: &mut FrameDiagnostics,
+) {
+    for (j, &i) in free.iter().enumerate() {
+        let added = (wide[(j, j)] - cov[(j, j)]).max(0.0);
+        diag.param_sigmas[i] = (diag.param_sigmas[i].powi(2) + added).sqrt();
+    }
+    diag.covariance = wide.transpose().iter().copied().collect();
 }
 
 /// The fewest road matches of [`Odometry::road_arc_length`]'s best arc length.

@@ -139,8 +139,8 @@ impl RunSummary {
         }
     }
 
-    /// Whether the scale was never measured: no frame pair took it from odometry or estimated
-    /// it (the trajectory's scale is arbitrary).
+    /// Whether the scale was never measured: no frame pair took it from odometry, estimated it
+    /// or read it off the road (the trajectory's scale is arbitrary).
     pub fn scale_never_measured(&self) -> bool {
         self.frames > 1
             && self.scale_odometry == 0
