@@ -104,21 +104,39 @@ fn fisheye_rig_with_blinded_camera_end_to_end() {
 }
 
 #[test]
-fn run_without_odometry_holds_or_estimates_scale_and_says_which() {
+fn run_without_odometry_reads_the_scale_off_the_road_or_holds_it_and_says_which() {
     let tmp = tempfile::tempdir().expect("tmp");
     let seq = tmp.path().join("seq");
     let mut cfg = SimConfig::clean_pinhole();
     cfg.frames = 30;
     write_sim(&seq, &cfg);
     std::fs::remove_file(seq.join("odometry.csv")).expect("odometry written by the simulator");
+    let off = tmp.path().join("off.toml");
+    std::fs::write(&off, "[odometry]\nroad_scale_frames = 0\n").expect("write");
     let out = tmp.path().join("poses.txt");
     let diag = tmp.path().join("diag.csv");
-    let o = run(&seq, &out, &["--diagnostics", diag.to_str().expect("utf8")]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(momo::io::read_poses(&out).expect("poses").len(), 30);
-    let text = std::fs::read_to_string(&diag).expect("diag");
-    for line in text.lines().skip(1) {
-        let scale = line.split(',').nth(2).expect("scale column");
+    // The scale column of each frame, with the given extra arguments.
+    let scales = |extra: &[&str]| -> Vec<String> {
+        let mut args = vec!["--diagnostics", diag.to_str().expect("utf8")];
+        args.extend_from_slice(extra);
+        let o = run(&seq, &out, &args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(momo::io::read_poses(&out).expect("poses").len(), 30);
+        let text = std::fs::read_to_string(&diag).expect("diag");
+        text.lines()
+            .skip(1)
+            .map(|line| line.split(',').nth(2).expect("scale column").to_string())
+            .collect()
+    };
+    // The default: the road plane gives the arc length from the first frame that reads it on.
+    let by_road = scales(&[]);
+    assert!(
+        by_road[0] == "estimated" || by_road[0] == "held",
+        "{by_road:?}"
+    );
+    assert!(by_road[9..].iter().all(|s| s == "road"), "{by_road:?}");
+    // Off: estimated through the lever arm, or held.
+    for scale in scales(&["--config", off.to_str().expect("utf8")]) {
         assert!(scale == "estimated" || scale == "held", "{scale}");
     }
 }

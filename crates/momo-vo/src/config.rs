@@ -99,12 +99,16 @@ pub struct OdometryOptions {
     pub standstill_jackknife: bool,
     /// On a single camera without odometry.csv (its matches observe the scale at most weakly,
     /// through the lever arm in curves), the arc length held for each frame is the median of the
-    /// last this many frames' arc lengths from the road plane (`Odometry::road_arc_length`:
+    /// last this many admitted arc lengths from the road plane (`Odometry::road_arc_length`:
     /// the arc length at which most of the motion's static matches stand on the road at the
-    /// camera's known height), from estimated frames; `odometry.initial_arc_length` until
-    /// there is one. 0: off (the arc length is estimated, or held, as before). The
-    /// separation's road cues read the road at the motion's metric scale; a wrong scale by 20 %
-    /// makes them pick a lead vehicle's motion.
+    /// camera's known height), read off estimated and weak moving frames; a road arc length
+    /// that leaves the held one by more than 30 % and 0.1 m (plus 0.03 m per frame since the
+    /// last admitted one) is not admitted unless ten in a row are not
+    /// (`Odometry::admit_road_arc_length`: a lead vehicle's "road"). Until there is one, the
+    /// arc length is estimated or held as with 0 (off). The separation's road cues read the
+    /// road at the motion's metric scale; a wrong scale by 20 % makes them pick a lead
+    /// vehicle's motion. Default 1 since the forty-sixth session (docs/RESULTS.md): the last
+    /// admitted one, which follows braking and starts that a longer median lags behind.
     pub road_scale_frames: usize,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,
@@ -592,7 +596,7 @@ impl Default for OdometryOptions {
             standstill_still_angle: 0.006,
             standstill_cell_cap: 2.0,
             standstill_jackknife: true,
-            road_scale_frames: 0,
+            road_scale_frames: 1,
             min_matches: 8,
             initial_arc_length: 1.0,
             estimate_scale: true,
@@ -970,8 +974,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # less than standstill_still_angle radians (a standing vehicle does not turn), at most\n\
          # standstill_cell_cap times the median per image cell (a lead car holds many in a few\n\
          # cells), its covariance widened by their leave-one-cell-out jackknife\n\
-         # (standstill_jackknife). road_scale_frames (opt-in): without odometry.csv, one camera\n\
-         # holds the median of the last N frames' arc lengths from the road plane.",
+         # (standstill_jackknife). road_scale_frames: without odometry.csv, one camera holds the\n\
+         # median of the last N admitted arc lengths from the road plane (0: off).",
     ),
     (
         "odometry.final_fit",

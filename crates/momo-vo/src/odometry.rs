@@ -242,6 +242,11 @@ pub struct Odometry {
     /// `odometry.road_scale_frames`: the last frames' arc lengths from the road plane
     /// ([`Odometry::road_arc_length`]).
     road_arc_lengths: std::collections::VecDeque<f64>,
+    /// `odometry.road_scale_frames`: the road arc lengths rejected in a row by the gate of
+    /// [`Odometry::admit_road_arc_length`] (newest last; cleared by an admitted one).
+    road_rejected: Vec<f64>,
+    /// `odometry.road_scale_frames`: the frame whose road arc length was admitted last.
+    road_admitted_frame: usize,
     /// Running mean of the soft manifold's prior residuals over the moving frames
     /// (`odometry.soft_prior_centring_frames`; empty if off or the model is hard).
     soft_center: Vec<f64>,
@@ -412,6 +417,8 @@ impl Odometry {
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
             road_arc_lengths: std::collections::VecDeque::new(),
+            road_rejected: Vec::new(),
+            road_admitted_frame: 0,
             soft_center,
             soft_count: 0,
             soft_inv_scale,
@@ -1079,6 +1086,8 @@ impl Odometry {
         self.recent_tilts.clear();
         self.recent_motions.clear();
         self.road_arc_lengths.clear();
+        self.road_rejected.clear();
+        self.road_admitted_frame = 0;
         self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
             let neutral = self
                 .estimator
@@ -1164,17 +1173,17 @@ impl Odometry {
                 fixed[i] = true;
                 ScaleSource::Estimated
             }
-            (Some(i), None) if self.road_scale_on() => {
+            (Some(i), None)
+                if self.road_scale_on()
+                    && let Some(l) =
+                        crate::stats::median(self.road_arc_lengths.iter().copied()) =>
+            {
                 // `odometry.road_scale_frames`: the median of the last frames' road arc
-                // lengths, held for the solve (the last arc length until there is one).
+                // lengths, held for the solve (until there is one, the arc length is estimated
+                // or held as without the option).
                 fixed[i] = true;
-                match crate::stats::median(self.road_arc_lengths.iter().copied()) {
-                    Some(l) => {
-                        init[i] = l;
-                        ScaleSource::Road
-                    }
-                    None => ScaleSource::Held,
-                }
+                init[i] = l;
+                ScaleSource::Road
             }
             (Some(i), None) => {
                 if !self.scale_observable {
@@ -1952,14 +1961,11 @@ impl Odometry {
         if self.road_scale_on()
             && arc_length.is_none()
             && !standstill
-            && diag.status == FrameStatus::Estimated
+            && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
             && let Some(i) = arc_index
             && let Some(l) = self.road_arc_length(obs, &params, i)
         {
-            self.road_arc_lengths.push_back(l);
-            while self.road_arc_lengths.len() > self.config.odometry.road_scale_frames {
-                self.road_arc_lengths.pop_front();
-            }
+            self.admit_road_arc_length(l);
         }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -1982,6 +1988,39 @@ impl Odometry {
         FrameResult {
             motion,
             diagnostics: diag,
+        }
+    }
+
+    /// Adds a frame's road arc length to the history of `odometry.road_scale_frames` unless it
+    /// leaves the held median by more than [`ROAD_SCALE_GATE`] (relative) and
+    /// [`ROAD_SCALE_GATE_METRES`]: a vehicle does not change its speed that much from one frame
+    /// to the next, but a lead vehicle that moves with the ego vehicle stands on a "road" of
+    /// its own at a fraction of the ego motion's scale (its motion relative to the camera is
+    /// the difference of the two) and can hold more road matches than the road itself where it
+    /// covers it. After [`ROAD_SCALE_RESETS`] rejections in a row the history restarts from
+    /// them (a wrong start must not be held forever).
+    fn admit_road_arc_length(&mut self, l: f64) {
+        let held = crate::stats::median(self.road_arc_lengths.iter().copied());
+        let stale = self.frame.saturating_sub(self.road_admitted_frame + 1) as f64;
+        let admit = held.is_none_or(|h| {
+            (l - h).abs()
+                <= (ROAD_SCALE_GATE * h).max(ROAD_SCALE_GATE_METRES)
+                    + ROAD_SCALE_GATE_METRES_PER_FRAME * stale
+        });
+        if admit {
+            self.road_admitted_frame = self.frame;
+            self.road_rejected.clear();
+            self.road_arc_lengths.push_back(l);
+        } else {
+            self.road_rejected.push(l);
+            if self.road_rejected.len() < ROAD_SCALE_RESETS {
+                return;
+            }
+            self.road_arc_lengths = self.road_rejected.drain(..).collect();
+            self.road_admitted_frame = self.frame;
+        }
+        while self.road_arc_lengths.len() > self.config.odometry.road_scale_frames {
+            self.road_arc_lengths.pop_front();
         }
     }
 
@@ -3877,6 +3916,23 @@ fn report_widened(
 
 /// The fewest road matches of [`Odometry::road_arc_length`]'s best arc length.
 const ROAD_SCALE_MIN_MATCHES: usize = 12;
+
+/// [`Odometry::admit_road_arc_length`]: a road arc length further than this fraction of the held
+/// one from it (and further than [`ROAD_SCALE_GATE_METRES`]) is rejected.
+const ROAD_SCALE_GATE: f64 = 0.3;
+
+/// [`Odometry::admit_road_arc_length`]: the gate's floor in metres (slow frames: a start from
+/// rest doubles the arc length within a few frames).
+const ROAD_SCALE_GATE_METRES: f64 = 0.1;
+
+/// [`Odometry::admit_road_arc_length`]: the gate widens by this many metres for every frame
+/// since the last admitted road arc length (a vehicle's speed changes by at most so much per
+/// frame: 3 m/s² at 10 Hz).
+const ROAD_SCALE_GATE_METRES_PER_FRAME: f64 = 0.03;
+
+/// [`Odometry::admit_road_arc_length`]: this many rejected road arc lengths in a row restart
+/// the history from them.
+const ROAD_SCALE_RESETS: usize = 10;
 
 /// The fewest labelled matches outside the support whose share [`quiet_memory`] reads (the
 /// separation's persistence uses the same count).
@@ -5867,13 +5923,67 @@ mod tests {
                 ratios[ratios.len() - 1],
             )
         };
-        let (lo, mid, hi) = run(5);
-        assert!((mid - 1.0).abs() < 0.08, "median ratio {mid}");
-        assert!(lo > 0.85 && hi < 1.15, "ratios {lo}..{hi}");
+        // The default (the last admitted road arc length) and a median of five.
+        for frames in [1, 5] {
+            let (lo, mid, hi) = run(frames);
+            assert!((mid - 1.0).abs() < 0.08, "{frames}: median ratio {mid}");
+            assert!(lo > 0.85 && hi < 1.15, "{frames}: ratios {lo}..{hi}");
+        }
         // Off, the arc length is the initial one or the weakly observable estimate: not the
         // truth.
         let (_, off, _) = run(0);
         assert!((off - 1.0).abs() > 0.15, "median ratio {off}");
+    }
+
+    #[test]
+    fn the_road_arc_length_gate_rejects_a_lead_vehicles_road_widens_with_time_and_restarts() {
+        let rig = momo_sim::simulate(&momo_sim::SimConfig {
+            frames: 2,
+            ..momo_sim::SimConfig::clean_pinhole()
+        })
+        .expect("simulates")
+        .sequence
+        .rig;
+        let mut config = crate::Config::default();
+        config.odometry.road_scale_frames = 5;
+        let mut vo = Odometry::new(rig, config).expect("builds");
+        let held = |vo: &Odometry| crate::stats::median(vo.road_arc_lengths.iter().copied());
+        // One road arc length per frame.
+        let feed = |vo: &mut Odometry, l: f64| {
+            vo.frame += 1;
+            vo.admit_road_arc_length(l);
+        };
+        for l in [1.0, 1.02, 0.98] {
+            feed(&mut vo, l);
+        }
+        assert_eq!(held(&vo), Some(1.0));
+        // A lead vehicle's "road" at a fifth of the scale, four frames in a row: rejected.
+        for _ in 0..4 {
+            feed(&mut vo, 0.2);
+        }
+        assert_eq!(held(&vo), Some(1.0));
+        assert_eq!(vo.road_rejected.len(), 4);
+        // The road again: admitted, the rejections forgotten.
+        feed(&mut vo, 1.04);
+        assert!(vo.road_rejected.is_empty());
+        assert_eq!(vo.road_arc_lengths.len(), 4);
+        // 0.5 m right after: too far from the held 1 m.
+        feed(&mut vo, 0.5);
+        assert_eq!(vo.road_rejected.len(), 1);
+        // Twenty frames without a road arc length (braking behind a lead vehicle): 0.5 m now
+        // fits within the widened gate (0.3 m + 0.03 m per frame).
+        vo.frame += 20;
+        feed(&mut vo, 0.5);
+        assert!(vo.road_rejected.is_empty());
+        assert_eq!(vo.road_arc_lengths.back(), Some(&0.5));
+        // Ten rejected in a row, at one new level: the history restarts from them.
+        let before = held(&vo).expect("a history");
+        for k in 0..ROAD_SCALE_RESETS {
+            assert_eq!(held(&vo), Some(before), "rejection {k}");
+            feed(&mut vo, 4.0);
+        }
+        assert_eq!(held(&vo), Some(4.0));
+        assert!(vo.road_rejected.is_empty());
     }
 
     #[test]

@@ -159,12 +159,15 @@ fn centred_rig() -> Rig {
 
 #[test]
 fn without_odometry_scale_is_estimated_in_curves_with_a_lever_arm_and_held_otherwise() {
-    // A forward camera 1.5 m ahead of the motion centre: in a curve it moves sideways.
+    // A forward camera 1.5 m ahead of the motion centre: in a curve it moves sideways. The
+    // road's arc length (`odometry.road_scale_frames`) is off here: this is the estimate it
+    // falls back on before the road gives one.
     let rig = canned::pinhole_rig();
-    let config = Config {
+    let mut config = Config {
         model: Box::new(SingleTrack2d),
         ..Default::default()
     };
+    config.odometry.road_scale_frames = 0;
     let mut vo = Odometry::new(rig.clone(), config).expect("valid");
     assert!(vo.scale_observable());
     let truth = motion(0.15, 1.5);
@@ -188,6 +191,22 @@ fn without_odometry_scale_is_estimated_in_curves_with_a_lever_arm_and_held_other
         None,
     );
     assert_eq!(r.diagnostics.scale, ScaleSource::Held);
+    assert!((r.diagnostics.params[1] - 1.5).abs() < 0.15);
+    // With the road's arc length on (the default), the first frame has no road history yet:
+    // it falls back on the same estimate.
+    let mut vo = Odometry::new(
+        rig.clone(),
+        Config {
+            model: Box::new(SingleTrack2d),
+            ..Default::default()
+        },
+    )
+    .expect("valid");
+    let r = vo.process(
+        &canned::synthetic_observations(&rig, &truth, 300, 0, 5),
+        None,
+    );
+    assert_eq!(r.diagnostics.scale, ScaleSource::Estimated);
     assert!((r.diagnostics.params[1] - 1.5).abs() < 0.15);
 
     // A camera in the motion centre never observes scale: always held, and the driver says so
