@@ -5858,15 +5858,20 @@ mod tests {
         (momo_core::so3_log(&motion.rotation).norm(), sigma, d)
     }
 
-    #[test]
-    fn a_standing_vehicle_at_rest_does_not_follow_a_passing_bus() {
-        let rig = momo_sim::simulate(&momo_sim::SimConfig {
+    /// The clean_pinhole scenario's rig (one KITTI-like camera).
+    fn clean_pinhole_rig() -> Rig {
+        momo_sim::simulate(&momo_sim::SimConfig {
             frames: 2,
             ..momo_sim::SimConfig::clean_pinhole()
         })
         .expect("simulates")
         .sequence
-        .rig;
+        .rig
+    }
+
+    #[test]
+    fn a_standing_vehicle_at_rest_does_not_follow_a_passing_bus() {
+        let rig = clean_pinhole_rig();
         let deg = 1.0_f64.to_radians();
         // A bus with 60 % of the matches moves like a turn of 1.5 deg (19 px).
         let bus = 1.5 * deg;
@@ -5937,13 +5942,7 @@ mod tests {
 
     #[test]
     fn the_road_arc_length_gate_rejects_a_lead_vehicles_road_widens_with_time_and_restarts() {
-        let rig = momo_sim::simulate(&momo_sim::SimConfig {
-            frames: 2,
-            ..momo_sim::SimConfig::clean_pinhole()
-        })
-        .expect("simulates")
-        .sequence
-        .rig;
+        let rig = clean_pinhole_rig();
         let mut config = crate::Config::default();
         config.odometry.road_scale_frames = 5;
         let mut vo = Odometry::new(rig, config).expect("builds");
@@ -5988,13 +5987,7 @@ mod tests {
 
     #[test]
     fn a_lead_car_creeping_inside_the_still_cut_neither_biases_nor_hides_in_the_covariance() {
-        let rig = momo_sim::simulate(&momo_sim::SimConfig {
-            frames: 2,
-            ..momo_sim::SimConfig::clean_pinhole()
-        })
-        .expect("simulates")
-        .sequence
-        .rig;
+        let rig = clean_pinhole_rig();
         let deg = 1.0_f64.to_radians();
         // A lead car in 240 x 100 px ahead holds 200 of 290 matches and drifts sideways like a
         // turn of 0.2 deg (2.5 px): inside the still cut (0.006 rad = 0.34 deg), with up to 1
