@@ -1967,6 +1967,16 @@ impl Odometry {
         {
             self.admit_road_arc_length(l);
         }
+        // `trust.stale_scale_frames`: the road's arc length not measured again for so many
+        // frames, report only (after the frame's state).
+        let stale = self.config.trust.stale_scale_frames;
+        if stale > 0
+            && diag.scale == ScaleSource::Road
+            && !standstill
+            && self.frame.saturating_sub(self.road_admitted_frame) >= stale
+        {
+            flag_weak_report_only(&mut diag, Reason::StaleScale);
+        }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
@@ -5914,7 +5924,11 @@ mod tests {
                 .map(|k| {
                     let d = vo.process(&seq.frames[k], None).diagnostics;
                     if frames > 0 && k >= 10 {
-                        assert_eq!(d.scale, ScaleSource::Road, "frame {k}");
+                        assert!(
+                            k == 1 || d.scale == ScaleSource::Road,
+                            "frame {k}: {:?}",
+                            d.scale
+                        );
                     }
                     let true_arc = truth[k - 1].inverse().compose(&truth[k]).translation.norm();
                     d.params[i] / true_arc
@@ -5938,6 +5952,59 @@ mod tests {
         // truth.
         let (_, off, _) = run(0);
         assert!((off - 1.0).abs() > 0.15, "median ratio {off}");
+    }
+
+    #[test]
+    fn without_odometry_a_road_arc_length_not_measured_again_is_flagged_stale() {
+        use momo_sim::{SimConfig, simulate};
+        let sim = simulate(&SimConfig {
+            frames: 30,
+            seed: 5,
+            ..SimConfig::clean_pinhole()
+        })
+        .expect("the clean scenario simulates");
+        let seq = &sim.sequence;
+        let mount = seq.rig.cameras()[0].t_vehicle_camera.rotation;
+        let mut vo = Odometry::new(seq.rig.clone(), crate::Config::default()).expect("builds");
+        let stale = vo.config.trust.stale_scale_frames;
+        assert!(stale > 0, "on by default");
+        // From frame 11 on the road is hidden: only the matches above the horizon are kept.
+        let hidden = 11;
+        let mut rows = Vec::new();
+        for k in 1..seq.num_frames() {
+            let mut obs = seq.frames[k].clone();
+            if k >= hidden {
+                for m in &mut obs.per_camera {
+                    m.retain(|o| (mount * o.f0).z > 0.0);
+                }
+            }
+            let d = vo.process(&obs, None).diagnostics;
+            assert!(
+                k == 1 || d.scale == ScaleSource::Road,
+                "frame {k}: {:?}",
+                d.scale
+            );
+            rows.push((k, d.status, d.reason));
+        }
+        // No frame says `estimated` from the stale-th frame without a road arc length on (the
+        // first ones say `road_score_drop`, then `stale_scale` to the end), and none is stale
+        // before.
+        let first = hidden + stale - 1;
+        for &(k, status, reason) in &rows {
+            if k < first {
+                assert_ne!(reason, Some(Reason::StaleScale), "frame {k}");
+            } else {
+                assert_eq!(status, FrameStatus::Weak, "frame {k}");
+            }
+        }
+        let last = rows.last().expect("frames");
+        assert_eq!(last.2, Some(Reason::StaleScale));
+        assert!(
+            rows.iter()
+                .filter(|r| r.2 == Some(Reason::StaleScale))
+                .count()
+                >= 5
+        );
     }
 
     #[test]

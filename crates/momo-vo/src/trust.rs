@@ -331,6 +331,16 @@ pub struct TrustOptions {
     /// keeps 2-10 % of its 800 matches (15-80 inliers) against 30-40 % on ordinary frames.
     /// Report only, as [`TrustOptions::yaw_change`]: poses unchanged. 0: off (default).
     pub min_inlier_share: f64,
+    /// Without odometry.csv, on one camera whose arc length comes from the road plane
+    /// (`odometry.road_scale_frames`): a moving frame is flagged `weak` / `stale_scale` where it
+    /// was `estimated` once this many frames in a row, itself included, admitted no road arc
+    /// length. The separation tells the static scene from a lead vehicle by the road at the
+    /// motion's metric scale, and a motion that follows a lead vehicle reads no road: a held
+    /// arc length that is not measured again is where such runs hide (forty-sixth session:
+    /// 16 of the 16 `estimated` frames above 1 deg of `dev` without odometry.csv had gone 5 or
+    /// more frames without one, against 1 % of all its frames). Report only, as
+    /// [`TrustOptions::yaw_change`]: poses unchanged. 0: off. Default 8.
+    pub stale_scale_frames: usize,
     /// A lock-in: a moving frame whose reported motion keeps fewer than this share of its
     /// matches as inliers *and* changes its yaw `ω_z` (`ω = log R`, vehicle frame) by more
     /// than [`TrustOptions::support_change_yaw`] or its tilt `(ω_x, ω_y)` by more than
@@ -425,6 +435,7 @@ impl Default for TrustOptions {
             yaw_change: 0.0,
             yaw_change_weight: 1.0,
             min_inlier_share: 0.0,
+            stale_scale_frames: 8,
             support_change_share: 0.15,
             support_change_yaw: 0.00873,
             support_change_tilt: 0.0157,
@@ -684,6 +695,9 @@ pub enum Reason {
     YawChange,
     /// The inliers are fewer than `trust.min_inlier_share` of the matches (report only).
     LowSupport,
+    /// No odometry: the arc length from the road plane was not measured again for
+    /// `trust.stale_scale_frames` frames (report only).
+    StaleScale,
     /// A small support with a jump of the yaw or the tilt, or a small support right after
     /// such a frame (`trust.support_change_share`; report only).
     SupportChange,
@@ -711,6 +725,7 @@ impl Reason {
             Reason::RoadScoreDrop => "road_score_drop",
             Reason::YawChange => "yaw_change",
             Reason::LowSupport => "low_support",
+            Reason::StaleScale => "stale_scale",
             Reason::SupportChange => "support_change",
             Reason::IllConditioned => "ill_conditioned",
         }
