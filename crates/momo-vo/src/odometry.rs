@@ -1603,15 +1603,12 @@ impl Odometry {
                     && opts.memory_final
                     && opts.memory_radius > 0.0
                 {
-                    let support: Vec<Vec<bool>> = crate::separate::epipolar_at_least(
+                    let support = crate::separate::epipolar_within(
                         &self.rig,
                         &self.estimator.motion(&sol.params),
                         obs,
                         opts.threshold,
-                    )
-                    .into_iter()
-                    .map(|m| m.into_iter().map(|outside| !outside).collect())
-                    .collect();
+                    );
                     self.hypotheses.memory = crate::hypotheses::MatchMemory::record(obs, &support);
                 }
                 // The jackknife (a dozen solves) only where the support dropped against the
@@ -1973,7 +1970,7 @@ impl Odometry {
         if stale > 0
             && diag.scale == ScaleSource::Road
             && !standstill
-            && self.frame.saturating_sub(self.road_admitted_frame) >= stale
+            && self.frames_since_road_admitted() >= stale
         {
             flag_weak_report_only(&mut diag, Reason::StaleScale);
         }
@@ -2011,7 +2008,8 @@ impl Odometry {
     /// them (a wrong start must not be held forever).
     fn admit_road_arc_length(&mut self, l: f64) {
         let held = crate::stats::median(self.road_arc_lengths.iter().copied());
-        let stale = self.frame.saturating_sub(self.road_admitted_frame + 1) as f64;
+        // Frames since the last admitted one, this one excluded.
+        let stale = self.frames_since_road_admitted().saturating_sub(1) as f64;
         let admit = held.is_none_or(|h| {
             (l - h).abs()
                 <= (ROAD_SCALE_GATE * h).max(ROAD_SCALE_GATE_METRES)
@@ -2032,6 +2030,12 @@ impl Odometry {
         while self.road_arc_lengths.len() > self.config.odometry.road_scale_frames {
             self.road_arc_lengths.pop_front();
         }
+    }
+
+    /// Frames since the last admitted road arc length (`odometry.road_scale_frames`), this one
+    /// included.
+    fn frames_since_road_admitted(&self) -> usize {
+        self.frame.saturating_sub(self.road_admitted_frame)
     }
 
     /// Whether `odometry.road_scale_frames` applies: on, and a single camera (no cross-camera
@@ -2062,15 +2066,12 @@ impl Odometry {
             .as_ref()
             .filter(|o| o.enabled)?;
         let h = opts.hypotheses()?;
-        let support: Vec<Vec<bool>> = crate::separate::epipolar_at_least(
+        let support = crate::separate::epipolar_within(
             &self.rig,
             &self.estimator.motion(params),
             obs,
             opts.threshold,
-        )
-        .into_iter()
-        .map(|m| m.into_iter().map(|outside| !outside).collect())
-        .collect();
+        );
         const STEP: f64 = 1.02;
         let (lo, hi) = (0.05_f64, 5.0_f64);
         let steps = ((hi / lo).ln() / STEP.ln()).ceil() as usize;
@@ -2115,11 +2116,7 @@ impl Odometry {
             .filter(|o| o.enabled)?;
         let h = opts.hypotheses()?;
         let motion = self.estimator.motion(params);
-        let support: Vec<Vec<bool>> =
-            crate::separate::epipolar_at_least(&self.rig, &motion, obs, opts.threshold)
-                .into_iter()
-                .map(|m| m.into_iter().map(|outside| !outside).collect())
-                .collect();
+        let support = crate::separate::epipolar_within(&self.rig, &motion, obs, opts.threshold);
         Some((
             crate::hypotheses::score(h, &self.rig, &motion, obs, &support),
             support,
@@ -5868,15 +5865,21 @@ mod tests {
         (momo_core::so3_log(&motion.rotation).norm(), sigma, d)
     }
 
-    /// The clean_pinhole scenario's rig (one KITTI-like camera).
-    fn clean_pinhole_rig() -> Rig {
+    /// The clean_pinhole scenario (one KITTI-like camera), `frames` frames of seed `seed`.
+    fn clean_pinhole_drive(frames: usize, seed: u64) -> momo_sim::Simulation {
         momo_sim::simulate(&momo_sim::SimConfig {
-            frames: 2,
+            frames,
+            seed,
             ..momo_sim::SimConfig::clean_pinhole()
         })
-        .expect("simulates")
-        .sequence
-        .rig
+        .expect("the clean scenario simulates")
+    }
+
+    /// The clean_pinhole scenario's rig.
+    fn clean_pinhole_rig() -> Rig {
+        clean_pinhole_drive(2, momo_sim::SimConfig::clean_pinhole().seed)
+            .sequence
+            .rig
     }
 
     #[test]
@@ -5905,13 +5908,7 @@ mod tests {
 
     #[test]
     fn without_odometry_one_camera_reads_its_arc_length_off_the_road() {
-        use momo_sim::{SimConfig, simulate};
-        let sim = simulate(&SimConfig {
-            frames: 40,
-            seed: 5,
-            ..SimConfig::clean_pinhole()
-        })
-        .expect("the clean scenario simulates");
+        let sim = clean_pinhole_drive(40, 5);
         let seq = &sim.sequence;
         let truth = seq.ground_truth.as_ref().expect("ground truth");
         let run = |frames: usize| {
@@ -5924,11 +5921,7 @@ mod tests {
                 .map(|k| {
                     let d = vo.process(&seq.frames[k], None).diagnostics;
                     if frames > 0 && k >= 10 {
-                        assert!(
-                            k == 1 || d.scale == ScaleSource::Road,
-                            "frame {k}: {:?}",
-                            d.scale
-                        );
+                        assert_eq!(d.scale, ScaleSource::Road, "frame {k}");
                     }
                     let true_arc = truth[k - 1].inverse().compose(&truth[k]).translation.norm();
                     d.params[i] / true_arc
@@ -5956,13 +5949,7 @@ mod tests {
 
     #[test]
     fn without_odometry_a_road_arc_length_not_measured_again_is_flagged_stale() {
-        use momo_sim::{SimConfig, simulate};
-        let sim = simulate(&SimConfig {
-            frames: 30,
-            seed: 5,
-            ..SimConfig::clean_pinhole()
-        })
-        .expect("the clean scenario simulates");
+        let sim = clean_pinhole_drive(30, 5);
         let seq = &sim.sequence;
         let mount = seq.rig.cameras()[0].t_vehicle_camera.rotation;
         let mut vo = Odometry::new(seq.rig.clone(), crate::Config::default()).expect("builds");

@@ -856,6 +856,18 @@ pub fn epipolar_at_least(
     per_match_sines(rig, motion, obs, angle_at_least(threshold))
 }
 
+/// The matches within `threshold` (radians) of `motion`'s epipolar geometry: the complement of
+/// [`epipolar_at_least`] (the support that the match memory records and the road cues read).
+pub fn epipolar_within(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    threshold: f64,
+) -> Vec<Vec<bool>> {
+    let at_least = angle_at_least(threshold);
+    per_match_sines(rig, motion, obs, |sines| !at_least(sines))
+}
+
 /// The decision of [`epipolar_at_least`] for one match from its [`one_sided_sines`]: whether
 /// its epipolar angle is at least `threshold` (radians), without the two `asin` where both
 /// sines are clearly on one side of `sin(threshold)`.

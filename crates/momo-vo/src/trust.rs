@@ -337,8 +337,8 @@ pub struct TrustOptions {
     /// length. The separation tells the static scene from a lead vehicle by the road at the
     /// motion's metric scale, and a motion that follows a lead vehicle reads no road: a held
     /// arc length that is not measured again is where such runs hide (forty-sixth session:
-    /// 16 of the 16 `estimated` frames above 1 deg of `dev` without odometry.csv had gone 5 or
-    /// more frames without one, against 1 % of all its frames). Report only, as
+    /// 16 of the 16 `estimated` frames above 1 deg of `dev` without odometry.csv had held the
+    /// same arc length for 5 or more frames, against 1 % of all its frames). Report only, as
     /// [`TrustOptions::yaw_change`]: poses unchanged. 0: off. Default 8.
     pub stale_scale_frames: usize,
     /// A lock-in: a moving frame whose reported motion keeps fewer than this share of its
