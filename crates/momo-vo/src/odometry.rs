@@ -2059,19 +2059,7 @@ impl Odometry {
         params: &[f64],
         arc_index: usize,
     ) -> Option<f64> {
-        let opts = self
-            .config
-            .odometry
-            .separate
-            .as_ref()
-            .filter(|o| o.enabled)?;
-        let h = opts.hypotheses()?;
-        let support = crate::separate::epipolar_within(
-            &self.rig,
-            &self.estimator.motion(params),
-            obs,
-            opts.threshold,
-        );
+        let (h, support) = self.road_support(obs, &self.estimator.motion(params))?;
         const STEP: f64 = 1.02;
         let (lo, hi) = (0.05_f64, 5.0_f64);
         let steps = ((hi / lo).ln() / STEP.ln()).ceil() as usize;
@@ -2100,6 +2088,27 @@ impl Odometry {
         Some((counts[first].0 * counts[last].0).sqrt())
     }
 
+    /// The separation's hypotheses options and the support its road cues read under `motion`
+    /// (the matches within the separation's threshold of its epipolar geometry); `None` where
+    /// the separation or its hypotheses are off.
+    fn road_support(
+        &self,
+        obs: &FrameObservations,
+        motion: &Pose<f64>,
+    ) -> Option<(&crate::hypotheses::HypothesesOptions, Vec<Vec<bool>>)> {
+        let opts = self
+            .config
+            .odometry
+            .separate
+            .as_ref()
+            .filter(|o| o.enabled)?;
+        let h = opts.hypotheses()?;
+        Some((
+            h,
+            crate::separate::epipolar_within(&self.rig, motion, obs, opts.threshold),
+        ))
+    }
+
     /// The separation's road score of `params` ([`crate::hypotheses::score`]) on its own
     /// support (the matches within the separation's threshold of its epipolar geometry), with
     /// that support; `None` where the separation or its hypotheses are off.
@@ -2108,15 +2117,8 @@ impl Odometry {
         obs: &FrameObservations,
         params: &[f64],
     ) -> Option<(usize, Vec<Vec<bool>>)> {
-        let opts = self
-            .config
-            .odometry
-            .separate
-            .as_ref()
-            .filter(|o| o.enabled)?;
-        let h = opts.hypotheses()?;
         let motion = self.estimator.motion(params);
-        let support = crate::separate::epipolar_within(&self.rig, &motion, obs, opts.threshold);
+        let (h, support) = self.road_support(obs, &motion)?;
         Some((
             crate::hypotheses::score(h, &self.rig, &motion, obs, &support),
             support,
