@@ -1028,6 +1028,115 @@ pub fn ground_mask(
     )
 }
 
+/// [`ground_support`] of each of `motions`, the motions of one model at the increasing arc
+/// lengths `arc_lengths` (the same length): equal to calling it once per motion, at a fraction
+/// of the cost where the motions share their rotation and their translation is affine in the
+/// arc length (`t(l) = t₀ + l u`, every model whose rotation does not depend on the arc length).
+/// Then a camera's translation is affine in `l` too, and so is a match's triangulated height
+/// above the road (its range `z0` is linear in the camera's translation): the height can lie
+/// within the tolerance of [`ground_mask`] (at most `max(ground_tolerance, 4 h σ / parallax)`,
+/// below `h / 2`) only on one interval of arc lengths, and the exact test runs only at the arc
+/// lengths in it (one more on either side against rounding). Motions that are not of that form
+/// take the test at every arc length.
+pub fn ground_support_over(
+    rig: &Rig,
+    arc_lengths: &[f64],
+    motions: &[Pose<f64>],
+    obs: &FrameObservations,
+    support: &[Vec<bool>],
+    opts: &HypothesesOptions,
+) -> Vec<usize> {
+    let every = || {
+        motions
+            .iter()
+            .map(|m| ground_support(rig, m, obs, support, opts))
+            .collect::<Vec<_>>()
+    };
+    let n = motions.len();
+    if n < 3 || arc_lengths.len() != n {
+        return every();
+    }
+    let (l0, l1) = (arc_lengths[0], arc_lengths[n - 1]);
+    let (m0, m1) = (&motions[0], &motions[n - 1]);
+    if !(l1 > l0) {
+        return every();
+    }
+    let u = (m1.translation - m0.translation) / (l1 - l0);
+    let t0 = m0.translation - u * l0;
+    let affine = arc_lengths.iter().zip(motions).all(|(l, m)| {
+        m.rotation == m0.rotation
+            && (m.translation - (t0 + u * *l)).norm() <= 1e-9 * (1.0 + m.translation.norm())
+    });
+    if !affine {
+        return every();
+    }
+    let mut counts = vec![0_usize; n];
+    for ((cam, matches), mask) in rig.cameras().iter().zip(&obs.per_camera).zip(support) {
+        let mount = &cam.t_vehicle_camera;
+        let height = mount.translation.z - opts.ground_z;
+        if !(height > 0.2) {
+            continue;
+        }
+        // The camera's motion at each arc length, and its translation's affine form.
+        let cams: Vec<Option<RoadCamera<'_>>> = motions
+            .iter()
+            .map(|m| {
+                let c = camera_motion(m, mount);
+                let travel = c.translation.norm();
+                (travel > 1e-9).then(|| RoadCamera {
+                    mount,
+                    direction: c.translation / travel,
+                    motion: c,
+                    travel,
+                    height,
+                })
+            })
+            .collect();
+        let c0 = camera_motion(&Pose::new(m0.rotation, t0), mount);
+        let cu = mount.rotation.transpose() * u;
+        let rotation = c0.rotation;
+        let reach = if opts.parallax > 0.0 {
+            opts.ground_tolerance
+                .max(4.0 * height * opts.noise_angle / opts.parallax)
+                .min(0.5 * height)
+        } else {
+            0.5 * height
+        };
+        for (o, _) in matches.iter().zip(mask).filter(|(_, k)| **k) {
+            // The height above the road at arc length l, z(l) = a + b l (see road_point).
+            let rf1 = rotation * o.f1;
+            let a12 = -o.f0.dot(&rf1);
+            let det = 1.0 - a12 * a12;
+            if det.abs() < 1e-12 {
+                continue;
+            }
+            let w = (o.f0 + rf1 * a12) / det;
+            let up = (mount.rotation * o.f0).z;
+            let a = up * w.dot(&c0.translation) + mount.translation.z - opts.ground_z;
+            let b = up * w.dot(&cu);
+            // |a + b l| < reach.
+            let (lo, hi) = if b.abs() > 0.0 {
+                let (x, y) = ((-reach - a) / b, (reach - a) / b);
+                (x.min(y), x.max(y))
+            } else if a.abs() < reach {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                continue;
+            };
+            let first = arc_lengths.partition_point(|l| *l < lo).saturating_sub(1);
+            let last = arc_lengths.partition_point(|l| *l <= hi).min(n - 1);
+            for k in first..=last {
+                if let Some(cam) = &cams[k]
+                    && road_point(cam, o, opts).is_some()
+                {
+                    counts[k] += 1;
+                }
+            }
+        }
+    }
+    counts
+}
+
 /// The range `z0` (along the unit bearing `f0`, metres at the motion's scale) of a match
 /// triangulated under the camera's motion if it is a road point of [`ground_mask`]: at least
 /// `opts.parallax / 2` radians of derotated parallax, in front of the camera, and on the road
@@ -2115,6 +2224,63 @@ mod tests {
             m <= 3,
             "{m} of 30 road points on the road at the wrong scale"
         );
+    }
+
+    proptest::proptest! {
+        /// [`ground_support_over`] counts what [`ground_support`] counts at every arc length
+        /// (the affine shortcut and the fallback for a rotation that changes with it), on road
+        /// points, points above the road and a co-moving object's matches.
+        #[test]
+        fn ground_support_over_counts_what_ground_support_counts_at_each_arc_length(
+            yaw in -0.03_f64..0.03,
+            climb in -0.02_f64..0.02,
+            travel in 0.2_f64..2.5,
+            seed in 0_u64..1000,
+        ) {
+            let (rig, p_vc) = kitti_mono();
+            let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
+            let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let mut uniform = |lo: f64, hi: f64| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+            };
+            let rotation = momo_core::so3_exp(&Vector3::new(0.0, climb, yaw));
+            let direction = Vector3::new(1.0, 0.5 * yaw, climb).normalize();
+            let ego = Pose::new(rotation, direction * travel);
+            let mut pts = Vec::new();
+            for _ in 0..40 {
+                // Road (with a little noise in height), facades, points far ahead.
+                pts.push(Vector3::new(uniform(4.0, 40.0), uniform(-6.0, 6.0), uniform(-0.03, 0.03)));
+                pts.push(Vector3::new(uniform(6.0, 60.0), uniform(-9.0, 9.0), uniform(0.3, 6.0)));
+            }
+            let mut obs = obs_of(&pts.iter().map(|v| to_cam(*v)).collect::<Vec<_>>(), &camera_motion(&ego, &p_vc));
+            // A co-moving object: no motion relative to the camera but a little noise.
+            let object: Vec<Vector3<f64>> = (0..20)
+                .map(|_| to_cam(Vector3::new(uniform(8.0, 15.0), uniform(-1.0, 1.0), uniform(0.0, 2.0))))
+                .collect();
+            let still = obs_of(&object, &Pose::new(Matrix3::identity(), Vector3::new(0.0, 0.0, uniform(-0.05, 0.05))));
+            obs.per_camera[0].extend(still.per_camera[0].iter().cloned());
+            let n = obs.per_camera[0].len();
+            let support = vec![(0..n).map(|i| i % 7 != 3).collect::<Vec<bool>>()];
+            let opts = HypothesesOptions::default();
+            let arc_lengths: Vec<f64> = (0..=232).map(|k| 0.05 * 1.02_f64.powi(k)).collect();
+            let affine: Vec<Pose<f64>> = arc_lengths.iter().map(|l| Pose::new(rotation, direction * *l)).collect();
+            // A model whose rotation grows with the arc length (constant curvature): the fallback.
+            let curved: Vec<Pose<f64>> = arc_lengths
+                .iter()
+                .map(|l| Pose::new(momo_core::so3_exp(&Vector3::new(0.0, climb, yaw * *l / travel)), direction * *l))
+                .collect();
+            for motions in [&affine, &curved] {
+                let each: Vec<usize> = motions.iter().map(|m| ground_support(&rig, m, &obs, &support, &opts)).collect();
+                let over = ground_support_over(&rig, &arc_lengths, motions, &obs, &support, &opts);
+                proptest::prop_assert_eq!(&over, &each);
+            }
+            // Not a vacuous comparison: with parallax enough, the road is found.
+            if travel >= 0.8 {
+                let top = affine.iter().map(|m| ground_support(&rig, m, &obs, &support, &opts)).max();
+                proptest::prop_assert!(top.unwrap_or(0) >= 10, "road support {top:?}");
+            }
+        }
     }
 
     #[test]

@@ -2049,7 +2049,9 @@ impl Odometry {
     /// epipolar geometry are triangulated under `params` with the arc length (parameter
     /// `arc_index`) on a log grid of 0.05-5 m (steps of 2 %); each arc length counts the
     /// matches on the road plane ([`crate::hypotheses::ground_support`]: the camera's height is
-    /// known, so the road's depth fixes the scale). The answer is the geometric mean of the
+    /// known, so the road's depth fixes the scale; [`crate::hypotheses::ground_support_over`]
+    /// counts all arc lengths at once, testing each match only near the arc length that puts it
+    /// on the road). The answer is the geometric mean of the
     /// contiguous run of arc lengths around the best count that count at least 80 % of it.
     /// `None` where the best count is below [`ROAD_SCALE_MIN_MATCHES`], or without the
     /// separation's hypotheses.
@@ -2064,16 +2066,25 @@ impl Odometry {
         let (lo, hi) = (0.05_f64, 5.0_f64);
         let steps = ((hi / lo).ln() / STEP.ln()).ceil() as usize;
         let mut at = params.to_vec();
-        let counts: Vec<(f64, usize)> = (0..=steps)
-            .map(|k| {
-                let l = lo * STEP.powi(k as i32);
-                at[arc_index] = l;
-                let motion = self.estimator.motion(&at);
-                (
-                    l,
-                    crate::hypotheses::ground_support(&self.rig, &motion, obs, &support, h),
-                )
+        let arc_lengths: Vec<f64> = (0..=steps).map(|k| lo * STEP.powi(k as i32)).collect();
+        let motions: Vec<_> = arc_lengths
+            .iter()
+            .map(|l| {
+                at[arc_index] = *l;
+                self.estimator.motion(&at)
             })
+            .collect();
+        let counts: Vec<(f64, usize)> = arc_lengths
+            .iter()
+            .copied()
+            .zip(crate::hypotheses::ground_support_over(
+                &self.rig,
+                &arc_lengths,
+                &motions,
+                obs,
+                &support,
+                h,
+            ))
             .collect();
         let (best, &(_, top)) = counts
             .iter()
