@@ -110,6 +110,13 @@ pub struct OdometryOptions {
     /// vehicle's motion. Default 1 since the forty-sixth session (docs/RESULTS.md): the last
     /// admitted one, which follows braking and starts that a longer median lags behind.
     pub road_scale_frames: usize,
+    /// With `road_scale_frames`, the separation takes the held road arc length as the frame's
+    /// metric arc length, as it takes odometry.csv's: the cues that need the metric scale (the
+    /// road candidate, the road track, the under-road mask, the metric road score and the slow
+    /// yaw margin) run, where without it they are off for want of odometry. A road arc length
+    /// 10 % off leaves them right (docs/RESULTS.md, forty-fifth session: odometry.csv scaled by
+    /// 0.9 and 1.1). Default true since the forty-seventh session (docs/RESULTS.md).
+    pub road_scale_metric: bool,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,
     /// Arc length assumed before any is known when there is no odometry (metres per frame).
@@ -597,6 +604,7 @@ impl Default for OdometryOptions {
             standstill_cell_cap: 2.0,
             standstill_jackknife: true,
             road_scale_frames: 1,
+            road_scale_metric: true,
             min_matches: 8,
             initial_arc_length: 1.0,
             estimate_scale: true,
@@ -975,7 +983,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # standstill_cell_cap times the median per image cell (a lead car holds many in a few\n\
          # cells), its covariance widened by their leave-one-cell-out jackknife\n\
          # (standstill_jackknife). road_scale_frames: without odometry.csv, one camera holds the\n\
-         # median of the last N admitted arc lengths from the road plane (0: off).",
+         # median of the last N admitted arc lengths from the road plane (0: off);\n\
+         # road_scale_metric: the separation takes it as metric, as odometry.csv's.",
     ),
     (
         "odometry.final_fit",
