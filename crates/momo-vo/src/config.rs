@@ -117,6 +117,15 @@ pub struct OdometryOptions {
     /// 10 % off leaves them right (docs/RESULTS.md, forty-fifth session: odometry.csv scaled by
     /// 0.9 and 1.1). Default true since the forty-seventh session (docs/RESULTS.md).
     pub road_scale_metric: bool,
+    /// With `road_scale_frames`, before the first road arc length is admitted, the arc length
+    /// is held (`initial_arc_length` at the start, 1 m per frame) where it would be estimated
+    /// from the lever arm (`estimate_scale`, a camera off the motion centre), and the
+    /// separation takes it as metric too (a camera in the motion centre holds it, `unobservable`,
+    /// as before). At a drive's start the motion
+    /// that the road is read under is not known to be the static world's yet: without the
+    /// metric cues a lead vehicle's motion wins the first frames and its "road" is read
+    /// (docs/RESULTS.md, forty-seventh session). Default true since the forty-seventh session.
+    pub road_scale_initial_metric: bool,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,
     /// Arc length assumed before any is known when there is no odometry (metres per frame).
@@ -605,6 +614,7 @@ impl Default for OdometryOptions {
             standstill_jackknife: true,
             road_scale_frames: 1,
             road_scale_metric: true,
+            road_scale_initial_metric: true,
             min_matches: 8,
             initial_arc_length: 1.0,
             estimate_scale: true,
@@ -984,7 +994,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # cells), its covariance widened by their leave-one-cell-out jackknife\n\
          # (standstill_jackknife). road_scale_frames: without odometry.csv, one camera holds the\n\
          # median of the last N admitted arc lengths from the road plane (0: off);\n\
-         # road_scale_metric: the separation takes it as metric, as odometry.csv's.",
+         # road_scale_metric: the separation takes it as metric, as odometry.csv's;\n\
+         # road_scale_initial_metric: before the first one initial_arc_length is held as metric.",
     ),
     (
         "odometry.final_fit",

@@ -1185,6 +1185,18 @@ impl Odometry {
                 init[i] = l;
                 ScaleSource::Road
             }
+            (Some(i), None)
+                if self.road_scale_on()
+                    && self.config.odometry.road_scale_initial_metric
+                    && self.scale_observable
+                    && self.config.odometry.estimate_scale
+                    && self.road_arc_lengths.is_empty() =>
+            {
+                // `odometry.road_scale_initial_metric`: before the first road arc length, the
+                // last one held (`initial_arc_length` at the start), as metric.
+                fixed[i] = true;
+                ScaleSource::Held
+            }
             (Some(i), None) => {
                 if !self.scale_observable {
                     fixed[i] = true;
@@ -1199,9 +1211,17 @@ impl Odometry {
             (None, _) => ScaleSource::Estimated,
         };
         // `odometry.road_scale_metric`: the road's held arc length is the separation's metric
-        // arc length, as odometry.csv's is.
+        // arc length, as odometry.csv's is; `road_scale_initial_metric`: so is the arc length
+        // held before the first one.
         let metric_arc_length = match (arc_index, scale) {
             (Some(i), ScaleSource::Road) if self.config.odometry.road_scale_metric => Some(init[i]),
+            (Some(i), ScaleSource::Held)
+                if self.road_scale_on()
+                    && self.config.odometry.road_scale_initial_metric
+                    && arc_length.is_none() =>
+            {
+                Some(init[i])
+            }
             _ => arc_length,
         };
         let standstill = arc_index.is_some_and(|i| {

@@ -193,21 +193,28 @@ fn without_odometry_scale_is_estimated_in_curves_with_a_lever_arm_and_held_other
     assert_eq!(r.diagnostics.scale, ScaleSource::Held);
     assert!((r.diagnostics.params[1] - 1.5).abs() < 0.15);
     // With the road's arc length on (the default), the first frame has no road history yet:
-    // it falls back on the same estimate.
-    let mut vo = Odometry::new(
-        rig.clone(),
-        Config {
+    // it holds `initial_arc_length` (`odometry.road_scale_initial_metric`, the default), or
+    // falls back on the same estimate without it.
+    let first = |initial_metric: bool| {
+        let mut config = Config {
             model: Box::new(SingleTrack2d),
             ..Default::default()
-        },
-    )
-    .expect("valid");
-    let r = vo.process(
-        &canned::synthetic_observations(&rig, &truth, 300, 0, 5),
-        None,
-    );
-    assert_eq!(r.diagnostics.scale, ScaleSource::Estimated);
-    assert!((r.diagnostics.params[1] - 1.5).abs() < 0.15);
+        };
+        config.odometry.road_scale_initial_metric = initial_metric;
+        let initial = config.odometry.initial_arc_length;
+        let mut vo = Odometry::new(rig.clone(), config).expect("valid");
+        let r = vo.process(
+            &canned::synthetic_observations(&rig, &truth, 300, 0, 5),
+            None,
+        );
+        (r.diagnostics, initial)
+    };
+    let (d, initial) = first(true);
+    assert_eq!(d.scale, ScaleSource::Held);
+    assert_eq!(d.params[1], initial);
+    let (d, _) = first(false);
+    assert_eq!(d.scale, ScaleSource::Estimated);
+    assert!((d.params[1] - 1.5).abs() < 0.15);
 
     // A camera in the motion centre never observes scale: always held, and the driver says so
     // (scale `unobservable`, distinct from `held` in a straight stretch).
