@@ -5990,7 +5990,8 @@ mod tests {
     /// metric scale (the road candidate, the road track, the under-road mask) run on the road's
     /// held arc length. Moving traffic on the built-in drive, 80 frames of 200 matches, the
     /// seeds of 1-80 on which the run without them has frames above 1 deg (a scan in the
-    /// forty-seventh session; no seed had more with them).
+    /// forty-seventh session; no seed had more with them). `road_scale_initial_metric` is on in
+    /// both runs (the default).
     #[test]
     fn without_odometry_the_road_arc_length_is_metric_for_the_separation() {
         let above_1_deg = |seed: u64, metric: bool| -> usize {
@@ -6017,6 +6018,37 @@ mod tests {
         let off: Vec<usize> = seeds.iter().map(|&s| above_1_deg(s, false)).collect();
         assert_eq!(on, vec![0; seeds.len()], "with the metric road: {on:?}");
         assert!(off.iter().all(|&n| n > 0), "without: {off:?}");
+    }
+
+    /// `odometry.road_scale_initial_metric`: before the first road arc length the held
+    /// `initial_arc_length` is metric for the separation, so a drive that starts among traffic
+    /// does not follow it from frame 1. Moving traffic on the built-in drive, 30 frames of 200
+    /// matches, seed 2: the one of seeds 1-160 on which the two differ (a scan in the
+    /// forty-seventh session).
+    #[test]
+    fn without_odometry_the_start_of_a_drive_holds_the_initial_arc_length_as_metric() {
+        let sim = momo_sim::simulate(&momo_sim::SimConfig {
+            frames: 30,
+            seed: 2,
+            matches_per_camera: 200,
+            ..momo_sim::SimConfig::moving_traffic()
+        })
+        .expect("the traffic scenario simulates");
+        let above_1_deg = |initial_metric: bool| -> usize {
+            let mut config = crate::Config::default();
+            config.odometry.road_scale_initial_metric = initial_metric;
+            let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("builds");
+            (1..sim.sequence.num_frames())
+                .filter(|&k| {
+                    let m = vo.process(&sim.sequence.frames[k], None).motion;
+                    let truth = &sim.vehicle_motions[k];
+                    so3_log(&(truth.rotation.transpose() * m.rotation)).norm() > 1f64.to_radians()
+                })
+                .count()
+        };
+        assert_eq!(above_1_deg(true), 0);
+        let off = above_1_deg(false);
+        assert!(off > 0, "without: {off}");
     }
 
     #[test]
