@@ -105,7 +105,8 @@ pub struct OdometryOptions {
     /// that leaves the held one by more than 30 % and 0.1 m (plus 0.03 m per frame since the
     /// last admitted one) is not admitted unless ten in a row are not
     /// (`Odometry::admit_road_arc_length`: a lead vehicle's "road"). Until there is one, the
-    /// arc length is estimated or held as with 0 (off). The separation's road cues read the
+    /// arc length is held as metric (`road_scale_initial_metric`), or estimated or held as with
+    /// 0 (off) without that option. The separation's road cues read the
     /// road at the motion's metric scale; a wrong scale by 20 % makes them pick a lead
     /// vehicle's motion. Default 1 since the forty-sixth session (docs/RESULTS.md): the last
     /// admitted one, which follows braking and starts that a longer median lags behind.
@@ -117,14 +118,14 @@ pub struct OdometryOptions {
     /// 10 % off leaves them right (docs/RESULTS.md, forty-fifth session: odometry.csv scaled by
     /// 0.9 and 1.1). Default true since the forty-seventh session (docs/RESULTS.md).
     pub road_scale_metric: bool,
-    /// With `road_scale_frames`, before the first road arc length is admitted, the arc length
-    /// is held (`initial_arc_length` at the start, 1 m per frame) where it would be estimated
-    /// from the lever arm (`estimate_scale`, a camera off the motion centre), and the
-    /// separation takes it as metric too (a camera in the motion centre holds it, `unobservable`,
-    /// as before). At a drive's start the motion
-    /// that the road is read under is not known to be the static world's yet: without the
-    /// metric cues a lead vehicle's motion wins the first frames and its "road" is read
-    /// (docs/RESULTS.md, forty-seventh session). Default true since the forty-seventh session.
+    /// With `road_scale_frames`, before the first road arc length is admitted, the held arc
+    /// length (`initial_arc_length` at the start, 1 m per frame) is the separation's metric arc
+    /// length too. Where it would be estimated from the lever arm (`estimate_scale`, a camera
+    /// off the motion centre) it is held instead; a camera in the motion centre holds it as
+    /// before (`unobservable`, not metric). At a drive's start the motion that the road is read
+    /// under is not known to be the static world's yet: without the metric cues a lead
+    /// vehicle's motion wins the first frames and its "road" is read (docs/RESULTS.md,
+    /// forty-seventh session). Default true since the forty-seventh session.
     pub road_scale_initial_metric: bool,
     /// Frames with fewer matches (all cameras) hold the previous motion.
     pub min_matches: usize,

@@ -1080,17 +1080,7 @@ pub fn ground_support_over(
         // The camera's motion at each arc length, and its translation's affine form.
         let cams: Vec<Option<RoadCamera<'_>>> = motions
             .iter()
-            .map(|m| {
-                let c = camera_motion(m, mount);
-                let travel = c.translation.norm();
-                (travel > 1e-9).then(|| RoadCamera {
-                    mount,
-                    direction: c.translation / travel,
-                    motion: c,
-                    travel,
-                    height,
-                })
-            })
+            .map(|m| RoadCamera::under(m, mount, height, 1e-9))
             .collect();
         let c0 = camera_motion(&Pose::new(m0.rotation, t0), mount);
         let cu = mount.rotation.transpose() * u;
@@ -1227,6 +1217,27 @@ struct RoadCamera<'a> {
     height: f64,
 }
 
+impl<'a> RoadCamera<'a> {
+    /// The camera at `mount`, `height` above the road, under the vehicle motion `motion`;
+    /// `None` where it moved no more than `min_travel` (metres).
+    fn under(
+        motion: &Pose<f64>,
+        mount: &'a Pose<f64>,
+        height: f64,
+        min_travel: f64,
+    ) -> Option<Self> {
+        let c = camera_motion(motion, mount);
+        let travel = c.translation.norm();
+        (travel > min_travel).then(|| RoadCamera {
+            mount,
+            direction: c.translation / travel,
+            motion: c,
+            travel,
+            height,
+        })
+    }
+}
+
 /// The mask (per camera, per match) of the supported matches for which `test` holds, on the
 /// cameras more than 0.2 m above the road (`ground_z`) that moved more than `min_travel`
 /// (metres) under `motion`; every other match is `false`.
@@ -1255,17 +1266,8 @@ fn road_mask(
         if !(height > 0.2) {
             continue;
         }
-        let c = camera_motion(motion, mount);
-        let travel = c.translation.norm();
-        if !(travel > min_travel) {
+        let Some(road) = RoadCamera::under(motion, mount, height, min_travel) else {
             continue;
-        }
-        let road = RoadCamera {
-            mount,
-            direction: c.translation / travel,
-            motion: c,
-            travel,
-            height,
         };
         for ((o, _), flag) in matches
             .iter()

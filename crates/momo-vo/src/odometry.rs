@@ -1163,6 +1163,10 @@ impl Odometry {
             && arc_index.is_some()
             && self.config.odometry.estimate_scale
             && obs.cross_camera.len() >= crate::stereo_scale::MIN_CROSS_INLIERS;
+        // `odometry.road_scale_initial_metric`, before the first road arc length.
+        let initial_metric = self.road_scale_on()
+            && self.config.odometry.road_scale_initial_metric
+            && self.road_arc_lengths.is_empty();
         let scale = match (arc_index, arc_length) {
             (Some(i), Some(l)) => {
                 init[i] = l;
@@ -1179,18 +1183,17 @@ impl Odometry {
                         crate::stats::median(self.road_arc_lengths.iter().copied()) =>
             {
                 // `odometry.road_scale_frames`: the median of the last frames' road arc
-                // lengths, held for the solve (until there is one, the arc length is estimated
-                // or held as without the option).
+                // lengths, held for the solve (until there is one, the arc length is held as
+                // metric, `road_scale_initial_metric`, or estimated or held as without the
+                // option).
                 fixed[i] = true;
                 init[i] = l;
                 ScaleSource::Road
             }
             (Some(i), None)
-                if self.road_scale_on()
-                    && self.config.odometry.road_scale_initial_metric
+                if initial_metric
                     && self.scale_observable
-                    && self.config.odometry.estimate_scale
-                    && self.road_arc_lengths.is_empty() =>
+                    && self.config.odometry.estimate_scale =>
             {
                 // `odometry.road_scale_initial_metric`: before the first road arc length, the
                 // last one held (`initial_arc_length` at the start), as metric.
@@ -1215,13 +1218,7 @@ impl Odometry {
         // held before the first one.
         let metric_arc_length = match (arc_index, scale) {
             (Some(i), ScaleSource::Road) if self.config.odometry.road_scale_metric => Some(init[i]),
-            (Some(i), ScaleSource::Held)
-                if self.road_scale_on()
-                    && self.config.odometry.road_scale_initial_metric
-                    && arc_length.is_none() =>
-            {
-                Some(init[i])
-            }
+            (Some(i), ScaleSource::Held) if initial_metric => Some(init[i]),
             _ => arc_length,
         };
         let standstill = arc_index.is_some_and(|i| {
@@ -5986,32 +5983,45 @@ mod tests {
         assert!((off - 1.0).abs() > 0.15, "median ratio {off}");
     }
 
+    /// Moving traffic on the built-in drive, `frames` frames of 200 matches of seed `seed`.
+    fn traffic_drive(frames: usize, seed: u64) -> momo_sim::Simulation {
+        momo_sim::simulate(&momo_sim::SimConfig {
+            frames,
+            seed,
+            matches_per_camera: 200,
+            ..momo_sim::SimConfig::moving_traffic()
+        })
+        .expect("the traffic scenario simulates")
+    }
+
+    /// The frames of `sim` whose rotation `config` gets more than 1 deg wrong, without
+    /// odometry.csv.
+    fn frames_above_1_deg_without_odometry(
+        sim: &momo_sim::Simulation,
+        config: crate::Config,
+    ) -> usize {
+        let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("builds");
+        (1..sim.sequence.num_frames())
+            .filter(|&k| {
+                let m = vo.process(&sim.sequence.frames[k], None).motion;
+                let truth = &sim.vehicle_motions[k];
+                so3_log(&(truth.rotation.transpose() * m.rotation)).norm() > 1f64.to_radians()
+            })
+            .count()
+    }
+
     /// `odometry.road_scale_metric`: without odometry.csv, the separation's cues that need the
     /// metric scale (the road candidate, the road track, the under-road mask) run on the road's
     /// held arc length. Moving traffic on the built-in drive, 80 frames of 200 matches, the
-    /// seeds of 1-80 on which the run without them has frames above 1 deg (a scan in the
-    /// forty-seventh session; no seed had more with them). `road_scale_initial_metric` is on in
-    /// both runs (the default).
+    /// seeds of 1-80 on which the run without them had frames above 1 deg (a scan in the
+    /// forty-seventh session with the build before `road_scale_initial_metric`; no seed had
+    /// more with them). `road_scale_initial_metric` is on in both runs (the default).
     #[test]
     fn without_odometry_the_road_arc_length_is_metric_for_the_separation() {
         let above_1_deg = |seed: u64, metric: bool| -> usize {
-            let sim = momo_sim::simulate(&momo_sim::SimConfig {
-                frames: 80,
-                seed,
-                matches_per_camera: 200,
-                ..momo_sim::SimConfig::moving_traffic()
-            })
-            .expect("the traffic scenario simulates");
             let mut config = crate::Config::default();
             config.odometry.road_scale_metric = metric;
-            let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("builds");
-            (1..sim.sequence.num_frames())
-                .filter(|&k| {
-                    let m = vo.process(&sim.sequence.frames[k], None).motion;
-                    let truth = &sim.vehicle_motions[k];
-                    so3_log(&(truth.rotation.transpose() * m.rotation)).norm() > 1f64.to_radians()
-                })
-                .count()
+            frames_above_1_deg_without_odometry(&traffic_drive(80, seed), config)
         };
         let seeds = [11, 46, 60, 62];
         let on: Vec<usize> = seeds.iter().map(|&s| above_1_deg(s, true)).collect();
@@ -6027,24 +6037,11 @@ mod tests {
     /// forty-seventh session).
     #[test]
     fn without_odometry_the_start_of_a_drive_holds_the_initial_arc_length_as_metric() {
-        let sim = momo_sim::simulate(&momo_sim::SimConfig {
-            frames: 30,
-            seed: 2,
-            matches_per_camera: 200,
-            ..momo_sim::SimConfig::moving_traffic()
-        })
-        .expect("the traffic scenario simulates");
+        let sim = traffic_drive(30, 2);
         let above_1_deg = |initial_metric: bool| -> usize {
             let mut config = crate::Config::default();
             config.odometry.road_scale_initial_metric = initial_metric;
-            let mut vo = Odometry::new(sim.sequence.rig.clone(), config).expect("builds");
-            (1..sim.sequence.num_frames())
-                .filter(|&k| {
-                    let m = vo.process(&sim.sequence.frames[k], None).motion;
-                    let truth = &sim.vehicle_motions[k];
-                    so3_log(&(truth.rotation.transpose() * m.rotation)).norm() > 1f64.to_radians()
-                })
-                .count()
+            frames_above_1_deg_without_odometry(&sim, config)
         };
         assert_eq!(above_1_deg(true), 0);
         let off = above_1_deg(false);
