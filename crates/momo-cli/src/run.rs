@@ -135,6 +135,21 @@ pub(crate) fn print_summary(
         summary.scale_held,
         summary.scale_unobservable
     );
+    match &summary.road_mount {
+        momo_vo::RoadMount::Calibrated(d) => {
+            let d = d.map(f64::to_degrees);
+            note!(
+                "momo: no odometry.csv: the mount was calibrated on the sequence first, for the road's arc length (odometry.road_scale_calibrate_mount): roll {:+.3}, pitch {:+.3}, yaw {:+.3} deg",
+                d.x,
+                d.y,
+                d.z
+            );
+        }
+        momo_vo::RoadMount::Failed(why) => note!(
+            "momo: warning: no odometry.csv, and the mount could not be calibrated for the road's arc length ({why}): the road is read through the rig as given"
+        ),
+        momo_vo::RoadMount::NotRun => {}
+    }
     if summary.scale_never_measured() {
         note!(
             "momo: warning: the scale was never measured (no odometry.csv, no frame where the rig made it observable and none read off the road): the trajectory's scale is arbitrary"

@@ -277,7 +277,7 @@ pub fn match_to_sequence<P: AsRef<Path>>(
 }
 
 /// What `momo vo` did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct VoSummary {
     /// The front end's time and matches.
     pub front_end: FrontEndStats,

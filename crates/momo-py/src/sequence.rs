@@ -159,6 +159,12 @@ fn run_dir(
         None
     };
     let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunFailure::Input)?;
+    // `odometry.road_scale_calibrate_mount`, as `run_sequence` does.
+    let has_odometry = arc_lengths
+        .as_ref()
+        .is_some_and(|a| a.iter().any(Option::is_some));
+    let (rig, config, _) = momo_vo::road_scale_setup(dir, rig, config, kind, has_odometry)
+        .map_err(RunFailure::Input)?;
     let mut vo = momo_vo::driver(kind, &rig, config).map_err(RunFailure::Vo)?;
     let mut trajectory = Trajectory::new(&rig);
     let mut poses = vec![trajectory.camera0()];

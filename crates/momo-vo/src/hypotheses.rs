@@ -50,6 +50,10 @@
 use momo_core::{FrameObservations, Pose, Rig, camera_motion};
 use serde::{Deserialize, Serialize};
 
+/// Largest [`HypothesesOptions::ground_pitch`] accepted, radians (11.5°): a camera mounted
+/// further off its nominal pitch has the wrong rig.
+pub const MAX_GROUND_PITCH: f64 = 0.2;
+
 /// Options of the multi-frame hypothesis choice (`[odometry.separate.hypotheses]`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -74,6 +78,13 @@ pub struct HypothesesOptions {
     pub ground: bool,
     /// Height of the road in the vehicle frame, metres (0: the vehicle origin on the road).
     pub ground_z: f64,
+    /// Pitch of the road against the vehicle frame, radians: below each camera the road
+    /// rises ahead by `tan(ground_pitch)` per metre of `x`, `z = ground_z + tan(ground_pitch)
+    /// (x - x_c)` (`x_c` the camera's). A camera pitched nose down by `θ` against its nominal
+    /// mount sees the road rise by `θ` in the nominal vehicle frame: `momo calibrate`'s pitch
+    /// (`odometry.road_scale_calibrate_mount` sets it from the sequence's calibration). 0: the
+    /// road is the vehicle frame's x-y plane.
+    pub ground_pitch: f64,
     /// Least height tolerance of a road point, metres.
     pub ground_tolerance: f64,
     /// Standard deviation of a bearing's angle (radians; 1 px at f = 718 px is 0.0014), for
@@ -444,6 +455,7 @@ impl Default for HypothesesOptions {
             margin: 0.0,
             ground: true,
             ground_z: 0.0,
+            ground_pitch: 0.0,
             ground_tolerance: 0.08,
             noise_angle: 0.0014,
             spread_grid: None,
@@ -495,6 +507,11 @@ impl HypothesesOptions {
         }
         if !self.ground_z.is_finite() {
             return Err("odometry.separate.hypotheses.ground_z must be a finite number".into());
+        }
+        if !(self.ground_pitch.is_finite() && self.ground_pitch.abs() <= MAX_GROUND_PITCH) {
+            return Err(format!(
+                "odometry.separate.hypotheses.ground_pitch must be within ±{MAX_GROUND_PITCH} rad"
+            ));
         }
         if !(self.ground_tolerance.is_finite() && self.ground_tolerance > 0.0) {
             return Err(
@@ -1023,7 +1040,7 @@ pub fn ground_mask(
         motion,
         obs,
         support,
-        (opts.ground_z, 1e-9),
+        (opts.ground_z, opts.ground_pitch, 1e-9),
         |cam, o| road_point(cam, o, opts).is_some(),
     )
 }
@@ -1078,9 +1095,10 @@ pub fn ground_support_over(
             continue;
         }
         // The camera's motion at each arc length, and its translation's affine form.
+        let tan_pitch = opts.ground_pitch.tan();
         let cams: Vec<Option<RoadCamera<'_>>> = motions
             .iter()
-            .map(|m| RoadCamera::under(m, mount, height, 1e-9))
+            .map(|m| RoadCamera::under(m, mount, height, tan_pitch, 1e-9))
             .collect();
         let c0 = camera_motion(&Pose::new(m0.rotation, t0), mount);
         let cu = mount.rotation.transpose() * u;
@@ -1101,7 +1119,9 @@ pub fn ground_support_over(
                 continue;
             }
             let w = (o.f0 + rf1 * a12) / det;
-            let up = (mount.rotation * o.f0).z;
+            // The bearing's rise above the (pitched) road per unit range.
+            let v = mount.rotation * o.f0;
+            let up = v.z - tan_pitch * v.x;
             let a = up * w.dot(&c0.translation) + mount.translation.z - opts.ground_z;
             let b = up * w.dot(&cu);
             // |a + b l| < reach.
@@ -1125,6 +1145,24 @@ pub fn ground_support_over(
         }
     }
     counts
+}
+
+/// The arc length at which the road's counts `counts` (of [`ground_support_over`] at the
+/// increasing `arc_lengths`) put the road (`odometry.road_scale_frames`): the geometric mean of
+/// the contiguous run of arc lengths around the best count (the shortest of equal ones) that
+/// count at least 80 % of it. `None` where the best count is below `min_matches`.
+pub fn road_arc_length(arc_lengths: &[f64], counts: &[usize], min_matches: usize) -> Option<f64> {
+    let (best, &top) = counts
+        .iter()
+        .enumerate()
+        .max_by_key(|(k, c)| (**c, std::cmp::Reverse(*k)))?;
+    if top < min_matches || arc_lengths.len() != counts.len() {
+        return None;
+    }
+    let near = |k: &usize| 5 * counts[*k] >= 4 * top;
+    let first = (0..=best).rev().take_while(near).last().unwrap_or(best);
+    let last = (best..counts.len()).take_while(near).last().unwrap_or(best);
+    Some((arc_lengths[first] * arc_lengths[last]).sqrt())
 }
 
 /// The range `z0` (along the unit bearing `f0`, metres at the motion's scale) of a match
@@ -1159,10 +1197,11 @@ fn road_point(
         return None;
     }
     let x_v = p_vc.rotation * (o.f0 * z0) + p_vc.translation;
+    let above = x_v.z - opts.ground_z - cam.tan_pitch * (x_v.x - p_vc.translation.x);
     let tol = opts
         .ground_tolerance
         .max(2.0 * height * opts.noise_angle / p);
-    (tol < 0.5 * height && (x_v.z - opts.ground_z).abs() < tol).then_some(z0)
+    (tol < 0.5 * height && above.abs() < tol).then_some(z0)
 }
 
 /// The tilt of a vehicle-frame motion ([`HypothesesOptions::tilt_margin`]): the norm of the
@@ -1193,7 +1232,7 @@ pub fn road_depth_span(
         motion,
         obs,
         support,
-        (opts.ground_z, 1e-9),
+        (opts.ground_z, opts.ground_pitch, 1e-9),
         |cam, o| {
             let z = road_point(cam, o, opts).map(|z0| z0 * o.f0.z / o.f0.norm());
             if let Some(z) = z.filter(|z| *z > 0.0) {
@@ -1208,22 +1247,26 @@ pub fn road_depth_span(
 }
 
 /// A camera of [`road_mask`]: its mount, its motion, the unit direction and length of its
-/// translation, and its height above the road.
+/// translation, its height above the road and the road's rise per metre ahead
+/// ([`HypothesesOptions::ground_pitch`]).
 struct RoadCamera<'a> {
     mount: &'a Pose<f64>,
     motion: Pose<f64>,
     direction: nalgebra::Vector3<f64>,
     travel: f64,
     height: f64,
+    tan_pitch: f64,
 }
 
 impl<'a> RoadCamera<'a> {
-    /// The camera at `mount`, `height` above the road, under the vehicle motion `motion`;
-    /// `None` where it moved no more than `min_travel` (metres).
+    /// The camera at `mount`, `height` above a road that rises by `tan_pitch` per metre
+    /// ahead, under the vehicle motion `motion`; `None` where it moved no more than
+    /// `min_travel` (metres).
     fn under(
         motion: &Pose<f64>,
         mount: &'a Pose<f64>,
         height: f64,
+        tan_pitch: f64,
         min_travel: f64,
     ) -> Option<Self> {
         let c = camera_motion(motion, mount);
@@ -1234,19 +1277,20 @@ impl<'a> RoadCamera<'a> {
             motion: c,
             travel,
             height,
+            tan_pitch,
         })
     }
 }
 
 /// The mask (per camera, per match) of the supported matches for which `test` holds, on the
-/// cameras more than 0.2 m above the road (`ground_z`) that moved more than `min_travel`
-/// (metres) under `motion`; every other match is `false`.
+/// cameras more than 0.2 m above the road (`ground_z`, pitched by `ground_pitch`) that moved
+/// more than `min_travel` (metres) under `motion`; every other match is `false`.
 fn road_mask(
     rig: &Rig,
     motion: &Pose<f64>,
     obs: &FrameObservations,
     support: &[Vec<bool>],
-    (ground_z, min_travel): (f64, f64),
+    (ground_z, ground_pitch, min_travel): (f64, f64, f64),
     mut test: impl FnMut(&RoadCamera<'_>, &momo_core::Observation) -> bool,
 ) -> Vec<Vec<bool>> {
     let mut out: Vec<Vec<bool>> = obs
@@ -1266,7 +1310,8 @@ fn road_mask(
         if !(height > 0.2) {
             continue;
         }
-        let Some(road) = RoadCamera::under(motion, mount, height, min_travel) else {
+        let Some(road) = RoadCamera::under(motion, mount, height, ground_pitch.tan(), min_travel)
+        else {
             continue;
         };
         for ((o, _), flag) in matches
@@ -1286,6 +1331,9 @@ fn road_mask(
 pub struct UnderRoad {
     /// Height of the road in the vehicle frame, metres.
     pub ground_z: f64,
+    /// Pitch of the road against the vehicle frame, radians
+    /// ([`HypothesesOptions::ground_pitch`]).
+    pub ground_pitch: f64,
     /// Standard deviation of a bearing's angle, radians.
     pub noise_angle: f64,
     /// A match is flagged when its inverse range falls short of the road's by more than this
@@ -1319,10 +1367,12 @@ pub fn under_road_mask(
         motion,
         obs,
         support,
-        (opts.ground_z, 1e-6),
+        (opts.ground_z, opts.ground_pitch, 1e-6),
         |cam, o| {
-            // Sine of the ray's angle below the horizon, less the slope margin.
-            let down = -(cam.mount.rotation * o.f0).z / o.f0.norm() - opts.slope;
+            // Sine of the ray's angle below the (pitched) road's horizon, less the slope
+            // margin: the road lies `h / down` along the ray.
+            let v = cam.mount.rotation * o.f0;
+            let down = -(v.z - cam.tan_pitch * v.x) / o.f0.norm() - opts.slope;
             if !(down > 1e-6) {
                 return false;
             }
@@ -2228,6 +2278,60 @@ mod tests {
         );
     }
 
+    /// [`HypothesesOptions::ground_pitch`]: a road that rises 1° ahead of the camera (a camera
+    /// pitched nose down by 1° against its nominal mount) is on the road at the true scale
+    /// with the pitch given, and read at a longer arc length without it: its far points lie
+    /// higher than a level road allows, so a larger scale pushes them down onto it.
+    #[test]
+    fn a_pitched_road_is_read_at_the_true_scale_with_its_pitch() {
+        let (rig, p_vc) = kitti_mono();
+        let pitch = 1f64.to_radians();
+        let road: Vec<Vector3<f64>> = (0..40)
+            .map(|i| {
+                let x = 5.0 + 0.6 * i as f64;
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (1.0 + 0.05 * i as f64);
+                let v = Vector3::new(x, y, pitch.tan() * (x - p_vc.translation.x));
+                p_vc.rotation.transpose() * (v - p_vc.translation)
+            })
+            .collect();
+        let ego = Pose::new(Matrix3::identity(), Vector3::new(1.0, 0.0, 0.0));
+        let obs = obs_of(&road, &camera_motion(&ego, &p_vc));
+        let all = vec![vec![true; road.len()]];
+        let arc_lengths: Vec<f64> = (0..=232).map(|k| 0.05 * 1.02_f64.powi(k)).collect();
+        let motions: Vec<Pose<f64>> = arc_lengths
+            .iter()
+            .map(|l| Pose::new(ego.rotation, ego.translation * *l))
+            .collect();
+        let read = |ground_pitch: f64| -> (Option<f64>, usize) {
+            let opts = HypothesesOptions {
+                ground_pitch,
+                ..HypothesesOptions::default()
+            };
+            let counts = ground_support_over(&rig, &arc_lengths, &motions, &obs, &all, &opts);
+            let top = counts.iter().copied().max().unwrap_or(0);
+            (road_arc_length(&arc_lengths, &counts, 12), top)
+        };
+        let (with, n_with) = read(pitch);
+        let (level, _) = read(0.0);
+        assert!(
+            n_with >= 30,
+            "{n_with} of 40 road points on the pitched road"
+        );
+        let with = with.unwrap_or(f64::NAN);
+        let level = level.unwrap_or(f64::NAN);
+        assert!(
+            (with - 1.0).abs() <= 0.03,
+            "arc length with the pitch: {with}"
+        );
+        assert!(level >= 1.05, "arc length through a level road: {level}");
+        // Validated: a pitch beyond the limit is refused.
+        let bad = HypothesesOptions {
+            ground_pitch: 0.3,
+            ..HypothesesOptions::default()
+        };
+        assert!(bad.validate().is_err());
+    }
+
     proptest::proptest! {
         /// [`ground_support_over`] counts what [`ground_support`] counts at every arc length
         /// (the affine shortcut and the fallback for a rotation that changes with it), on road
@@ -2237,9 +2341,12 @@ mod tests {
             yaw in -0.03_f64..0.03,
             climb in -0.02_f64..0.02,
             travel in 0.2_f64..2.5,
+            pitch in -0.03_f64..0.03,
             seed in 0_u64..1000,
         ) {
             let (rig, p_vc) = kitti_mono();
+            // The road rises ahead of the camera by `tan(pitch)` per metre.
+            let road_z = |x: f64| pitch.tan() * (x - p_vc.translation.x);
             let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
             let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             let mut uniform = |lo: f64, hi: f64| {
@@ -2252,7 +2359,8 @@ mod tests {
             let mut pts = Vec::new();
             for _ in 0..40 {
                 // Road (with a little noise in height), facades, points far ahead.
-                pts.push(Vector3::new(uniform(4.0, 40.0), uniform(-6.0, 6.0), uniform(-0.03, 0.03)));
+                let x = uniform(4.0, 40.0);
+                pts.push(Vector3::new(x, uniform(-6.0, 6.0), road_z(x) + uniform(-0.03, 0.03)));
                 pts.push(Vector3::new(uniform(6.0, 60.0), uniform(-9.0, 9.0), uniform(0.3, 6.0)));
             }
             let mut obs = obs_of(&pts.iter().map(|v| to_cam(*v)).collect::<Vec<_>>(), &camera_motion(&ego, &p_vc));
@@ -2264,7 +2372,7 @@ mod tests {
             obs.per_camera[0].extend(still.per_camera[0].iter().cloned());
             let n = obs.per_camera[0].len();
             let support = vec![(0..n).map(|i| i % 7 != 3).collect::<Vec<bool>>()];
-            let opts = HypothesesOptions::default();
+            let opts = HypothesesOptions { ground_pitch: pitch, ..HypothesesOptions::default() };
             let arc_lengths: Vec<f64> = (0..=232).map(|k| 0.05 * 1.02_f64.powi(k)).collect();
             let affine: Vec<Pose<f64>> = arc_lengths.iter().map(|l| Pose::new(rotation, direction * *l)).collect();
             // A model whose rotation grows with the arc length (constant curvature): the fallback.
@@ -2306,6 +2414,7 @@ mod tests {
         let all = vec![vec![true; pts.len()]];
         let test = UnderRoad {
             ground_z: 0.0,
+            ground_pitch: 0.0,
             noise_angle: 0.0014,
             sigmas: 3.0,
             slope: 0.02,

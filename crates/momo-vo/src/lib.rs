@@ -44,11 +44,13 @@ pub use calibrate::{
 };
 pub use config::{
     Config, ConfigError, FivePointOptions, MAX_CONFIG_BYTES, OdometryOptions, Origin,
+    RoadScaleMount,
 };
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };
 pub use pipeline::{
-    EstimatorKind, RunError, RunOptions, RunSummary, driver, run_in_memory, run_loop, run_sequence,
+    EstimatorKind, RoadMount, RunError, RunOptions, RunSummary, driver, road_scale_setup,
+    run_in_memory, run_loop, run_sequence,
 };
 pub use trust::{Constraint, Reason, TrustOptions};

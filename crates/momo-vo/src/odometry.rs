@@ -2097,29 +2097,15 @@ impl Odometry {
                 self.estimator.motion(&at)
             })
             .collect();
-        let counts: Vec<(f64, usize)> = arc_lengths
-            .iter()
-            .copied()
-            .zip(crate::hypotheses::ground_support_over(
-                &self.rig,
-                &arc_lengths,
-                &motions,
-                obs,
-                &support,
-                h,
-            ))
-            .collect();
-        let (best, &(_, top)) = counts
-            .iter()
-            .enumerate()
-            .max_by_key(|(k, (_, c))| (*c, std::cmp::Reverse(*k)))?;
-        if top < ROAD_SCALE_MIN_MATCHES {
-            return None;
-        }
-        let near = |k: &usize| 5 * counts[*k].1 >= 4 * top;
-        let first = (0..=best).rev().take_while(near).last().unwrap_or(best);
-        let last = (best..counts.len()).take_while(near).last().unwrap_or(best);
-        Some((counts[first].0 * counts[last].0).sqrt())
+        let counts = crate::hypotheses::ground_support_over(
+            &self.rig,
+            &arc_lengths,
+            &motions,
+            obs,
+            &support,
+            h,
+        );
+        crate::hypotheses::road_arc_length(&arc_lengths, &counts, ROAD_SCALE_MIN_MATCHES)
     }
 
     /// The separation's hypotheses options and the support its road cues read under `motion`

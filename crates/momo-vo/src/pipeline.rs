@@ -3,7 +3,8 @@
 //! written atomically (temporary file, then rename: no half-written output on any error).
 
 use crate::baseline::{FivePointBaseline, MotionDriver};
-use crate::config::Config;
+use crate::calibrate::{CalibrationError, MountCalibration, MountEstimate};
+use crate::config::{Config, RoadScaleMount};
 use crate::odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };
@@ -91,7 +92,7 @@ pub struct RunOptions {
 }
 
 /// Totals of a run.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RunSummary {
     /// Frames written (poses), including frame 0.
     pub frames: usize,
@@ -121,6 +122,116 @@ pub struct RunSummary {
     pub restarts_won: usize,
     /// Sum of per-frame compute times, seconds.
     pub compute_seconds: f64,
+    /// What `odometry.road_scale_mount` did before the run.
+    pub road_mount: RoadMount,
+}
+
+/// What `odometry.road_scale_mount` did before a run.
+///
+/// Without odometry.csv one camera reads its arc length off the road
+/// (`odometry.road_scale_frames`): the arc length at which the static matches triangulate onto
+/// the road at the camera's height, through the mount's rotation. A camera pitched against the
+/// vehicle by `θ` puts the road at depth `Z` `θ Z` higher or lower than a level mount says (1°
+/// at 15 m: 0.26 m of a 1.65 m height), and the arc length follows: the real KITTI cameras,
+/// whose rig is level on paper, read it 6-17 % long (docs/RESULTS.md, forty-eighth session). So
+/// such a run first calibrates the mount's rotation on the whole sequence (the joint
+/// single-track calibration of `momo calibrate`, [`crate::calibrate_sequence`], without its
+/// bootstrap) and runs with the corrected rig: two passes over the matches, the sequence held
+/// in memory during the first.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum RoadMount {
+    /// Not run: odometry.csv gives the arc lengths, the rig has more than one camera, the
+    /// road scale or the option is off, the estimator is not momo, or the run was given a rig
+    /// ([`RunOptions::rig`]).
+    #[default]
+    NotRun,
+    /// The run used the corrected rig; the correction `δ` (radians, about the vehicle's x, y, z
+    /// axes: [`MountEstimate::delta`]).
+    Calibrated(nalgebra::Vector3<f64>),
+    /// The calibration failed (its message; e.g. no frame pair that moves): the run used the
+    /// rig as given.
+    Failed(String),
+}
+
+impl RoadMount {
+    /// Whether a run calibrates its mount first (see the type's doc): the momo estimator, one
+    /// camera, no arc lengths from odometry, `odometry.road_scale_frames > 0` and
+    /// `odometry.road_scale_mount`.
+    pub fn applies(
+        estimator: EstimatorKind,
+        rig: &Rig,
+        config: &Config,
+        has_odometry: bool,
+    ) -> bool {
+        estimator == EstimatorKind::Momo
+            && !has_odometry
+            && rig.len() == 1
+            && config.odometry.road_scale_frames > 0
+            && config.odometry.road_scale_mount != RoadScaleMount::Nominal
+    }
+
+    /// The rig and configuration to run with and the outcome, from `calibrate` given the
+    /// calibration's options (`momo calibrate`'s defaults without the bootstrap: only the
+    /// correction is used).
+    fn calibrate(
+        rig: Rig,
+        mut config: Config,
+        calibrate: impl FnOnce(&Config, &MountCalibration) -> Result<MountEstimate, CalibrationError>,
+    ) -> (Rig, Config, Self) {
+        let options = MountCalibration {
+            bootstrap: 0,
+            ..MountCalibration::default()
+        };
+        let est = match calibrate(&config, &options) {
+            Ok(est) => est,
+            Err(e) => return (rig, config, RoadMount::Failed(e.to_string())),
+        };
+        match config.odometry.road_scale_mount {
+            RoadScaleMount::Rig => (est.corrected_rig, config, RoadMount::Calibrated(est.delta)),
+            _ => {
+                let pitch = est.delta.y;
+                if pitch.abs() > crate::hypotheses::MAX_GROUND_PITCH {
+                    let why = format!(
+                        "a pitch of {:.2} deg against the rig is beyond the road's {:.2} deg",
+                        pitch.to_degrees(),
+                        crate::hypotheses::MAX_GROUND_PITCH.to_degrees()
+                    );
+                    return (rig, config, RoadMount::Failed(why));
+                }
+                if let Some(h) = config
+                    .odometry
+                    .separate
+                    .as_mut()
+                    .and_then(|s| s.hypotheses.as_mut())
+                {
+                    h.ground_pitch = pitch;
+                }
+                (rig, config, RoadMount::Calibrated(est.delta))
+            }
+        }
+    }
+}
+
+/// The rig and configuration a run over the sequence directory `dir` uses, and what
+/// `odometry.road_scale_mount` did ([`RoadMount`]): `rig` (the sequence's) and `config` as
+/// they are, or, where [`RoadMount::applies`], the mount calibrated on the sequence's matches
+/// (read whole into memory) and its pitch given to the road
+/// ([`crate::hypotheses::HypothesesOptions::ground_pitch`]), or the whole rig corrected.
+/// [`run_sequence`] and the Python module's `run` call it.
+pub fn road_scale_setup(
+    dir: &Path,
+    rig: Rig,
+    config: Config,
+    estimator: EstimatorKind,
+    has_odometry: bool,
+) -> Result<(Rig, Config, RoadMount), IoError> {
+    if !RoadMount::applies(estimator, &rig, &config, has_odometry) {
+        return Ok((rig, config, RoadMount::NotRun));
+    }
+    let sequence = momo_io::read_sparse_sequence(dir)?;
+    Ok(RoadMount::calibrate(rig, config, |config, options| {
+        crate::calibrate::calibrate_sequence(&sequence, config, options)
+    }))
 }
 
 impl RunSummary {
@@ -378,6 +489,14 @@ pub fn run_sequence(
         Vec::new()
     };
     let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunError::Input)?;
+    // `odometry.road_scale_mount`: one camera without odometry.csv runs with its
+    // mount calibrated on the sequence first (not where the caller gave the rig).
+    let (rig, config, road_mount) = if options.rig.is_some() {
+        (rig, config, RoadMount::NotRun)
+    } else {
+        road_scale_setup(dir, rig, config, options.estimator, !arc_rows.is_empty())
+            .map_err(RunError::Input)?
+    };
 
     let mut vo = driver(options.estimator, &rig, config)?;
     let mut poses = PoseWriter::create(&options.output).map_err(RunError::Output)?;
@@ -398,7 +517,7 @@ pub fn run_sequence(
             .get(next_row)
             .and_then(|&(f, l)| (f == k).then_some(l))
     };
-    let summary = run_loop_with(
+    let mut summary = run_loop_with(
         vo.as_mut(),
         &rig,
         frames,
@@ -419,6 +538,7 @@ pub fn run_sequence(
     let mut outputs = vec![poses.into_file()];
     outputs.extend(diagnostics.map(DiagnosticsWriter::into_file));
     momo_io::commit_all(outputs).map_err(RunError::Output)?;
+    summary.road_mount = road_mount;
     Ok(summary)
 }
 
@@ -466,14 +586,29 @@ pub fn run_in_memory(
     config: Config,
     mut on_frame: impl FnMut(&FrameResult),
 ) -> Result<(Vec<momo_core::Pose<f64>>, Vec<FrameDiagnostics>), VoError> {
-    let mut vo = driver(estimator, &sequence.rig, config)?;
+    // `odometry.road_scale_mount`, as in `run_sequence`.
+    let has_odometry = sequence
+        .arc_lengths
+        .as_ref()
+        .is_some_and(|a| a.iter().any(Option::is_some));
+    let (rig, config) = if RoadMount::applies(estimator, &sequence.rig, &config, has_odometry) {
+        let frames = sequence.frames.get(1..).unwrap_or_default();
+        let (rig, config, _) =
+            RoadMount::calibrate(sequence.rig.clone(), config, |config, options| {
+                crate::calibrate::calibrate_mount(&sequence.rig, frames, None, config, options)
+            });
+        (rig, config)
+    } else {
+        (sequence.rig.clone(), config)
+    };
+    let mut vo = driver(estimator, &rig, config)?;
     let n = sequence.num_frames();
     let mut poses = Vec::with_capacity(n);
     let mut diagnostics = Vec::with_capacity(n);
     let frames = sequence.frames.iter().enumerate().skip(1);
     run_loop(
         vo.as_mut(),
-        &sequence.rig,
+        &rig,
         frames.map(Ok::<_, VoError>),
         sequence.arc_lengths.as_deref(),
         n.saturating_sub(1),

@@ -1910,13 +1910,16 @@ fn separate_with(
         }
     };
     // Leaves out the matches under the road (`under_road`).
-    let ground_z = opts.hypotheses().map_or(0.0, |h| h.ground_z);
+    let (ground_z, ground_pitch) = opts
+        .hypotheses()
+        .map_or((0.0, 0.0), |h| (h.ground_z, h.ground_pitch));
     let road = |mask: Vec<Vec<bool>>, params: &[f64]| -> Vec<Vec<bool>> {
         if !(opts.under_road > 0.0 && arc_length.is_some()) {
             return mask;
         }
         let test = UnderRoad {
             ground_z,
+            ground_pitch,
             noise_angle: opts.under_road_noise,
             sigmas: opts.under_road,
             slope: opts.under_road_slope,
