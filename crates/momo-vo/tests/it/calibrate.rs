@@ -596,3 +596,68 @@ fn without_odometry_the_calibrated_pitch_puts_the_road_arc_length_right() {
     );
     assert!((rig - 1.0).abs() < 0.03, "the corrected rig: {rig}");
 }
+
+/// `odometry.road_scale_mount` in `run_sequence` (the path of `momo run`): the summary says what
+/// the run did. The pitched camera of the test above is calibrated (pitch within 0.1° of the
+/// true 1°); with odometry.csv, or with the option `nominal`, nothing is calibrated; a sequence
+/// whose frame pairs all have too few matches cannot be calibrated, and the run still writes
+/// its poses with the rig as given and says why.
+#[test]
+fn a_run_says_how_it_calibrated_the_mount_for_the_road() {
+    use momo_sim::{RigPreset, SimConfig};
+    use momo_vo::{RoadMount, RoadScaleMount, RunOptions, run_sequence};
+    let level = momo_sim::kitti_mono();
+    let pitched =
+        corrected_rig(&level, &Vector3::new(0.0, 1f64.to_radians(), 0.0)).expect("a valid rig");
+    let sim = momo_sim::simulate(&SimConfig {
+        frames: 40,
+        seed: 5,
+        rig: RigPreset::Custom(pitched),
+        ..SimConfig::default()
+    })
+    .expect("simulates");
+    let dir = std::env::temp_dir().join(format!("momo-road-mount-{}", std::process::id()));
+    let run = |sequence: &momo_io::Sequence, mount: RoadScaleMount| -> RoadMount {
+        std::fs::remove_dir_all(&dir).ok();
+        momo_io::write_sequence(&dir, sequence).expect("writes");
+        let mut config = Config::default();
+        config.odometry.road_scale_mount = mount;
+        let options = RunOptions {
+            estimator: momo_vo::EstimatorKind::Momo,
+            output: dir.join("est.txt"),
+            diagnostics: None,
+            rig: None,
+        };
+        let summary = run_sequence(&dir, config, &options, |_| {}).expect("runs");
+        assert!(dir.join("est.txt").exists(), "the poses are written");
+        summary.road_mount
+    };
+    let mut sequence = sim.sequence.clone();
+    sequence.rig = level;
+    sequence.arc_lengths = None;
+    match run(&sequence, RoadScaleMount::Road) {
+        RoadMount::Calibrated(d) => {
+            assert!((d.y.to_degrees() - 1.0).abs() < 0.1, "pitch {}", d.y.to_degrees())
+        }
+        other => panic!("not calibrated: {other:?}"),
+    }
+    assert_eq!(run(&sequence, RoadScaleMount::Nominal), RoadMount::NotRun);
+    let with_odometry = momo_io::Sequence {
+        arc_lengths: sim.sequence.arc_lengths.clone(),
+        ..sequence.clone()
+    };
+    assert_eq!(run(&with_odometry, RoadScaleMount::Road), RoadMount::NotRun);
+    // Three matches per frame pair: below `odometry.min_matches`, nothing to calibrate on.
+    let mut sparse = sequence.clone();
+    for frame in &mut sparse.frames {
+        for list in &mut frame.per_camera {
+            list.truncate(3);
+        }
+    }
+    let failed = run(&sparse, RoadScaleMount::Road);
+    std::fs::remove_dir_all(&dir).ok();
+    match failed {
+        RoadMount::Failed(why) => assert!(why.contains("no usable frame pairs"), "{why}"),
+        other => panic!("calibrated on 3 matches per frame pair: {other:?}"),
+    }
+}
