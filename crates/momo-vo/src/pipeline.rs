@@ -134,10 +134,12 @@ pub struct RunSummary {
 /// vehicle by `θ` puts the road at depth `Z` `θ Z` higher or lower than a level mount says (1°
 /// at 15 m: 0.26 m of a 1.65 m height), and the arc length follows: the real KITTI cameras,
 /// whose rig is level on paper, read it 6-17 % long (docs/RESULTS.md, forty-eighth session). So
-/// such a run first calibrates the mount's rotation on the whole sequence (the joint
-/// single-track calibration of `momo calibrate`, [`crate::calibrate_sequence`], without its
-/// bootstrap) and runs with the corrected rig: two passes over the matches, the sequence held
-/// in memory during the first.
+/// such a run first calibrates the mount's rotation on the sequence's first
+/// [`ROAD_MOUNT_FRAMES`] frame pairs (the joint single-track calibration of `momo calibrate`,
+/// [`crate::calibrate_mount`], without its bootstrap) and then, as
+/// `odometry.road_scale_mount` says, gives the calibrated pitch to the road
+/// ([`crate::hypotheses::HypothesesOptions::ground_pitch`]) or runs with the corrected rig: two
+/// passes over those matches.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum RoadMount {
     /// Not run: odometry.csv gives the arc lengths, the rig has more than one camera, the
@@ -212,10 +214,16 @@ impl RoadMount {
     }
 }
 
+/// The frame pairs (the first ones) that `odometry.road_scale_mount` calibrates the mount on:
+/// a mount does not change along a drive, and a run's memory stays bounded (about 25 MB at 300
+/// matches per frame pair). On real KITTI 00 frame pairs 1-150 calibrate as well as all 300
+/// (docs/GUIDE.md, mount self-calibration).
+pub const ROAD_MOUNT_FRAMES: usize = 1000;
+
 /// The rig and configuration a run over the sequence directory `dir` uses, and what
 /// `odometry.road_scale_mount` did ([`RoadMount`]): `rig` (the sequence's) and `config` as
-/// they are, or, where [`RoadMount::applies`], the mount calibrated on the sequence's matches
-/// (read whole into memory) and its pitch given to the road
+/// they are, or, where [`RoadMount::applies`], the mount calibrated on the sequence's first
+/// [`ROAD_MOUNT_FRAMES`] frame pairs and its pitch given to the road
 /// ([`crate::hypotheses::HypothesesOptions::ground_pitch`]), or the whole rig corrected.
 /// [`run_sequence`] and the Python module's `run` call it.
 pub fn road_scale_setup(
@@ -228,9 +236,19 @@ pub fn road_scale_setup(
     if !RoadMount::applies(estimator, &rig, &config, has_odometry) {
         return Ok((rig, config, RoadMount::NotRun));
     }
-    let sequence = momo_io::read_sparse_sequence(dir)?;
+    // The first ROAD_MOUNT_FRAMES frame pairs, read as the run reads them (memory bounded).
+    let mut frames: Vec<FrameObservations> = Vec::new();
+    for item in MatchReader::open(dir.join("matches.csv"), &rig)? {
+        let (k, obs) = item?;
+        if k > ROAD_MOUNT_FRAMES {
+            break;
+        }
+        frames.resize_with(k - 1, || FrameObservations::new(rig.len()));
+        frames.push(obs);
+    }
+    let calibration_rig = rig.clone();
     Ok(RoadMount::calibrate(rig, config, |config, options| {
-        crate::calibrate::calibrate_sequence(&sequence, config, options)
+        crate::calibrate::calibrate_mount(&calibration_rig, &frames, None, config, options)
     }))
 }
 
@@ -593,6 +611,7 @@ pub fn run_in_memory(
         .is_some_and(|a| a.iter().any(Option::is_some));
     let (rig, config) = if RoadMount::applies(estimator, &sequence.rig, &config, has_odometry) {
         let frames = sequence.frames.get(1..).unwrap_or_default();
+        let frames = &frames[..frames.len().min(ROAD_MOUNT_FRAMES)];
         let (rig, config, _) =
             RoadMount::calibrate(sequence.rig.clone(), config, |config, options| {
                 crate::calibrate::calibrate_mount(&sequence.rig, frames, None, config, options)

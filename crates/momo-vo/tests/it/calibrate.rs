@@ -637,7 +637,11 @@ fn a_run_says_how_it_calibrated_the_mount_for_the_road() {
     sequence.arc_lengths = None;
     match run(&sequence, RoadScaleMount::Road) {
         RoadMount::Calibrated(d) => {
-            assert!((d.y.to_degrees() - 1.0).abs() < 0.1, "pitch {}", d.y.to_degrees())
+            assert!(
+                (d.y.to_degrees() - 1.0).abs() < 0.1,
+                "pitch {}",
+                d.y.to_degrees()
+            )
         }
         other => panic!("not calibrated: {other:?}"),
     }
