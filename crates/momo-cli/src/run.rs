@@ -139,7 +139,7 @@ pub(crate) fn print_summary(
         momo_vo::RoadMount::Calibrated(d) => {
             let d = d.map(f64::to_degrees);
             note!(
-                "momo: no odometry.csv: the mount was calibrated on the sequence first, for the road's arc length (odometry.road_scale_calibrate_mount): roll {:+.3}, pitch {:+.3}, yaw {:+.3} deg",
+                "momo: no odometry.csv: the mount was calibrated on the first frame pairs for the road's arc length (odometry.road_scale_mount): roll {:+.3}, pitch {:+.3}, yaw {:+.3} deg",
                 d.x,
                 d.y,
                 d.z

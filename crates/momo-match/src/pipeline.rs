@@ -317,12 +317,34 @@ pub fn vo_from_images(
         .map(momo_io::read_odometry)
         .transpose()?;
     let mut front = ImageFrontEnd::new(&run.folders, &rig, &run.rig, options)?;
+    // `odometry.road_scale_mount`: one camera without odometry.csv holds back the first frame
+    // pairs' matches, calibrates the mount on them, then runs them and the rest as they come.
+    let has_odometry = arc_lengths
+        .as_ref()
+        .is_some_and(|a| a.iter().any(Option::is_some));
+    let mut held = Vec::new();
+    let (rig, config, road_mount) =
+        if momo_vo::RoadMount::applies(run.estimator, &rig, &config, has_odometry) {
+            let mut frames: Vec<FrameObservations> = Vec::new();
+            for item in front.by_ref() {
+                let (k, obs) = item?;
+                frames.resize_with(k.saturating_sub(1), || FrameObservations::new(rig.len()));
+                frames.push(obs.clone());
+                held.push((k, obs));
+                if k >= momo_vo::pipeline::ROAD_MOUNT_FRAMES {
+                    break;
+                }
+            }
+            momo_vo::RoadMount::calibrate(rig, config, &frames)
+        } else {
+            (rig, config, momo_vo::RoadMount::NotRun)
+        };
     let mut vo = momo_vo::driver(run.estimator, &rig, config)?;
     let mut poses = PoseWriter::create(&run.output)?;
     let totals = momo_vo::run_loop(
         vo.as_mut(),
         &rig,
-        &mut front,
+        held.into_iter().map(Ok).chain(&mut front),
         arc_lengths.as_deref(),
         0,
         |pose, result| {
@@ -337,6 +359,7 @@ pub fn vo_from_images(
         run: totals,
         ..VoSummary::default()
     };
+    summary.run.road_mount = road_mount;
     summary.poses = poses.len();
     poses.finish()?;
     summary.front_end = front.stats();

@@ -159,7 +159,7 @@ fn run_dir(
         None
     };
     let reader = MatchReader::open(dir.join("matches.csv"), &rig).map_err(RunFailure::Input)?;
-    // `odometry.road_scale_calibrate_mount`, as `run_sequence` does.
+    // `odometry.road_scale_mount`, as `run_sequence` does.
     let has_odometry = arc_lengths
         .as_ref()
         .is_some_and(|a| a.iter().any(Option::is_some));

@@ -127,14 +127,15 @@ pub struct OdometryOptions {
     /// vehicle's motion wins the first frames and its "road" is read (docs/RESULTS.md,
     /// forty-seventh session). Default true since the forty-seventh session.
     pub road_scale_initial_metric: bool,
-    /// With `road_scale_frames`, a run over a whole sequence (`momo run`, the Python module's
-    /// `run`, `momo_vo::run_sequence` / `run_in_memory`, the sweep) first calibrates the
-    /// camera's mount rotation on it (`momo calibrate`'s joint single-track calibration of
+    /// With `road_scale_frames`, a run over a whole sequence (`momo run`, `momo vo`, the Python
+    /// module's `run`, `momo_vo::run_sequence` / `run_in_memory`, the sweep) first calibrates
+    /// the camera's mount rotation on its first `momo_vo::pipeline::ROAD_MOUNT_FRAMES` frame
+    /// pairs (`momo calibrate`'s joint single-track calibration of
     /// pitch and yaw, without its bootstrap; `momo_vo::RoadMount`). The road's arc length reads
-    /// the road's depth through the mount: a camera pitched 1° against its nominal mount reads
-    /// it 5-15 % off (real KITTI 00 / 01 / 06 without odometry.csv: road arc length over the
-    /// true one 1.06 / 1.10 / 1.17 with the nominal level rig; docs/RESULTS.md, forty-eighth
-    /// session). `road`: the calibrated pitch becomes the road's
+    /// the road's depth through the mount: a camera pitched 1° nose down against its nominal
+    /// mount reads it 11 % long on the built-in drive, and real KITTI 00 / 01 / 06 without
+    /// odometry.csv read it 1.06 / 1.10 / 1.17 of the true one through the nominal level rig
+    /// (docs/RESULTS.md, forty-eighth session). `road`: the calibrated pitch becomes the road's
     /// (`separate.hypotheses.ground_pitch`), the motion model keeps the rig as given; `rig`:
     /// the run uses the corrected rig (as `momo run --calibrate-mount`); `nominal`: no
     /// calibration. Where the calibration fails (no frame pair that moves, a mount the matches

@@ -82,7 +82,7 @@ pub struct HypothesesOptions {
     /// rises ahead by `tan(ground_pitch)` per metre of `x`, `z = ground_z + tan(ground_pitch)
     /// (x - x_c)` (`x_c` the camera's). A camera pitched nose down by `θ` against its nominal
     /// mount sees the road rise by `θ` in the nominal vehicle frame: `momo calibrate`'s pitch
-    /// (`odometry.road_scale_calibrate_mount` sets it from the sequence's calibration). 0: the
+    /// (`odometry.road_scale_mount` sets it from the sequence's calibration). 0: the
     /// road is the vehicle frame's x-y plane.
     pub ground_pitch: f64,
     /// Least height tolerance of a road point, metres.

@@ -3,7 +3,7 @@
 //! written atomically (temporary file, then rename: no half-written output on any error).
 
 use crate::baseline::{FivePointBaseline, MotionDriver};
-use crate::calibrate::{CalibrationError, MountCalibration, MountEstimate};
+use crate::calibrate::{MountCalibration, MountEstimate};
 use crate::config::{Config, RoadScaleMount};
 use crate::odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
@@ -172,19 +172,23 @@ impl RoadMount {
             && config.odometry.road_scale_mount != RoadScaleMount::Nominal
     }
 
-    /// The rig and configuration to run with and the outcome, from `calibrate` given the
-    /// calibration's options (`momo calibrate`'s defaults without the bootstrap: only the
-    /// correction is used).
-    fn calibrate(
+    /// The rig and configuration to run with and the outcome, from the mount calibrated on
+    /// `frames` (frame pair `i + 1` at index `i`; the first [`ROAD_MOUNT_FRAMES`] of them) with
+    /// `momo calibrate`'s defaults without the bootstrap (only the correction is used). For a
+    /// run where [`RoadMount::applies`]: [`road_scale_setup`], [`run_in_memory`] and
+    /// `momo vo` (which holds back the first frame pairs' matches for it).
+    pub fn calibrate(
         rig: Rig,
         mut config: Config,
-        calibrate: impl FnOnce(&Config, &MountCalibration) -> Result<MountEstimate, CalibrationError>,
+        frames: &[FrameObservations],
     ) -> (Rig, Config, Self) {
         let options = MountCalibration {
             bootstrap: 0,
             ..MountCalibration::default()
         };
-        let est = match calibrate(&config, &options) {
+        let frames = &frames[..frames.len().min(ROAD_MOUNT_FRAMES)];
+        let calibrated = crate::calibrate::calibrate_mount(&rig, frames, None, &config, &options);
+        let est: MountEstimate = match calibrated {
             Ok(est) => est,
             Err(e) => return (rig, config, RoadMount::Failed(e.to_string())),
         };
@@ -246,10 +250,7 @@ pub fn road_scale_setup(
         frames.resize_with(k - 1, || FrameObservations::new(rig.len()));
         frames.push(obs);
     }
-    let calibration_rig = rig.clone();
-    Ok(RoadMount::calibrate(rig, config, |config, options| {
-        crate::calibrate::calibrate_mount(&calibration_rig, &frames, None, config, options)
-    }))
+    Ok(RoadMount::calibrate(rig, config, &frames))
 }
 
 impl RunSummary {
@@ -611,11 +612,7 @@ pub fn run_in_memory(
         .is_some_and(|a| a.iter().any(Option::is_some));
     let (rig, config) = if RoadMount::applies(estimator, &sequence.rig, &config, has_odometry) {
         let frames = sequence.frames.get(1..).unwrap_or_default();
-        let frames = &frames[..frames.len().min(ROAD_MOUNT_FRAMES)];
-        let (rig, config, _) =
-            RoadMount::calibrate(sequence.rig.clone(), config, |config, options| {
-                crate::calibrate::calibrate_mount(&sequence.rig, frames, None, config, options)
-            });
+        let (rig, config, _) = RoadMount::calibrate(sequence.rig.clone(), config, frames);
         (rig, config)
     } else {
         (sequence.rig.clone(), config)

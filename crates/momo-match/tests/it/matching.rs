@@ -444,3 +444,55 @@ fn errors_name_the_file() {
     assert!(e.to_string().contains("bad_rig.json"), "{e}");
     assert!(e.is_input());
 }
+
+/// One camera without odometry.csv: `momo vo` holds back the first frame pairs' matches for
+/// `odometry.road_scale_mount` and then runs them, so it gives the poses and the calibration
+/// outcome of `momo match` followed by `momo run` (`run_sequence`).
+#[test]
+fn vo_without_odometry_calibrates_as_match_and_run_do() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let c0 = write_frames(dir.path(), "cam0", 6, 1);
+    let rig = write_rig(dir.path(), 1);
+    let seq = dir.path().join("seq");
+    match_to_sequence(
+        std::slice::from_ref(&c0),
+        &rig,
+        &seq,
+        None,
+        &FrontEndOptions::default(),
+        |_| {},
+    )
+    .expect("matched");
+    let run_poses = dir.path().join("run.txt");
+    let options = momo_vo::RunOptions {
+        estimator: momo_vo::EstimatorKind::Momo,
+        output: run_poses.clone(),
+        diagnostics: None,
+        rig: None,
+    };
+    let ran =
+        momo_vo::run_sequence(&seq, momo_vo::Config::default(), &options, |_| {}).expect("runs");
+    let vo_poses = dir.path().join("vo.txt");
+    let run = VoRun {
+        folders: vec![c0],
+        rig,
+        odometry: None,
+        output: vo_poses.clone(),
+        estimator: momo_vo::EstimatorKind::Momo,
+    };
+    let mut frames = 0;
+    let vo = vo_from_images(
+        &run,
+        momo_vo::Config::default(),
+        &FrontEndOptions::default(),
+        |_| frames += 1,
+    )
+    .expect("vo");
+    assert_eq!(frames, 5);
+    assert_ne!(ran.road_mount, momo_vo::RoadMount::NotRun);
+    assert_eq!(vo.run.road_mount, ran.road_mount);
+    assert_eq!(
+        std::fs::read(&vo_poses).expect("vo poses"),
+        std::fs::read(&run_poses).expect("run poses")
+    );
+}
