@@ -56,7 +56,8 @@ for s in 06 01; do
             --odometry "$out/kitti$s/odometry.csv" -o "$out/est/${name}_vo.txt" 2> "$out/log/vo_$name.txt"
         vo_ms=$(sed -n 's/.*[ (]\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/vo_$name.txt")
         # Without odometry.csv: the scale comes from the stereo cross-camera matches
-        # (momo-match's stereo module) or is unobservable (mono).
+        # (momo-match's stereo module) or from the road, read through the mount calibrated on the
+        # first frame pairs (mono, `odometry.road_scale_mount`).
         "$momo" vo "${folders[@]}" --rig "$out/kitti$s/rig_$rig.json" \
             -o "$out/est/${name}_vo_noodo.txt" 2> "$out/log/vo_noodo_$name.txt"
         noodo_ms=$(sed -n 's/.*[ (]\([0-9.]*\) ms\/frame matching.*/\1/p' "$out/log/vo_noodo_$name.txt")

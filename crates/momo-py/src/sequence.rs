@@ -266,7 +266,9 @@ fn diagnostics_dict<'py>(
 }
 
 /// Runs the odometry over a sequence directory as `momo run` does (same frames, same poses
-/// bit for bit), keeping the results in memory.
+/// bit for bit), keeping the results in memory. One camera without odometry.csv: the mount is
+/// calibrated on the first frame pairs first and its pitch given to the road that gives the
+/// scale (`odometry.road_scale_mount`), as `momo run` does.
 ///
 /// `config`: a `Config`, a path to a configuration file (as `momo run --config`), or None for
 /// the default. `estimator`: `"momo"`, `"five-point"` or `"five-point-refined"`.
