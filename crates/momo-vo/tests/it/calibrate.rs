@@ -544,6 +544,26 @@ fn the_mount_sigma_covers_the_error_of_a_weakly_seen_direction_of_travel() {
     assert!(bootstrap < 1.5, "with the bootstrap: {bootstrap}");
 }
 
+/// The built-in drive (`frames`, `seed`) seen by one camera pitched 1° nose down against the
+/// level KITTI mount, given the level rig and no odometry.csv (the vehicle travels along its
+/// x axis and the road is its x-y plane, as a real vehicle's); with the simulation.
+fn pitched_camera_drive(frames: usize, seed: u64) -> (momo_sim::Simulation, momo_io::Sequence) {
+    let level = momo_sim::kitti_mono();
+    let pitched =
+        corrected_rig(&level, &Vector3::new(0.0, 1f64.to_radians(), 0.0)).expect("a valid rig");
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames,
+        seed,
+        rig: momo_sim::RigPreset::Custom(pitched),
+        ..momo_sim::SimConfig::default()
+    })
+    .expect("simulates");
+    let mut sequence = sim.sequence.clone();
+    sequence.rig = level;
+    sequence.arc_lengths = None;
+    (sim, sequence)
+}
+
 /// `odometry.road_scale_mount`: one camera pitched 1° nose down against its nominal (level)
 /// mount, no odometry.csv, the built-in drive (the vehicle travels along its x axis, the road
 /// is its x-y plane). Through the nominal mount the road's far points lie higher than a level
@@ -553,21 +573,8 @@ fn the_mount_sigma_covers_the_error_of_a_weakly_seen_direction_of_travel() {
 /// from the road).
 #[test]
 fn without_odometry_the_calibrated_pitch_puts_the_road_arc_length_right() {
-    use momo_sim::{RigPreset, SimConfig};
     use momo_vo::{EstimatorKind, RoadScaleMount, ScaleSource};
-    let level = momo_sim::kitti_mono();
-    let pitched =
-        corrected_rig(&level, &Vector3::new(0.0, 1f64.to_radians(), 0.0)).expect("a valid rig");
-    let sim = momo_sim::simulate(&SimConfig {
-        frames: 60,
-        seed: 3,
-        rig: RigPreset::Custom(pitched),
-        ..SimConfig::default()
-    })
-    .expect("simulates");
-    let mut sequence = sim.sequence.clone();
-    sequence.rig = level;
-    sequence.arc_lengths = None;
+    let (sim, sequence) = pitched_camera_drive(60, 3);
     let median_ratio = |mount: RoadScaleMount| -> f64 {
         let mut config = Config::default();
         config.odometry.road_scale_mount = mount;
@@ -604,18 +611,8 @@ fn without_odometry_the_calibrated_pitch_puts_the_road_arc_length_right() {
 /// its poses with the rig as given and says why.
 #[test]
 fn a_run_says_how_it_calibrated_the_mount_for_the_road() {
-    use momo_sim::{RigPreset, SimConfig};
     use momo_vo::{RoadMount, RoadScaleMount, RunOptions, run_sequence};
-    let level = momo_sim::kitti_mono();
-    let pitched =
-        corrected_rig(&level, &Vector3::new(0.0, 1f64.to_radians(), 0.0)).expect("a valid rig");
-    let sim = momo_sim::simulate(&SimConfig {
-        frames: 40,
-        seed: 5,
-        rig: RigPreset::Custom(pitched),
-        ..SimConfig::default()
-    })
-    .expect("simulates");
+    let (sim, sequence) = pitched_camera_drive(40, 5);
     let dir = std::env::temp_dir().join(format!("momo-road-mount-{}", std::process::id()));
     let run = |sequence: &momo_io::Sequence, mount: RoadScaleMount| -> RoadMount {
         std::fs::remove_dir_all(&dir).ok();
@@ -632,9 +629,6 @@ fn a_run_says_how_it_calibrated_the_mount_for_the_road() {
         assert!(dir.join("est.txt").exists(), "the poses are written");
         summary.road_mount
     };
-    let mut sequence = sim.sequence.clone();
-    sequence.rig = level;
-    sequence.arc_lengths = None;
     match run(&sequence, RoadScaleMount::Road) {
         RoadMount::Calibrated(d) => {
             assert!(
