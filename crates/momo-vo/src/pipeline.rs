@@ -147,8 +147,9 @@ pub enum RoadMount {
     /// ([`RunOptions::rig`]).
     #[default]
     NotRun,
-    /// The run used the corrected rig; the correction `δ` (radians, about the vehicle's x, y, z
-    /// axes: [`MountEstimate::delta`]).
+    /// The mount was calibrated: its pitch read the road (`road`) or the run used the corrected
+    /// rig (`rig`). The correction `δ` (radians, about the vehicle's x, y, z axes:
+    /// [`MountEstimate::delta`]).
     Calibrated(nalgebra::Vector3<f64>),
     /// The calibration failed (its message; e.g. no frame pair that moves): the run used the
     /// rig as given.
