@@ -158,8 +158,9 @@ pub enum RoadMount {
 
 impl RoadMount {
     /// Whether a run calibrates its mount first (see the type's doc): the momo estimator, one
-    /// camera, no arc lengths from odometry, `odometry.road_scale_frames > 0` and
-    /// `odometry.road_scale_mount`.
+    /// camera, no arc lengths from odometry, `odometry.road_scale_frames > 0`,
+    /// `odometry.road_scale_mount` not `nominal`, and the separation's hypotheses on (the road
+    /// is read through them: without them there is no road scale to correct).
     pub fn applies(
         estimator: EstimatorKind,
         rig: &Rig,
@@ -171,6 +172,13 @@ impl RoadMount {
             && rig.len() == 1
             && config.odometry.road_scale_frames > 0
             && config.odometry.road_scale_mount != RoadScaleMount::Nominal
+            && config
+                .odometry
+                .separate
+                .as_ref()
+                .filter(|s| s.enabled)
+                .and_then(|s| s.hypotheses())
+                .is_some()
     }
 
     /// The rig and configuration to run with and the outcome, from the mount calibrated on

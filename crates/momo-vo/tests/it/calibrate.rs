@@ -645,6 +645,19 @@ fn a_run_says_how_it_calibrated_the_mount_for_the_road() {
         ..sequence.clone()
     };
     assert_eq!(run(&with_odometry, RoadScaleMount::Road), RoadMount::NotRun);
+    // Without the separation's hypotheses there is no road scale, and nothing to calibrate for.
+    let kind = momo_vo::EstimatorKind::Momo;
+    assert!(RoadMount::applies(
+        kind,
+        &sequence.rig,
+        &Config::default(),
+        false
+    ));
+    let mut without = Config::default();
+    if let Some(s) = without.odometry.separate.as_mut() {
+        s.enabled = false;
+    }
+    assert!(!RoadMount::applies(kind, &sequence.rig, &without, false));
     // Three matches per frame pair: below `odometry.min_matches`, nothing to calibrate on.
     let mut sparse = sequence.clone();
     for frame in &mut sparse.frames {
