@@ -322,11 +322,12 @@ pub fn scenarios() -> Vec<&'static str> {
 /// `scenario`: one of `momo.scenarios()`; `frames`, `seed`; `matches`: matches per camera and
 /// frame pair (default: the scenario's); `trajectory`: drive along these camera-0 poses
 /// ((N, 4, 4) array, or a path to a KITTI poses file) instead of a generated drive, at most
-/// `frames` of them; `rig`: a `Rig` instead of the scenario's. Returns a `Sequence` with ground
+/// `frames` of them; `rig`: a `Rig` instead of the scenario's; `along_travel`: the trajectory
+/// turned by its travel elevation first (`momo simulate --trajectory-along-travel`). Returns a `Sequence` with ground
 /// truth (and the true arc lengths as odometry where the scenario has them) and
 /// `vehicle_poses`.
 #[pyfunction]
-#[pyo3(signature = (scenario = "clean_pinhole", frames = 400, seed = 1, matches = None, trajectory = None, rig = None))]
+#[pyo3(signature = (scenario = "clean_pinhole", frames = 400, seed = 1, matches = None, trajectory = None, rig = None, along_travel = false))]
 pub fn simulate(
     py: Python<'_>,
     scenario: &str,
@@ -335,6 +336,7 @@ pub fn simulate(
     matches: Option<usize>,
     trajectory: Option<&Bound<'_, PyAny>>,
     rig: Option<&Bound<'_, PyRig>>,
+    along_travel: bool,
 ) -> PyResult<PySequence> {
     let Some(mut cfg) = momo_sim::SimConfig::scenario(scenario) else {
         return Err(SimulationError::new_err(format!(
@@ -352,7 +354,11 @@ pub fn simulate(
         if poses.is_empty() {
             return Err(SimulationError::new_err("trajectory: no poses"));
         }
-        cfg.camera_trajectory = Some(poses);
+        cfg.camera_trajectory = Some(if along_travel {
+            momo_sim::along_travel(&poses).0
+        } else {
+            poses
+        });
     }
     if let Some(r) = rig {
         cfg.rig = momo_sim::RigPreset::Custom(r.get().inner.clone());

@@ -65,7 +65,7 @@ pub use rigs::{
 };
 pub use sim::{
     BlindMode, Blinding, MAX_MATCHES_PER_CAMERA, MatchLabel, MovingObject, SceneConfig, SimConfig,
-    SimError, Simulation, camera_poses_from_vehicle_poses, simulate,
+    SimError, Simulation, along_travel, camera_poses_from_vehicle_poses, simulate,
     vehicle_poses_from_camera_poses,
 };
 pub use traffic::{

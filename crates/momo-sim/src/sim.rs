@@ -931,6 +931,59 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     })
 }
 
+/// Camera poses turned so that the camera looks along its travel: every pose `C_k` becomes
+/// `C_k · R_x(θ)`, `θ` the median over the consecutive pairs that move more than 0.3 m of the
+/// travel's elevation above the optical axis, `atan2(-t_y, t_z)` of the relative translation in
+/// the camera at k-1 (KITTI camera frame: x right, y down, z forward). Returns the poses and
+/// `θ` (0 where no pair moves that much).
+///
+/// A real camera is mounted a little off the direction of travel: the KITTI camera looks about
+/// 1° down against it (+0.98° on sequence 00, −0.39° on 03). Driven as a level camera
+/// ([`vehicle_poses_from_camera_poses`]), such a trajectory makes the simulated vehicle travel
+/// that far above its own road plane (the scene's ground is the vehicle's `z = 0` at each
+/// frame); turned first, the vehicle travels along its road, as a real one does, and the
+/// rig's camera looks along the travel (`momo simulate --trajectory-along-travel`;
+/// docs/RESULTS.md, forty-eighth session).
+///
+/// ```
+/// use momo_core::{Pose, so3_exp};
+/// use momo_sim::along_travel;
+/// use nalgebra::Vector3;
+///
+/// // A camera pitched 1° nose down (about its x axis) driving straight along the world's z.
+/// let pitch = so3_exp(&Vector3::new(-1f64.to_radians(), 0.0, 0.0));
+/// let c: Vec<Pose<f64>> = (0..5)
+///     .map(|k| Pose::new(pitch, Vector3::new(0.0, 0.0, k as f64)))
+///     .collect();
+/// let (turned, theta) = along_travel(&c);
+/// assert!((theta.to_degrees() - 1.0).abs() < 1e-9);
+/// let t = turned[0].inverse().compose(&turned[1]).translation;
+/// assert!(t.y.abs() < 1e-12 && (t.z - 1.0).abs() < 1e-12);
+/// ```
+pub fn along_travel(camera_poses: &[Pose<f64>]) -> (Vec<Pose<f64>>, f64) {
+    let mut elevations: Vec<f64> = camera_poses
+        .windows(2)
+        .map(|w| w[0].inverse().compose(&w[1]).translation)
+        .filter(|t| t.norm() > 0.3)
+        .map(|t| (-t.y).atan2(t.z))
+        .collect();
+    elevations.sort_by(f64::total_cmp);
+    let n = elevations.len();
+    let theta = match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => elevations[n / 2],
+        _ => 0.5 * (elevations[n / 2 - 1] + elevations[n / 2]),
+    };
+    let turn = Pose::new(
+        momo_core::so3_exp(&Vector3::new(theta, 0.0, 0.0)),
+        Vector3::zeros(),
+    );
+    (
+        camera_poses.iter().map(|c| c.compose(&turn)).collect(),
+        theta,
+    )
+}
+
 /// The vehicle poses of camera-0 poses: `V_k = P0 · C_k · P0⁻¹` with `P0 = T_vehicle_camera` of
 /// camera 0 (the inverse of the ground truth's `C_k = P0⁻¹ V_k P0`).
 ///

@@ -111,6 +111,25 @@ def test_simulate_along_trajectory(sim):
     assert np.abs(again.ground_truth - gt).max() < 1e-9
 
 
+def test_simulate_along_travel():
+    """A camera pitched 1 deg nose down driving straight: turned along its travel, the
+    ground truth's camera moves along its optical axis (no vertical component)."""
+    a = np.radians(1.0)
+    pitch = np.array([[1, 0, 0], [0, np.cos(a), np.sin(a)], [0, -np.sin(a), np.cos(a)]])
+    cams = np.tile(np.eye(4), (20, 1, 1))
+    cams[:, :3, :3] = pitch
+    cams[:, 2, 3] = 1.2 * np.arange(20)
+    as_given = momo.simulate("clean_pinhole", frames=10, seed=4, matches=60, trajectory=cams)
+    turned = momo.simulate(
+        "clean_pinhole", frames=10, seed=4, matches=60, trajectory=cams, along_travel=True
+    )
+    def step(gt):
+        return np.linalg.inv(gt[0]) @ gt[1]
+
+    assert abs(step(as_given.ground_truth)[1, 3]) > 0.01
+    assert abs(step(turned.ground_truth)[1, 3]) < 1e-9
+
+
 def test_gil_released_during_run(tmp_path):
     """While `run` estimates in one thread, another Python thread keeps running."""
     d = tmp_path / "seq"

@@ -242,3 +242,38 @@ fn kitti_00_ground_truth_as_a_trajectory() {
     // KITTI 00 starts driving forward at about 8.6 m/s.
     assert!((sim.speeds[1] - 8.6).abs() < 0.2, "{}", sim.speeds[1]);
 }
+
+/// [`along_travel`]: a camera pitched 1° nose down against its straight travel, driven as a
+/// level camera, makes the vehicle climb out of its road plane by that angle every frame pair;
+/// turned by its travel elevation first, the vehicle travels along its x axis (its road).
+#[test]
+fn a_trajectory_turned_along_its_travel_keeps_the_vehicle_on_its_road() {
+    let pitch = momo_core::so3_exp(&Vector3::new(-1f64.to_radians(), 0.0, 0.0));
+    let cams: Vec<Pose<f64>> = (0..30)
+        .map(|k| Pose::new(pitch, Vector3::new(0.0, 0.0, 1.2 * k as f64)))
+        .collect();
+    let climb = |cams: Vec<Pose<f64>>| -> f64 {
+        let sim = simulate(&SimConfig {
+            frames: 20,
+            camera_trajectory: Some(cams),
+            ..SimConfig::clean_pinhole()
+        })
+        .unwrap();
+        // The largest climb of a frame pair's translation above the vehicle's x-y plane.
+        sim.vehicle_motions[1..]
+            .iter()
+            .map(|m| (m.translation.z / m.translation.norm()).asin().abs())
+            .fold(0.0, f64::max)
+            .to_degrees()
+    };
+    let as_given = climb(cams.clone());
+    let (turned, theta) = along_travel(&cams);
+    assert!(
+        (theta.to_degrees() - 1.0).abs() < 1e-9,
+        "{}",
+        theta.to_degrees()
+    );
+    let along = climb(turned);
+    assert!((as_given - 1.0).abs() < 0.01, "as given: {as_given} deg");
+    assert!(along < 1e-6, "turned: {along} deg");
+}
