@@ -325,17 +325,15 @@ pub fn vo_from_images(
     let mut held = Vec::new();
     let (rig, config, road_mount) =
         if momo_vo::RoadMount::applies(run.estimator, &rig, &config, has_odometry) {
-            let mut frames: Vec<FrameObservations> = Vec::new();
             for item in front.by_ref() {
                 let (k, obs) = item?;
-                frames.resize_with(k.saturating_sub(1), || FrameObservations::new(rig.len()));
-                frames.push(obs.clone());
                 held.push((k, obs));
                 if k >= momo_vo::pipeline::ROAD_MOUNT_FRAMES {
                     break;
                 }
             }
-            momo_vo::RoadMount::calibrate(rig, config, &frames)
+            let frames = held.iter().map(|(k, obs)| (*k, obs));
+            momo_vo::RoadMount::calibrate(rig, config, frames)
         } else {
             (rig, config, momo_vo::RoadMount::NotRun)
         };

@@ -514,11 +514,11 @@ pub fn calibrate_mount(
 
 /// One frame pair given to the calibration: its index `i` among the frame pairs (frame pair
 /// `(i, i+1)`), its matches and its odometry arc length.
-type FramePair<'a> = (usize, &'a FrameObservations, Option<f64>);
+pub(crate) type FramePair<'a> = (usize, &'a FrameObservations, Option<f64>);
 
 /// [`calibrate_mount`] over the frame pairs with matches (`i` increasing) of `total` frame
 /// pairs; the ones not listed have no matches.
-fn calibrate_frames(
+pub(crate) fn calibrate_frames(
     rig: &Rig,
     frames: &[FramePair<'_>],
     total: usize,

@@ -182,21 +182,28 @@ impl RoadMount {
     }
 
     /// The rig and configuration to run with and the outcome, from the mount calibrated on
-    /// `frames` (frame pair `i + 1` at index `i`; the first [`ROAD_MOUNT_FRAMES`] of them) with
-    /// `momo calibrate`'s defaults without the bootstrap (only the correction is used). For a
-    /// run where [`RoadMount::applies`]: [`road_scale_setup`], [`run_in_memory`] and
-    /// `momo vo` (which holds back the first frame pairs' matches for it).
-    pub fn calibrate(
+    /// the frame pairs `frames` (`(k, matches)` of frame pair `k - 1, k`, `k` increasing; those
+    /// up to [`ROAD_MOUNT_FRAMES`]) with `momo calibrate`'s defaults without the bootstrap (only
+    /// the correction is used). For a run where [`RoadMount::applies`]: [`road_scale_setup`],
+    /// [`run_in_memory`] and `momo vo` (which holds back the first frame pairs' matches for it).
+    pub fn calibrate<'a>(
         rig: Rig,
         mut config: Config,
-        frames: &[FrameObservations],
+        frames: impl IntoIterator<Item = (usize, &'a FrameObservations)>,
     ) -> (Rig, Config, Self) {
         let options = MountCalibration {
             bootstrap: 0,
             ..MountCalibration::default()
         };
-        let frames = &frames[..frames.len().min(ROAD_MOUNT_FRAMES)];
-        let calibrated = crate::calibrate::calibrate_mount(&rig, frames, None, &config, &options);
+        let mut total = 0;
+        let pairs: Vec<_> = frames
+            .into_iter()
+            .take_while(|(k, _)| *k <= ROAD_MOUNT_FRAMES)
+            .inspect(|(k, _)| total = *k)
+            .filter(|(k, obs)| *k >= 1 && !obs.is_empty())
+            .map(|(k, obs)| (k - 1, obs, None))
+            .collect();
+        let calibrated = crate::calibrate::calibrate_frames(&rig, &pairs, total, &config, &options);
         let est: MountEstimate = match calibrated {
             Ok(est) => est,
             Err(e) => return (rig, config, RoadMount::Failed(e.to_string())),
@@ -250,16 +257,16 @@ pub fn road_scale_setup(
         return Ok((rig, config, RoadMount::NotRun));
     }
     // The first ROAD_MOUNT_FRAMES frame pairs, read as the run reads them (memory bounded).
-    let mut frames: Vec<FrameObservations> = Vec::new();
+    let mut frames = Vec::new();
     for item in MatchReader::open(dir.join("matches.csv"), &rig)? {
         let (k, obs) = item?;
         if k > ROAD_MOUNT_FRAMES {
             break;
         }
-        frames.resize_with(k - 1, || FrameObservations::new(rig.len()));
-        frames.push(obs);
+        frames.push((k, obs));
     }
-    Ok(RoadMount::calibrate(rig, config, &frames))
+    let frames = frames.iter().map(|(k, obs)| (*k, obs));
+    Ok(RoadMount::calibrate(rig, config, frames))
 }
 
 impl RunSummary {
@@ -620,7 +627,7 @@ pub fn run_in_memory(
         .as_ref()
         .is_some_and(|a| a.iter().any(Option::is_some));
     let (rig, config) = if RoadMount::applies(estimator, &sequence.rig, &config, has_odometry) {
-        let frames = sequence.frames.get(1..).unwrap_or_default();
+        let frames = sequence.frames.iter().enumerate().skip(1);
         let (rig, config, _) = RoadMount::calibrate(sequence.rig.clone(), config, frames);
         (rig, config)
     } else {
