@@ -102,9 +102,11 @@ pub struct OdometryOptions {
     /// last this many admitted arc lengths from the road plane (`Odometry::road_arc_length`:
     /// the arc length at which most of the motion's static matches stand on the road at the
     /// camera's known height), read off estimated and weak moving frames; a road arc length
-    /// that leaves the held one by more than 30 % and 0.1 m (plus 0.03 m per frame since the
-    /// last admitted one) is not admitted unless ten in a row are not
-    /// (`Odometry::admit_road_arc_length`: a lead vehicle's "road"). Until there is one, the
+    /// that leaves the median of the last five admitted ones by more than 30 % and 0.1 m (plus
+    /// 0.03 m per frame since the last admitted one) is not admitted unless five in a row are
+    /// not, each in a frame that counts under half its road matches at that median
+    /// (`Odometry::admit_road_arc_length`: a lead vehicle's "road", and a drive's start read
+    /// under a lead vehicle's motion; docs/RESULTS.md, forty-ninth session). Until there is one, the
     /// arc length is held as metric (`road_scale_initial_metric`), or estimated or held as with
     /// 0 (off) without that option. The separation's road cues read the
     /// road at the motion's metric scale; a wrong scale by 20 % makes them pick a lead

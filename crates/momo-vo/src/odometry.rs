@@ -1179,8 +1179,7 @@ impl Odometry {
             }
             (Some(i), None)
                 if self.road_scale_on()
-                    && let Some(l) =
-                        crate::stats::median(self.road_arc_lengths.iter().copied()) =>
+                    && let Some(l) = self.road_held() =>
             {
                 // `odometry.road_scale_frames`: the median of the last frames' road arc
                 // lengths, held for the solve (until there is one, the arc length is held as
@@ -1983,9 +1982,9 @@ impl Odometry {
             && !standstill
             && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
             && let Some(i) = arc_index
-            && let Some(l) = self.road_arc_length(obs, &params, i)
+            && let Some(reading) = self.road_arc_length(obs, &params, i)
         {
-            self.admit_road_arc_length(l);
+            self.admit_road_arc_length(reading);
         }
         // `trust.stale_scale_frames`: the road's arc length not measured again for so many
         // frames, report only (after the frame's state).
@@ -2022,15 +2021,20 @@ impl Odometry {
     }
 
     /// Adds a frame's road arc length to the history of `odometry.road_scale_frames` unless it
-    /// leaves the held median by more than [`ROAD_SCALE_GATE`] (relative) and
-    /// [`ROAD_SCALE_GATE_METRES`]: a vehicle does not change its speed that much from one frame
-    /// to the next, but a lead vehicle that moves with the ego vehicle stands on a "road" of
-    /// its own at a fraction of the ego motion's scale (its motion relative to the camera is
-    /// the difference of the two) and can hold more road matches than the road itself where it
-    /// covers it. After [`ROAD_SCALE_RESETS`] rejections in a row the history restarts from
-    /// them (a wrong start must not be held forever).
-    fn admit_road_arc_length(&mut self, l: f64) {
-        let held = crate::stats::median(self.road_arc_lengths.iter().copied());
+    /// leaves the gate's reference (the median of the last [`ROAD_SCALE_GATE_FRAMES`] admitted
+    /// ones) by more than [`ROAD_SCALE_GATE`] (relative) and [`ROAD_SCALE_GATE_METRES`]: a
+    /// vehicle does not change its speed that much from one frame to the next, but a lead
+    /// vehicle that moves with the ego vehicle stands on a "road" of its own at a fraction of
+    /// the ego motion's scale (its motion relative to the camera is the difference of the two)
+    /// and can hold more road matches than the road itself where it covers it. A rejected
+    /// reading whose frame still counts at least [`ROAD_SCALE_HELD_SUPPORT`] of its road
+    /// matches at the reference ([`RoadReading::held_count`]) speaks for the reference and is
+    /// dropped. The others are kept, and [`ROAD_SCALE_RESETS`] of them in a row restart the
+    /// history from them: a wrong start (a drive's first readings taken under a lead vehicle's
+    /// motion) must not be held where the frames find no road at it.
+    fn admit_road_arc_length(&mut self, reading: RoadReading) {
+        let l = reading.arc_length;
+        let held = self.road_gate_reference();
         // Frames since the last admitted one, this one excluded.
         let stale = self.frames_since_road_admitted().saturating_sub(1) as f64;
         let admit = held.is_none_or(|h| {
@@ -2043,6 +2047,9 @@ impl Odometry {
             self.road_rejected.clear();
             self.road_arc_lengths.push_back(l);
         } else {
+            if reading.held_count as f64 >= ROAD_SCALE_HELD_SUPPORT * reading.count as f64 {
+                return;
+            }
             self.road_rejected.push(l);
             if self.road_rejected.len() < ROAD_SCALE_RESETS {
                 return;
@@ -2050,9 +2057,34 @@ impl Odometry {
             self.road_arc_lengths = self.road_rejected.drain(..).collect();
             self.road_admitted_frame = self.frame;
         }
-        while self.road_arc_lengths.len() > self.config.odometry.road_scale_frames {
+        while self.road_arc_lengths.len() > self.road_kept() {
             self.road_arc_lengths.pop_front();
         }
+    }
+
+    /// How many admitted road arc lengths are kept: the held one's `odometry.road_scale_frames`
+    /// and the gate's [`ROAD_SCALE_GATE_FRAMES`].
+    fn road_kept(&self) -> usize {
+        self.config
+            .odometry
+            .road_scale_frames
+            .max(ROAD_SCALE_GATE_FRAMES)
+    }
+
+    /// The held road arc length (`odometry.road_scale_frames`): the median of the last so many
+    /// admitted ones.
+    fn road_held(&self) -> Option<f64> {
+        let n = self.road_arc_lengths.len();
+        let k = self.config.odometry.road_scale_frames.min(n);
+        crate::stats::median(self.road_arc_lengths.iter().skip(n - k).copied())
+    }
+
+    /// The reference of [`Odometry::admit_road_arc_length`]'s gate: the median of the last
+    /// [`ROAD_SCALE_GATE_FRAMES`] admitted road arc lengths.
+    fn road_gate_reference(&self) -> Option<f64> {
+        let n = self.road_arc_lengths.len();
+        let k = ROAD_SCALE_GATE_FRAMES.min(n);
+        crate::stats::median(self.road_arc_lengths.iter().skip(n - k).copied())
     }
 
     /// Frames since the last admitted road arc length (`odometry.road_scale_frames`), this one
@@ -2083,7 +2115,7 @@ impl Odometry {
         obs: &FrameObservations,
         params: &[f64],
         arc_index: usize,
-    ) -> Option<f64> {
+    ) -> Option<RoadReading> {
         let (h, support) = self.road_support(obs, &self.estimator.motion(params))?;
         const STEP: f64 = 1.02;
         let (lo, hi) = (0.05_f64, 5.0_f64);
@@ -2105,7 +2137,27 @@ impl Odometry {
             &support,
             h,
         );
-        crate::hypotheses::road_arc_length(&arc_lengths, &counts, ROAD_SCALE_MIN_MATCHES)
+        let arc_length =
+            crate::hypotheses::road_arc_length(&arc_lengths, &counts, ROAD_SCALE_MIN_MATCHES)?;
+        // The road's count at the gate's reference (the most at the grid's arc lengths within
+        // two steps of it: the road's plateau is a few steps wide).
+        let held_count = self
+            .road_gate_reference()
+            .map(|h| {
+                arc_lengths
+                    .iter()
+                    .zip(&counts)
+                    .filter(|(l, _)| (*l / h).ln().abs() <= 2.0 * STEP.ln() + 1e-9)
+                    .map(|(_, c)| *c)
+                    .max()
+                    .unwrap_or(0)
+            })
+            .unwrap_or(0);
+        Some(RoadReading {
+            arc_length,
+            count: counts.iter().copied().max().unwrap_or(0),
+            held_count,
+        })
     }
 
     /// The separation's hypotheses options and the support its road cues read under `motion`
@@ -3959,9 +4011,31 @@ const ROAD_SCALE_GATE_METRES: f64 = 0.1;
 /// frame: 3 m/s² at 10 Hz).
 const ROAD_SCALE_GATE_METRES_PER_FRAME: f64 = 0.03;
 
-/// [`Odometry::admit_road_arc_length`]: this many rejected road arc lengths in a row restart
-/// the history from them.
-const ROAD_SCALE_RESETS: usize = 10;
+/// [`Odometry::admit_road_arc_length`]: this many rejected road arc lengths in a row (those
+/// whose frames find no road at the gate's reference) restart the history from them.
+const ROAD_SCALE_RESETS: usize = 5;
+
+/// [`Odometry::admit_road_arc_length`]: a rejected road arc length whose frame counts at least
+/// this fraction of its road matches at the gate's reference too does not count towards a
+/// restart.
+const ROAD_SCALE_HELD_SUPPORT: f64 = 0.5;
+
+/// [`Odometry::admit_road_arc_length`]: the gate's reference is the median of this many last
+/// admitted road arc lengths, however few `odometry.road_scale_frames` holds: a lead vehicle
+/// whose "road" lies 20-30 % below the held one must not pull it down a step per frame.
+const ROAD_SCALE_GATE_FRAMES: usize = 5;
+
+/// One frame's reading of `odometry.road_scale_frames` ([`Odometry::road_arc_length`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RoadReading {
+    /// The arc length that puts the most matches on the road (the plateau's geometric mean).
+    arc_length: f64,
+    /// The road matches counted at the best arc length.
+    count: usize,
+    /// The road matches counted at the gate's reference
+    /// ([`Odometry::road_gate_reference`]; 0 without one).
+    held_count: usize,
+}
 
 /// The fewest labelled matches outside the support whose share [`quiet_memory`] reads (the
 /// separation's persistence uses the same count).
@@ -6091,7 +6165,11 @@ mod tests {
         // One road arc length per frame.
         let feed = |vo: &mut Odometry, l: f64| {
             vo.frame += 1;
-            vo.admit_road_arc_length(l);
+            vo.admit_road_arc_length(RoadReading {
+                arc_length: l,
+                count: 20,
+                held_count: 0,
+            });
         };
         for l in [1.0, 1.02, 0.98] {
             feed(&mut vo, l);
@@ -6116,7 +6194,8 @@ mod tests {
         feed(&mut vo, 0.5);
         assert!(vo.road_rejected.is_empty());
         assert_eq!(vo.road_arc_lengths.back(), Some(&0.5));
-        // Ten rejected in a row, at one new level: the history restarts from them.
+        // `ROAD_SCALE_RESETS` rejected in a row, at one new level, in frames that find no road
+        // at the held one: the history restarts from them.
         let before = held(&vo).expect("a history");
         for k in 0..ROAD_SCALE_RESETS {
             assert_eq!(held(&vo), Some(before), "rejection {k}");
@@ -6124,6 +6203,77 @@ mod tests {
         }
         assert_eq!(held(&vo), Some(4.0));
         assert!(vo.road_rejected.is_empty());
+    }
+
+    #[test]
+    fn a_rejected_road_arc_length_counts_towards_a_restart_only_where_the_held_one_finds_no_road() {
+        let rig = clean_pinhole_rig();
+        let mut config = crate::Config::default();
+        config.odometry.road_scale_frames = 5;
+        let mut vo = Odometry::new(rig, config).expect("builds");
+        let held = |vo: &Odometry| crate::stats::median(vo.road_arc_lengths.iter().copied());
+        let feed = |vo: &mut Odometry, l: f64, count: usize, held_count: usize| {
+            vo.frame += 1;
+            vo.admit_road_arc_length(RoadReading {
+                arc_length: l,
+                count,
+                held_count,
+            });
+        };
+        for l in [1.0, 1.02, 0.98] {
+            feed(&mut vo, l, 20, 20);
+        }
+        assert_eq!(held(&vo), Some(1.0));
+        // A lead vehicle's "road" at a fifth of the scale for many frames, while the road
+        // still counts half of its matches at the held 1 m: the held one stays.
+        for k in 0..2 * ROAD_SCALE_RESETS {
+            feed(&mut vo, 0.2, 20, 10 + k % 3);
+            assert_eq!(held(&vo), Some(1.0), "frame {k}");
+            assert!(vo.road_rejected.is_empty());
+        }
+        // Readings at 0.2 m whose frames find (almost) no road at the held 1 m: the held one
+        // was the wrong one, and the history restarts from them.
+        for k in 0..ROAD_SCALE_RESETS {
+            assert_eq!(held(&vo), Some(1.0), "rejection {k}");
+            feed(&mut vo, 0.2, 20, 9);
+        }
+        assert_eq!(held(&vo), Some(0.2));
+        // One supported rejection between unsupported ones neither counts nor clears them.
+        feed(&mut vo, 1.0, 20, 2);
+        feed(&mut vo, 1.0, 20, 15);
+        assert_eq!(vo.road_rejected.len(), 1);
+    }
+
+    #[test]
+    fn a_lead_vehicles_road_cannot_pull_the_held_arc_length_down_step_by_step() {
+        let rig = clean_pinhole_rig();
+        // The default holds the last admitted road arc length alone.
+        let config = crate::Config::default();
+        assert_eq!(config.odometry.road_scale_frames, 1);
+        let mut vo = Odometry::new(rig, config).expect("builds");
+        let feed = |vo: &mut Odometry, l: f64| {
+            vo.frame += 1;
+            vo.admit_road_arc_length(RoadReading {
+                arc_length: l,
+                count: 20,
+                held_count: 12,
+            });
+        };
+        for _ in 0..ROAD_SCALE_GATE_FRAMES {
+            feed(&mut vo, 1.0);
+        }
+        // Braking: 0.8 m is within 30 % of the reference and held at once.
+        feed(&mut vo, 0.8);
+        assert_eq!(vo.road_held(), Some(0.8));
+        // 0.62 m is within 30 % of the held 0.8 m but not of the last frames' median (1 m).
+        feed(&mut vo, 0.62);
+        assert_eq!(vo.road_held(), Some(0.8));
+        // Nor does a lead vehicle's road 25 % below every held value get there in steps.
+        for l in [0.6, 0.45, 0.34, 0.25] {
+            feed(&mut vo, l);
+        }
+        assert_eq!(vo.road_held(), Some(0.8));
+        assert_eq!(vo.road_gate_reference(), Some(1.0));
     }
 
     #[test]
