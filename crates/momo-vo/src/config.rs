@@ -106,11 +106,10 @@ pub struct OdometryOptions {
     /// 0.03 m per frame since the last admitted one) is not admitted unless five in a row are
     /// not, each in a frame that counts under half its road matches at that median
     /// (`Odometry::admit_road_arc_length`: a lead vehicle's "road", and a drive's start read
-    /// under a lead vehicle's motion; docs/RESULTS.md, forty-ninth session). Until there is one, the
-    /// arc length is held as metric (`road_scale_initial_metric`), or estimated or held as with
-    /// 0 (off) without that option. The separation's road cues read the
-    /// road at the motion's metric scale; a wrong scale by 20 % makes them pick a lead
-    /// vehicle's motion. Default 1 since the forty-sixth session (docs/RESULTS.md): the last
+    /// under a lead vehicle's motion; docs/RESULTS.md, forty-ninth session). Until there is
+    /// one, the arc length is held as metric (`road_scale_initial_metric`), or estimated or held
+    /// as with 0 (off) without that option. The separation's road cues read the road at the
+    /// motion's metric scale; a wrong scale by 20 % makes them pick a lead vehicle's motion. Default 1 since the forty-sixth session (docs/RESULTS.md): the last
     /// admitted one, which follows braking and starts that a longer median lags behind.
     pub road_scale_frames: usize,
     /// With `road_scale_frames`, the separation takes the held road arc length as the frame's
