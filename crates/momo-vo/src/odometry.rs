@@ -6155,22 +6155,31 @@ mod tests {
         );
     }
 
+    /// A single camera's odometry holding the median of the last `road_scale_frames` road arc
+    /// lengths.
+    fn road_vo(road_scale_frames: usize) -> Odometry {
+        let mut config = crate::Config::default();
+        config.odometry.road_scale_frames = road_scale_frames;
+        Odometry::new(clean_pinhole_rig(), config).expect("builds")
+    }
+
+    /// One frame's road reading offered to the gate: `count` road matches at `arc_length`,
+    /// `held_count` at the gate's reference.
+    fn read_road(vo: &mut Odometry, arc_length: f64, count: usize, held_count: usize) {
+        vo.frame += 1;
+        vo.admit_road_arc_length(RoadReading {
+            arc_length,
+            count,
+            held_count,
+        });
+    }
+
     #[test]
     fn the_road_arc_length_gate_rejects_a_lead_vehicles_road_widens_with_time_and_restarts() {
-        let rig = clean_pinhole_rig();
-        let mut config = crate::Config::default();
-        config.odometry.road_scale_frames = 5;
-        let mut vo = Odometry::new(rig, config).expect("builds");
-        let held = |vo: &Odometry| crate::stats::median(vo.road_arc_lengths.iter().copied());
+        let mut vo = road_vo(5);
+        let held = |vo: &Odometry| vo.road_held();
         // One road arc length per frame.
-        let feed = |vo: &mut Odometry, l: f64| {
-            vo.frame += 1;
-            vo.admit_road_arc_length(RoadReading {
-                arc_length: l,
-                count: 20,
-                held_count: 0,
-            });
-        };
+        let feed = |vo: &mut Odometry, l: f64| read_road(vo, l, 20, 0);
         for l in [1.0, 1.02, 0.98] {
             feed(&mut vo, l);
         }
@@ -6207,19 +6216,9 @@ mod tests {
 
     #[test]
     fn a_rejected_road_arc_length_counts_towards_a_restart_only_where_the_held_one_finds_no_road() {
-        let rig = clean_pinhole_rig();
-        let mut config = crate::Config::default();
-        config.odometry.road_scale_frames = 5;
-        let mut vo = Odometry::new(rig, config).expect("builds");
-        let held = |vo: &Odometry| crate::stats::median(vo.road_arc_lengths.iter().copied());
-        let feed = |vo: &mut Odometry, l: f64, count: usize, held_count: usize| {
-            vo.frame += 1;
-            vo.admit_road_arc_length(RoadReading {
-                arc_length: l,
-                count,
-                held_count,
-            });
-        };
+        let mut vo = road_vo(5);
+        let held = |vo: &Odometry| vo.road_held();
+        let feed = read_road;
         for l in [1.0, 1.02, 0.98] {
             feed(&mut vo, l, 20, 20);
         }
@@ -6246,19 +6245,10 @@ mod tests {
 
     #[test]
     fn a_lead_vehicles_road_cannot_pull_the_held_arc_length_down_step_by_step() {
-        let rig = clean_pinhole_rig();
         // The default holds the last admitted road arc length alone.
-        let config = crate::Config::default();
-        assert_eq!(config.odometry.road_scale_frames, 1);
-        let mut vo = Odometry::new(rig, config).expect("builds");
-        let feed = |vo: &mut Odometry, l: f64| {
-            vo.frame += 1;
-            vo.admit_road_arc_length(RoadReading {
-                arc_length: l,
-                count: 20,
-                held_count: 12,
-            });
-        };
+        assert_eq!(crate::Config::default().odometry.road_scale_frames, 1);
+        let mut vo = road_vo(1);
+        let feed = |vo: &mut Odometry, l: f64| read_road(vo, l, 20, 12);
         for _ in 0..ROAD_SCALE_GATE_FRAMES {
             feed(&mut vo, 1.0);
         }
