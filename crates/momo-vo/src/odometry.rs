@@ -247,6 +247,10 @@ pub struct Odometry {
     road_rejected: Vec<f64>,
     /// `odometry.road_scale_frames`: the frame whose road arc length was admitted last.
     road_admitted_frame: usize,
+    /// `trust.unconfirmed_scale`: the last admitted road arc length passed the gate only
+    /// through its widening for unread frames, and no reading within the plain gate has
+    /// followed.
+    road_unconfirmed: bool,
     /// Running mean of the soft manifold's prior residuals over the moving frames
     /// (`odometry.soft_prior_centring_frames`; empty if off or the model is hard).
     soft_center: Vec<f64>,
@@ -419,6 +423,7 @@ impl Odometry {
             road_arc_lengths: std::collections::VecDeque::new(),
             road_rejected: Vec::new(),
             road_admitted_frame: 0,
+            road_unconfirmed: false,
             soft_center,
             soft_count: 0,
             soft_inv_scale,
@@ -1088,6 +1093,7 @@ impl Odometry {
         self.road_arc_lengths.clear();
         self.road_rejected.clear();
         self.road_admitted_frame = 0;
+        self.road_unconfirmed = false;
         self.soft_center = if self.config.odometry.soft_prior_centring_frames > 0 {
             let neutral = self
                 .estimator
@@ -1976,6 +1982,8 @@ impl Odometry {
                 self.hypotheses.set_last_yaw_sigma(sigma);
             }
         }
+        // `trust.unconfirmed_scale`: the state of the arc length this frame was solved with.
+        let unconfirmed = self.road_unconfirmed;
         // `odometry.road_scale_frames`: this frame's arc length from the road plane.
         if self.road_scale_on()
             && arc_length.is_none()
@@ -1993,6 +2001,15 @@ impl Odometry {
             && diag.scale == ScaleSource::Road
             && !standstill
             && self.frames_since_road_admitted() >= stale
+        {
+            flag_weak_report_only(&mut diag, Reason::StaleScale);
+        }
+        // `trust.unconfirmed_scale`: the held road arc length jumped through the widened gate
+        // and was not confirmed since, report only.
+        if self.config.trust.unconfirmed_scale
+            && diag.scale == ScaleSource::Road
+            && !standstill
+            && unconfirmed
         {
             flag_weak_report_only(&mut diag, Reason::StaleScale);
         }
@@ -2037,12 +2054,12 @@ impl Odometry {
         let held = self.road_gate_reference();
         // Frames since the last admitted one, this one excluded.
         let stale = self.frames_since_road_admitted().saturating_sub(1) as f64;
-        let admit = held.is_none_or(|h| {
-            (l - h).abs()
-                <= (ROAD_SCALE_GATE * h).max(ROAD_SCALE_GATE_METRES)
-                    + ROAD_SCALE_GATE_METRES_PER_FRAME * stale
-        });
+        let gate = |h: f64, widening: f64| {
+            (l - h).abs() <= (ROAD_SCALE_GATE * h).max(ROAD_SCALE_GATE_METRES) + widening
+        };
+        let admit = held.is_none_or(|h| gate(h, ROAD_SCALE_GATE_METRES_PER_FRAME * stale));
         if admit {
+            self.road_unconfirmed = held.is_some_and(|h| !gate(h, 0.0));
             self.road_admitted_frame = self.frame;
             self.road_rejected.clear();
             self.road_arc_lengths.push_back(l);
@@ -2056,6 +2073,7 @@ impl Odometry {
             }
             self.road_arc_lengths = self.road_rejected.drain(..).collect();
             self.road_admitted_frame = self.frame;
+            self.road_unconfirmed = false;
         }
         while self.road_arc_lengths.len() > self.road_kept() {
             self.road_arc_lengths.pop_front();
@@ -6155,6 +6173,33 @@ mod tests {
         );
     }
 
+    /// `trust.unconfirmed_scale`: a frame solved with an unconfirmed road arc length is flagged
+    /// `weak` / `stale_scale`, report only (the same motion as with the option off).
+    #[test]
+    fn without_odometry_a_frame_solved_with_an_unconfirmed_road_arc_length_is_flagged() {
+        let sim = clean_pinhole_drive(12, 5);
+        let seq = &sim.sequence;
+        let run = |flag: bool| {
+            let mut config = crate::Config::default();
+            config.trust.unconfirmed_scale = flag;
+            let mut vo = Odometry::new(seq.rig.clone(), config).expect("builds");
+            for k in 1..10 {
+                let d = vo.process(&seq.frames[k], None).diagnostics;
+                assert_eq!(d.status, FrameStatus::Estimated, "frame {k}");
+            }
+            assert!(!vo.road_unconfirmed, "a clean drive confirms its road");
+            // As if the last road arc length had jumped through the widened gate.
+            vo.road_unconfirmed = true;
+            vo.process(&seq.frames[10], None)
+        };
+        let (on, off) = (run(true), run(false));
+        assert_eq!(on.diagnostics.scale, ScaleSource::Road);
+        assert_eq!(on.diagnostics.status, FrameStatus::Weak);
+        assert_eq!(on.diagnostics.reason, Some(Reason::StaleScale));
+        assert_eq!(off.diagnostics.status, FrameStatus::Estimated);
+        assert_eq!(on.motion, off.motion);
+    }
+
     /// A single camera's odometry holding the median of the last `road_scale_frames` road arc
     /// lengths.
     fn road_vo(road_scale_frames: usize) -> Odometry {
@@ -6241,6 +6286,24 @@ mod tests {
         feed(&mut vo, 1.0, 20, 2);
         feed(&mut vo, 1.0, 20, 15);
         assert_eq!(vo.road_rejected.len(), 1);
+    }
+
+    #[test]
+    fn a_road_arc_length_admitted_through_the_widened_gate_is_unconfirmed_until_a_plain_one() {
+        let mut vo = road_vo(1);
+        for _ in 0..ROAD_SCALE_GATE_FRAMES {
+            read_road(&mut vo, 1.0, 20, 20);
+            assert!(!vo.road_unconfirmed);
+        }
+        // Twelve frames read no road; then 0.5 m passes the gate widened by 0.33 m only.
+        vo.frame += 12;
+        read_road(&mut vo, 0.5, 20, 5);
+        assert_eq!(vo.road_held(), Some(0.5));
+        assert!(vo.road_unconfirmed);
+        // A reading within 30 % of the last five's median (1 m) confirms the road again.
+        read_road(&mut vo, 0.9, 20, 20);
+        assert_eq!(vo.road_held(), Some(0.9));
+        assert!(!vo.road_unconfirmed);
     }
 
     #[test]

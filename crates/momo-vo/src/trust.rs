@@ -341,6 +341,14 @@ pub struct TrustOptions {
     /// same arc length for 5 or more frames, against 1 % of all its frames). Report only, as
     /// [`TrustOptions::yaw_change`]: poses unchanged. 0: off. Default 8.
     pub stale_scale_frames: usize,
+    /// Without odometry.csv, with `odometry.road_scale_frames`: a moving frame solved with a
+    /// road arc length that passed the gate only through its widening for unread frames
+    /// (further than 30 % and 0.1 m from the last five admitted ones' median), and that no
+    /// reading within the plain gate has confirmed since, is flagged `weak` / `stale_scale`
+    /// where it was `estimated`: after a run of unread frames the first reading is as likely a
+    /// lead vehicle's road as a change of speed (forty-ninth session). Report only, as
+    /// [`TrustOptions::yaw_change`]: poses unchanged. Default true.
+    pub unconfirmed_scale: bool,
     /// A lock-in: a moving frame whose reported motion keeps fewer than this share of its
     /// matches as inliers *and* changes its yaw `ω_z` (`ω = log R`, vehicle frame) by more
     /// than [`TrustOptions::support_change_yaw`] or its tilt `(ω_x, ω_y)` by more than
@@ -436,6 +444,7 @@ impl Default for TrustOptions {
             yaw_change_weight: 1.0,
             min_inlier_share: 0.0,
             stale_scale_frames: 8,
+            unconfirmed_scale: true,
             support_change_share: 0.15,
             support_change_yaw: 0.00873,
             support_change_tilt: 0.0157,
@@ -696,7 +705,8 @@ pub enum Reason {
     /// The inliers are fewer than `trust.min_inlier_share` of the matches (report only).
     LowSupport,
     /// No odometry: the arc length from the road plane was not measured again for
-    /// `trust.stale_scale_frames` frames (report only).
+    /// `trust.stale_scale_frames` frames, or it passed the gate only through its widening and
+    /// was not confirmed since (`trust.unconfirmed_scale`; report only).
     StaleScale,
     /// A small support with a jump of the yaw or the tilt, or a small support right after
     /// such a frame (`trust.support_change_share`; report only).
