@@ -1994,22 +1994,14 @@ impl Odometry {
         {
             self.admit_road_arc_length(reading);
         }
-        // `trust.stale_scale_frames`: the road's arc length not measured again for so many
-        // frames, report only (after the frame's state).
+        // Report only (after the frame's state): `trust.stale_scale_frames`, the road's arc
+        // length not measured again for so many frames; `trust.unconfirmed_scale`, the held
+        // road arc length jumped through the widened gate and was not confirmed since.
         let stale = self.config.trust.stale_scale_frames;
-        if stale > 0
-            && diag.scale == ScaleSource::Road
+        if diag.scale == ScaleSource::Road
             && !standstill
-            && self.frames_since_road_admitted() >= stale
-        {
-            flag_weak_report_only(&mut diag, Reason::StaleScale);
-        }
-        // `trust.unconfirmed_scale`: the held road arc length jumped through the widened gate
-        // and was not confirmed since, report only.
-        if self.config.trust.unconfirmed_scale
-            && diag.scale == ScaleSource::Road
-            && !standstill
-            && unconfirmed
+            && ((stale > 0 && self.frames_since_road_admitted() >= stale)
+                || (self.config.trust.unconfirmed_scale && unconfirmed))
         {
             flag_weak_report_only(&mut diag, Reason::StaleScale);
         }
@@ -2092,17 +2084,19 @@ impl Odometry {
     /// The held road arc length (`odometry.road_scale_frames`): the median of the last so many
     /// admitted ones.
     fn road_held(&self) -> Option<f64> {
-        let n = self.road_arc_lengths.len();
-        let k = self.config.odometry.road_scale_frames.min(n);
-        crate::stats::median(self.road_arc_lengths.iter().skip(n - k).copied())
+        self.road_median_of_last(self.config.odometry.road_scale_frames)
     }
 
     /// The reference of [`Odometry::admit_road_arc_length`]'s gate: the median of the last
     /// [`ROAD_SCALE_GATE_FRAMES`] admitted road arc lengths.
     fn road_gate_reference(&self) -> Option<f64> {
+        self.road_median_of_last(ROAD_SCALE_GATE_FRAMES)
+    }
+
+    /// The median of the last `k` admitted road arc lengths (of all of them where fewer).
+    fn road_median_of_last(&self, k: usize) -> Option<f64> {
         let n = self.road_arc_lengths.len();
-        let k = ROAD_SCALE_GATE_FRAMES.min(n);
-        crate::stats::median(self.road_arc_lengths.iter().skip(n - k).copied())
+        crate::stats::median(self.road_arc_lengths.iter().skip(n - k.min(n)).copied())
     }
 
     /// Frames since the last admitted road arc length (`odometry.road_scale_frames`), this one
