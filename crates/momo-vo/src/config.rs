@@ -593,6 +593,17 @@ pub struct OdometryOptions {
     /// protect itself; after a doubted frame every alternative competes. 0 (the default): the
     /// yaw test applies on every frame (as `decide_by_road_continuing` alone).
     pub decide_by_road_trusted_frames: usize,
+    /// With `decide_by_road`: the vehicle model's bound on the change of yaw `ω_z` from one
+    /// frame to the next (radians per frame pair). An alternative whose yaw lies more than
+    /// this from the previous frame's reported yaw, and further from it than the chosen
+    /// motion's, does not compete: a car does not leave a turn of 3 deg per frame for a
+    /// straight line within one frame, a lead vehicle's motion seen from it does
+    /// (docs/RESULTS.md, fiftieth session). `decide_by_road_continuing` is the bound at 0.
+    /// Default 0.03 (1.7 deg) since the fiftieth session: over twice the largest change of
+    /// yaw between consecutive frames of the KITTI 00-10 ground truth at 10 Hz (0.013 rad, on
+    /// 02 and 05; 00's single 0.043 at frame 2980 is a step of its poses); at another frame
+    /// rate scale it with the frame interval. 0: off.
+    pub decide_by_road_yaw_jump: f64,
     /// With `decide_by_road`: only the alternatives whose tilt ([`crate::hypotheses::tilt`],
     /// the norm of roll and pitch) lies at least as close to the previous frame's reported
     /// motion's tilt as the chosen motion's compete (a tilt that leaves the run's tilt is no
@@ -715,6 +726,7 @@ impl Default for OdometryOptions {
             decide_by_road: 3,
             decide_by_road_continuing: false,
             decide_by_road_trusted_frames: 0,
+            decide_by_road_yaw_jump: 0.03,
             decide_by_road_tilt: true,
             decide_by_road_tilt_vector: false,
             decide_by_road_tilt_frames: 1,
@@ -1501,6 +1513,15 @@ impl Config {
                 format!(
                     "odometry.soft_prior_sigma_max must be finite and at least 1, got {}",
                     o.soft_prior_sigma_max
+                ),
+            );
+        }
+        if !(o.decide_by_road_yaw_jump.is_finite() && o.decide_by_road_yaw_jump >= 0.0) {
+            bad(
+                &["odometry.decide_by_road_yaw_jump"],
+                format!(
+                    "odometry.decide_by_road_yaw_jump must be finite and non-negative, got {}",
+                    o.decide_by_road_yaw_jump
                 ),
             );
         }

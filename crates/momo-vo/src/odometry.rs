@@ -2254,10 +2254,13 @@ impl Odometry {
             })
         };
         let tilt_reach = tilt_distance(chosen);
+        // `decide_by_road_yaw_jump`: the previous frame's yaw and the chosen motion's.
+        let (y0, y_chosen) = (yaw(&self.previous), yaw(chosen));
         let scored: Vec<_> = alternatives
             .into_iter()
             .filter(|a| a.len() == chosen.len() && a.iter().all(|x| x.is_finite()))
             .filter(|a| reach.is_none_or(|(y0, d)| (yaw(a) - y0).abs() <= d))
+            .filter(|a| within_yaw_jump(y0, y_chosen, yaw(a), o.decide_by_road_yaw_jump))
             .filter(|a| tilt_reach.is_none_or(|d| tilt_distance(a).is_none_or(|e| e <= d)))
             .map(|mut a| {
                 // The frame's own arc length (held or measured) for every alternative.
@@ -4093,6 +4096,14 @@ struct InfluenceFrame {
     cells: Vec<Vec<momo_core::Linearization>>,
 }
 
+/// `odometry.decide_by_road_yaw_jump` (`bound`, radians per frame; 0 off): whether an
+/// alternative of yaw `yaw` may replace the chosen motion of yaw `chosen` after a frame whose
+/// reported yaw was `previous`: its change of yaw from the previous frame is within the bound,
+/// or no larger than the chosen motion's.
+pub fn within_yaw_jump(previous: f64, chosen: f64, yaw: f64, bound: f64) -> bool {
+    !(bound > 0.0) || (yaw - previous).abs() <= bound.max((chosen - previous).abs())
+}
+
 /// The choice of `odometry.decide_by_road`: the index of the highest of the alternatives' road
 /// `scores` (the first of equal ones) where it is at least `margin` above the chosen motion's
 /// `base`; `None` (the chosen motion stays) otherwise or where `margin` is 0.
@@ -5290,6 +5301,27 @@ mod tests {
         assert_eq!(pick_by_road(usize::MAX, &[usize::MAX], 1), None);
     }
 
+    /// `decide_by_road_yaw_jump`: a car in a turn of 3 deg per frame does not go straight in
+    /// the next frame; an alternative that does (a lead vehicle's motion, docs/RESULTS.md,
+    /// fiftieth session) does not compete where the chosen motion continues the turn, and does
+    /// where the chosen motion jumped as far, or with the bound off.
+    #[test]
+    fn decide_by_road_yaw_jump_bounds_the_change_of_yaw() {
+        let (previous, chosen, car) = (-0.0536, -0.0424, 0.0086);
+        assert!(!within_yaw_jump(previous, chosen, car, 0.03));
+        assert!(within_yaw_jump(previous, chosen, car, 0.0));
+        assert!(within_yaw_jump(previous, chosen, car, 0.07));
+        // Within the bound either way, and a turn that continues.
+        assert!(within_yaw_jump(previous, chosen, -0.03, 0.03));
+        assert!(within_yaw_jump(previous, chosen, -0.0526, 0.03));
+        // A chosen motion that jumped as far (the car's, 0.062 rad): an alternative 0.06 rad
+        // from the previous yaw competes; after one that jumped 0.054 rad the car's does not.
+        assert!(within_yaw_jump(previous, car, previous + 0.06, 0.03));
+        assert!(!within_yaw_jump(previous, 0.0, car, 0.03));
+        assert!(!within_yaw_jump(previous, chosen, f64::NAN, 0.03));
+        assert!(within_yaw_jump(previous, chosen, car, f64::NAN));
+    }
+
     /// `decide_by_road` in the driver, a single camera in traffic: off (the default) the
     /// estimates are the default configuration's bit for bit; on, it replaces some frame's
     /// motion, the first frame where the estimates part is flagged `weak` and carries a
@@ -5355,6 +5387,24 @@ mod tests {
         assert_eq!(cont[first].0.status, FrameStatus::Weak);
         assert!(
             (y_on - y0).abs() <= (y_off - y0).abs() + 1e-12,
+            "{y_on} {y_off} against {y0}"
+        );
+        // `decide_by_road_yaw_jump`: the first replacement keeps the yaw within the bound of the
+        // previous frame's, or no further from it than the motion it replaced.
+        let bounded = run(
+            "[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = false\ndecide_by_road_yaw_jump = 1e-5\n",
+        );
+        let first = bounded
+            .iter()
+            .zip(&off)
+            .position(|(a, b)| a.0.params != b.0.params)
+            .expect("the bounded option replaced some frame");
+        assert!(first > 0);
+        let y0 = yaw(&off[first - 1].0.params);
+        let (y_on, y_off) = (yaw(&bounded[first].0.params), yaw(&off[first].0.params));
+        assert_eq!(bounded[first].0.status, FrameStatus::Weak);
+        assert!(
+            (y_on - y0).abs() <= 1e-5_f64.max((y_off - y0).abs()) + 1e-12,
             "{y_on} {y_off} against {y0}"
         );
         // `decide_by_road_tilt`: the replacement's tilt is no further from the previous frame's
