@@ -5366,47 +5366,35 @@ mod tests {
         assert!(d.competing.is_some() || d.road_alternative.is_some());
         let (on_score, off_score) = (score.expect("scored"), off[first].1.expect("scored"));
         assert!(on_score >= off_score + 3, "{on_score} against {off_score}");
-        // `decide_by_road_continuing`: the replacement's yaw is no further from the previous
-        // frame's than the motion it replaced.
-        let cont = run(
-            "[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = false\ndecide_by_road_continuing = true\n",
-        );
-        let first = cont
-            .iter()
-            .zip(&off)
-            .position(|(a, b)| a.0.params != b.0.params)
-            .expect("the continuing option acted on some frame");
-        assert!(first > 0);
         let yaw = |p: &[f64]| {
             let config = crate::Config::default();
             let vo = Odometry::new(seq.rig.clone(), config).expect("the odometry builds");
             so3_log(&vo.estimator.motion(p).rotation).z
         };
-        let y0 = yaw(&off[first - 1].0.params);
-        let (y_on, y_off) = (yaw(&cont[first].0.params), yaw(&off[first].0.params));
-        assert_eq!(cont[first].0.status, FrameStatus::Weak);
-        assert!(
-            (y_on - y0).abs() <= (y_off - y0).abs() + 1e-12,
-            "{y_on} {y_off} against {y0}"
-        );
-        // `decide_by_road_yaw_jump`: the first replacement keeps the yaw within the bound of the
-        // previous frame's, or no further from it than the motion it replaced.
-        let bounded = run(
-            "[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = false\ndecide_by_road_yaw_jump = 1e-5\n",
-        );
-        let first = bounded
-            .iter()
-            .zip(&off)
-            .position(|(a, b)| a.0.params != b.0.params)
-            .expect("the bounded option replaced some frame");
-        assert!(first > 0);
-        let y0 = yaw(&off[first - 1].0.params);
-        let (y_on, y_off) = (yaw(&bounded[first].0.params), yaw(&off[first].0.params));
-        assert_eq!(bounded[first].0.status, FrameStatus::Weak);
-        assert!(
-            (y_on - y0).abs() <= 1e-5_f64.max((y_off - y0).abs()) + 1e-12,
-            "{y_on} {y_off} against {y0}"
-        );
+        // `decide_by_road_continuing` (the yaw bound at 0) and `decide_by_road_yaw_jump` at a
+        // bound of 1e-5: the first replacement's yaw lies within the bound of the previous
+        // frame's, or no further from it than the motion it replaced.
+        for (option, bound) in [
+            ("decide_by_road_continuing = true", 0.0),
+            ("decide_by_road_yaw_jump = 1e-5", 1e-5_f64),
+        ] {
+            let bounded = run(&format!(
+                "[odometry]\ndecide_by_road = 3\ndecide_by_road_tilt = false\n{option}\n"
+            ));
+            let first = bounded
+                .iter()
+                .zip(&off)
+                .position(|(a, b)| a.0.params != b.0.params)
+                .unwrap_or_else(|| panic!("{option}: no frame replaced"));
+            assert!(first > 0);
+            let y0 = yaw(&off[first - 1].0.params);
+            let (y_on, y_off) = (yaw(&bounded[first].0.params), yaw(&off[first].0.params));
+            assert_eq!(bounded[first].0.status, FrameStatus::Weak, "{option}");
+            assert!(
+                (y_on - y0).abs() <= bound.max((y_off - y0).abs()) + 1e-12,
+                "{option}: {y_on} {y_off} against {y0}"
+            );
+        }
         // `decide_by_road_tilt`: the replacement's tilt is no further from the previous frame's
         // reported tilt than the motion it replaced.
         let tilted = guarded;
