@@ -601,8 +601,9 @@ pub struct OdometryOptions {
     /// (docs/RESULTS.md, fiftieth session). `decide_by_road_continuing` is the bound at 0.
     /// Default 0.03 (1.7 deg) since the fiftieth session: over twice the largest change of
     /// yaw between consecutive frames of the KITTI 00-10 ground truth at 10 Hz (0.013 rad, on
-    /// 02 and 05; 00's single 0.043 at frame 2980 is a step of its poses); at another frame
-    /// rate scale it with the frame interval. 0: off.
+    /// 02 and 05; 00's single 0.043 at frame 2980 follows three frames of one held yaw rate,
+    /// a step of its poses rather than of the car); at another frame rate scale it with the
+    /// frame interval. 0: off.
     pub decide_by_road_yaw_jump: f64,
     /// With `decide_by_road`: only the alternatives whose tilt ([`crate::hypotheses::tilt`],
     /// the norm of roll and pitch) lies at least as close to the previous frame's reported

@@ -2255,12 +2255,14 @@ impl Odometry {
         };
         let tilt_reach = tilt_distance(chosen);
         // `decide_by_road_yaw_jump`: the previous frame's yaw and the chosen motion's.
-        let (y0, y_chosen) = (yaw(&self.previous), yaw(chosen));
+        let (yaw_previous, yaw_chosen) = (yaw(&self.previous), yaw(chosen));
         let scored: Vec<_> = alternatives
             .into_iter()
             .filter(|a| a.len() == chosen.len() && a.iter().all(|x| x.is_finite()))
             .filter(|a| reach.is_none_or(|(y0, d)| (yaw(a) - y0).abs() <= d))
-            .filter(|a| within_yaw_jump(y0, y_chosen, yaw(a), o.decide_by_road_yaw_jump))
+            .filter(|a| {
+                within_yaw_jump(yaw_previous, yaw_chosen, yaw(a), o.decide_by_road_yaw_jump)
+            })
             .filter(|a| tilt_reach.is_none_or(|d| tilt_distance(a).is_none_or(|e| e <= d)))
             .map(|mut a| {
                 // The frame's own arc length (held or measured) for every alternative.
