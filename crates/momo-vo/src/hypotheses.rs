@@ -260,6 +260,20 @@ pub struct HypothesesOptions {
     pub yaw_history_frames: usize,
     /// The margin `m` (radians) of [`HypothesesOptions::yaw_history_frames`].
     pub yaw_history_margin: f64,
+    /// The ordinary choice's near tie broken by the yaw history (0: off; fifty-first session,
+    /// tie66): where the alternative with the highest road score ([`score`]) lies more than
+    /// half the yaw margin ([`HypothesisTracker::yaw_margin`]) from the recent frames'
+    /// reference yaw ([`HypothesisTracker::yaw_reference`]), the highest-scoring alternative
+    /// within half the margin whose road score is at least this share of the top one's is the
+    /// one that competes with A instead. Two motions whose road scores differ by a cell or two
+    /// are not told apart by the road (the lower half of a vehicle that its own motion puts on
+    /// the road plane earns a few cells), while a car's yaw changes by a few tenths of a degree
+    /// from one frame to the next. Unlike the veto of
+    /// [`HypothesesOptions::yaw_history_frames`] the rule never keeps A: it only picks which
+    /// alternative A meets, so it cannot hold a lock-in whose history is the object's where the
+    /// static world's road outscores the alternatives near that history. Off in
+    /// `HypothesesOptions::default()`; the default configuration sets 0.8.
+    pub yaw_history_tie: f64,
     /// The margin of [`HypothesesOptions::yaw_history_frames`] for a slow vehicle, `(m₀, k)`:
     /// with the frame's arc length `s` (metres, from odometry) and `σ` the largest standard
     /// deviation of the history's reported yaws (each frame's covariance on `ω_z`) the margin is
@@ -472,6 +486,7 @@ impl Default for HypothesesOptions {
             tilt_reference: TiltReference::Median,
             yaw_history_frames: 0,
             yaw_history_margin: 0.0,
+            yaw_history_tie: 0.0,
             yaw_history_slow_margin: (0.0, 0.0),
             yaw_history_replace: false,
             yaw_history_final: false,
@@ -576,6 +591,11 @@ impl HypothesesOptions {
             return Err(
                 "odometry.separate.hypotheses.yaw_history_margin must be a finite number >= 0"
                     .into(),
+            );
+        }
+        if !(self.yaw_history_tie.is_finite() && (0.0..=1.0).contains(&self.yaw_history_tie)) {
+            return Err(
+                "odometry.separate.hypotheses.yaw_history_tie must be a number in [0, 1]".into(),
             );
         }
         let (m0, k) = self.yaw_history_slow_margin;

@@ -593,6 +593,7 @@ impl SeparateOptions {
                 tilt_reference_margin: 0.01,
                 yaw_history_frames: 1,
                 yaw_history_margin: 0.01745,
+                yaw_history_tie: 0.8,
                 yaw_history_slow_margin: (0.00436, 0.01745),
                 yaw_history_replace: true,
                 yaw_history_final: true,
@@ -1747,7 +1748,10 @@ fn separate_with(
                 let m = ctx.estimator.motion(&alt.0.params);
                 (score(h, ctx.rig, &m, obs, &alt.1), alt)
             }
-            None => scored.swap_remove(0),
+            None => {
+                let i = history_tie(h, tracker, &scored, |c| yaw_of(ctx, &c.0.params));
+                scored.swap_remove(i)
+            }
         };
         let switch = ordinary(tracker, score_b, &best);
         // `yaw_history_frames`: the ordinary choice does not switch to a yaw jump away from
@@ -2012,6 +2016,36 @@ fn first_highest<'a>(
 /// The yaw `ω_z` of a candidate's motion (`ω = log R`, vehicle frame).
 fn yaw_of(ctx: &SolveContext<'_>, params: &[f64]) -> f64 {
     momo_core::so3_log(&ctx.estimator.motion(params).rotation).z
+}
+
+/// The index (into `scored`, sorted by road score, highest first) of the alternative that
+/// competes with A in the ordinary choice ([`HypothesesOptions::yaw_history_tie`] `= q`): 0,
+/// unless the first one's yaw lies more than half the yaw margin `m`
+/// ([`HypothesisTracker::yaw_margin`]) from the recent frames' reference yaw `r`
+/// ([`HypothesisTracker::yaw_reference`]; a NaN yaw does); then the first one with
+/// `|ω_z − r| <= m / 2` and a road score of at least `q` times the first one's, where there is
+/// one. 0 with the rule off, before any frame was recorded, or for fewer than two alternatives.
+fn history_tie<C>(
+    h: &HypothesesOptions,
+    tracker: &HypothesisTracker,
+    scored: &[(usize, C)],
+    yaw: impl Fn(&C) -> f64,
+) -> usize {
+    let (Some(r), Some((top, first))) = (tracker.yaw_reference(), scored.first()) else {
+        return 0;
+    };
+    if !(h.yaw_history_tie > 0.0 && h.yaw_history_frames > 0 && scored.len() > 1) {
+        return 0;
+    }
+    let half = 0.5 * tracker.yaw_margin(h);
+    let near = |c: &C| (yaw(c) - r).abs() <= half;
+    if near(first) {
+        return 0;
+    }
+    scored
+        .iter()
+        .position(|(s, c)| *s as f64 >= h.yaw_history_tie * *top as f64 && near(c))
+        .unwrap_or(0)
 }
 
 /// Whether [`HypothesesOptions::yaw_history_frames`] stops the ordinary choice's switch from
@@ -3656,6 +3690,65 @@ mod tests {
             ..HypothesesOptions::default()
         };
         assert!(bad.validate().expect_err("NaN").contains("yaw_jump"));
+    }
+
+    /// `yaw_history_tie`: the numbers of dev2 05 s32 frame 430 (previous yaw 0.0432 rad, the
+    /// object's motion 0.0262 with road score 14 against 12 and 11 for two motions near the
+    /// history): the near tie goes to the motion that continues the history; a clear lead, a
+    /// top motion that itself continues the history, the rule off, or nothing recorded leave
+    /// the top one.
+    #[test]
+    fn yaw_history_tie_prefers_the_motion_that_continues_the_history() {
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: 0.01745,
+            yaw_history_tie: 0.8,
+            ..HypothesesOptions::default()
+        };
+        let yaw = |c: &f64| *c;
+        let mut tracker = HypothesisTracker::default();
+        let scored = [(14, 0.0262), (12, 0.0433), (11, 0.0430)];
+        assert_eq!(
+            history_tie(&h, &tracker, &scored, yaw),
+            0,
+            "nothing recorded"
+        );
+        tracker.record_yaw(&h, 0.0432);
+        assert_eq!(history_tie(&h, &tracker, &scored, yaw), 1);
+        // 11 < 0.8 x 14: a clear lead stays.
+        assert_eq!(
+            history_tie(&h, &tracker, &[(14, 0.0262), (11, 0.0433)], yaw),
+            0
+        );
+        // The top one within half the margin (0.0087) of the history stays.
+        assert_eq!(
+            history_tie(&h, &tracker, &[(14, 0.0350), (13, 0.0433)], yaw),
+            0
+        );
+        // The alternative must itself lie within half the margin.
+        assert_eq!(
+            history_tie(&h, &tracker, &[(14, 0.0262), (13, 0.0340)], yaw),
+            0
+        );
+        // A NaN top yaw counts as a jump; a NaN alternative never continues.
+        assert_eq!(
+            history_tie(&h, &tracker, &[(14, f64::NAN), (13, 0.0433)], yaw),
+            1
+        );
+        assert_eq!(
+            history_tie(&h, &tracker, &[(14, 0.0262), (13, f64::NAN)], yaw),
+            0
+        );
+        let off = HypothesesOptions {
+            yaw_history_tie: 0.0,
+            ..h.clone()
+        };
+        assert_eq!(history_tie(&off, &tracker, &scored, yaw), 0);
+        let bad = HypothesesOptions {
+            yaw_history_tie: 1.5,
+            ..h.clone()
+        };
+        assert!(bad.validate().expect_err("> 1").contains("yaw_history_tie"));
     }
 
     /// `yaw_history_frames`: against the median yaw of the recent frames' chosen motions, the
