@@ -557,7 +557,10 @@ impl SeparateOptions {
     /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). Since the
     /// thirty-fifth session the ground cue's, the memory's and (since the thirty-sixth) the
     /// road tests' counts shrink in a frame with fewer than 300 matches (`count_reference =
-    /// 300`; docs/RESULTS.md §9, thirty-fifth session, scale49, and thirty-sixth, scale50). A
+    /// 300`; docs/RESULTS.md §9, thirty-fifth session, scale49, and thirty-sixth, scale50).
+    /// Since the fifty-first session the ordinary choice's near tie of road scores goes to the
+    /// alternative that continues the yaw history (`hypotheses.yaw_history_tie = 0.8`;
+    /// docs/RESULTS.md §9, fifty-first session, tie66). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
