@@ -1728,9 +1728,11 @@ fn separate_with(
         };
         // `tilt_reference_frames`: the ordinary choice's switch to an alternative whose tilt
         // does not jump from the recent frames' stands (decided on a copy of the state).
+        // `yaw_history_tie`: the alternative the ordinary choice meets.
+        let tie = history_tie(h, tracker, &scored, |c| yaw_of(ctx, &c.0.params));
         let tilted_a = tilted_a.filter(|_| {
             h.tilt_reference_frames == 0
-                || scored.first().is_none_or(|(s, best)| {
+                || scored.get(tie).is_none_or(|(s, best)| {
                     let tilt_b = crate::hypotheses::tilt(&ctx.estimator.motion(&best.0.params));
                     tracker.tilt_jumps_given_road(h, tilt_b, weak_road_a)
                         || !spread_ok(&best.1, &chosen.1)
@@ -1751,10 +1753,7 @@ fn separate_with(
                 let m = ctx.estimator.motion(&alt.0.params);
                 (score(h, ctx.rig, &m, obs, &alt.1), alt)
             }
-            None => {
-                let i = history_tie(h, tracker, &scored, |c| yaw_of(ctx, &c.0.params));
-                scored.swap_remove(i)
-            }
+            None => scored.swap_remove(tie),
         };
         let switch = ordinary(tracker, score_b, &best);
         // `yaw_history_frames`: the ordinary choice does not switch to a yaw jump away from
