@@ -212,7 +212,9 @@ pub struct HypothesesOptions {
     /// where its tilt also exceeds a reference tilt of the last `K` frames' chosen motions
     /// ([`HypothesisTracker::tilt_reference`], [`HypothesesOptions::tilt_reference`]) by
     /// [`HypothesesOptions::tilt_reference_margin`], and never where the ordinary choice
-    /// switched to an alternative that passes the same test. A car's roll and pitch rates
+    /// switched to an alternative that passes the same test (the one it meets: the highest
+    /// road score's, or since the fifty-second session the one
+    /// [`HypothesesOptions::yaw_history_tie`] picks). A car's roll and pitch rates
     /// change smoothly from frame to frame (a road's grade and camber vary over tens of
     /// metres), so a true tilt rises from the previous frames' tilts while a fit to an object's
     /// motion or to the noise jumps away from them. Before `K` frames have been recorded the
