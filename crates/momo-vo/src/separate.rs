@@ -1726,10 +1726,10 @@ fn separate_with(
                     > crate::hypotheses::tilt(&a.motion) + tilt_margin;
             (ground_choice || vote) && !tilted_b
         };
-        // `tilt_reference_frames`: the ordinary choice's switch to an alternative whose tilt
-        // does not jump from the recent frames' stands (decided on a copy of the state).
-        // `yaw_history_tie`: the alternative the ordinary choice meets.
+        // `yaw_history_tie`: the alternative the ordinary choice meets (index into `scored`).
         let tie = history_tie(h, tracker, &scored, |c| yaw_of(ctx, &c.0.params));
+        // `tilt_reference_frames`: the ordinary choice's switch to that alternative, where its
+        // tilt does not jump from the recent frames', stands (decided on a copy of the state).
         let tilted_a = tilted_a.filter(|_| {
             h.tilt_reference_frames == 0
                 || scored.get(tie).is_none_or(|(s, best)| {
