@@ -60,6 +60,11 @@
 #               files but odometry.csv). bound.csv is the bound with the arc length known, so
 #               efficiencies are against a bound that such a run cannot reach (added in the 45th
 #               session)
+#   ALONG_TRAVEL environment variable: 1 simulates every sequence along a KITTI trajectory
+#               with `momo simulate --trajectory-along-travel` (the vehicle travels along its
+#               road, as a real one does; as they are, the KITTI camera's poses make the
+#               simulated vehicle travel about 1 deg above its own road plane) and keeps them
+#               under SETS_DIR/along_travel (added in the 54th session)
 #   MOMO        environment variable: the momo binary (default target/release/momo)
 #   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
 #   SIM_MOMO    environment variable: the momo binary that simulates missing sequences (default
@@ -86,6 +91,8 @@ sets=("$@")
 ((${#sets[@]})) || sets=(grid holdout static builtin k00)
 momo="$(abs "${MOMO:-$root/target/release/momo}")"
 sets_dir="$(abs "${SETS_DIR:-$root/target/family_sets}")"
+along_travel="${ALONG_TRAVEL:-0}"
+[[ "$along_travel" == 1 ]] && sets_dir="$sets_dir/along_travel"
 data="$(abs "${MOMO_DATA:-$root/../shared/data}")"
 frames="${FRAMES:-500}"
 jobs="${JOBS:-2}"
@@ -99,7 +106,7 @@ for b in "$momo" "$sim_momo"; do
         exit 2
     fi
 done
-export momo sim_momo cfg data frames
+export momo sim_momo cfg data frames along_travel
 
 # make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES [MATCHES [START]]]: simulates one sequence unless
 # it is there (MATCHES: `momo simulate --matches`, default the scenario's, `-` for it; START:
@@ -108,6 +115,7 @@ make_seq() {
     local dir="$1" sc="$2" t="$3" seed="$4" n="${5:-$frames}" traj=() m=()
     [[ -f "$dir/bound.csv" ]] && return 0
     [[ "$t" != drive ]] && traj=(--trajectory "$data/kitti_odometry_gt/poses/$t.txt")
+    [[ "$t" != drive && "$along_travel" == 1 ]] && traj+=(--trajectory-along-travel)
     [[ -n "${6:-}" && "${6:-}" != - ]] && m=(--matches "$6")
     [[ -n "${7:-}" ]] && traj+=(--trajectory-start "$7")
     rm -rf "$dir"
