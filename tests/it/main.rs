@@ -13,3 +13,4 @@ mod pipeline_props;
 mod recovery;
 mod reliability;
 mod sweep;
+mod traffic_start;

@@ -163,6 +163,16 @@ pub struct HypothesesOptions {
     /// give 10 on the grid, 6 and 7 on the hold-out). A config file's
     /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
     pub road_span: f64,
+    /// [`HypothesesOptions::road_span`] holds the continued track only once the road has
+    /// vouched for a track (fifty-fifth session): since the start (or a reset of the driver) a
+    /// chosen track's decayed road-score sum has reached [`HypothesesOptions::min_matches`].
+    /// Before that the continued track is the first frame's solve, chosen on no evidence, and at
+    /// a drive's start the static road's depth span is physically narrow: a road point's
+    /// parallax after a forward step `s` is about `s h / Z²` (`h` the camera's height), so at
+    /// `s = 0.17 m` it reaches [`HypothesesOptions::parallax`] only within about 8 m, while a
+    /// bus holding 60 % of the matches wins the first solve. Off in
+    /// `HypothesesOptions::default()`.
+    pub road_span_vouched: bool,
     /// Vehicle-model plausibility of the choice (radians; 0: off; twentieth session, frames34):
     /// a car's frame-to-frame motion hardly rolls or pitches, so an alternative whose [`tilt`]
     /// (the roll and pitch part of its rotation, `√(ω_x² + ω_y²)` of `ω = log R` in the vehicle
@@ -480,6 +490,7 @@ impl Default for HypothesesOptions {
             track_min_labelled: 20,
             track_hold: 0.0,
             road_span: 0.0,
+            road_span_vouched: false,
             tilt_margin: 0.0,
             tilt_replace: false,
             yaw_jump: 0.0,
@@ -668,6 +679,9 @@ pub struct HypothesisTracker {
     /// This frame's sums of (A's track, B's track), kept by [`HypothesisTracker::choose`] until
     /// [`HypothesisTracker::settle`] knows the frame's choice.
     pending: Option<(f64, f64)>,
+    /// Whether a chosen track's road-score sum has reached `min_matches` since the start
+    /// ([`HypothesesOptions::road_span_vouched`]).
+    vouched: bool,
     /// The previous frame pair's labelled matches (`odometry.separate.memory_radius`).
     pub memory: MatchMemory,
     /// The road track's start for the next frame (`odometry.separate.road_track`,
@@ -1677,6 +1691,12 @@ impl HypothesisTracker {
         let pb = score(opts, rig, &b.motion, obs, b.support);
         if opts.track_decay > 0.0 {
             let d = opts.track_decay;
+            if self
+                .run
+                .is_some_and(|(c, _)| c >= opts.min_matches.max(1) as f64)
+            {
+                self.vouched = true;
+            }
             let (ta, tb) = match (self.run, b_continues) {
                 (Some((c, o)), Some(false)) => (d * c + pa as f64, d * o + pb as f64),
                 (Some((c, o)), Some(true)) => (d * o + pa as f64, d * c + pb as f64),
@@ -1695,6 +1715,7 @@ impl HypothesisTracker {
             // `road_span`: leaving the continued track needs B's road to span the depths.
             let narrow = switch
                 && opts.road_span > 0.0
+                && (self.vouched || !opts.road_span_vouched)
                 && b_continues == Some(false)
                 && self.run.is_some()
                 && road_depth_span(rig, &b.motion, obs, b.support, opts)
@@ -2054,6 +2075,54 @@ mod tests {
         assert_eq!(choose(&held, &band, None), Some(true));
         assert_eq!(choose(&held, &band, Some(true)), Some(true));
         assert_eq!(choose(&held, &spread, Some(false)), Some(true));
+        // `road_span_vouched`: before a chosen track's road sum has reached `min_matches` the
+        // continued track is not held; once one has (the previous frames' run), it is, also
+        // where the continued track's sum has decayed since.
+        let vouched = HypothesesOptions {
+            road_span_vouched: true,
+            ..held.clone()
+        };
+        assert_eq!(choose(&vouched, &band, Some(false)), Some(true));
+        assert_eq!(
+            choose_after(Some((3.0, 9.0)), &vouched, &band, Some(false)),
+            Some(true)
+        );
+        assert_eq!(
+            choose_after(Some((10.0, 0.0)), &vouched, &band, Some(false)),
+            Some(false)
+        );
+        let mut t = HypothesisTracker {
+            run: Some((10.0, 0.0)),
+            ..HypothesisTracker::default()
+        };
+        let (a, b) = (
+            Hypothesis {
+                motion: ego,
+                support: &none,
+            },
+            Hypothesis {
+                motion: ego,
+                support: &band,
+            },
+        );
+        assert_eq!(
+            t.choose(&vouched, &rig, &obs, 1.0, true, &a, &b, Some(false)),
+            Some(false)
+        );
+        t.settle(false);
+        t.run = Some((0.5, 0.0));
+        assert_eq!(
+            t.choose(&vouched, &rig, &obs, 1.0, true, &a, &b, Some(false)),
+            Some(false)
+        );
+        t.reset();
+        t.run = Some((0.5, 0.0));
+        assert_eq!(
+            t.choose(&vouched, &rig, &obs, 1.0, true, &a, &b, Some(false)),
+            Some(true)
+        );
+        let o: HypothesesOptions = toml::from_str("road_span_vouched = true").unwrap();
+        assert!(o.road_span_vouched);
         let bad = HypothesesOptions {
             road_span: f64::NAN,
             ..opts.clone()

@@ -560,7 +560,10 @@ impl SeparateOptions {
     /// 300`; docs/RESULTS.md §9, thirty-fifth session, scale49, and thirty-sixth, scale50).
     /// Since the fifty-first session the ordinary choice's near tie of road scores goes to the
     /// alternative that continues the yaw history (`hypotheses.yaw_history_tie = 0.8`;
-    /// docs/RESULTS.md §9, fifty-first session, tie66). A
+    /// docs/RESULTS.md §9, fifty-first session, tie66). Since the fifty-fifth session the
+    /// road's depth-span hold waits until the road has vouched for a track
+    /// (`hypotheses.road_span_vouched = true`; docs/RESULTS.md §9, fifty-fifth session,
+    /// vouch70). A
     /// config file's `[odometry.separate]` section starts from it: the fields it omits keep
     /// these values (since the eleventh session; before, they took
     /// [`SeparateOptions::default`], the bare separation). Measured in docs/RESULTS.md §9
@@ -589,6 +592,7 @@ impl SeparateOptions {
                 spread_grid: Some((16, 8)),
                 track_decay: 0.7,
                 road_span: 3.4,
+                road_span_vouched: true,
                 tilt_margin: 0.01,
                 yaw_jump: 7.0,
                 tilt_replace: true,
