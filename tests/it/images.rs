@@ -25,10 +25,7 @@ fn momo(args: &[&std::ffi::OsStr]) -> Output {
 }
 
 fn snippets() -> Option<PathBuf> {
-    let base = std::env::var_os("MOMO_DATA").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        PathBuf::from,
-    );
+    let base = crate::common::shared_data();
     let dir = base.join("kitti_stereo_snippets");
     dir.is_dir().then_some(dir)
 }

@@ -4,7 +4,7 @@
 //! The data folder is `$MOMO_DATA/kitti00_stereo_matches_l1avgvo`, with `MOMO_DATA` defaulting to
 //! `../shared/data` beside the workspace; without it the test prints SKIPPED and passes.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn momo(args: &[&std::ffi::OsStr]) -> Output {
@@ -21,10 +21,7 @@ fn momo(args: &[&std::ffi::OsStr]) -> Output {
 }
 
 fn data_dir() -> Option<PathBuf> {
-    let base = std::env::var_os("MOMO_DATA").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        PathBuf::from,
-    );
+    let base = crate::common::shared_data();
     let dir = base.join("kitti00_stereo_matches_l1avgvo");
     dir.join("calib.txt").is_file().then_some(dir)
 }
@@ -109,12 +106,7 @@ fn kitti00_import_run_eval() {
 /// towards the running inlier ratio.
 #[test]
 fn kitti00_stop_and_go_has_no_gross_rotation_error() {
-    let gt = std::env::var_os("MOMO_DATA")
-        .map_or_else(
-            || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-            PathBuf::from,
-        )
-        .join("kitti_odometry_gt/poses/00.txt");
+    let gt = crate::common::shared_data().join("kitti_odometry_gt/poses/00.txt");
     if !gt.is_file() {
         eprintln!("SKIPPED: {} not found (set MOMO_DATA)", gt.display());
         return;

@@ -29,10 +29,7 @@ fn ok(args: &[&std::ffi::OsStr]) -> Output {
 }
 
 fn snippet() -> Option<PathBuf> {
-    let base = std::env::var_os("MOMO_DATA").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        PathBuf::from,
-    );
+    let base = crate::common::shared_data();
     let dir = base.join("kitti_stereo_snippets/kitti06_frames000000-000050");
     dir.join("calib.txt").is_file().then_some(dir)
 }

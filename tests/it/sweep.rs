@@ -159,10 +159,7 @@ fn input_errors_exit_with_2_and_name_the_problem() {
 /// the same seed (so sweep rows are comparable with `scripts/kitti00_eval.sh`).
 #[test]
 fn sweep_subsampling_equals_the_kitti_import() {
-    let data = std::env::var_os("MOMO_DATA").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        std::path::PathBuf::from,
-    );
+    let data = crate::common::shared_data();
     let dir = data.join("kitti00_stereo_matches_l1avgvo");
     if !dir.join("calib.txt").exists() {
         eprintln!(

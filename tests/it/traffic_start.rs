@@ -12,10 +12,7 @@ use crate::common::{momo, out, stderr};
 use std::path::{Path, PathBuf};
 
 fn poses_10() -> Option<PathBuf> {
-    let base = std::env::var_os("MOMO_DATA").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-        PathBuf::from,
-    );
+    let base = crate::common::shared_data();
     let p = base.join("kitti_odometry_gt/poses/10.txt");
     p.is_file().then_some(p)
 }

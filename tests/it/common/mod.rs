@@ -3,7 +3,17 @@
 // Not every part is used by every build of the tests.
 #![allow(dead_code)]
 
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+/// The shared data folder: `$MOMO_DATA`, default `../shared/data` beside the repository (tests
+/// that read it skip with a message where what they need is absent).
+pub fn shared_data() -> PathBuf {
+    std::env::var_os("MOMO_DATA").map_or_else(
+        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
+        PathBuf::from,
+    )
+}
 
 /// The `momo` binary of this build.
 pub fn momo() -> Command {
