@@ -167,9 +167,10 @@ pub struct HypothesesOptions {
     /// vouched for a track (fifty-fifth session): since the start (or a reset of the driver) a
     /// chosen track's decayed road-score sum has reached [`HypothesesOptions::min_matches`].
     /// Before that the continued track is the first frame's solve, chosen on no evidence, and at
-    /// a drive's start the static road's depth span is physically narrow: a road point's
-    /// parallax after a forward step `s` is about `s h / Z²` (`h` the camera's height), so at
-    /// `s = 0.17 m` it reaches [`HypothesesOptions::parallax`] only within about 8 m, while a
+    /// a drive's start the static road's depth span is narrow: a road point straight ahead
+    /// moves by a parallax of about `s h / Z²` after a forward step `s` (`h` the camera's
+    /// height), so at `s = 0.17 m` it reaches [`HypothesesOptions::parallax`] only within
+    /// about 8 m (points to the side farther out), while a
     /// bus holding 60 % of the matches wins the first solve. Off in
     /// `HypothesesOptions::default()`.
     pub road_span_vouched: bool,
