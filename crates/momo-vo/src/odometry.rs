@@ -198,6 +198,9 @@ pub struct Odometry {
     /// The yaw `ω_z` of the previous frame's reported motion where that frame was estimated
     /// while moving (`estimated` or `weak`), `None` otherwise (`trust.yaw_change`).
     previous_yaw: Option<f64>,
+    /// `trust.side_slip_change`: the centre of the side slip (its mean) and how many frames
+    /// fed it.
+    side_slip_centre: (f64, usize),
     /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
     /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
     previous_omega: Option<nalgebra::Vector3<f64>>,
@@ -403,6 +406,7 @@ impl Odometry {
             after_standstill: false,
             after_flag: false,
             previous_yaw: None,
+            side_slip_centre: (0.0, 0),
             previous_omega: None,
             support_change_fired: false,
             last_competing: None,
@@ -1080,6 +1084,7 @@ impl Odometry {
         self.after_standstill = false;
         self.after_flag = false;
         self.previous_yaw = None;
+        self.side_slip_centre = (0.0, 0);
         self.previous_omega = None;
         self.support_change_fired = false;
         self.last_competing = None;
@@ -1955,6 +1960,13 @@ impl Odometry {
         if let Some((b, w)) = recheck {
             apply_recheck(&params, &b, w, &mut diag);
         }
+        // The direction of travel left the vehicle's (`trust.side_slip_change`), report only.
+        let slip = moving.then(|| side_slip(&motion)).flatten();
+        if let Some(slip) = slip
+            && side_slip_jumps(&self.config.trust, self.side_slip_centre, slip)
+        {
+            flag_weak_report_only(&mut diag, Reason::SideSlip);
+        }
         // Too small a support for the static scene (`trust.min_inlier_share`), report only.
         let share = self.config.trust.min_inlier_share;
         if moving && diag.matches > 0 && (diag.inliers as f64) < share * diag.matches as f64 {
@@ -1963,6 +1975,16 @@ impl Odometry {
         // An estimated frame reports a finite covariance, or says that it has none
         // (`ill_conditioned`, infinite sigmas), report only: after the state above.
         flag_ill_conditioned(&mut diag);
+        // `trust.side_slip_change`'s centre learns from the frames reported `estimated` without
+        // a competing motion.
+        if let Some((beta, _)) = slip
+            && diag.status == FrameStatus::Estimated
+            && diag.competing.is_none()
+        {
+            let (mean, n) = &mut self.side_slip_centre;
+            *n += 1;
+            *mean += (beta - *mean) / (*n).min(crate::trust::SIDE_SLIP_CENTRE_FRAMES) as f64;
+        }
         // `separate.hypotheses.yaw_history_final`: the yaw history holds the reported motion.
         if !standstill
             && let Some(h) = self
@@ -4591,6 +4613,36 @@ fn with_free(params: &[f64], free: &[usize], values: &[f64]) -> Vec<f64> {
     all
 }
 
+/// The side slip of a vehicle motion and its horizontal travel: `β = atan2(t_y, t_x) − ω_z / 2`
+/// (`t` the translation, `ω = log R`, vehicle frame; a backward translation read as its
+/// reverse, so that reversing is no slip) and `‖(t_x, t_y)‖`; `None` without a horizontal
+/// translation.
+fn side_slip(motion: &Pose<f64>) -> Option<(f64, f64)> {
+    let t = &motion.translation;
+    let travel = t.x.hypot(t.y);
+    if !(travel > 1e-9) {
+        return None;
+    }
+    let (x, y) = if t.x < 0.0 { (-t.x, -t.y) } else { (t.x, t.y) };
+    Some((y.atan2(x) - 0.5 * so3_log(&motion.rotation).z, travel))
+}
+
+/// Whether a frame's side slip `(β, travel)` ([`side_slip`]) jumps against the centre
+/// `(β̄, n)` (mean and frames that fed it) of `trust.side_slip_change`: `|β − β̄|` above it and
+/// `travel · sin|β − β̄|` above `trust.side_slip_lateral`, once `n` reached
+/// [`crate::trust::SIDE_SLIP_MIN_FRAMES`]; never with the rule off.
+fn side_slip_jumps(
+    t: &crate::trust::TrustOptions,
+    (centre, n): (f64, usize),
+    (beta, travel): (f64, f64),
+) -> bool {
+    let d = (beta - centre).abs();
+    t.side_slip_change > 0.0
+        && n >= crate::trust::SIDE_SLIP_MIN_FRAMES
+        && d > t.side_slip_change
+        && travel * d.min(std::f64::consts::FRAC_PI_2).sin() > t.side_slip_lateral
+}
+
 /// A report-only flag (`trust.support_change_share`, `trust.yaw_change`,
 /// `trust.min_inlier_share`): an `estimated` frame
 /// becomes `weak` for `reason`; a frame flagged already keeps its status and reason.
@@ -4632,6 +4684,44 @@ fn flag_ill_conditioned(diag: &mut FrameDiagnostics) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`side_slip`]: a planar arc (translation along half the yaw) has no slip, a sideways
+    /// step has a quarter turn less half the yaw, a backward step is read as its reverse, and
+    /// no horizontal translation has none; [`side_slip_jumps`] needs both the angle and the
+    /// sideways metres, and enough frames in the centre.
+    #[test]
+    fn side_slip_reads_the_direction_of_travel_against_the_chord() {
+        let yaw = 0.04_f64;
+        let r = momo_core::so3_exp(&nalgebra::Vector3::new(0.0, 0.0, yaw));
+        let along =
+            |a: f64, l: f64| Pose::new(r, nalgebra::Vector3::new(l * a.cos(), l * a.sin(), 0.0));
+        let (b, travel) = side_slip(&along(0.5 * yaw, 1.5)).expect("moving");
+        assert!(
+            b.abs() < 1e-12 && (travel - 1.5).abs() < 1e-12,
+            "{b} {travel}"
+        );
+        let (b, _) = side_slip(&along(std::f64::consts::FRAC_PI_2, 1.0)).expect("moving");
+        assert!(
+            (b - (std::f64::consts::FRAC_PI_2 - 0.5 * yaw)).abs() < 1e-12,
+            "{b}"
+        );
+        let (b, _) = side_slip(&along(std::f64::consts::PI + 0.5 * yaw, 1.0)).expect("moving");
+        assert!(b.abs() < 1e-12, "reversing: {b}");
+        assert!(side_slip(&Pose::new(r, nalgebra::Vector3::new(0.0, 0.0, 0.3))).is_none());
+        let t = crate::trust::TrustOptions::default();
+        let n = crate::trust::SIDE_SLIP_MIN_FRAMES;
+        // 0.08 rad at 1.5 m: 0.12 m sideways; at 1.0 m only 0.08 m.
+        assert!(side_slip_jumps(&t, (0.01, n), (0.09, 1.5)));
+        assert!(!side_slip_jumps(&t, (0.01, n), (0.09, 1.0)));
+        // 0.05 rad at 3 m: 0.15 m sideways, but within the angle.
+        assert!(!side_slip_jumps(&t, (0.0, n), (-0.05, 3.0)));
+        assert!(!side_slip_jumps(&t, (0.01, n - 1), (0.09, 1.5)));
+        let off = crate::trust::TrustOptions {
+            side_slip_change: 0.0,
+            ..t
+        };
+        assert!(!side_slip_jumps(&off, (0.01, n), (0.09, 1.5)));
+    }
 
     #[test]
     fn the_consistency_widening_waits_after_a_flagged_frame_or_stops_at_the_first() {

@@ -331,6 +331,24 @@ pub struct TrustOptions {
     /// keeps 2-10 % of its 800 matches (15-80 inliers) against 30-40 % on ordinary frames.
     /// Report only, as [`TrustOptions::yaw_change`]: poses unchanged. 0: off (default).
     pub min_inlier_share: f64,
+    /// A vehicle travels along its heading: its side slip (the direction of travel against
+    /// the chord of the turn, `β = atan2(t_y, t_x) − ω_z / 2` in the vehicle frame, `t` the
+    /// translation, `ω = log R`) changes slowly. Where a moving frame's reported motion's side
+    /// slip departs from the recent frames' centre `β̄` by more than this angle (radians) *and*
+    /// the translation's sideways displacement against that centre, `‖t‖ sin|β − β̄|`, by more
+    /// than [`TrustOptions::side_slip_lateral`] metres, the motion is not a vehicle's: an
+    /// object that pulls the estimate turns the direction of travel first. The frame is flagged
+    /// `weak` / `side_slip` where it was `estimated`. `β̄` is a running mean over the last
+    /// [`SIDE_SLIP_CENTRE_FRAMES`] moving `estimated` frames without a competing motion (a
+    /// cumulative mean before that), so that a mount's yaw does not fire it. Model-free: it
+    /// reads the motion, not the parameters. Report only, as [`TrustOptions::yaw_change`]:
+    /// poses unchanged. Not before [`SIDE_SLIP_MIN_FRAMES`] frames fed the centre. 0: off.
+    /// Default 0.06 (6 times `soft_single_track`'s side-slip sigma; fifty-sixth session).
+    pub side_slip_change: f64,
+    /// The sideways displacement (metres) of [`TrustOptions::side_slip_change`]: the angle
+    /// alone flags slow frames, whose direction of travel is noisy (along KITTI 08's slow start
+    /// the ground truth's own slip moves by 0.03-0.09 m per frame). Default 0.1.
+    pub side_slip_lateral: f64,
     /// Without odometry.csv, on one camera whose arc length comes from the road plane
     /// (`odometry.road_scale_frames`): a moving frame is flagged `weak` / `stale_scale` where it
     /// was `estimated` once this many frames in a row, itself included, admitted no road arc
@@ -443,6 +461,8 @@ impl Default for TrustOptions {
             yaw_change: 0.0,
             yaw_change_weight: 1.0,
             min_inlier_share: 0.0,
+            side_slip_change: 0.06,
+            side_slip_lateral: 0.1,
             stale_scale_frames: 8,
             unconfirmed_scale: true,
             support_change_share: 0.15,
@@ -589,6 +609,7 @@ impl TrustOptions {
             ("trust.yaw_change", self.yaw_change),
             ("trust.support_change_yaw", self.support_change_yaw),
             ("trust.support_change_tilt", self.support_change_tilt),
+            ("trust.side_slip_change", self.side_slip_change),
         ] {
             if !(0.0..=std::f64::consts::PI).contains(&v) {
                 out.push((
@@ -596,6 +617,15 @@ impl TrustOptions {
                     format!("{key} must be within 0..=pi radians, got {v}"),
                 ));
             }
+        }
+        if !(self.side_slip_lateral >= 0.0 && self.side_slip_lateral.is_finite()) {
+            out.push((
+                vec!["trust.side_slip_lateral"],
+                format!(
+                    "trust.side_slip_lateral must be a finite number of metres of at least 0, got {}",
+                    self.side_slip_lateral
+                ),
+            ));
         }
         if !(0.0..1.0).contains(&self.covariance_memory) {
             out.push((
@@ -673,6 +703,14 @@ pub enum Constraint {
     Degenerate,
 }
 
+/// The moving `estimated` frames without a competing motion whose side slip the centre of
+/// [`TrustOptions::side_slip_change`] averages (a cumulative mean over the first ones).
+pub const SIDE_SLIP_CENTRE_FRAMES: usize = 100;
+
+/// The frames that must have fed the centre of [`TrustOptions::side_slip_change`] before it
+/// flags a frame.
+pub const SIDE_SLIP_MIN_FRAMES: usize = 5;
+
 /// Why a frame is weak or degenerate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -711,6 +749,10 @@ pub enum Reason {
     /// A small support with a jump of the yaw or the tilt, or a small support right after
     /// such a frame (`trust.support_change_share`; report only).
     SupportChange,
+    /// The reported motion's side slip jumped: its direction of travel left the recent
+    /// frames' by more than `trust.side_slip_change` and sideways by more than
+    /// `trust.side_slip_lateral` (report only).
+    SideSlip,
     /// The reported covariance could not be computed (a non-finite entry): the information's
     /// condition number is past the inversion's relative eigenvalue test
     /// ([`calibrated_covariance`]: a stiff direction, e.g. `1e14` above the data's other
@@ -736,6 +778,7 @@ impl Reason {
             Reason::YawChange => "yaw_change",
             Reason::LowSupport => "low_support",
             Reason::StaleScale => "stale_scale",
+            Reason::SideSlip => "side_slip",
             Reason::SupportChange => "support_change",
             Reason::IllConditioned => "ill_conditioned",
         }

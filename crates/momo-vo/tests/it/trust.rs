@@ -1305,6 +1305,78 @@ fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
     assert!(e.contains("trust.min_inlier_share"), "{e}");
 }
 
+/// `trust.side_slip_change` (report only): the run with the rule is the run without it except
+/// that exactly the `estimated` frames where the rule fires — recomputed here from the reported
+/// motions: the side slip `β = atan2(t_y, t_x) − ω_z / 2` more than the angle and the metres
+/// sideways from the running mean of the frames reported `estimated` without a competing
+/// motion — become `weak` / `side_slip`. Thresholds low enough to fire on ordinary frames
+/// exercise the bookkeeping; a negative distance is rejected at its line.
+#[test]
+fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes_no_pose() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 80;
+    traffic.seed = 3;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let (angle, lateral) = (0.004, 0.004);
+    let run = |angle: f64| {
+        let mut config = Config::default();
+        config.trust.side_slip_change = angle;
+        config.trust.side_slip_lateral = lateral;
+        process_all(seq, config)
+    };
+    let off = run(0.0);
+    let on = run(angle);
+    let (mut centre, mut n) = (0.0_f64, 0_usize);
+    let (mut flagged, mut kept) = (0, 0);
+    for (k, (a, b)) in off.iter().zip(&on).enumerate() {
+        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
+        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
+        assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
+        let moving = matches!(a.1.status, FrameStatus::Estimated | FrameStatus::Weak)
+            && a.1.covariance.len() == a.1.free.len().pow(2);
+        let t = &a.0.translation;
+        let travel = t.x.hypot(t.y);
+        let slip = (moving && travel > 1e-9).then(|| {
+            let (x, y) = if t.x < 0.0 { (-t.x, -t.y) } else { (t.x, t.y) };
+            y.atan2(x) - 0.5 * momo_core::so3_log(&a.0.rotation).z
+        });
+        // `ill_conditioned` is the last report-only flag: the rule flags such a frame first.
+        let estimated =
+            a.1.status == FrameStatus::Estimated || a.1.reason == Some(Reason::IllConditioned);
+        let fires = slip.is_some_and(|beta| {
+            let d = (beta - centre).abs();
+            estimated
+                && n >= momo_vo::trust::SIDE_SLIP_MIN_FRAMES
+                && d > angle
+                && travel * d.min(std::f64::consts::FRAC_PI_2).sin() > lateral
+        });
+        if fires {
+            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
+            assert_eq!(b.1.reason, Some(Reason::SideSlip), "frame {k}");
+            flagged += 1;
+        } else {
+            assert_eq!(
+                (a.1.status, a.1.reason),
+                (b.1.status, b.1.reason),
+                "frame {k}"
+            );
+            kept += usize::from(a.1.status == FrameStatus::Estimated);
+        }
+        if let Some(beta) = slip
+            && b.1.status == FrameStatus::Estimated
+            && b.1.competing.is_none()
+        {
+            n += 1;
+            centre += (beta - centre) / n.min(momo_vo::trust::SIDE_SLIP_CENTRE_FRAMES) as f64;
+        }
+    }
+    eprintln!("flagged {flagged}, kept estimated {kept}");
+    assert!(flagged >= 3 && kept >= 5, "flagged {flagged}, kept {kept}");
+    let e = config_error("[trust]\nside_slip_lateral = -0.1\n");
+    assert!(e.contains("trust.side_slip_lateral"), "{e}");
+}
+
 /// `trust.support_change_share` (report only): the run with the rule is the run without it
 /// except that exactly the `estimated` frames where the rule fires — recomputed here from the
 /// run without it: a moving frame after a moving frame whose inlier share is below `s` and
