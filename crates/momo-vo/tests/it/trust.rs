@@ -27,6 +27,45 @@ fn process_all(
         .collect()
 }
 
+/// One frame pair's reported motion and diagnostics.
+type Frame = (Pose<f64>, momo_vo::FrameDiagnostics);
+
+/// A report-only rule's runs compared frame by frame: every pose and covariance of `on` (the
+/// rule on) is `off`'s (the rule off), and exactly the frames where `fires(off, on)` holds
+/// (asked in frame order, with the frame's `estimated` state in `off`, an `ill_conditioned`
+/// one counting as `estimated`: that is the last report-only flag, so the rule flags such a
+/// frame first) are `weak` with `reason`; the others keep their status and reason. Returns the
+/// frames flagged and the `estimated` frames kept.
+fn assert_report_only(
+    off: &[Frame],
+    on: &[Frame],
+    reason: Reason,
+    mut fires: impl FnMut(bool, &Frame, &Frame) -> bool,
+) -> (usize, usize) {
+    let (mut flagged, mut kept) = (0, 0);
+    for (k, (a, b)) in off.iter().zip(on).enumerate() {
+        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
+        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
+        assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
+        let estimated =
+            a.1.status == FrameStatus::Estimated || a.1.reason == Some(Reason::IllConditioned);
+        if fires(estimated, a, b) {
+            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
+            assert_eq!(b.1.reason, Some(reason), "frame {k}");
+            flagged += 1;
+        } else {
+            assert_eq!(
+                (a.1.status, a.1.reason),
+                (b.1.status, b.1.reason),
+                "frame {k}"
+            );
+            kept += usize::from(a.1.status == FrameStatus::Estimated);
+        }
+    }
+    eprintln!("flagged {flagged}, kept estimated {kept}");
+    (flagged, kept)
+}
+
 /// The default estimator, warmed up on `frames` ordinary frames of `warm` (each estimated).
 fn warmed_up(
     rig: &Rig,
@@ -1276,30 +1315,9 @@ fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
     shares.sort_by(f64::total_cmp);
     let median = shares[shares.len() / 2];
     let on = run(median);
-    let (mut flagged, mut kept) = (0, 0);
-    for (k, (a, b)) in off.iter().zip(&on).enumerate() {
-        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
-        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
-        assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
-        // `ill_conditioned` is the last report-only flag: the rule flags such a frame first.
-        let estimated =
-            a.1.status == FrameStatus::Estimated || a.1.reason == Some(Reason::IllConditioned);
-        let below =
-            estimated && a.1.matches > 0 && (a.1.inliers as f64) < median * a.1.matches as f64;
-        if below {
-            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
-            assert_eq!(b.1.reason, Some(Reason::LowSupport), "frame {k}");
-            flagged += 1;
-        } else {
-            assert_eq!(
-                (a.1.status, a.1.reason),
-                (b.1.status, b.1.reason),
-                "frame {k}"
-            );
-            kept += usize::from(a.1.status == FrameStatus::Estimated);
-        }
-    }
-    eprintln!("flagged {flagged}, kept estimated {kept}");
+    let (flagged, kept) = assert_report_only(&off, &on, Reason::LowSupport, |estimated, a, _| {
+        estimated && a.1.matches > 0 && (a.1.inliers as f64) < median * a.1.matches as f64
+    });
     assert!(flagged >= 5 && kept >= 5, "flagged {flagged}, kept {kept}");
     let e = config_error("[trust]\nmin_inlier_share = 1.5\n");
     assert!(e.contains("trust.min_inlier_share"), "{e}");
@@ -1328,11 +1346,7 @@ fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes
     let off = run(0.0);
     let on = run(angle);
     let (mut centre, mut n) = (0.0_f64, 0_usize);
-    let (mut flagged, mut kept) = (0, 0);
-    for (k, (a, b)) in off.iter().zip(&on).enumerate() {
-        assert_eq!(a.0.rotation, b.0.rotation, "frame {k}");
-        assert_eq!(a.0.translation, b.0.translation, "frame {k}");
-        assert_eq!(a.1.covariance, b.1.covariance, "frame {k}");
+    let (flagged, kept) = assert_report_only(&off, &on, Reason::SideSlip, |estimated, a, b| {
         let moving = matches!(a.1.status, FrameStatus::Estimated | FrameStatus::Weak)
             && a.1.covariance.len() == a.1.free.len().pow(2);
         let t = &a.0.translation;
@@ -1341,9 +1355,6 @@ fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes
             let (x, y) = if t.x < 0.0 { (-t.x, -t.y) } else { (t.x, t.y) };
             y.atan2(x) - 0.5 * momo_core::so3_log(&a.0.rotation).z
         });
-        // `ill_conditioned` is the last report-only flag: the rule flags such a frame first.
-        let estimated =
-            a.1.status == FrameStatus::Estimated || a.1.reason == Some(Reason::IllConditioned);
         let fires = slip.is_some_and(|beta| {
             let d = (beta - centre).abs();
             estimated
@@ -1351,18 +1362,8 @@ fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes
                 && d > angle
                 && travel * d.min(std::f64::consts::FRAC_PI_2).sin() > lateral
         });
-        if fires {
-            assert_eq!(b.1.status, FrameStatus::Weak, "frame {k}");
-            assert_eq!(b.1.reason, Some(Reason::SideSlip), "frame {k}");
-            flagged += 1;
-        } else {
-            assert_eq!(
-                (a.1.status, a.1.reason),
-                (b.1.status, b.1.reason),
-                "frame {k}"
-            );
-            kept += usize::from(a.1.status == FrameStatus::Estimated);
-        }
+        // The centre learns from the frames the run with the rule reports `estimated` without a
+        // competing motion.
         if let Some(beta) = slip
             && b.1.status == FrameStatus::Estimated
             && b.1.competing.is_none()
@@ -1370,8 +1371,8 @@ fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes
             n += 1;
             centre += (beta - centre) / n.min(momo_vo::trust::SIDE_SLIP_CENTRE_FRAMES) as f64;
         }
-    }
-    eprintln!("flagged {flagged}, kept estimated {kept}");
+        fires
+    });
     assert!(flagged >= 3 && kept >= 5, "flagged {flagged}, kept {kept}");
     let e = config_error("[trust]\nside_slip_lateral = -0.1\n");
     assert!(e.contains("trust.side_slip_lateral"), "{e}");
