@@ -346,8 +346,8 @@ pub struct TrustOptions {
     /// Default 0.06 (6 times `soft_single_track`'s side-slip sigma; fifty-sixth session).
     pub side_slip_change: f64,
     /// The sideways displacement (metres) of [`TrustOptions::side_slip_change`]: the angle
-    /// alone flags slow frames, whose direction of travel is noisy (along KITTI 08's slow start
-    /// the ground truth's own slip moves by 0.03-0.09 m per frame). Default 0.1.
+    /// alone flags slow frames, whose direction of travel is noisy (along KITTI 08's slow start,
+    /// static scenes: right rotations, 0.015-0.09 m sideways per frame). Default 0.1.
     pub side_slip_lateral: f64,
     /// Without odometry.csv, on one camera whose arc length comes from the road plane
     /// (`odometry.road_scale_frames`): a moving frame is flagged `weak` / `stale_scale` where it
