@@ -201,6 +201,9 @@ pub struct Odometry {
     /// `trust.side_slip_change`: the centre of the side slip (its mean) and how many frames
     /// fed it.
     side_slip_centre: (f64, usize),
+    /// `trust.unconfirmed_start`: a frame since the start (or the reset) was reported
+    /// `estimated` without a competing motion.
+    start_confirmed: bool,
     /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
     /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
     previous_omega: Option<nalgebra::Vector3<f64>>,
@@ -407,6 +410,7 @@ impl Odometry {
             after_flag: false,
             previous_yaw: None,
             side_slip_centre: (0.0, 0),
+            start_confirmed: false,
             previous_omega: None,
             support_change_fired: false,
             last_competing: None,
@@ -1085,6 +1089,7 @@ impl Odometry {
         self.after_flag = false;
         self.previous_yaw = None;
         self.side_slip_centre = (0.0, 0);
+        self.start_confirmed = false;
         self.previous_omega = None;
         self.support_change_fired = false;
         self.last_competing = None;
@@ -2027,6 +2032,15 @@ impl Odometry {
         {
             flag_weak_report_only(&mut diag, Reason::StaleScale);
         }
+        // Two motions compete before the run confirmed one (`trust.unconfirmed_start`), report
+        // only: the last flag (a frame flagged for another reason keeps it), after the recheck,
+        // which may name the second motion. The first frame reported `estimated` without a
+        // competing motion confirms the run.
+        if self.config.trust.unconfirmed_start && !self.start_confirmed && diag.competing.is_some()
+        {
+            flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
+        }
+        self.start_confirmed |= diag.status == FrameStatus::Estimated && diag.competing.is_none();
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;

@@ -1651,3 +1651,61 @@ fn the_competing_recheck_runs_only_on_frames_with_few_matches() {
     assert!(same(&run(5, 10), &off));
     assert!(same(&run(5, 100), &ungated));
 }
+
+/// `trust.unconfirmed_start` (report only): the run with the rule is the run without it except
+/// that exactly the `estimated` frames with a competing motion before the first frame that the
+/// run reports `estimated` without one become `weak` / `unconfirmed_start`; poses and
+/// covariances identical. Every independent pair of `estimate_batch` is such a start, so there
+/// every `estimated` pair with a competing motion is flagged.
+#[test]
+fn unconfirmed_start_flags_the_competing_frames_before_the_run_confirmed_a_motion() {
+    let mut traffic = momo_sim::SimConfig::moving_traffic();
+    traffic.frames = 60;
+    traffic.seed = 2;
+    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let seq = &sim.sequence;
+    let config = |flag: bool| {
+        let mut config = Config::default();
+        config.trust.unconfirmed_start = flag;
+        config
+    };
+    // Along the sequence: the frames before the first confirmed one.
+    let mut confirmed = false;
+    let (flagged, kept) = assert_report_only(
+        &process_all(seq, config(false)),
+        &process_all(seq, config(true)),
+        Reason::UnconfirmedStart,
+        |_, a, b| {
+            // The last report-only flag: a frame `ill_conditioned` without it keeps that.
+            let fires =
+                a.1.status == FrameStatus::Estimated && !confirmed && a.1.competing.is_some();
+            confirmed |= b.1.status == FrameStatus::Estimated && b.1.competing.is_none();
+            fires
+        },
+    );
+    assert!(
+        confirmed && flagged >= 1 && kept >= 10,
+        "flagged {flagged}, kept {kept}"
+    );
+    // Independent pairs: each is a start.
+    let pairs: Vec<momo_vo::FramePair> = (1..seq.num_frames())
+        .map(|k| {
+            let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+            momo_vo::FramePair::new(seq.frames[k].clone(), arc)
+        })
+        .collect();
+    let batch = |flag: bool| -> Vec<Frame> {
+        momo_vo::estimate_batch(&seq.rig, &config(flag), &pairs, 2)
+            .expect("estimated")
+            .into_iter()
+            .map(|r| (r.motion, r.diagnostics))
+            .collect()
+    };
+    let (flagged, kept) = assert_report_only(
+        &batch(false),
+        &batch(true),
+        Reason::UnconfirmedStart,
+        |_, a, _| a.1.status == FrameStatus::Estimated && a.1.competing.is_some(),
+    );
+    assert!(flagged >= 1 && kept >= 5, "flagged {flagged}, kept {kept}");
+}
