@@ -27,6 +27,25 @@ fn process_all(
         .collect()
 }
 
+/// The simulated sequence of `config`.
+fn simulated(config: &momo_sim::SimConfig) -> momo_io::Sequence {
+    momo_sim::simulate(config).expect("simulated").sequence
+}
+
+/// The `moving_traffic` scenario with `frames` frames from `seed`, simulated (the sequence and
+/// its truth): most report-only rules' tests run on it.
+fn traffic_sim(frames: usize, seed: u64) -> momo_sim::Simulation {
+    let mut config = momo_sim::SimConfig::moving_traffic();
+    config.frames = frames;
+    config.seed = seed;
+    momo_sim::simulate(&config).expect("simulated")
+}
+
+/// [`traffic_sim`]'s sequence.
+fn traffic(frames: usize, seed: u64) -> momo_io::Sequence {
+    traffic_sim(frames, seed).sequence
+}
+
 /// One frame pair's reported motion and diagnostics.
 type Frame = (Pose<f64>, momo_vo::FrameDiagnostics);
 
@@ -908,10 +927,7 @@ fn traffic_moving_with_the_vehicle_widens_the_covariance_of_every_frame() {
     };
     let (mut every, mut dropped, mut scored) = (0usize, 0usize, 0usize);
     for seed in 1..=3 {
-        let mut cfg = momo_sim::SimConfig::moving_traffic();
-        cfg.frames = 200;
-        cfg.seed = seed;
-        let sim = momo_sim::simulate(&cfg).expect("simulated");
+        let sim = traffic_sim(200, seed);
         let seq = &sim.sequence;
         let run = |config: Config| {
             let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
@@ -1024,11 +1040,7 @@ fn the_road_alternatives_covariance_covers_each_alternative() {
 /// one is at least `ρ` times the earlier one. Out-of-range values are rejected.
 #[test]
 fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 60;
-    traffic.seed = 1;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(60, 1);
     let run = |config: Config| process_all(seq, config);
     const RHO: f64 = 0.5;
     // As measured: before the neighbourhood test ran on one camera (the default since the
@@ -1087,11 +1099,7 @@ fn the_covariance_memory_floors_the_covariance_and_changes_no_pose() {
 /// below 1 are rejected.
 #[test]
 fn report_grids_widen_only_the_reported_covariance() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 60;
-    traffic.seed = 2;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(60, 2);
     let run = |grids: Vec<[usize; 2]>| {
         let mut config = Config::default();
         config.trust.report_grids = grids;
@@ -1143,10 +1151,7 @@ fn report_grids_widen_only_the_reported_covariance() {
 #[test]
 fn the_report_pool_changes_only_the_reported_covariance() {
     const CHI2_3_99: f64 = 11.344_866_730_144_373;
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 120;
-    traffic.seed = 3;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
+    let sim = traffic_sim(120, 3);
     let seq = &sim.sequence;
     let run = |frames: usize, trim: usize, ratio: f64| {
         let mut config = Config::default();
@@ -1204,11 +1209,7 @@ fn the_report_pool_changes_only_the_reported_covariance() {
 #[test]
 fn yaw_change_flags_a_jump_of_the_yaw_and_changes_no_pose() {
     use momo_core::so3_log;
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 120;
-    traffic.seed = 3;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(120, 3);
     let run = |on: bool, j: f64, weight: f64| {
         let mut config = Config::default();
         if on {
@@ -1295,11 +1296,7 @@ fn yaw_change_flags_a_jump_of_the_yaw_and_changes_no_pose() {
 /// as it was, and a share outside `[0, 1]` is rejected at its line.
 #[test]
 fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 80;
-    traffic.seed = 3;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(80, 3);
     let run = |share: f64| {
         let mut config = Config::default();
         config.trust.min_inlier_share = share;
@@ -1331,11 +1328,7 @@ fn min_inlier_share_flags_the_frames_below_it_and_changes_no_pose() {
 /// exercise the bookkeeping; a negative distance is rejected at its line.
 #[test]
 fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes_no_pose() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 80;
-    traffic.seed = 3;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(80, 3);
     let (angle, lateral) = (0.004, 0.004);
     let run = |angle: f64| {
         let mut config = Config::default();
@@ -1389,11 +1382,7 @@ fn side_slip_change_flags_the_frames_whose_direction_of_travel_jumps_and_changes
 #[test]
 fn support_change_flags_a_small_support_with_a_jump_and_changes_no_pose() {
     use momo_core::so3_log;
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 120;
-    traffic.seed = 3;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(120, 3);
     let run = |c: Option<(f64, f64, f64, f64)>| {
         let mut config = Config::default();
         let (s, j, t, h) = c.unwrap_or((0.0, 0.0, 0.0, 0.0));
@@ -1502,13 +1491,9 @@ fn support_change_flags_a_small_support_with_a_jump_and_changes_no_pose() {
 /// `well`, with every covariance entry infinite (JSON `null`).
 #[test]
 fn an_estimated_frame_reports_a_finite_covariance() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 60;
-    traffic.seed = 2;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
     // The reproduction as found: before the neighbourhood test ran on one camera (the default
     // since the forty-second session, under which frame 43 is well conditioned).
-    let out = process_all(&sim.sequence, before_one_camera_test());
+    let out = process_all(&traffic(60, 2), before_one_camera_test());
     let mut flagged = 0;
     for (k, (_, d)) in out.iter().enumerate() {
         let k2 = d.free.len() * d.free.len();
@@ -1549,7 +1534,7 @@ fn few_match_traffic() -> momo_io::Sequence {
     traffic.frames = 120;
     traffic.seed = 4;
     traffic.matches_per_camera = 100;
-    momo_sim::simulate(&traffic).expect("simulated").sequence
+    simulated(&traffic)
 }
 
 /// `seq` processed with `trust.competing_recheck_frames = k` and
@@ -1659,11 +1644,7 @@ fn the_competing_recheck_runs_only_on_frames_with_few_matches() {
 /// every `estimated` pair with a competing motion is flagged.
 #[test]
 fn unconfirmed_start_flags_the_competing_frames_before_the_run_confirmed_a_motion() {
-    let mut traffic = momo_sim::SimConfig::moving_traffic();
-    traffic.frames = 60;
-    traffic.seed = 2;
-    let sim = momo_sim::simulate(&traffic).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &traffic(60, 2);
     let config = |flag: bool| {
         let mut config = Config::default();
         config.trust.unconfirmed_start = flag;
