@@ -5,5 +5,6 @@ mod jacobians;
 mod kernel;
 mod motion;
 mod register;
+mod rotation;
 mod soft;
 mod specs;
