@@ -35,10 +35,12 @@ fn simulated(config: &momo_sim::SimConfig) -> momo_io::Sequence {
 /// The `moving_traffic` scenario with `frames` frames from `seed`, simulated (the sequence and
 /// its truth): most report-only rules' tests run on it.
 fn traffic_sim(frames: usize, seed: u64) -> momo_sim::Simulation {
-    let mut config = momo_sim::SimConfig::moving_traffic();
-    config.frames = frames;
-    config.seed = seed;
-    momo_sim::simulate(&config).expect("simulated")
+    momo_sim::simulate(&momo_sim::SimConfig {
+        frames,
+        seed,
+        ..momo_sim::SimConfig::moving_traffic()
+    })
+    .expect("simulated")
 }
 
 /// [`traffic_sim`]'s sequence.
@@ -633,8 +635,7 @@ fn residuals_cluster_in_the_image_where_a_rigid_object_pulls_the_estimate() {
         if let Some(o) = cfg.moving_object.as_mut() {
             o.frames = 30..42;
         }
-        let sim = momo_sim::simulate(&cfg).expect("simulated");
-        let seq = &sim.sequence;
+        let seq = &simulated(&cfg);
         let mut vo = Odometry::new(seq.rig.clone(), Config::default()).expect("valid");
         (1..seq.num_frames())
             .map(|k| {
@@ -773,8 +774,7 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
     if let Some(o) = cfg.moving_object.as_mut() {
         o.frames = 28..36;
     }
-    let sim = momo_sim::simulate(&cfg).expect("simulated");
-    let seq = &sim.sequence;
+    let seq = &simulated(&cfg);
     let run = |config: Config| process_all(seq, config);
     let mut solves = Config::default();
     solves.trust.jackknife_influence = false;
@@ -806,12 +806,7 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
 /// covariances change and their poses do not (on this drive: the option changes no status).
 #[test]
 fn gauss_newton_steps_for_the_undefined_cells_change_only_their_covariances() {
-    let run = |cfg: &momo_sim::SimConfig, config: Config| {
-        process_all(
-            &momo_sim::simulate(cfg).expect("simulated").sequence,
-            config,
-        )
-    };
+    let run = |cfg: &momo_sim::SimConfig, config: Config| process_all(&simulated(cfg), config);
     let steps = || {
         let mut c = Config::default();
         c.trust.jackknife_undefined_steps = 1;
@@ -846,12 +841,7 @@ fn gauss_newton_steps_for_the_undefined_cells_change_only_their_covariances() {
 /// and (on this drive) no pose; a value below 1 is rejected.
 #[test]
 fn the_undefined_cells_solver_changes_only_their_covariances() {
-    let run = |cfg: &momo_sim::SimConfig, config: Config| {
-        process_all(
-            &momo_sim::simulate(cfg).expect("simulated").sequence,
-            config,
-        )
-    };
+    let run = |cfg: &momo_sim::SimConfig, config: Config| process_all(&simulated(cfg), config);
     // Off: the solver's own options on every grid (the default before the twenty-fifth
     // session); lengthened: on every grid.
     let off = || {
