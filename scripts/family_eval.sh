@@ -67,6 +67,10 @@
 #               road, as a real one does; as they are, the KITTI camera's poses make the
 #               simulated vehicle travel about 1 deg above its own road plane) and keeps them
 #               under SETS_DIR/along_travel (added in the 54th session)
+#   NOISE       environment variable: the pixel noise of every simulated sequence in pixels
+#               (`momo simulate --pixel-noise`; default: each scenario's own, 1 px for the traffic
+#               sets) kept under SETS_DIR/noiseNOISE; bound.csv is the bound at that noise (added
+#               in the fifty-ninth session)
 #   MOMO        environment variable: the momo binary (default target/release/momo)
 #   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
 #   SIM_MOMO    environment variable: the momo binary that simulates missing sequences (default
@@ -95,6 +99,8 @@ momo="$(abs "${MOMO:-$root/target/release/momo}")"
 sets_dir="$(abs "${SETS_DIR:-$root/target/family_sets}")"
 along_travel="${ALONG_TRAVEL:-0}"
 [[ "$along_travel" == 1 ]] && sets_dir="$sets_dir/along_travel"
+noise="${NOISE:-}"
+[[ -n "$noise" ]] && sets_dir="$sets_dir/noise$noise"
 data="$(abs "${MOMO_DATA:-$root/../shared/data}")"
 frames="${FRAMES:-500}"
 jobs="${JOBS:-2}"
@@ -108,7 +114,7 @@ for b in "$momo" "$sim_momo"; do
         exit 2
     fi
 done
-export momo sim_momo cfg data frames along_travel
+export momo sim_momo cfg data frames along_travel noise
 
 # make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES [MATCHES [START]]]: simulates one sequence unless
 # it is there (MATCHES: `momo simulate --matches`, default the scenario's, `-` for it; START:
@@ -120,6 +126,7 @@ make_seq() {
     [[ "$t" != drive && "$along_travel" == 1 ]] && traj+=(--trajectory-along-travel)
     [[ -n "${6:-}" && "${6:-}" != - ]] && m=(--matches "$6")
     [[ -n "${7:-}" ]] && traj+=(--trajectory-start "$7")
+    [[ -n "$noise" ]] && m+=(--pixel-noise "$noise")
     rm -rf "$dir"
     mkdir -p "$(dirname "$dir")"
     if ! "$sim_momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "${m[@]}" "$dir" \

@@ -78,3 +78,50 @@ fn simulate_writes_the_bound_and_eval_reports_the_efficiency() {
         .arg(&est));
     assert_exit(&o, 2, &["bound.csv:2:"]);
 }
+
+/// `momo simulate --pixel-noise` replaces the scenario's noise; the bound scales with it (the
+/// Fisher information is 1/σ² times a noise-free geometry's), and a noise that is not a
+/// non-negative number is an input error that leaves no directory behind.
+#[test]
+fn simulate_pixel_noise_sets_the_noise_and_the_bound() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let bound_column = |noise: Option<&str>, name: &str| -> Vec<f64> {
+        let seq = dir.path().join(name);
+        let mut cmd = momo();
+        cmd.args(["simulate", "--scenario", "clean_pinhole", "--frames", "6"]);
+        if let Some(n) = noise {
+            cmd.args(["--pixel-noise", n]);
+        }
+        let o = out(cmd.arg("--quiet").arg(&seq));
+        assert_exit(&o, 0, &[]);
+        let text = std::fs::read_to_string(seq.join("bound.csv")).expect("bound.csv");
+        text.lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .nth(1)
+                    .expect("a bound")
+                    .parse()
+                    .expect("a number")
+            })
+            .collect()
+    };
+    // clean_pinhole's own noise is 0.5 px.
+    let own = bound_column(None, "own");
+    let quarter = bound_column(Some("0.25"), "quarter");
+    let double = bound_column(Some("1"), "double");
+    assert_eq!(own.len(), 6);
+    for ((o, q), d) in own.iter().zip(&quarter).zip(&double) {
+        assert!((q / o - 0.5).abs() < 1e-6, "{q} / {o}");
+        assert!((d / o - 2.0).abs() < 1e-6, "{d} / {o}");
+    }
+    for bad in ["nan", "-1", "x"] {
+        let seq = dir.path().join("bad");
+        let o = out(momo()
+            .arg("simulate")
+            .arg(format!("--pixel-noise={bad}"))
+            .arg(&seq));
+        assert_exit(&o, 2, &["noise"]);
+        assert!(!seq.exists(), "--pixel-noise {bad} left {}", seq.display());
+    }
+}

@@ -41,6 +41,11 @@ pub(crate) struct SimulateArgs {
     /// Matches per camera and frame pair (default: the scenario's).
     #[arg(long)]
     matches: Option<usize>,
+    /// Standard deviation of the Gaussian noise on every match's pixels (default: the
+    /// scenario's, e.g. 0.5 for clean_pinhole, 1 for outliers and moving_traffic); bound.csv
+    /// is the bound at this noise.
+    #[arg(long)]
+    pixel_noise: Option<f64>,
     /// Output directory (created; an existing one must be empty unless --force; removed
     /// again on failure if this created it).
     out_dir: PathBuf,
@@ -105,6 +110,9 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
     cfg.seed = args.seed;
     if let Some(m) = args.matches {
         cfg.matches_per_camera = m;
+    }
+    if let Some(sigma) = args.pixel_noise {
+        cfg.pixel_noise = sigma;
     }
     let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
     if std::fs::metadata(&args.out_dir).is_ok() {

@@ -627,6 +627,22 @@ pub struct OdometryOptions {
     /// camera's rows of the frame in matches.csv's order). An analysis aid: it changes no
     /// estimate. false (the default): the field is not written (byte-identical diagnostics).
     pub report_support: bool,
+    /// The noise (radians of epipolar angle) at which the driver's angular thresholds are
+    /// stated ([`crate::noise`]): `odometry.standstill_still_angle`, the `previous_basin` and
+    /// `competing_region` bands, `separate.threshold`, `separate.under_road_noise`,
+    /// `separate.hypotheses.noise_angle` and `trust.competing_threshold` scale with the median
+    /// noise of the last `noise_frames` frames reported `estimated` over this, where that ratio
+    /// exceeds `noise_band` (never below 1). 0: off (the thresholds as written). The default,
+    /// 0.0019, is the median noise measured at 1 px on the simulated KITTI camera; the
+    /// defaults of `noise_frames` (20) and `noise_band` (1.4) lie between the largest 20-frame
+    /// median measured at 1 px (1.23 times it, the moving-traffic hold-out seeds) and the
+    /// smallest at 2 px (1.58 times).
+    pub noise_reference: f64,
+    /// How many recent frames' noise the scale of [`noise_reference`](Self::noise_reference)
+    /// is the median of.
+    pub noise_frames: usize,
+    /// The ratio (at least 1) up to which the thresholds stay as written.
+    pub noise_band: f64,
 }
 
 /// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
@@ -733,6 +749,9 @@ impl Default for OdometryOptions {
             decide_by_road_tilt_frames: 1,
             decide_by_road_keep_memory: false,
             report_support: false,
+            noise_reference: 0.0019,
+            noise_frames: 20,
+            noise_band: 1.4,
         }
     }
 }
@@ -1044,7 +1063,10 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # road_scale_metric: the separation takes it as metric, as odometry.csv's;\n\
          # road_scale_initial_metric: before the first one initial_arc_length is held as metric;\n\
          # road_scale_mount: a run over a whole sequence calibrates the mount first and gives\n\
-         # its pitch to the road (road), runs with the corrected rig (rig), or not (nominal).",
+         # its pitch to the road (road), runs with the corrected rig (rig), or not (nominal).\n\
+         # noise_reference: the epipolar-angle noise (radians) the angular thresholds are\n\
+         # stated for (1 px at f = 718 px); where the median noise of the last noise_frames\n\
+         # estimated frames exceeds noise_band times it, they scale with it (0: off).",
     ),
     (
         "odometry.final_fit",
@@ -1360,6 +1382,24 @@ impl Config {
             bad(
                 &["odometry.standstill_still_angle"],
                 "odometry.standstill_still_angle must be a finite angle in 0..1 rad".into(),
+            );
+        }
+        if !finite_nonneg(o.noise_reference) || o.noise_reference >= 1.0 {
+            bad(
+                &["odometry.noise_reference"],
+                "odometry.noise_reference must be a finite angle in 0..1 rad (0: off)".into(),
+            );
+        }
+        if !(o.noise_band.is_finite() && o.noise_band >= 1.0) {
+            bad(
+                &["odometry.noise_band"],
+                "odometry.noise_band must be a finite ratio of at least 1".into(),
+            );
+        }
+        if o.noise_frames == 0 {
+            bad(
+                &["odometry.noise_frames"],
+                "odometry.noise_frames must be at least 1".into(),
             );
         }
         if !finite_nonneg(o.standstill_cell_cap) {

@@ -27,6 +27,7 @@ pub mod config;
 pub mod final_fit;
 pub mod ground_drop;
 pub mod hypotheses;
+pub mod noise;
 pub mod odometry;
 pub mod pipeline;
 mod road_track;

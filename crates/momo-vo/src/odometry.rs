@@ -212,6 +212,9 @@ pub struct Odometry {
     /// The frame and full parameters of the last competing motion found on a moving frame
     /// (`trust.competing_recheck_frames`).
     last_competing: Option<(usize, Vec<f64>)>,
+    /// `odometry.noise_reference`: the recent frames' noise and the angular thresholds as
+    /// configured (kept across [`reset`](Self::reset): the noise is the camera's).
+    noise: crate::noise::NoiseAdapt,
     scale_observable: bool,
     frame: usize,
     /// Running average of the inlier ratio of estimated frames (`None` before the first).
@@ -399,6 +402,7 @@ impl Odometry {
             Vec::new()
         };
         let soft_arc_jitter = seeded_arc_jitter(&config.odometry, soft_inv_scale.len());
+        let noise = crate::noise::NoiseAdapt::new(&config);
         Ok(Self {
             rig,
             config,
@@ -414,6 +418,7 @@ impl Odometry {
             previous_omega: None,
             support_change_fired: false,
             last_competing: None,
+            noise,
             scale_observable,
             frame: 0,
             inlier_ratio_average: None,
@@ -1072,9 +1077,16 @@ impl Odometry {
         &self.previous
     }
 
+    /// The factor the angular thresholds are scaled by for the run's noise
+    /// (`odometry.noise_reference`, [`crate::noise`]): 1 at or below the reference noise.
+    pub fn noise_scale(&self) -> f64 {
+        self.noise.scale()
+    }
+
     /// Forgets every frame seen: the driver is as [`Odometry::new`] left it, except that the
     /// next frame starts from `previous` (a full parameter vector of the model) when given and
-    /// of the right length. No change-of-motion prior is active for that frame (it has no
+    /// of the right length, and that the noise learnt for `odometry.noise_reference` (the
+    /// camera's, not the run's) and the thresholds scaled to it stay. No change-of-motion prior is active for that frame (it has no
     /// estimated predecessor). Used by [`crate::batch`] to estimate independent frame pairs.
     pub fn reset(&mut self, previous: Option<&[f64]>) {
         let n = self.estimator.param_names().len();
@@ -2041,6 +2053,18 @@ impl Odometry {
             flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
         }
         self.start_confirmed |= diag.status == FrameStatus::Estimated && diag.competing.is_none();
+        // `odometry.noise_reference`: the angular thresholds follow the run's noise, read off
+        // the frames reported `estimated` without a competing motion (from the next frame on).
+        if moving
+            && self.config.odometry.noise_reference > 0.0
+            && diag.status == FrameStatus::Estimated
+            && diag.competing.is_none()
+        {
+            let angles = crate::separate::epipolar_angles(&self.rig, &motion, obs);
+            if let Some(sigma) = crate::separate::noise_sigma(&angles, self.config.loss.scale()) {
+                self.noise.observe(sigma, &mut self.config);
+            }
+        }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;

@@ -8,6 +8,7 @@ mod final_fit;
 mod fuzz_regressions;
 mod hostile;
 mod hypotheses;
+mod noise;
 mod priors;
 mod slow_pull;
 mod soft_sigma;
