@@ -80,8 +80,9 @@ fn simulate_writes_the_bound_and_eval_reports_the_efficiency() {
 }
 
 /// `momo simulate --pixel-noise` replaces the scenario's noise; the bound scales with it (the
-/// Fisher information is 1/σ² times a noise-free geometry's), and a noise that is not a
-/// non-negative number is an input error that leaves no directory behind.
+/// Fisher information is 1/σ² times a noise-free geometry's; within 1 %: a match whose noisy
+/// pixel leaves the image is drawn again, so a frame's points can differ by one), and a noise
+/// that is not a non-negative number is an input error that leaves no directory behind.
 #[test]
 fn simulate_pixel_noise_sets_the_noise_and_the_bound() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -110,10 +111,10 @@ fn simulate_pixel_noise_sets_the_noise_and_the_bound() {
     let own = bound_column(None, "own");
     let quarter = bound_column(Some("0.25"), "quarter");
     let double = bound_column(Some("1"), "double");
-    assert_eq!(own.len(), 6);
+    assert_eq!(own.len(), 5, "one row per frame pair");
     for ((o, q), d) in own.iter().zip(&quarter).zip(&double) {
-        assert!((q / o - 0.5).abs() < 1e-6, "{q} / {o}");
-        assert!((d / o - 2.0).abs() < 1e-6, "{d} / {o}");
+        assert!((q / o / 0.5 - 1.0).abs() < 0.01, "{q} / {o}");
+        assert!((d / o / 2.0 - 1.0).abs() < 0.01, "{d} / {o}");
     }
     for bad in ["nan", "-1", "x"] {
         let seq = dir.path().join("bad");
