@@ -1086,8 +1086,9 @@ impl Odometry {
     /// Forgets every frame seen: the driver is as [`Odometry::new`] left it, except that the
     /// next frame starts from `previous` (a full parameter vector of the model) when given and
     /// of the right length, and that the noise learnt for `odometry.noise_reference` (the
-    /// camera's, not the run's) and the thresholds scaled to it stay. No change-of-motion prior is active for that frame (it has no
-    /// estimated predecessor). Used by [`crate::batch`] to estimate independent frame pairs.
+    /// camera's, not the run's) and the thresholds scaled to it stay. No change-of-motion prior
+    /// is active for that frame (it has no estimated predecessor). Used by [`crate::batch`] to
+    /// estimate independent frame pairs.
     pub fn reset(&mut self, previous: Option<&[f64]>) {
         let n = self.estimator.param_names().len();
         self.previous = match previous {
