@@ -636,7 +636,8 @@ pub struct OdometryOptions {
     /// 0.0019, is the median noise measured at 1 px on the simulated KITTI camera; the
     /// defaults of `noise_frames` (20) and `noise_band` (1.4) lie between the largest 20-frame
     /// median measured at 1 px (1.23 times it, the moving-traffic hold-out seeds) and the
-    /// smallest at 2 px (1.58 times).
+    /// smallest at 2 px (1.58 times). A model misfit reads as noise too: KITTI 08's climbing
+    /// start with 40-100 matches reads up to 2.6 times it at 1 px (docs/RESULTS.md).
     pub noise_reference: f64,
     /// How many recent frames' noise the scale of [`noise_reference`](Self::noise_reference)
     /// is the median of.

@@ -493,8 +493,9 @@ impl FinalFitOptions {
     }
 }
 
-/// The median of `v` (reordered in place); `None` if empty.
-fn median(v: &mut [f64]) -> Option<f64> {
+/// The median of `v` (reordered in place): the element of rank `len / 2` (the upper of the two
+/// middle ones of an even count); `None` if empty.
+pub(crate) fn median(v: &mut [f64]) -> Option<f64> {
     if v.is_empty() {
         return None;
     }

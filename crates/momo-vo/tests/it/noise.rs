@@ -28,7 +28,8 @@ fn the_thresholds_follow_twice_the_noise_and_stay_as_written_at_one_pixel_or_les
     // The reference is the KITTI camera's noise at 1 px: no change there or below.
     assert_eq!(scale_after(1.0, 20, Config::default()), 1.0);
     assert_eq!(scale_after(0.5, 20, Config::default()), 1.0);
-    // At 2 px the measured noise is about twice the reference (the trimmed MAD reads 1.9x).
+    // At 2 px the measured noise is about twice the reference (on moving traffic the trimmed
+    // MAD read 1.9 times it).
     let s = scale_after(2.0, 20, Config::default());
     assert!((1.6..2.3).contains(&s), "scale {s} at 2 px");
     // Off: the thresholds as written whatever the noise.
