@@ -245,6 +245,64 @@ impl PyDiagnostics {
     fn time_us(&self) -> f64 {
         self.inner.time_us
     }
+    /// How well the matches constrained the motion: `"well"`, `"weak"` or `"degenerate"`.
+    #[getter]
+    fn constraint(&self) -> String {
+        tag(&self.inner.constraint)
+    }
+    /// Why the frame is weak or degenerate (`"competing_motions"`, `"road_score_drop"`,
+    /// `"yaw_change"`, ...: docs/GUIDE.md, Degenerate input); None if well constrained.
+    #[getter]
+    fn reason(&self) -> Option<String> {
+        self.inner.reason.as_ref().map(tag)
+    }
+    /// The competing motion found by the covariance's check: `(params, weight)` (all of the
+    /// model's parameters, the mixture weight `w`), or None.
+    #[getter]
+    fn competing<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, PyArray1<f64>>, f64)> {
+        self.inner
+            .competing
+            .as_ref()
+            .map(|(p, w)| (PyArray1::from_slice(py, p), *w))
+    }
+    /// The road's alternative that widened the covariance of a frame whose road score
+    /// dropped (all of the model's parameters), or None.
+    #[getter]
+    fn road_alternative<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .road_alternative
+            .as_ref()
+            .map(|p| PyArray1::from_slice(py, p))
+    }
+    /// Whether the leave-one-cell-out jackknife of the covariance ran on this frame.
+    #[getter]
+    fn jackknife(&self) -> bool {
+        self.inner.jackknife
+    }
+    /// The clustering of the residuals in the image over its degrees of freedom (about 1 for
+    /// independent residuals; NaN if not computed).
+    #[getter]
+    fn residual_clustering(&self) -> f64 {
+        self.inner.residual_clustering
+    }
+    /// The factor the angular thresholds were scaled by on this frame for the run's measured
+    /// noise (`odometry.noise_reference`): 1 at or below the reference noise, or with the rule off.
+    #[getter]
+    fn noise_scale(&self) -> f64 {
+        self.inner.noise_scale
+    }
+    /// This frame's noise reading (radians, the epipolar angles' trimmed MAD at the reported
+    /// motion) where it entered the run's noise window, else None.
+    #[getter]
+    fn noise(&self) -> Option<f64> {
+        self.inner.noise
+    }
+    /// The final stage's support per camera (match indices in the camera's input order), with
+    /// `odometry.report_support` only; else None.
+    #[getter]
+    fn support(&self) -> Option<Vec<Vec<usize>>> {
+        self.inner.support.clone()
+    }
     /// All fields as a dict (the JSON line of `momo run --diagnostics`, with `scale` named
     /// `scale_source` and arrays for `params`, `param_sigmas` and `covariance`).
     fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
@@ -268,6 +326,15 @@ impl PyDiagnostics {
             "restarts",
             "restart_won",
             "time_us",
+            "constraint",
+            "reason",
+            "jackknife",
+            "competing",
+            "residual_clustering",
+            "road_alternative",
+            "noise_scale",
+            "noise",
+            "support",
         ] {
             d.set_item(name, slf.getattr(name)?)?;
         }

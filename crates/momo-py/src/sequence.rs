@@ -248,6 +248,26 @@ fn diagnostics_dict<'py>(
         PyArray1::from_vec(py, col_f(&|x| x.final_cost)),
     )?;
     d.set_item("time_us", PyArray1::from_vec(py, col_f(&|x| x.time_us)))?;
+    d.set_item("constraint", strings(&|x| tag(&x.constraint))?)?;
+    d.set_item(
+        "reason",
+        strings(&|x| x.reason.as_ref().map_or_else(|| "none".into(), tag))?,
+    )?;
+    d.set_item(
+        "competing_weight",
+        PyArray1::from_vec(
+            py,
+            col_f(&|x| x.competing.as_ref().map_or(f64::NAN, |c| c.1)),
+        ),
+    )?;
+    d.set_item(
+        "noise_scale",
+        PyArray1::from_vec(py, col_f(&|x| x.noise_scale)),
+    )?;
+    d.set_item(
+        "noise",
+        PyArray1::from_vec(py, col_f(&|x| x.noise.unwrap_or(f64::NAN))),
+    )?;
     let p = diags.first().map_or(0, |x| x.params.len());
     let table = |f: &dyn Fn(&FrameDiagnostics) -> &Vec<f64>| {
         Array2::from_shape_fn((diags.len(), p), |(k, i)| {
@@ -276,8 +296,10 @@ fn diagnostics_dict<'py>(
 /// Returns `(poses, diagnostics)`: camera 0's poses as (N, 4, 4) (identity first) and a dict
 /// of arrays with one row per frame pair (frames 1..N-1): `frame`, `status`, `scale_source`,
 /// `termination`, `matches`, `inliers`, `iterations`, `restarts`, `restart_won`,
-/// `initial_cost`, `final_cost`, `time_us`, `params` and `param_sigmas` (rows x parameters),
-/// `param_names`. The GIL is released during the run.
+/// `initial_cost`, `final_cost`, `time_us`, `constraint`, `reason` (`"none"` where none),
+/// `competing_weight` (the competing motion's mixture weight, NaN where none), `noise_scale`,
+/// `noise` (NaN where the frame was not read), `params` and `param_sigmas` (rows x
+/// parameters), `param_names`. The GIL is released during the run.
 #[pyfunction]
 #[pyo3(signature = (seq_dir, config = None, estimator = "momo"))]
 pub fn run<'py>(

@@ -102,23 +102,25 @@ impl NoiseAdapt {
 
     /// Adds one frame's noise `sigma` (radians) and, where the scale changes, writes the
     /// thresholds at the new scale into `config` (whose `odometry.noise_*` options rule).
-    pub fn observe(&mut self, sigma: f64, config: &mut Config) {
+    /// Returns whether `sigma` was kept (the rule on, `sigma` finite and positive).
+    pub fn observe(&mut self, sigma: f64, config: &mut Config) -> bool {
         let o = &config.odometry;
         if !(o.noise_reference > 0.0 && sigma.is_finite() && sigma > 0.0) {
-            return;
+            return false;
         }
         self.recent.push_back(sigma);
         while self.recent.len() > o.noise_frames.max(1) {
             self.recent.pop_front();
         }
         if 2 * self.recent.len() < o.noise_frames {
-            return;
+            return true;
         }
         let s = scale_for(&self.recent, o.noise_reference, o.noise_band);
         if s != self.scale {
             self.scale = s;
             self.base.apply(config, s);
         }
+        true
     }
 }
 

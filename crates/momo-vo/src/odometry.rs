@@ -126,6 +126,17 @@ pub struct FrameDiagnostics {
     /// (all of the model's); `None` where there was none.
     #[serde(default)]
     pub road_alternative: Option<Vec<f64>>,
+    /// The factor the driver's angular thresholds were scaled by on this frame for the run's
+    /// measured noise (`odometry.noise_reference`, [`crate::noise`]): 1 while the noise read so
+    /// far lies within `noise_band` times the reference, or with the rule off.
+    #[serde(default = "one")]
+    pub noise_scale: f64,
+    /// This frame's noise reading that entered the run's window of `odometry.noise_frames`
+    /// (radians; the final stage's trimmed MAD of the epipolar angles at the reported motion,
+    /// [`crate::separate::noise_sigma`]). `None` (not written) where the frame was not read: not
+    /// moving, not reported `estimated`, a competing motion found, or the rule off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
     /// The final stage's support ([`crate::final_fit`]), with `odometry.report_support` only:
     /// per camera, the indices of the matches the stage refit on (its last pass), counted
     /// among the camera's matches of the frame in input order (matches.csv's rows of that
@@ -134,6 +145,11 @@ pub struct FrameDiagnostics {
     /// the reported motion is then the first stage's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<Vec<Vec<usize>>>,
+}
+
+/// Serde's default of [`FrameDiagnostics::noise_scale`] (diagnostics written before the field).
+fn one() -> f64 {
+    1.0
 }
 
 /// The result of one frame pair.
@@ -1301,6 +1317,8 @@ impl Odometry {
             competing: None,
             residual_clustering: f64::NAN,
             road_alternative: None,
+            noise_scale: self.noise.scale(),
+            noise: None,
             support: None,
         };
 
@@ -2063,7 +2081,9 @@ impl Odometry {
         {
             let angles = crate::separate::epipolar_angles(&self.rig, &motion, obs);
             if let Some(sigma) = crate::separate::noise_sigma(&angles, self.config.loss.scale()) {
-                self.noise.observe(sigma, &mut self.config);
+                if self.noise.observe(sigma, &mut self.config) {
+                    diag.noise = Some(sigma);
+                }
             }
         }
         diag.params = params.clone();

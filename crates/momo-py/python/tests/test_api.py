@@ -48,6 +48,9 @@ def test_process_returns_motion_and_diagnostics(sim):
     assert np.allclose(d.covariance, d.covariance.T)
     assert len(d.params) == len(d.param_names) == len(vo.param_names)
     assert d.to_dict()["status"] == "estimated"
+    # Trusted, no second motion, the thresholds as written (no noise read yet).
+    assert (d.constraint, d.reason, d.competing) == ("well", None, None)
+    assert d.noise_scale == 1.0 and d.to_dict()["noise_scale"] == 1.0
     # Against the truth: the vehicle moved forward by the arc length.
     v = sim.vehicle_poses
     true_motion = np.linalg.inv(v[0]) @ v[1]

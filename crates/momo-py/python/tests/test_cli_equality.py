@@ -40,6 +40,10 @@ def test_python_loop_equals_momo_run(simulated):
         assert (row["frame"], row["status"], row["scale"]) == (d.frame, d.status, d.scale_source)
         assert (row["inliers"], row["iterations"], row["matches"]) == (d.inliers, d.iterations, d.matches)
         assert np.array_equal(np.array(row["params"], dtype=float), d.params)
+        # The trust fields: why a frame is flagged, and the thresholds' noise scale.
+        assert (row["constraint"], row["reason"]) == (d.constraint, d.reason)
+        assert (row["competing"] is None) == (d.competing is None)
+        assert (row["noise_scale"], row.get("noise")) == (d.noise_scale, d.noise)
     # Composing the motions in numpy instead of Odometry.pose: the same up to rounding.
     p0 = seq.rig.cameras[0]["T_vehicle_camera"]
     v = np.eye(4)
@@ -58,6 +62,11 @@ def test_run_equals_momo_run(simulated):
     rows = [json.loads(line) for line in simulated["diagnostics"].read_text().splitlines()]
     assert list(diags["status"]) == [r["status"] for r in rows]
     assert list(diags["inliers"]) == [r["inliers"] for r in rows]
+    assert list(diags["constraint"]) == [r["constraint"] for r in rows]
+    assert list(diags["reason"]) == [r["reason"] or "none" for r in rows]
+    assert list(diags["noise_scale"]) == [r["noise_scale"] for r in rows]
+    noise = np.array([r.get("noise", np.nan) for r in rows], dtype=float)
+    assert np.array_equal(diags["noise"], noise, equal_nan=True)
     assert diags["params"].shape == (len(rows), len(rows[0]["params"]))
     assert np.array_equal(diags["params"], np.array([r["params"] for r in rows], dtype=float))
 

@@ -2,11 +2,16 @@
 //! run's measured noise above the noise they are stated for, and stay as written at or below
 //! it.
 
-use momo_vo::{Config, Odometry};
+use momo_vo::{Config, FrameDiagnostics, FrameStatus, Odometry};
 
 /// The threshold scale after a simulated `outliers` drive (30 % mismatches) of `frames` frames
 /// at `pixel_noise`, with `config`.
 fn scale_after(pixel_noise: f64, frames: usize, config: Config) -> f64 {
+    run(pixel_noise, frames, config).0
+}
+
+/// [`scale_after`], with each frame's diagnostics and the scale in force before it.
+fn run(pixel_noise: f64, frames: usize, config: Config) -> (f64, Vec<(f64, FrameDiagnostics)>) {
     let seq = momo_sim::simulate(&momo_sim::SimConfig {
         frames,
         seed: 3,
@@ -16,11 +21,13 @@ fn scale_after(pixel_noise: f64, frames: usize, config: Config) -> f64 {
     .expect("simulated")
     .sequence;
     let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+    let mut diags = Vec::new();
     for k in 1..seq.num_frames() {
         let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-        vo.process(&seq.frames[k], arc);
+        let before = vo.noise_scale();
+        diags.push((before, vo.process(&seq.frames[k], arc).diagnostics));
     }
-    vo.noise_scale()
+    (vo.noise_scale(), diags)
 }
 
 #[test]
@@ -36,4 +43,40 @@ fn the_thresholds_follow_twice_the_noise_and_stay_as_written_at_one_pixel_or_les
     let mut off = Config::default();
     off.odometry.noise_reference = 0.0;
     assert_eq!(scale_after(2.0, 20, off), 1.0);
+}
+
+#[test]
+fn the_diagnostics_report_each_frames_scale_and_the_noise_read() {
+    let reference = Config::default().odometry.noise_reference;
+    let (scale, diags) = run(2.0, 30, Config::default());
+    assert!(scale > 1.4, "scale {scale} at 2 px");
+    let mut read = Vec::new();
+    for (before, d) in &diags {
+        // The scale a frame reports is the one its thresholds had: the one in force before it.
+        assert_eq!(d.noise_scale, *before, "frame {}", d.frame);
+        // Only frames reported `estimated` without a competing motion are read.
+        if let Some(sigma) = d.noise {
+            assert!(d.status == FrameStatus::Estimated && d.competing.is_none());
+            assert!(sigma > 0.0 && sigma.is_finite());
+            read.push(sigma);
+        }
+    }
+    // The scale starts once half the window (`noise_frames` 20) is read, and is then the
+    // median of the last 20 readings over the reference.
+    assert!(read.len() >= 10, "{} frames read", read.len());
+    assert_eq!(diags[0].1.noise_scale, 1.0);
+    let last: Vec<f64> = read.iter().rev().take(20).copied().collect();
+    let (lo, hi) = last
+        .iter()
+        .fold((f64::INFINITY, 0.0_f64), |(l, h), &x| (l.min(x), h.max(x)));
+    assert!(
+        (lo..=hi).contains(&(scale * reference)),
+        "{scale} x {reference} outside [{lo}, {hi}]"
+    );
+    // `momo run --diagnostics` writes the scale on every row, the noise where it was read.
+    for (_, d) in &diags {
+        let row = serde_json::to_value(d).expect("serialize");
+        assert_eq!(row["noise_scale"].as_f64(), Some(d.noise_scale));
+        assert_eq!(row.get("noise").and_then(|v| v.as_f64()), d.noise);
+    }
 }
