@@ -644,6 +644,12 @@ pub struct OdometryOptions {
     pub noise_frames: usize,
     /// The ratio (at least 1) up to which the thresholds stay as written.
     pub noise_band: f64,
+    /// With [`noise_reference`](Self::noise_reference): the final stage's noise window,
+    /// `final_fit.start_scales` and `final_fit.max_scale_ratio` (in first-stage loss scales,
+    /// stated for the same noise), scales with the thresholds. Without it the stage's noise
+    /// estimate stops at 5 loss scales (0.005 rad): 2 px through a fisheye of f = 330 px reads
+    /// 0.0086, and the stage then trims and down-weights good static matches.
+    pub noise_final_fit: bool,
 }
 
 /// With [`OdometryOptions::quiet_frames`]: a frame whose first-stage inlier share is below this
@@ -753,6 +759,7 @@ impl Default for OdometryOptions {
             noise_reference: 0.0019,
             noise_frames: 20,
             noise_band: 1.4,
+            noise_final_fit: true,
         }
     }
 }
@@ -1067,7 +1074,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # its pitch to the road (road), runs with the corrected rig (rig), or not (nominal).\n\
          # noise_reference: the epipolar-angle noise (radians) the angular thresholds are\n\
          # stated for (1 px at f = 718 px); where the median noise of the last noise_frames\n\
-         # estimated frames exceeds noise_band times it, they scale with it (0: off).",
+         # estimated frames exceeds noise_band times it, they scale with it (0: off);\n\
+         # noise_final_fit: the final stage's noise window (final_fit.start_scales,\n\
+         # max_scale_ratio) scales with them.",
     ),
     (
         "odometry.final_fit",
