@@ -644,11 +644,13 @@ pub struct OdometryOptions {
     pub noise_frames: usize,
     /// The ratio (at least 1) up to which the thresholds stay as written.
     pub noise_band: f64,
-    /// With [`noise_reference`](Self::noise_reference): the final stage's noise window,
-    /// `final_fit.start_scales` and `final_fit.max_scale_ratio` (in first-stage loss scales,
-    /// stated for the same noise), scales with the thresholds. Without it the stage's noise
-    /// estimate stops at 5 loss scales (0.005 rad): 2 px through a fisheye of f = 330 px reads
-    /// 0.0086, and the stage then trims and down-weights good static matches.
+    /// With [`noise_reference`](Self::noise_reference): the upper clamp of the final stage's
+    /// noise estimate, `final_fit.max_scale_ratio` (in first-stage loss scales, stated for the
+    /// same noise), scales with the thresholds; its start window (`start_scales`) does not.
+    /// Without it the stage's noise estimate stops at 5 loss scales (0.005 rad): 2 px through
+    /// a fisheye of f = 330 px reads 0.0086, and the stage then trims and down-weights good
+    /// static matches. Scaling the start window too measured worse on moving traffic at 3 px
+    /// (docs/RESULTS.md, sixtieth session).
     pub noise_final_fit: bool,
 }
 
@@ -1075,8 +1077,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # noise_reference: the epipolar-angle noise (radians) the angular thresholds are\n\
          # stated for (1 px at f = 718 px); where the median noise of the last noise_frames\n\
          # estimated frames exceeds noise_band times it, they scale with it (0: off);\n\
-         # noise_final_fit: the final stage's noise window (final_fit.start_scales,\n\
-         # max_scale_ratio) scales with them.",
+         # noise_final_fit: the final stage's noise clamp (final_fit.max_scale_ratio)\n\
+         # scales with them.",
     ),
     (
         "odometry.final_fit",

@@ -38,8 +38,8 @@ pub struct NoiseThresholds {
     /// `odometry.separate.hypotheses.noise_angle`, where the choice is configured.
     noise_angle: Option<f64>,
     competing_threshold: f64,
-    /// `odometry.final_fit.start_scales` and `max_scale_ratio`, where `noise_final_fit` is on.
-    final_fit: Option<(f64, f64)>,
+    /// `odometry.final_fit.max_scale_ratio`, where `noise_final_fit` is on.
+    final_fit_max: Option<f64>,
 }
 
 impl NoiseThresholds {
@@ -57,9 +57,7 @@ impl NoiseThresholds {
                 .and_then(|s| s.hypotheses.as_ref())
                 .map(|h| h.noise_angle),
             competing_threshold: config.trust.competing_threshold,
-            final_fit: o
-                .noise_final_fit
-                .then_some((o.final_fit.start_scales, o.final_fit.max_scale_ratio)),
+            final_fit_max: o.noise_final_fit.then_some(o.final_fit.max_scale_ratio),
         }
     }
 
@@ -78,10 +76,8 @@ impl NoiseThresholds {
             }
         }
         config.trust.competing_threshold = s * self.competing_threshold;
-        if let Some((start, max)) = self.final_fit {
-            let f = &mut config.odometry.final_fit;
-            f.start_scales = s * start;
-            f.max_scale_ratio = s * max;
+        if let Some(max) = self.final_fit_max {
+            config.odometry.final_fit.max_scale_ratio = s * max;
         }
     }
 }
@@ -181,10 +177,14 @@ mod tests {
         assert!((t - 2.0 * t0).abs() < 1e-15 && (u - 2.0 * u0).abs() < 1e-15);
         let n = doubled.noise_angle.expect("choice configured");
         assert!((n - 2.0 * base.noise_angle.expect("choice configured")).abs() < 1e-15);
-        // The final stage's noise window too (`noise_final_fit`, on by default).
-        let (a, m) = doubled.final_fit.expect("noise_final_fit on");
-        let (a0, m0) = base.final_fit.expect("noise_final_fit on");
-        assert!((a - 2.0 * a0).abs() < 1e-12 && (m - 2.0 * m0).abs() < 1e-12);
+        // The final stage's noise clamp too (`noise_final_fit`, on by default), not its
+        // start window.
+        let m = doubled.final_fit_max.expect("noise_final_fit on");
+        assert!((m - 2.0 * base.final_fit_max.expect("noise_final_fit on")).abs() < 1e-12);
+        assert_eq!(
+            config.odometry.final_fit.start_scales,
+            Config::default().odometry.final_fit.start_scales
+        );
         for _ in 0..3 {
             adapt.observe(0.002, &mut config);
         }
@@ -194,7 +194,7 @@ mod tests {
     }
 
     #[test]
-    fn without_noise_final_fit_the_final_stage_keeps_its_window() {
+    fn without_noise_final_fit_the_final_stage_keeps_its_clamp() {
         let mut config = Config::default();
         config.odometry.noise_final_fit = false;
         let before = config.odometry.final_fit.clone();
