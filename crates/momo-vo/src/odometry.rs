@@ -132,9 +132,11 @@ pub struct FrameDiagnostics {
     #[serde(default = "one")]
     pub noise_scale: f64,
     /// This frame's noise reading that entered the run's window of `odometry.noise_frames`
-    /// (radians; the final stage's trimmed MAD of the epipolar angles at the reported motion,
-    /// [`crate::separate::noise_sigma`]). `None` (not written) where the frame was not read: not
-    /// moving, not reported `estimated`, a competing motion found, or the rule off.
+    /// (radians; the final stage's trimmed MAD of the epipolar angles at the reported motion
+    /// with the stage's default options, [`crate::separate::noise_sigma`]: it stops at 5 loss
+    /// scales, 0.005 rad, whatever the scale in force). `None` (not written) where the frame
+    /// was not read: not moving, not reported `estimated`, a competing motion found, or the
+    /// rule off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<f64>,
     /// The final stage's support ([`crate::final_fit`]), with `odometry.report_support` only:
