@@ -1099,6 +1099,7 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # cell_cap: at most max(2, ceil(cell_cap x median)) matches per image cell\n\
          # (cell_cap_grid per camera) in the final stage and, with cell_cap_first, in a\n\
          # re-solve of the first motion, where that leaves out cell_cap_min_share of them;\n\
+         # on a rig of several cameras the factor is cell_cap x cell_cap_rig_scale;\n\
          # ground_admit: a second motion failing the persistence test still competes if its\n\
          # ground score is at least ground_admit_min and ground_admit times the first's;\n\
          # memory_vote (0: off): where neither ground score is at least ground_admit_min and\n\

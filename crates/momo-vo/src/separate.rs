@@ -194,6 +194,16 @@ pub struct SeparateOptions {
     /// [`SeparateOptions::competition_over_time`] (the default configuration's) since the
     /// twelfth session; 0 in [`SeparateOptions::default`].
     pub cell_cap: f64,
+    /// On a rig of several cameras the cap's factor is `cell_cap · cell_cap_rig_scale`
+    /// ([`SeparateOptions::cell_cap_factor`]), where the gate
+    /// ([`SeparateOptions::cell_cap_min_share`]) still reads the cap at `cell_cap`
+    /// ([`gated_cap`]); positive; 1 in [`SeparateOptions::default`], 0.5 in
+    /// [`SeparateOptions::competition_over_time`] since the sixty-first session. A surround
+    /// rig's fisheye cells hold few static matches each (1.3 per occupied cell along KITTI 00
+    /// with traffic, against 1.5-2.2 for the single KITTI-like camera), so the cap at half the
+    /// factor (2 per cell there) still keeps the static world's cells whole and halves the
+    /// vehicles' around the rig (docs/RESULTS.md §9, sixty-first session).
+    pub cell_cap_rig_scale: f64,
     /// The grid (columns, rows) per camera image of [`SeparateOptions::cell_cap`].
     pub cell_cap_grid: (usize, usize),
     /// With [`SeparateOptions::cell_cap`], the frame's first motion A is also re-solved on the
@@ -472,6 +482,7 @@ impl Default for SeparateOptions {
             own_share: 0.0,
             own_persistence: 0.0,
             cell_cap: 0.0,
+            cell_cap_rig_scale: 1.0,
             cell_cap_grid: (16, 8),
             cell_cap_first: false,
             cell_cap_min_share: 0.2,
@@ -505,6 +516,17 @@ impl Default for SeparateOptions {
 }
 
 impl SeparateOptions {
+    /// The factor of the image-region cap ([`SeparateOptions::cell_cap`], [`cell_capped`]) on
+    /// a rig of `cameras` cameras: `cell_cap` on one camera, `cell_cap ·
+    /// cell_cap_rig_scale` on several; 0: no cap.
+    pub fn cell_cap_factor(&self, cameras: usize) -> f64 {
+        if cameras > 1 {
+            self.cell_cap * self.cell_cap_rig_scale
+        } else {
+            self.cell_cap
+        }
+    }
+
     /// The separation of the default configuration (`[odometry.separate]` when the config
     /// file has no such section; since 2026-11-28): the multi-frame choice by the spread of
     /// the ground support (`hypotheses.spread_grid = [16, 8]`), the robust loss, the default's
@@ -515,7 +537,8 @@ impl SeparateOptions {
     /// solved exactly as without the separation. Since the twelfth session the matches are
     /// balanced over image regions where they cluster (`cell_cap = 2`, `cell_cap_first`,
     /// gated by `cell_cap_min_share = 0.2`): a frame whose matches are spread out is solved as
-    /// before. Since the fifteenth session a second motion that fails competition over time
+    /// before; since the sixty-first session a rig of several cameras caps at half that factor
+    /// where the gate passes (`cell_cap_rig_scale = 0.5`). Since the fifteenth session a second motion that fails competition over time
     /// still competes where its ground score is at least twice A's (`ground_admit = 2`,
     /// `ground_admit_min = 12`). Since the sixteenth session the match memory's
     /// remembered-static shares may also switch to the alternative where neither ground score
@@ -579,6 +602,7 @@ impl SeparateOptions {
             own_share: 0.1,
             own_persistence: 0.2,
             cell_cap: 2.0,
+            cell_cap_rig_scale: 0.5,
             cell_cap_first: true,
             ground_admit: 2.0,
             memory_vote: 0.3,
@@ -708,6 +732,9 @@ impl SeparateOptions {
         }
         if !(self.cell_cap.is_finite() && self.cell_cap >= 0.0) {
             return Err("odometry.separate.cell_cap must be a non-negative number".into());
+        }
+        if !(self.cell_cap_rig_scale.is_finite() && self.cell_cap_rig_scale > 0.0) {
+            return Err("odometry.separate.cell_cap_rig_scale must be a positive number".into());
         }
         let cap_cells = self.cell_cap_grid.0.checked_mul(self.cell_cap_grid.1);
         if self.cell_cap_grid.0 == 0
@@ -1161,11 +1188,13 @@ fn separate_with(
     // (`cell_cap_first`) and the final stage on all matches (`final_fit`).
     let all_capped = (opts.cell_cap > 0.0 && (opts.cell_cap_first || opts.final_fit)).then(|| {
         let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
-        cell_capped(ctx.rig, obs, &all, opts.cell_cap_grid, opts.cell_cap)
+        gated_cap(ctx.rig, obs, &all, opts)
     });
     // A re-solved on the capped matches (`cell_cap_first`).
-    let first = if let Some(capped) = all_capped.as_ref().filter(|_| opts.cell_cap_first) {
-        let left_out = (n - count(capped)) as f64;
+    let first = if let Some((gate_left_out, capped)) =
+        all_capped.as_ref().filter(|_| opts.cell_cap_first)
+    {
+        let left_out = *gate_left_out as f64;
         match (left_out > 0.0
             && left_out >= opts.cell_cap_min_share * n as f64
             && count(capped) >= 12)
@@ -1881,9 +1910,9 @@ fn separate_with(
         };
         // Image-region balance of the final stage (`cell_cap`).
         let next = if let Some(all_capped) = all_capped {
-            let (base, capped) = match next {
+            let (base, (left_out, capped)) = match next {
                 NextStage::FinalFitOn(m) => {
-                    let capped = cell_capped(ctx.rig, obs, &m, opts.cell_cap_grid, opts.cell_cap);
+                    let capped = gated_cap(ctx.rig, obs, &m, opts);
                     (m, capped)
                 }
                 _ => {
@@ -1891,9 +1920,10 @@ fn separate_with(
                     (all, all_capped)
                 }
             };
-            let (before, after) = (count(&base), count(&capped));
-            let cap = after < before
-                && (before - after) as f64 >= opts.cell_cap_min_share * before as f64;
+            let before = count(&base);
+            let cap = left_out > 0
+                && count(&capped) < before
+                && left_out as f64 >= opts.cell_cap_min_share * before as f64;
             match (cap, before == n) {
                 (true, _) => NextStage::FinalFitOn(capped),
                 (false, true) => NextStage::FinalFit,
@@ -2488,6 +2518,30 @@ fn score_bound(opts: &HypothesesOptions, rig: &Rig, obs: &FrameObservations) -> 
 /// The fewest matches [`cell_capped`] keeps in a cell.
 pub const CELL_CAP_MIN: usize = 2;
 
+/// The image-region cap of `mask` as the separation applies it (`cell_cap`): how many of
+/// `mask`'s matches the cap at `cell_cap` leaves out (what `cell_cap_min_share` gates) and the
+/// matches kept at the rig's factor ([`SeparateOptions::cell_cap_factor`]; the same cap on one
+/// camera). The gate reads `cell_cap` on every rig, so a frame the gate passes over at
+/// `cell_cap` is passed over whatever the rig's factor.
+pub fn gated_cap(
+    rig: &Rig,
+    obs: &FrameObservations,
+    mask: &[Vec<bool>],
+    opts: &SeparateOptions,
+) -> (usize, Vec<Vec<bool>>) {
+    let gate = cell_capped(rig, obs, mask, opts.cell_cap_grid, opts.cell_cap);
+    let left_out = count(mask).saturating_sub(count(&gate));
+    let factor = opts.cell_cap_factor(rig.len());
+    if factor == opts.cell_cap || left_out == 0 {
+        (left_out, gate)
+    } else {
+        (
+            left_out,
+            cell_capped(rig, obs, mask, opts.cell_cap_grid, factor),
+        )
+    }
+}
+
 /// The order in which an over-full cell keeps its matches ([`cell_capped`]): a hash of the
 /// match's four pixel coordinates' bits (splitmix64's finaliser), so the kept ones do not depend
 /// on the matches' order in the file.
@@ -2914,6 +2968,115 @@ mod tests {
             "memory_vote_ground = inf",
             "ground_admit_own_share = 1.5",
             "ground_admit_own_share = -0.1",
+        ] {
+            let o: SeparateOptions = toml::from_str(bad).unwrap();
+            assert!(o.validate().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn a_rig_caps_at_its_own_factor_where_the_gate_at_cell_cap_passes() {
+        use momo_core::{CameraModel, Observation};
+        use nalgebra::Vector2;
+        let rig = momo_testing::canned::fisheye_rig();
+        let grid = (16, 8);
+        // Per camera two matches in every cell (the median count is 2); in the front camera 40
+        // more in one cell: a compact vehicle.
+        let scene = |cluster: bool| {
+            let per_camera = rig
+                .cameras()
+                .iter()
+                .enumerate()
+                .map(|(j, cam)| {
+                    let (w, h) = cam.model.size();
+                    let (cw, ch) = (w / 16.0, h / 8.0);
+                    let at = |x: f64, y: f64| {
+                        Observation::new(&cam.model, Vector2::new(x, y), Vector2::new(x + 1.0, y))
+                            .expect("the pixel unprojects")
+                    };
+                    let mut m: Vec<Observation> = (0..8)
+                        .flat_map(|r| (0..16).map(move |c| (c, r)))
+                        .flat_map(|(c, r)| {
+                            let (x, y) = (f64::from(c) * cw, (f64::from(r) + 0.5) * ch);
+                            [at(x + 0.3 * cw, y), at(x + 0.7 * cw, y)]
+                        })
+                        .collect();
+                    if cluster && j == 0 {
+                        for i in 0..40 {
+                            let (dx, dy) = (f64::from(i % 8) + 0.5, f64::from(i / 8) + 0.5);
+                            m.push(at(7.0 * cw + dx * cw / 8.5, 4.0 * ch + dy * ch / 5.5));
+                        }
+                    }
+                    m
+                })
+                .collect();
+            FrameObservations {
+                per_camera,
+                cross_camera: Vec::new(),
+            }
+        };
+        let all = |obs: &FrameObservations| -> Vec<Vec<bool>> {
+            obs.per_camera.iter().map(|m| vec![true; m.len()]).collect()
+        };
+        let opts = SeparateOptions::competition_over_time();
+        assert_eq!((opts.cell_cap, opts.cell_cap_rig_scale), (2.0, 0.5));
+        assert_eq!(opts.cell_cap_factor(4), 1.0);
+        assert_eq!(opts.cell_cap_factor(1), 2.0);
+        let obs = scene(true);
+        let n = obs.len();
+        // The gate reads the cap at cell_cap = 2 (max(2, 2 · 2) = 4 per cell: the cluster's
+        // cell keeps 4 of its 42), the rig keeps max(2, 1 · 2) = 2 there.
+        let (left_out, kept) = gated_cap(&rig, &obs, &all(&obs), &opts);
+        assert_eq!(left_out, 38);
+        assert_eq!(count(&kept), n - 40);
+        assert_eq!(kept, cell_capped(&rig, &obs, &all(&obs), grid, 1.0));
+        // Scale 1: the rig's cap is the gate's.
+        let one = SeparateOptions {
+            cell_cap_rig_scale: 1.0,
+            ..opts.clone()
+        };
+        let (left_one, kept_one) = gated_cap(&rig, &obs, &all(&obs), &one);
+        assert_eq!((left_one, count(&kept_one)), (38, n - 38));
+        // A spread-out scene: the cap at cell_cap leaves nothing out, so nothing is capped,
+        // though the rig's own cap would cut every cell with a third match.
+        let spread = scene(false);
+        let (left_spread, kept_spread) = gated_cap(&rig, &spread, &all(&spread), &opts);
+        assert_eq!(left_spread, 0);
+        assert_eq!(kept_spread, all(&spread));
+        // One camera: the cap at cell_cap itself.
+        let mono = momo_testing::canned::pinhole_rig();
+        let cam = &mono.cameras()[0];
+        let (w, h) = cam.model.size();
+        let one_cam = FrameObservations {
+            per_camera: vec![
+                (0..60)
+                    .map(|i| {
+                        let x = if i < 40 {
+                            w / 2.0 + f64::from(i) * 0.1
+                        } else {
+                            f64::from(i) * w / 61.0
+                        };
+                        Observation::new(
+                            &cam.model,
+                            Vector2::new(x, h / 2.0),
+                            Vector2::new(x + 1.0, h / 2.0),
+                        )
+                        .expect("the pixel unprojects")
+                    })
+                    .collect(),
+            ],
+            cross_camera: Vec::new(),
+        };
+        let (left_mono, kept_mono) = gated_cap(&mono, &one_cam, &all(&one_cam), &opts);
+        let at_cap = cell_capped(&mono, &one_cam, &all(&one_cam), grid, 2.0);
+        assert_eq!(kept_mono, at_cap);
+        assert_eq!(left_mono, 60 - count(&at_cap));
+        assert!(left_mono > 0);
+        // Validation: the scale is a positive number.
+        for bad in [
+            "cell_cap_rig_scale = 0.0",
+            "cell_cap_rig_scale = -1.0",
+            "cell_cap_rig_scale = nan",
         ] {
             let o: SeparateOptions = toml::from_str(bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
