@@ -54,6 +54,27 @@ fn median_rotation_error_toml(sim: &momo_sim::Simulation, config: &str) -> f64 {
     median_rotation_error(sim, config)
 }
 
+/// The median frame-to-frame rotation errors (deg) of the configurations `a` and `b` (TOML) on
+/// one simulated sequence of `frames` frames.
+fn errors_of_two(
+    cfg: momo_sim::SimConfig,
+    frames: usize,
+    seed: u64,
+    a: &str,
+    b: &str,
+) -> (f64, f64) {
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames,
+        seed,
+        ..cfg
+    })
+    .expect("simulation");
+    (
+        median_rotation_error_toml(&sim, a),
+        median_rotation_error_toml(&sim, b),
+    )
+}
+
 /// `[odometry.separate] cell_cap` (on by default since the twelfth session: `cell_cap = 2`,
 /// `cell_cap_first`, `cell_cap_min_share = 0.2`): the matches capped per image cell where they
 /// cluster. On the moving-traffic drive the objects near the focus of expansion, which fit the
@@ -63,32 +84,14 @@ fn median_rotation_error_toml(sim: &momo_sim::Simulation, config: &str) -> f64 {
 /// spread out and its estimates do not change (seeds 1-3 0.0129, 0.0139, 0.0144 deg both).
 #[test]
 fn a_cell_cap_takes_the_weight_of_compact_objects() {
-    use momo_sim::{SimConfig, simulate};
+    use momo_sim::SimConfig;
     let off = "[odometry.separate]\ncell_cap = 0.0\n";
     for seed in [1, 3] {
-        let sim = simulate(&SimConfig {
-            frames: 150,
-            seed,
-            ..SimConfig::moving_traffic()
-        })
-        .expect("simulation");
-        let (without, with) = (
-            median_rotation_error_toml(&sim, off),
-            median_rotation_error_toml(&sim, ""),
-        );
+        let (without, with) = errors_of_two(SimConfig::moving_traffic(), 150, seed, off, "");
         eprintln!("moving_traffic seed {seed}: cell_cap 0 {without:.4}, default {with:.4} deg");
         assert!(with < 0.85 * without, "seed {seed}: {with} vs {without}");
     }
-    let sim = simulate(&SimConfig {
-        frames: 150,
-        seed: 1,
-        ..SimConfig::clean_pinhole()
-    })
-    .expect("simulation");
-    let (without, with) = (
-        median_rotation_error_toml(&sim, off),
-        median_rotation_error_toml(&sim, ""),
-    );
+    let (without, with) = errors_of_two(SimConfig::clean_pinhole(), 150, 1, off, "");
     eprintln!("clean seed 1: cell_cap 0 {without:.4}, default {with:.4} deg");
     assert_eq!(with, without, "a spread-out scene is not capped");
 }
@@ -213,32 +216,20 @@ fn evidence_counts_scaled_to_a_100_match_frame_recover_the_bus_frames() {
 /// fisheye rig 0.0105 both.
 #[test]
 fn a_rig_caps_the_vehicles_around_it_at_half_the_factor() {
-    use momo_sim::{SimConfig, simulate};
+    use momo_sim::SimConfig;
     let scale_one = "[odometry.separate]\ncell_cap_rig_scale = 1.0\n";
     for seed in [1, 2, 3] {
-        let sim = simulate(&SimConfig {
-            frames: 250,
+        let (one, half) = errors_of_two(
+            SimConfig::moving_traffic_surround(),
+            250,
             seed,
-            ..SimConfig::moving_traffic_surround()
-        })
-        .expect("simulation");
-        let (one, half) = (
-            median_rotation_error_toml(&sim, scale_one),
-            median_rotation_error_toml(&sim, ""),
+            scale_one,
+            "",
         );
         eprintln!("moving_traffic_surround seed {seed}: scale 1 {one:.4}, default {half:.4} deg");
         assert!(half < 0.98 * one, "seed {seed}: {half} vs {one}");
     }
-    let sim = simulate(&SimConfig {
-        frames: 100,
-        seed: 1,
-        ..SimConfig::fisheye_surround()
-    })
-    .expect("simulation");
-    let (one, half) = (
-        median_rotation_error_toml(&sim, scale_one),
-        median_rotation_error_toml(&sim, ""),
-    );
+    let (one, half) = errors_of_two(SimConfig::fisheye_surround(), 100, 1, scale_one, "");
     eprintln!("fisheye_surround seed 1: scale 1 {one:.4}, default {half:.4} deg");
     assert_eq!(one, half, "a static rig's frames are not gated");
 }
