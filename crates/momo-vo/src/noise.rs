@@ -113,6 +113,23 @@ impl NoiseAdapt {
         self.scale
     }
 
+    /// Whether the run's noise is read: half of `odometry.noise_frames` readings kept, the
+    /// scale computed from them (before that the thresholds are as configured).
+    pub fn is_read(&self, config: &Config) -> bool {
+        2 * self.recent.len() >= config.odometry.noise_frames
+    }
+
+    /// The scale one frame's own noise `sigma` would set on its own (`σ̂ / noise_reference`
+    /// above `noise_band`, else 1; 1 where the rule is off or `sigma` is not a noise):
+    /// `trust.start_own_noise`, before the run's noise is read.
+    pub fn frame_scale(sigma: f64, config: &Config) -> f64 {
+        let o = &config.odometry;
+        if !(o.noise_reference > 0.0 && sigma.is_finite() && sigma > 0.0) {
+            return 1.0;
+        }
+        scale_for(&VecDeque::from([sigma]), o.noise_reference, o.noise_band)
+    }
+
     /// Adds one frame's noise `sigma` (radians) and, where the scale changes, writes the
     /// thresholds at the new scale into `config` (whose `odometry.noise_*` options rule).
     /// Returns whether `sigma` was kept (the rule on, `sigma` finite and positive).
@@ -160,6 +177,27 @@ mod tests {
         // Less noise than the reference keeps the thresholds as written.
         assert_eq!(scale_for(&v(&[0.001]), 0.002, 1.3), 1.0);
         assert_eq!(scale_for(&v(&[]), 0.002, 1.3), 1.0);
+    }
+
+    #[test]
+    fn a_frames_own_scale_and_the_window_half_read() {
+        let mut config = Config::default();
+        let r = config.odometry.noise_reference;
+        let band = config.odometry.noise_band;
+        assert_eq!(NoiseAdapt::frame_scale(r, &config), 1.0);
+        assert_eq!(NoiseAdapt::frame_scale(0.99 * band * r, &config), 1.0);
+        assert!((NoiseAdapt::frame_scale(2.0 * r, &config) - 2.0).abs() < 1e-12);
+        assert_eq!(NoiseAdapt::frame_scale(f64::NAN, &config), 1.0);
+        assert_eq!(NoiseAdapt::frame_scale(-1.0, &config), 1.0);
+        let mut noise = NoiseAdapt::new(&config);
+        let half = config.odometry.noise_frames.div_ceil(2);
+        for k in 0..half {
+            assert!(!noise.is_read(&config), "after {k} readings");
+            assert!(noise.observe(2.0 * r, &mut config));
+        }
+        assert!(noise.is_read(&config));
+        config.odometry.noise_reference = 0.0;
+        assert_eq!(NoiseAdapt::frame_scale(2.0 * r, &config), 1.0);
     }
 
     #[test]

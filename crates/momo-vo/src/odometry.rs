@@ -222,6 +222,9 @@ pub struct Odometry {
     /// `trust.unconfirmed_start`: a frame since the start (or the reset) was reported
     /// `estimated` without a competing motion.
     start_confirmed: bool,
+    /// `trust.start_own_noise`: this frame's own noise over `odometry.noise_reference` where
+    /// above `odometry.noise_band` (1 once the run's noise is read, or where the rule is off).
+    start_noise_scale: f64,
     /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
     /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
     previous_omega: Option<nalgebra::Vector3<f64>>,
@@ -433,6 +436,7 @@ impl Odometry {
             previous_yaw: None,
             side_slip_centre: (0.0, 0),
             start_confirmed: false,
+            start_noise_scale: 1.0,
             previous_omega: None,
             support_change_fired: false,
             last_competing: None,
@@ -1195,6 +1199,7 @@ impl Odometry {
         let (unique, repeated) = trust::deduped(obs);
         let obs = &*unique;
         self.frame += 1;
+        self.start_noise_scale = 1.0;
         self.frame_constants = None;
         self.frame_stage = None;
         let arc_index = self.estimator.arc_length_index();
@@ -1694,6 +1699,16 @@ impl Odometry {
                 // The statistic and the competing-motions mask share one pass over the matches.
                 let mut outside = None;
                 if !standstill {
+                    // `trust.start_own_noise`: before the run's noise is read, the frame's own.
+                    if self.start_own_noise() {
+                        let motion = self.estimator.motion(&sol.params);
+                        let angles = crate::separate::epipolar_angles(&self.rig, &motion, obs);
+                        self.start_noise_scale =
+                            crate::separate::noise_sigma(&angles, self.config.loss.scale())
+                                .map_or(1.0, |s| {
+                                    crate::noise::NoiseAdapt::frame_scale(s, &self.config)
+                                });
+                    }
                     let t = &self.config.trust;
                     let (stat, mask) = trust::residual_statistic_and_outside(
                         &self.rig,
@@ -3804,12 +3819,30 @@ impl Odometry {
         sol: &FrameSolution,
         outside: Option<Vec<Vec<bool>>>,
     ) -> Option<(Vec<f64>, f64)> {
-        self.competing_motion_from(obs, &sol.params, &sol.free, outside, None)
+        let threshold = self.config.trust.competing_threshold;
+        self.competing_motion_from(obs, &sol.params, &sol.free, outside, None, threshold)
+            .or_else(|| {
+                // `trust.start_own_noise`: once more at the frame's own noise.
+                let s = self.start_noise_scale;
+                (s > 1.0)
+                    .then(|| {
+                        self.competing_motion_from(
+                            obs,
+                            &sol.params,
+                            &sol.free,
+                            None,
+                            None,
+                            s * threshold,
+                        )
+                    })
+                    .flatten()
+            })
     }
 
     /// [`Odometry::competing_motion`] of the motion `params` (free parameters `free`), fitted
     /// from `extra_starts` where given (full parameter vectors) instead of from the previous
-    /// frame's motion and straight ahead.
+    /// frame's motion and straight ahead, with the epipolar `threshold` (radians) in place of
+    /// `trust.competing_threshold`.
     fn competing_motion_from(
         &self,
         obs: &FrameObservations,
@@ -3817,6 +3850,7 @@ impl Odometry {
         free: &[usize],
         outside: Option<Vec<Vec<bool>>>,
         extra_starts: Option<Vec<Vec<f64>>>,
+        threshold: f64,
     ) -> Option<(Vec<f64>, f64)> {
         let t = &self.config.trust;
         let n = obs.len();
@@ -3832,7 +3866,7 @@ impl Odometry {
                 &self.rig,
                 &self.estimator.motion(params),
                 obs,
-                t.competing_threshold,
+                threshold,
             )
         });
         let n_out = outside.iter().flatten().filter(|k| **k).count();
@@ -3880,7 +3914,7 @@ impl Odometry {
             .map(|(c, o)| {
                 c.iter()
                     .zip(o)
-                    .filter(|(x, o)| **o && **x < t.competing_threshold)
+                    .filter(|(x, o)| **o && **x < threshold)
                     .count()
             })
             .sum::<usize>();
@@ -3890,6 +3924,14 @@ impl Odometry {
         let in_a = n - n_out;
         let w = in_b as f64 / (in_a + in_b) as f64;
         Some((free.iter().map(|&i| b.params[i]).collect(), w))
+    }
+
+    /// `trust.start_own_noise` is in force: on, with `odometry.noise_reference`, and the run's
+    /// noise not read yet.
+    fn start_own_noise(&self) -> bool {
+        self.config.trust.start_own_noise
+            && self.config.odometry.noise_reference > 0.0
+            && !self.noise.is_read(&self.config)
     }
 
     /// `trust.competing_recheck_frames`: on a moving frame reported `estimated` without a
@@ -3911,8 +3953,9 @@ impl Odometry {
         }
         let found = diag.competing.as_ref().map(|c| c.0.clone());
         let max_matches = self.config.trust.competing_recheck_max_matches;
+        let sized = max_matches == 0 || obs.len() <= max_matches;
         let eligible = diag.status == FrameStatus::Estimated
-            && (max_matches == 0 || obs.len() <= max_matches)
+            && (sized || self.start_noise_scale > 1.0)
             && found.is_none()
             && !diag.free.is_empty()
             && diag.covariance.len() == diag.free.len().pow(2)
@@ -3938,7 +3981,24 @@ impl Odometry {
             let previous = with_arc(self.previous.clone());
             starts.extend(self.restart_points(&previous).into_iter().skip(1));
             if !starts.is_empty() {
-                result = self.competing_motion_from(obs, params, &diag.free, None, Some(starts));
+                // At the configured threshold on frames of at most `max_matches`, then
+                // (`trust.start_own_noise`) at the frame's own noise on any frame.
+                let threshold = self.config.trust.competing_threshold;
+                let s = self.start_noise_scale;
+                let at = |t: f64| {
+                    self.competing_motion_from(
+                        obs,
+                        params,
+                        &diag.free,
+                        None,
+                        Some(starts.clone()),
+                        t,
+                    )
+                };
+                result = sized.then(|| at(threshold)).flatten();
+                if result.is_none() && s > 1.0 {
+                    result = at(s * threshold);
+                }
             }
         }
         let recorded = found.or_else(|| {
