@@ -222,9 +222,6 @@ pub struct Odometry {
     /// `trust.unconfirmed_start`: a frame since the start (or the reset) was reported
     /// `estimated` without a competing motion.
     start_confirmed: bool,
-    /// `trust.start_own_noise`: this frame's own noise over `odometry.noise_reference` where
-    /// above `odometry.noise_band` (1 once the run's noise is read, or where the rule is off).
-    start_noise_scale: f64,
     /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
     /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
     previous_omega: Option<nalgebra::Vector3<f64>>,
@@ -436,7 +433,6 @@ impl Odometry {
             previous_yaw: None,
             side_slip_centre: (0.0, 0),
             start_confirmed: false,
-            start_noise_scale: 1.0,
             previous_omega: None,
             support_change_fired: false,
             last_competing: None,
@@ -1199,7 +1195,6 @@ impl Odometry {
         let (unique, repeated) = trust::deduped(obs);
         let obs = &*unique;
         self.frame += 1;
-        self.start_noise_scale = 1.0;
         self.frame_constants = None;
         self.frame_stage = None;
         let arc_index = self.estimator.arc_length_index();
@@ -1699,16 +1694,6 @@ impl Odometry {
                 // The statistic and the competing-motions mask share one pass over the matches.
                 let mut outside = None;
                 if !standstill {
-                    // `trust.start_own_noise`: before the run's noise is read, the frame's own.
-                    if self.start_own_noise() {
-                        let motion = self.estimator.motion(&sol.params);
-                        let angles = crate::separate::epipolar_angles(&self.rig, &motion, obs);
-                        self.start_noise_scale =
-                            crate::separate::noise_sigma(&angles, self.config.loss.scale())
-                                .map_or(1.0, |s| {
-                                    crate::noise::NoiseAdapt::frame_scale(s, &self.config)
-                                });
-                    }
                     let t = &self.config.trust;
                     let (stat, mask) = trust::residual_statistic_and_outside(
                         &self.rig,
@@ -2010,8 +1995,8 @@ impl Odometry {
         }
         // The competing motion found by the recheck, report only: the mixture's covariance and,
         // where it dominates, the flag.
-        if let Some((b, w)) = recheck {
-            apply_recheck(&params, &b, w, &mut diag);
+        if let Some((b, w, false)) = &recheck {
+            apply_recheck(&params, b, *w, &mut diag);
         }
         // The direction of travel left the vehicle's (`trust.side_slip_change`), report only.
         let slip = moving.then(|| side_slip(&motion)).flatten();
@@ -2102,6 +2087,11 @@ impl Odometry {
                     diag.noise = Some(sigma);
                 }
             }
+        }
+        // `trust.start_own_noise`'s second motion, report only: after the frame's state (the
+        // start's confirmation and the noise reading are the ones without it).
+        if let Some((b, w, true)) = &recheck {
+            apply_recheck(&params, b, *w, &mut diag);
         }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -3821,22 +3811,6 @@ impl Odometry {
     ) -> Option<(Vec<f64>, f64)> {
         let threshold = self.config.trust.competing_threshold;
         self.competing_motion_from(obs, &sol.params, &sol.free, outside, None, threshold)
-            .or_else(|| {
-                // `trust.start_own_noise`: once more at the frame's own noise.
-                let s = self.start_noise_scale;
-                (s > 1.0)
-                    .then(|| {
-                        self.competing_motion_from(
-                            obs,
-                            &sol.params,
-                            &sol.free,
-                            None,
-                            None,
-                            s * threshold,
-                        )
-                    })
-                    .flatten()
-            })
     }
 
     /// [`Odometry::competing_motion`] of the motion `params` (free parameters `free`), fitted
@@ -3938,15 +3912,17 @@ impl Odometry {
     /// competing motion, the competing-motions check at the reported motion `params` once more,
     /// fitted from the last competing motion of the previous `K` frames (this frame's arc
     /// length) and from the previous frame's motion turned by `odometry.restart_yaw_offsets`.
-    /// Returns the competitor's free parameters and weight; records every moving frame's
-    /// competing motion (the check's or this one's) for the next frames. `None` where off.
+    /// Then, with `trust.start_own_noise` in force, once more at the frame's own noise (see
+    /// [`trust::TrustOptions::start_own_noise`]). Returns the competitor's free parameters,
+    /// its weight and whether the start's rule found it; records every moving frame's competing
+    /// motion (the check's or this one's) for the next frames. `None` where off.
     fn competing_recheck(
         &mut self,
         obs: &FrameObservations,
         params: &[f64],
         standstill: bool,
         diag: &FrameDiagnostics,
-    ) -> Option<(Vec<f64>, f64)> {
+    ) -> Option<(Vec<f64>, f64, bool)> {
         let k = self.config.trust.competing_recheck_frames;
         if k == 0 || standstill {
             return None;
@@ -3954,8 +3930,19 @@ impl Odometry {
         let found = diag.competing.as_ref().map(|c| c.0.clone());
         let max_matches = self.config.trust.competing_recheck_max_matches;
         let sized = max_matches == 0 || obs.len() <= max_matches;
+        // `trust.start_own_noise`: the frame's own noise over the reference (1 where the rule
+        // is not in force or the frame reads within `noise_band`).
+        let own = if self.start_own_noise() && found.is_none() {
+            let angles =
+                crate::separate::epipolar_angles(&self.rig, &self.estimator.motion(params), obs);
+            crate::separate::noise_sigma(&angles, self.config.loss.scale()).map_or(1.0, |s| {
+                crate::noise::NoiseAdapt::frame_scale(s, &self.config)
+            })
+        } else {
+            1.0
+        };
         let eligible = diag.status == FrameStatus::Estimated
-            && (sized || self.start_noise_scale > 1.0)
+            && (sized || own > 1.0)
             && found.is_none()
             && !diag.free.is_empty()
             && diag.covariance.len() == diag.free.len().pow(2)
@@ -3980,31 +3967,42 @@ impl Odometry {
             // the check above tried already).
             let previous = with_arc(self.previous.clone());
             starts.extend(self.restart_points(&previous).into_iter().skip(1));
-            if !starts.is_empty() {
-                // At the configured threshold on frames of at most `max_matches`, then
-                // (`trust.start_own_noise`) at the frame's own noise on any frame.
-                let threshold = self.config.trust.competing_threshold;
-                let s = self.start_noise_scale;
-                let at = |t: f64| {
-                    self.competing_motion_from(
+            let threshold = self.config.trust.competing_threshold;
+            if sized && !starts.is_empty() {
+                result = self
+                    .competing_motion_from(
                         obs,
                         params,
                         &diag.free,
                         None,
                         Some(starts.clone()),
-                        t,
+                        threshold,
                     )
-                };
-                result = sized.then(|| at(threshold)).flatten();
-                if result.is_none() && s > 1.0 {
-                    result = at(s * threshold);
-                }
+                    .map(|(b, w)| (b, w, false));
+            }
+            // `trust.start_own_noise`: at the frame's own noise, from the check's starts too
+            // (the previous motion and straight ahead), on a frame of any size.
+            if result.is_none() && own > 1.0 {
+                let mut ahead = self.estimator.initial_params(1.0);
+                ahead = with_arc(std::mem::take(&mut ahead));
+                starts.insert(0, ahead);
+                starts.insert(0, previous);
+                result = self
+                    .competing_motion_from(
+                        obs,
+                        params,
+                        &diag.free,
+                        None,
+                        Some(starts),
+                        own * threshold,
+                    )
+                    .map(|(b, w)| (b, w, true));
             }
         }
         let recorded = found.or_else(|| {
             result
                 .as_ref()
-                .map(|(b, _)| with_free(params, &diag.free, b))
+                .map(|(b, _, _)| with_free(params, &diag.free, b))
         });
         if let Some(p) = recorded {
             self.last_competing = Some((self.frame, p));

@@ -381,20 +381,23 @@ pub struct TrustOptions {
     /// [`TrustOptions::yaw_change`]: poses and covariances unchanged. Default true.
     pub unconfirmed_start: bool,
     /// Before the run's noise is read (`odometry.noise_reference`: fewer than half of
-    /// `odometry.noise_frames` frames reported `estimated` without a competing motion), where
-    /// the competing-motions check finds no second motion at
-    /// [`TrustOptions::competing_threshold`], it looks once more with the threshold at the
-    /// frame's own noise (the final stage's noise estimate of the epipolar angles under the
-    /// solved motion over `noise_reference`, where above `odometry.noise_band`:
-    /// [`crate::noise::NoiseAdapt::frame_scale`]); so does the recheck
-    /// ([`TrustOptions::competing_recheck_frames`]), on frames of any size. It only adds: a
-    /// second motion found as configured is the one reported. At a run's first frames the
-    /// thresholds are as configured, stated for 1 px at f = 718 px: through a 330-px fisheye
-    /// at 2 px nearly every match lies outside 0.003 rad, the check's fit of "the rest" is the
+    /// `odometry.noise_frames` frames reported `estimated` without a competing motion), on a
+    /// moving frame reported `estimated` where the competing-motions check and its recheck
+    /// ([`TrustOptions::competing_recheck_frames`]) found no second motion, the recheck looks
+    /// once more, on a frame of any size, from the check's starts and the recheck's, with the
+    /// threshold [`TrustOptions::competing_threshold`] at the frame's own noise: the final
+    /// stage's noise estimate of the epipolar angles under the reported motion over
+    /// `noise_reference`, where above `odometry.noise_band`
+    /// ([`crate::noise::NoiseAdapt::frame_scale`]; a frame within the band is not looked at
+    /// again). A second motion found so is applied as the recheck's (the mixture covariance
+    /// `Σ + w (1 − w) d dᵀ`, the diagnostics' `competing`, `weak` / `competing_motions` where
+    /// the mixture dominates) after the frame's state: report only, every pose, the start's
+    /// confirmation and the noise reading are the ones without it. At a run's first frames the
+    /// thresholds are as configured, stated for 1 px at f = 718 px: through a 330-px fisheye at
+    /// 2 px nearly every match lies outside 0.003 rad, the check's fit of "the rest" is the
     /// frame again, and a bus that holds 113 of the 200 matches of three of the four cameras
     /// from frame 1 was reported `estimated` 3 deg off with a 0.35-deg yaw sigma (surround rig
-    /// with traffic along KITTI 01, seed 2; sixty-second session). Needs
-    /// `odometry.noise_reference > 0`. Default true.
+    /// with traffic along KITTI 01, seed 2; sixty-second session). Default true.
     pub start_own_noise: bool,
     /// A lock-in: a moving frame whose reported motion keeps fewer than this share of its
     /// matches as inliers *and* changes its yaw `ω_z` (`ω = log R`, vehicle frame) by more
