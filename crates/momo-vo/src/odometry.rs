@@ -3915,7 +3915,8 @@ impl Odometry {
     /// Then, with `trust.start_own_noise` in force, once more at the frame's own noise (see
     /// [`trust::TrustOptions::start_own_noise`]). Returns the competitor's free parameters,
     /// its weight and whether the start's rule found it; records every moving frame's competing
-    /// motion (the check's or this one's) for the next frames. `None` where off.
+    /// motion (the check's or this one's, not the start rule's) for the next frames. `None`
+    /// where off.
     fn competing_recheck(
         &mut self,
         obs: &FrameObservations,
@@ -4000,8 +4001,11 @@ impl Odometry {
             }
         }
         let recorded = found.or_else(|| {
+            // Not the start rule's: the later rechecks, which the noise reading and the start's
+            // confirmation follow, start from what they would without it.
             result
                 .as_ref()
+                .filter(|(_, _, start)| !start)
                 .map(|(b, _, _)| with_free(params, &diag.free, b))
         });
         if let Some(p) = recorded {
