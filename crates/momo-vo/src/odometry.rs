@@ -3969,35 +3969,20 @@ impl Odometry {
             let previous = with_arc(self.previous.clone());
             starts.extend(self.restart_points(&previous).into_iter().skip(1));
             let threshold = self.config.trust.competing_threshold;
+            let fit = |starts: Vec<Vec<f64>>, t: f64, start: bool| {
+                self.competing_motion_from(obs, params, &diag.free, None, Some(starts), t)
+                    .map(|(b, w)| (b, w, start))
+            };
             if sized && !starts.is_empty() {
-                result = self
-                    .competing_motion_from(
-                        obs,
-                        params,
-                        &diag.free,
-                        None,
-                        Some(starts.clone()),
-                        threshold,
-                    )
-                    .map(|(b, w)| (b, w, false));
+                result = fit(starts.clone(), threshold, false);
             }
             // `trust.start_own_noise`: at the frame's own noise, from the check's starts too
             // (the previous motion and straight ahead), on a frame of any size.
             if result.is_none() && own > 1.0 {
-                let mut ahead = self.estimator.initial_params(1.0);
-                ahead = with_arc(std::mem::take(&mut ahead));
+                let ahead = with_arc(self.estimator.initial_params(1.0));
                 starts.insert(0, ahead);
                 starts.insert(0, previous);
-                result = self
-                    .competing_motion_from(
-                        obs,
-                        params,
-                        &diag.free,
-                        None,
-                        Some(starts),
-                        own * threshold,
-                    )
-                    .map(|(b, w)| (b, w, true));
+                result = fit(starts, own * threshold, true);
             }
         }
         let recorded = found.or_else(|| {

@@ -138,12 +138,9 @@ fn data_dir() -> std::path::PathBuf {
 /// report only, every pose is the one without it.
 #[test]
 fn at_a_noisy_start_the_competing_check_reads_the_frames_own_noise() {
-    let path = data_dir().join("kitti_odometry_gt/poses/01.txt");
-    if !path.exists() {
-        eprintln!("SKIPPED: {} not found (set MOMO_DATA)", path.display());
+    let Some(sim) = along_kitti("01", 5, momo_sim::SimConfig::moving_traffic_surround()) else {
         return;
-    }
-    let sim = along_kitti(&path, 5, momo_sim::SimConfig::moving_traffic_surround());
+    };
     assert!(Config::default().trust.start_own_noise);
     let (off, on) = (start_rule_run(&sim, false), start_rule_run(&sim, true));
     let changed = assert_report_only_adds(&off, &on);
@@ -170,27 +167,33 @@ fn at_a_noisy_start_the_competing_check_reads_the_frames_own_noise() {
     }
 }
 
-/// The scenario `scenario` along the KITTI poses file `path` (as `momo simulate --trajectory`
-/// reads it: the whole trajectory moved to its first pose), `frames` frames, seed 2, 2 px.
+/// The scenario `scenario` along the ground truth of KITTI sequence `seq` (as `momo simulate
+/// --trajectory` reads it: the whole trajectory moved to its first pose), `frames` frames, seed
+/// 2, 2 px. `None`, with a message, where the shared data is absent.
 fn along_kitti(
-    path: &std::path::Path,
+    seq: &str,
     frames: usize,
     scenario: momo_sim::SimConfig,
-) -> momo_sim::Simulation {
-    let poses = momo_io::read_poses(path).expect("readable");
+) -> Option<momo_sim::Simulation> {
+    let path = data_dir().join(format!("kitti_odometry_gt/poses/{seq}.txt"));
+    if !path.exists() {
+        eprintln!("SKIPPED: {} not found (set MOMO_DATA)", path.display());
+        return None;
+    }
+    let poses = momo_io::read_poses(&path).expect("readable");
     let origin = poses[0].inverse();
     let trajectory = poses
         .iter()
         .map(|p| origin.compose(p).orthonormalized())
         .collect();
-    momo_sim::simulate(&momo_sim::SimConfig {
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
         frames,
         seed: 2,
         pixel_noise: 2.0,
         camera_trajectory: Some(trajectory),
         ..scenario
-    })
-    .expect("simulated")
+    });
+    Some(sim.expect("simulated"))
 }
 
 /// `trust.start_own_noise` stays report only over the frames after the one it flags: its second
@@ -201,12 +204,9 @@ fn along_kitti(
 /// (sixty-second session).
 #[test]
 fn the_start_rule_changes_no_later_frame() {
-    let path = data_dir().join("kitti_odometry_gt/poses/08.txt");
-    if !path.exists() {
-        eprintln!("SKIPPED: {} not found (set MOMO_DATA)", path.display());
+    let Some(sim) = along_kitti("08", 60, momo_sim::SimConfig::sparse_outliers()) else {
         return;
-    }
-    let sim = along_kitti(&path, 60, momo_sim::SimConfig::sparse_outliers());
+    };
     let (off, on) = (start_rule_run(&sim, false), start_rule_run(&sim, true));
     let changed = assert_report_only_adds(&off, &on);
     assert!(changed.contains(&12), "{changed:?}");
