@@ -3931,9 +3931,14 @@ impl Odometry {
         let found = diag.competing.as_ref().map(|c| c.0.clone());
         let max_matches = self.config.trust.competing_recheck_max_matches;
         let sized = max_matches == 0 || obs.len() <= max_matches;
+        let checkable = diag.status == FrameStatus::Estimated
+            && found.is_none()
+            && !diag.free.is_empty()
+            && diag.covariance.len() == diag.free.len().pow(2)
+            && diag.covariance.iter().all(|v| v.is_finite());
         // `trust.start_own_noise`: the frame's own noise over the reference (1 where the rule
         // is not in force or the frame reads within `noise_band`).
-        let own = if self.start_own_noise() && found.is_none() {
+        let own = if checkable && self.start_own_noise() {
             let angles =
                 crate::separate::epipolar_angles(&self.rig, &self.estimator.motion(params), obs);
             crate::separate::noise_sigma(&angles, self.config.loss.scale()).map_or(1.0, |s| {
@@ -3942,12 +3947,7 @@ impl Odometry {
         } else {
             1.0
         };
-        let eligible = diag.status == FrameStatus::Estimated
-            && (sized || own > 1.0)
-            && found.is_none()
-            && !diag.free.is_empty()
-            && diag.covariance.len() == diag.free.len().pow(2)
-            && diag.covariance.iter().all(|v| v.is_finite());
+        let eligible = checkable && (sized || own > 1.0);
         let mut result = None;
         if eligible {
             let arc = self.estimator.arc_length_index();

@@ -4,26 +4,17 @@
 //! (`ground_drop`), both off by default; measured in docs/RESULTS.md §9 (seventeenth session,
 //! pull31).
 
-use crate::support::{rot_err_deg, sixteenth_session_defaults};
+use crate::support::{errors_and_diagnostics, sixteenth_session_defaults};
 use momo_sim::{SimConfig, Simulation, simulate};
 use momo_vo::trust::Reason;
 use momo_vo::{Config, FrameStatus, Odometry};
 
 /// Per frame pair: the rotation error (deg), the status and the reason.
 fn run(sim: &Simulation, toml: &str) -> Vec<(f64, FrameStatus, Option<Reason>)> {
-    let seq = &sim.sequence;
     let config = Config::from_toml_str(toml, "test").expect("valid config");
-    let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid config");
-    (1..seq.num_frames())
-        .map(|k| {
-            let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-            let r = vo.process(&seq.frames[k], arc);
-            (
-                rot_err_deg(&r.motion, &sim.vehicle_motions[k]),
-                r.diagnostics.status,
-                r.diagnostics.reason,
-            )
-        })
+    errors_and_diagnostics(sim, config)
+        .into_iter()
+        .map(|(e, d)| (e, d.status, d.reason))
         .collect()
 }
 

@@ -125,17 +125,32 @@ pub fn rot_err_deg(a: &Pose<f64>, b: &Pose<f64>) -> f64 {
         .to_degrees()
 }
 
-/// The frame-to-frame rotation errors (deg) of the odometry with `config` over a simulated
-/// sequence (every frame pair after the first frame, in order).
-pub fn rotation_errors(sim: &momo_sim::Simulation, config: momo_vo::Config) -> Vec<f64> {
+/// The frame-to-frame rotation error (deg) and the diagnostics of the odometry with `config`
+/// over a simulated sequence (every frame pair after the first frame, in order).
+pub fn errors_and_diagnostics(
+    sim: &momo_sim::Simulation,
+    config: momo_vo::Config,
+) -> Vec<(f64, momo_vo::FrameDiagnostics)> {
     let seq = &sim.sequence;
     let mut vo = momo_vo::Odometry::new(seq.rig.clone(), config).expect("valid config");
     (1..seq.num_frames())
         .map(|k| {
             let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-            let m = vo.process(&seq.frames[k], arc).motion;
-            rot_err_deg(&m, &sim.vehicle_motions[k])
+            let r = vo.process(&seq.frames[k], arc);
+            (
+                rot_err_deg(&r.motion, &sim.vehicle_motions[k]),
+                r.diagnostics,
+            )
         })
+        .collect()
+}
+
+/// The frame-to-frame rotation errors (deg) of the odometry with `config` over a simulated
+/// sequence (every frame pair after the first frame, in order).
+pub fn rotation_errors(sim: &momo_sim::Simulation, config: momo_vo::Config) -> Vec<f64> {
+    errors_and_diagnostics(sim, config)
+        .into_iter()
+        .map(|(e, _)| e)
         .collect()
 }
 
