@@ -1100,6 +1100,9 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # (cell_cap_grid per camera) in the final stage and, with cell_cap_first, in a\n\
          # re-solve of the first motion, where that leaves out cell_cap_min_share of them;\n\
          # on a rig of several cameras the factor is cell_cap x cell_cap_rig_scale;\n\
+         # under_road (one camera) / under_road_rig (several; 0: off): the final stage leaves\n\
+         # out the matches below the horizon that lie beyond the road plane by this many\n\
+         # sigmas of their parallax noise (under_road_noise, radians; needs odometry);\n\
          # ground_admit: a second motion failing the persistence test still competes if its\n\
          # ground score is at least ground_admit_min and ground_admit times the first's;\n\
          # memory_vote (0: off): where neither ground score is at least ground_admit_min and\n\

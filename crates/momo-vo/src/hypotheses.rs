@@ -1415,12 +1415,18 @@ pub fn under_road_mask(
             }
             let away = cam.direction.cross(&o.f0);
             let a = away.norm();
-            if a < 1e-9 {
+            let rf1 = cam.motion.rotation * o.f1;
+            // The sine of the angle at frame k between the ray and the translation: by the law
+            // of sines the parallax over it is the range from frame k-1 (over the bearing's
+            // own angle it would be the range from frame k, which a camera moving away from
+            // the scene, a rear one, reads far larger).
+            let a1 = cam.direction.cross(&rf1).norm();
+            if a < 1e-9 || a1 < 1e-9 {
                 return false;
             }
-            let p = o.f0.cross(&(cam.motion.rotation * o.f1)).dot(&away) / a;
-            let inverse = p / (cam.travel * a);
-            let sigma = std::f64::consts::SQRT_2 * opts.noise_angle / (cam.travel * a);
+            let p = o.f0.cross(&rf1).dot(&away) / a;
+            let inverse = p / (cam.travel * a1);
+            let sigma = std::f64::consts::SQRT_2 * opts.noise_angle / (cam.travel * a1);
             down / cam.height - inverse > opts.sigmas * sigma
         },
     )
@@ -2553,6 +2559,64 @@ mod tests {
         let still = Pose::new(ego.rotation, Vector3::zeros());
         let flagged = under_road_mask(&rig, &still, &moving, &all, &test);
         assert!(flagged.iter().flatten().all(|f| !f));
+    }
+
+    #[test]
+    fn a_rear_cameras_road_points_are_not_under_the_road() {
+        // A camera looking back (optical axis along the vehicle's -x), 1.65 m above the road:
+        // under the forward motion its road points recede. The range the test compares with
+        // the road's is the one from frame k-1; the one from frame k is larger (5.3 against
+        // 6.2 m for a point 5 m behind), which read as "beyond the road" flagged them.
+        let p_vc = Pose::new(
+            Matrix3::new(0.0, 0.0, -1.0, 1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
+            Vector3::new(-0.5, 0.0, 1.65),
+        );
+        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+            fx: 718.0,
+            fy: 718.0,
+            cx: 607.0,
+            cy: 185.0,
+            width: 1241.0,
+            height: 376.0,
+        });
+        let rig = Rig::mono(cam, p_vc).unwrap();
+        let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
+        let road: Vec<Vector3<f64>> = (0..30)
+            .map(|i| {
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (0.5 + 0.1 * i as f64);
+                to_cam(Vector3::new(-5.0 - 0.8 * i as f64, y, 0.0))
+            })
+            .collect();
+        assert!(road.iter().all(|x| x.z > 0.0), "in front of the camera");
+        let ego = Pose::new(
+            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
+            Vector3::new(1.0, 0.0, 0.0),
+        );
+        let obs = obs_of(&road, &camera_motion(&ego, &p_vc));
+        let all = vec![vec![true; road.len()]];
+        let test = UnderRoad {
+            ground_z: 0.0,
+            ground_pitch: 0.0,
+            noise_angle: 0.0014,
+            sigmas: 3.0,
+            slope: 0.02,
+        };
+        let flagged = under_road_mask(&rig, &ego, &obs, &all, &test);
+        assert!(flagged.iter().flatten().all(|f| !f), "{flagged:?}");
+        // Points of a car behind that follows at the ego vehicle's speed (no parallax) are.
+        let car: Vec<Vector3<f64>> = (0..12)
+            .map(|i| {
+                to_cam(Vector3::new(
+                    -7.0,
+                    -1.5 + 0.25 * i as f64,
+                    0.3 + 0.05 * i as f64,
+                ))
+            })
+            .collect();
+        let follower = obs_of(&car, &Pose::identity());
+        let all = vec![vec![true; car.len()]];
+        let flagged = under_road_mask(&rig, &ego, &follower, &all, &test);
+        assert!(flagged.iter().flatten().all(|f| *f), "{flagged:?}");
     }
 
     #[test]
