@@ -2334,15 +2334,36 @@ mod tests {
             Matrix3::new(0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
             Vector3::new(1.0, 0.0, 1.65),
         );
-        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
+        (Rig::mono(kitti_camera(), p_vc).unwrap(), p_vc)
+    }
+
+    /// The KITTI-like pinhole camera of [`kitti_mono`].
+    fn kitti_camera() -> momo_core::Camera {
+        momo_core::Camera::Pinhole(momo_core::Pinhole {
             fx: 718.0,
             fy: 718.0,
             cx: 607.0,
             cy: 185.0,
             width: 1241.0,
             height: 376.0,
-        });
-        (Rig::mono(cam, p_vc).unwrap(), p_vc)
+        })
+    }
+
+    /// The under-the-road tests' ego motion (1 m ahead, a slight left turn) and test (3
+    /// sigmas of a 0.0014 rad bearing noise, the road descending by up to 0.02).
+    fn under_road_case() -> (Pose<f64>, UnderRoad) {
+        let ego = Pose::new(
+            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
+            Vector3::new(1.0, 0.0, 0.0),
+        );
+        let test = UnderRoad {
+            ground_z: 0.0,
+            ground_pitch: 0.0,
+            noise_angle: 0.0014,
+            sigmas: 3.0,
+            slope: 0.02,
+        };
+        (ego, test)
     }
 
     #[test]
@@ -2503,20 +2524,10 @@ mod tests {
             })
             .collect();
         pts.extend((0..10).map(|i| to_cam(Vector3::new(12.0, -6.0, 0.3 * i as f64))));
-        let ego = Pose::new(
-            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
-            Vector3::new(1.0, 0.0, 0.0),
-        );
+        let (ego, test) = under_road_case();
         let c = camera_motion(&ego, &p_vc);
         let obs = obs_of(&pts, &c);
         let all = vec![vec![true; pts.len()]];
-        let test = UnderRoad {
-            ground_z: 0.0,
-            ground_pitch: 0.0,
-            noise_angle: 0.0014,
-            sigmas: 3.0,
-            slope: 0.02,
-        };
         let flagged = under_road_mask(&rig, &ego, &obs, &all, &test);
         assert!(
             flagged.iter().flatten().all(|f| !f),
@@ -2571,15 +2582,7 @@ mod tests {
             Matrix3::new(0.0, 0.0, -1.0, 1.0, 0.0, 0.0, 0.0, -1.0, 0.0),
             Vector3::new(-0.5, 0.0, 1.65),
         );
-        let cam = momo_core::Camera::Pinhole(momo_core::Pinhole {
-            fx: 718.0,
-            fy: 718.0,
-            cx: 607.0,
-            cy: 185.0,
-            width: 1241.0,
-            height: 376.0,
-        });
-        let rig = Rig::mono(cam, p_vc).unwrap();
+        let rig = Rig::mono(kitti_camera(), p_vc).unwrap();
         let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
         let road: Vec<Vector3<f64>> = (0..30)
             .map(|i| {
@@ -2588,19 +2591,9 @@ mod tests {
             })
             .collect();
         assert!(road.iter().all(|x| x.z > 0.0), "in front of the camera");
-        let ego = Pose::new(
-            momo_core::so3_exp(&Vector3::new(0.0, 0.0, 0.005)),
-            Vector3::new(1.0, 0.0, 0.0),
-        );
+        let (ego, test) = under_road_case();
         let obs = obs_of(&road, &camera_motion(&ego, &p_vc));
         let all = vec![vec![true; road.len()]];
-        let test = UnderRoad {
-            ground_z: 0.0,
-            ground_pitch: 0.0,
-            noise_angle: 0.0014,
-            sigmas: 3.0,
-            slope: 0.02,
-        };
         let flagged = under_road_mask(&rig, &ego, &obs, &all, &test);
         assert!(flagged.iter().flatten().all(|f| !f), "{flagged:?}");
         // Points of a car behind that follows at the ego vehicle's speed (no parallax) are.

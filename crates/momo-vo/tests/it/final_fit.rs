@@ -527,14 +527,25 @@ fn assert_objects_leave_and_static_stay(
     on: &(usize, usize, Vec<Vec<u64>>),
     off: &(usize, usize, Vec<Vec<u64>>),
 ) {
+    assert_support_shares(on, off, 0.8, 0.8);
+}
+
+/// A test's effect on the support (`on` against `off`, as [`support_by_label`] counts them):
+/// fewer than `objects` x the object matches, more than `statics` x the static ones.
+fn assert_support_shares(
+    on: &(usize, usize, Vec<Vec<u64>>),
+    off: &(usize, usize, Vec<Vec<u64>>),
+    objects: f64,
+    statics: f64,
+) {
     assert!(
-        (on.1 as f64) < 0.8 * off.1 as f64,
+        (on.1 as f64) < objects * off.1 as f64,
         "objects in the support: {} with the test, {} without",
         on.1,
         off.1
     );
     assert!(
-        (on.0 as f64) > 0.8 * off.0 as f64,
+        (on.0 as f64) > statics * off.0 as f64,
         "static matches in the support: {} with the test, {} without",
         on.0,
         off.0
@@ -708,18 +719,7 @@ fn the_under_road_test_leaves_vehicles_out_of_a_rigs_support() {
         "static / object matches in the support: off {} / {}, on {} / {}",
         off.0, off.1, on.0, on.1
     );
-    assert!(
-        (on.1 as f64) < 0.9 * off.1 as f64,
-        "objects in the support: {} with the test, {} without",
-        on.1,
-        off.1
-    );
-    assert!(
-        (on.0 as f64) > 0.95 * off.0 as f64,
-        "static matches in the support: {} with the test, {} without",
-        on.0,
-        off.0
-    );
+    assert_support_shares(&on, &off, 0.9, 0.95);
     let mut mono = SimConfig::scenario("moving_traffic").expect("a listed scenario");
     mono.frames = 31;
     mono.seed = 3;
