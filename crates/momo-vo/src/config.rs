@@ -1833,6 +1833,7 @@ mod partial_tests {
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_rig_scale = 1.0\ncell_cap_first = false\n\
+             under_road_rig = 0.0\n\
              ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
              ground_drop = 0.0\ncandidate_by_road = false\ncount_reference = 0\n\
              second_soft_prior = 0.0\nyaw_votes = 0\n\
