@@ -135,14 +135,35 @@ fn data_dir() -> std::path::PathBuf {
 /// the threshold, the check's fit of "the rest" is the frame again, and frames 1 and 3 were
 /// reported `estimated` (rotation NEES 144 and 680; frame 2, 3.1 deg off, has a 3.3-deg yaw
 /// sigma). With the rule the static world is found as the second motion and both are `weak`;
-/// report only, every pose is the one without it.
+/// report only, every pose is the one without it. Measured before the rig's under-the-road test
+/// (`separate.under_road_rig`, default since the sixty-third session), which by itself puts
+/// frame 3 right (0.08 deg): held off here.
 #[test]
 fn at_a_noisy_start_the_competing_check_reads_the_frames_own_noise() {
     let Some(sim) = along_kitti("01", 5, momo_sim::SimConfig::moving_traffic_surround()) else {
         return;
     };
     assert!(Config::default().trust.start_own_noise);
-    let (off, on) = (start_rule_run(&sim, false), start_rule_run(&sim, true));
+    let default = start_rule_run(&sim, true);
+    assert!(
+        default[2].0 < 0.5,
+        "frame 3 with the default: {} deg",
+        default[2].0
+    );
+    let no_road_test = || {
+        let mut config = Config::default();
+        config
+            .odometry
+            .separate
+            .as_mut()
+            .expect("the default separates motions")
+            .under_road_rig = 0.0;
+        config
+    };
+    let (off, on) = (
+        start_rule_run_in(&sim, false, no_road_test()),
+        start_rule_run_in(&sim, true, no_road_test()),
+    );
     let changed = assert_report_only_adds(&off, &on);
     assert!(changed.contains(&1) && changed.contains(&3), "{changed:?}");
     // Without the rule `estimated`, with it `weak` with a second motion.
@@ -231,7 +252,15 @@ fn assert_report_only_adds(
 /// A run of the default configuration with `trust.start_own_noise` set to `on`: each frame's
 /// rotation error (deg) and diagnostics.
 fn start_rule_run(sim: &momo_sim::Simulation, on: bool) -> Vec<(f64, FrameDiagnostics)> {
-    let mut config = Config::default();
+    start_rule_run_in(sim, on, Config::default())
+}
+
+/// [`start_rule_run`] from the configuration `config`.
+fn start_rule_run_in(
+    sim: &momo_sim::Simulation,
+    on: bool,
+    mut config: Config,
+) -> Vec<(f64, FrameDiagnostics)> {
     config.trust.start_own_noise = on;
     crate::support::errors_and_diagnostics(sim, config)
 }
