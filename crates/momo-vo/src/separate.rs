@@ -1926,9 +1926,10 @@ fn separate_with(
     let (ground_z, ground_pitch) = opts
         .hypotheses()
         .map_or((0.0, 0.0), |h| (h.ground_z, h.ground_pitch));
+    let sigmas = opts.under_road_factor(ctx.rig.len());
+    let road_on = sigmas > 0.0 && arc_length.is_some();
     let road = |mask: Vec<Vec<bool>>, params: &[f64]| -> Vec<Vec<bool>> {
-        let sigmas = opts.under_road_factor(ctx.rig.len());
-        if !(sigmas > 0.0 && arc_length.is_some()) {
+        if !road_on {
             return mask;
         }
         let test = UnderRoad {
@@ -1988,9 +1989,7 @@ fn separate_with(
         // The matches under the road leave the final stage's (`under_road`, `under_road_rig`).
         let next = match next {
             NextStage::FinalFitOn(m) => NextStage::FinalFitOn(road(m, &sol.params)),
-            NextStage::FinalFit
-                if opts.under_road_factor(ctx.rig.len()) > 0.0 && arc_length.is_some() =>
-            {
+            NextStage::FinalFit if road_on => {
                 let all = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
                 let kept = road(all, &sol.params);
                 if count(&kept) < n {
@@ -2875,11 +2874,7 @@ mod tests {
         assert_eq!(SeparateOptions::default().under_road, 0.0, "off by default");
         // One camera reads `under_road`, a rig of several `under_road_rig`; the default's
         // separation tests on rigs only, the bare one nowhere.
-        let o: SeparateOptions = toml::from_str(
-            "under_road = 3.0
-under_road_rig = 0.5",
-        )
-        .unwrap();
+        let o: SeparateOptions = toml::from_str("under_road = 3.0\nunder_road_rig = 0.5").unwrap();
         assert_eq!((o.under_road_factor(1), o.under_road_factor(4)), (3.0, 0.5));
         let d = SeparateOptions::competition_over_time();
         assert_eq!((d.under_road_factor(1), d.under_road_factor(2)), (0.0, 3.0));
