@@ -15,6 +15,8 @@
 #        conf      the same, seeds 51-60 (a confirmation set, run since the 51st session)
 #        conf2     the same, seeds 61-70 (a second confirmation set, added in the 53rd session;
 #                  keep for confirmation: choose nothing on it)
+#        conf3     the same, seeds 81-90 (a third confirmation set, added in the 64th session;
+#                  keep for confirmation: choose nothing on it)
 #        few200    moving_traffic with 200 matches per frame pair instead of the scenario's 300
 #                  (`momo simulate --matches 200`: the same traffic as grid's seeds 1-5, the
 #                  objects keep their 30-70 % share and the outliers their 5 %: static matches
@@ -55,6 +57,8 @@
 #                  around), KITTI trajectories 00-10 and the built-in drive, seeds 1-3
 #        rigtraffic2  the same, seeds 4-6 (keep for confirmation: choose nothing on it)
 #        rigdev    the same, seeds 7-12 (a second development set for the rig)
+#        rigconf   the same, seeds 13-18 (a confirmation set for the rig, added in the 64th
+#                  session: choose nothing on it)
 #        rigblind  moving_traffic_surround_blind (the same with the front camera covered in frame
 #                  pairs 150-249, glare on the right camera in 300-349), seeds 1-3
 #   NO_ODOMETRY environment variable: 1 runs every simulated sequence without its odometry.csv
@@ -161,12 +165,12 @@ export -f run_one
 list_set() {
     local s="$1" seeds trajs="00 01 02 03 04 05 06 07 08 09 10" sc t seed n
     case "$s" in
-    grid | holdout | fresh | dev | dev2 | dev3 | conf | conf2)
+    grid | holdout | fresh | dev | dev2 | dev3 | conf | conf2 | conf3)
         case "$s" in
         grid) seeds="$(seq 1 10)" ;; holdout) seeds="$(seq 11 15)" ;;
         fresh) seeds="$(seq 16 20)" ;; dev) seeds="$(seq 21 30)" ;; dev2) seeds="$(seq 31 40)" ;;
         dev3) seeds="$(seq 41 50)" ;; conf) seeds="$(seq 51 60)" ;;
-        conf2) seeds="$(seq 61 70)" ;;
+        conf2) seeds="$(seq 61 70)" ;; conf3) seeds="$(seq 81 90)" ;;
         esac
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
@@ -202,9 +206,10 @@ list_set() {
             wide_angle_surround; do for t in $trajs; do for seed in $seeds; do
             echo "$sets_dir/static3/${sc}_${t}_s$seed $sc $t $seed $frames"
         done; done; done ;;
-    rigtraffic | rigtraffic2 | rigdev)
+    rigtraffic | rigtraffic2 | rigdev | rigconf)
         case "$s" in
         rigtraffic) seeds="1 2 3" ;; rigtraffic2) seeds="4 5 6" ;; rigdev) seeds="$(seq 7 12)" ;;
+        rigconf) seeds="$(seq 13 18)" ;;
         esac
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/rigtraffic/moving_traffic_surround_${t}_s$seed moving_traffic_surround $t $seed $frames"
