@@ -2573,6 +2573,72 @@ mod tests {
     }
 
     #[test]
+    fn the_separations_road_test_leaves_out_the_flagged_matches_of_its_mask_only() {
+        // `separate::under_road_left_out`: 30 road points and 12 points of a car moving with
+        // the ego vehicle (as above), the one-camera factor `under_road = 3`.
+        let (rig, p_vc) = kitti_mono();
+        let to_cam = |v: Vector3<f64>| p_vc.rotation.transpose() * (v - p_vc.translation);
+        let (ego, _) = under_road_case();
+        let c = camera_motion(&ego, &p_vc);
+        let road: Vec<Vector3<f64>> = (0..30)
+            .map(|i| {
+                let y = if i % 2 == 0 { 1.0 } else { -1.0 } * (2.0 + 0.1 * i as f64);
+                to_cam(Vector3::new(5.0 + 1.2 * i as f64, y, 0.0))
+            })
+            .collect();
+        let car: Vec<Vector3<f64>> = (0..12)
+            .map(|i| {
+                to_cam(Vector3::new(
+                    6.0,
+                    1.5 + 0.125 * i as f64,
+                    0.2 + 0.07 * i as f64,
+                ))
+            })
+            .collect();
+        let (static_obs, car_obs) = (obs_of(&road, &c), obs_of(&car, &Pose::identity()));
+        let obs = FrameObservations {
+            per_camera: vec![
+                static_obs.per_camera[0]
+                    .iter()
+                    .chain(&car_obs.per_camera[0])
+                    .copied()
+                    .collect(),
+            ],
+            cross_camera: Vec::new(),
+        };
+        let opts = crate::separate::SeparateOptions {
+            under_road: 3.0,
+            ..crate::separate::SeparateOptions::competition_over_time()
+        };
+        let all = vec![vec![true; 42]];
+        let out = crate::separate::under_road_left_out(&rig, &ego, &obs, &all, &opts, true)
+            .expect("the car is left out");
+        let flagged: Vec<usize> = (0..42).filter(|&i| out[0][i]).collect();
+        assert_eq!(flagged, (30..42).collect::<Vec<_>>());
+        // Only matches of the mask are left out.
+        let mut mask = all.clone();
+        mask[0][35] = false;
+        let out = crate::separate::under_road_left_out(&rig, &ego, &obs, &mask, &opts, true)
+            .expect("the car is left out");
+        assert!(!out[0][35] && out[0][34] && out[0][36]);
+        // Off: no metric scale, a factor of 0 (the rig's factor on one camera is not read),
+        // or a mask that would keep fewer than half (the car and 11 road points).
+        assert!(
+            crate::separate::under_road_left_out(&rig, &ego, &obs, &all, &opts, false).is_none()
+        );
+        let off = crate::separate::SeparateOptions {
+            under_road: 0.0,
+            under_road_rig: 3.0,
+            ..opts.clone()
+        };
+        assert!(crate::separate::under_road_left_out(&rig, &ego, &obs, &all, &off, true).is_none());
+        let few: Vec<Vec<bool>> = vec![(0..42).map(|i| !(11..30).contains(&i)).collect()];
+        assert!(
+            crate::separate::under_road_left_out(&rig, &ego, &obs, &few, &opts, true).is_none()
+        );
+    }
+
+    #[test]
     fn a_rear_cameras_road_points_are_not_under_the_road() {
         // A camera looking back (optical axis along the vehicle's -x), 1.65 m above the road:
         // under the forward motion its road points recede. The range the test compares with

@@ -1455,6 +1455,9 @@ impl Odometry {
         // What follows the separation (`separate.final_fit`: the final stage on all matches
         // or on the chosen motion's support).
         let mut next_stage = crate::separate::NextStage::FinalFit;
+        // The matches the under-the-road test leaves out of the final stage's
+        // (`separate.under_road`, `under_road_rig`), at the separation's chosen motion.
+        let mut road_out = None;
         // The chosen motion's road score dropped (`separate.ground_drop`).
         let mut ground_drop = false;
         // Only the road prediction competed and may keep the prior (`predict_by_road_prior`).
@@ -1499,7 +1502,34 @@ impl Odometry {
                     &mut self.hypotheses,
                     metric_arc_length,
                 );
-                next_stage = next;
+                // Guarded (one camera, `under_road_guard`): not before the run's start is
+                // confirmed, and with the neighbourhood test under `neighbour_guard`; else the
+                // stage is handed the matches without them.
+                let guarded = self.rig.len() == 1 && opts.under_road_guard;
+                let out = (!guarded || self.start_confirmed)
+                    .then(|| next.given(obs))
+                    .flatten()
+                    .and_then(|given| {
+                        crate::separate::under_road_left_out(
+                            &self.rig,
+                            &self.estimator.motion(&sol.params),
+                            obs,
+                            &given,
+                            opts,
+                            metric_arc_length.is_some(),
+                        )
+                        .map(|out| (given, out))
+                    });
+                next_stage = match out {
+                    Some((_, out)) if guarded => {
+                        road_out = Some(out);
+                        next
+                    }
+                    Some((given, out)) => {
+                        crate::separate::NextStage::FinalFitOn(and_not(&given, &out))
+                    }
+                    None => next,
+                };
                 ground_drop = o.ground_drop;
                 prior_kept = o.prior_kept;
                 self.quiet_streak = if o.competing {
@@ -1573,6 +1603,7 @@ impl Odometry {
                     let reduced = self.neighbour_stage(
                         obs,
                         &next_stage,
+                        road_out.as_deref(),
                         &sol.params,
                         &fixed,
                         diag.scale,
@@ -2955,45 +2986,54 @@ impl Odometry {
         fixed
     }
 
-    /// The final stage's matches after the support's neighbourhood test
-    /// (`odometry.final_fit.neighbour_share`, [`crate::final_fit::neighbour_kept`]) on a rig of
-    /// at least `neighbour_min_cameras` cameras (by default one): the matches `next` hands
-    /// the stage less the support's members whose neighbours are mostly outside it (at `from`),
-    /// as [`crate::separate::NextStage::FinalFitOn`];
-    /// `None` where the test is off, leaves nothing out or would leave fewer than half.
+    /// The final stage's matches after the support's tests: the matches `next` hands the stage
+    /// less `road_out` (the under-the-road test's, [`crate::separate::under_road_left_out`]),
+    /// then less the support's members whose neighbours are mostly outside it (at `from`; the
+    /// neighbourhood test, `odometry.final_fit.neighbour_share`,
+    /// [`crate::final_fit::neighbour_kept`], on a rig of at least `neighbour_min_cameras`
+    /// cameras, by default one; not where it would leave fewer than half), as
+    /// [`crate::separate::NextStage::FinalFitOn`]; `None` where neither test leaves anything
+    /// out. Where one does, `neighbour_guard` compares the stage on these matches with the
+    /// stage on those `next` hands it.
+    #[allow(clippy::too_many_arguments)]
     fn neighbour_stage(
         &self,
         obs: &FrameObservations,
         next: &crate::separate::NextStage,
+        road_out: Option<&[Vec<bool>]>,
         from: &[f64],
         fixed: &[bool],
         scale: ScaleSource,
         competing: bool,
     ) -> Option<crate::separate::NextStage> {
         let opts = &self.config.odometry.final_fit;
-        if !(opts.enabled
-            && opts.neighbour_share > 0.0
-            && self.rig.len() >= opts.neighbour_min_cameras)
-        {
-            return None;
-        }
-        let given = next.given(obs)?;
-        let fixed = self.stage_fixed(fixed, scale);
-        let ctx = self.final_fit_context(&fixed, competing);
-        let chosen = crate::separate::subset(obs, &given);
-        let kept = crate::final_fit::support_mask(&ctx, opts, &chosen, from)?;
-        let support = superset_mask(&given, &kept);
-        let reduced = crate::final_fit::neighbour_kept(
-            obs,
-            &given,
-            &support,
-            opts.neighbour_count,
-            opts.neighbour_share,
-        );
         let n = |m: &[Vec<bool>]| m.iter().flatten().filter(|k| **k).count();
-        let (before, after) = (n(&given), n(&reduced));
-        (after < before && 2 * after >= before)
-            .then_some(crate::separate::NextStage::FinalFitOn(reduced))
+        let handed = next.given(obs)?;
+        let given = road_out.map_or_else(|| handed.clone(), |out| and_not(&handed, out));
+        let neighbours = || {
+            if !(opts.enabled
+                && opts.neighbour_share > 0.0
+                && self.rig.len() >= opts.neighbour_min_cameras)
+            {
+                return None;
+            }
+            let fixed = self.stage_fixed(fixed, scale);
+            let ctx = self.final_fit_context(&fixed, competing);
+            let chosen = crate::separate::subset(obs, &given);
+            let kept = crate::final_fit::support_mask(&ctx, opts, &chosen, from)?;
+            let support = superset_mask(&given, &kept);
+            let reduced = crate::final_fit::neighbour_kept(
+                obs,
+                &given,
+                &support,
+                opts.neighbour_count,
+                opts.neighbour_share,
+            );
+            let (before, after) = (n(&given), n(&reduced));
+            (after < before && 2 * after >= before).then_some(reduced)
+        };
+        let reduced = neighbours().unwrap_or_else(|| given.clone());
+        (n(&reduced) < n(&handed)).then_some(crate::separate::NextStage::FinalFitOn(reduced))
     }
 
     /// The final stage on the matches `given` handed the neighbourhood test, from `start`
@@ -4651,6 +4691,14 @@ fn superset_mask(mask: &[Vec<bool>], kept: &[Vec<bool>]) -> Vec<Vec<bool>> {
                 .map(|&chosen| chosen && inner.next().copied().unwrap_or(false))
                 .collect()
         })
+        .collect()
+}
+
+/// Per camera, per match: `a` and not `b`.
+fn and_not(a: &[Vec<bool>], b: &[Vec<bool>]) -> Vec<Vec<bool>> {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.iter().zip(b).map(|(a, b)| *a && !*b).collect())
         .collect()
 }
 

@@ -113,6 +113,17 @@ pub struct SeparateOptions {
     /// sequences at 1 px: frames above 1 deg 4 -> 0, median efficiency 1.330 / 1.385 / 1.335 /
     /// 1.380 -> 1.320 / 1.385 / 1.330 / 1.360, 98 sequences better and 52 worse).
     pub under_road_rig: f64,
+    /// On one camera the under-the-road test ([`SeparateOptions::under_road`]) is guarded
+    /// (default true since the sixty-fourth session; a rig's test is not): it acts only once
+    /// the run's start is confirmed (the first frame reported `estimated` without a competing
+    /// motion, as `trust.unconfirmed_start` reads it), and it is one of the final stage's
+    /// support tests that `odometry.final_fit.neighbour_guard` checks: where the stage without
+    /// the matches they leave out turns more than that angle from the stage on the matches the
+    /// separation handed it, the frame keeps the latter. Under a motion locked onto a vehicle
+    /// the test takes the static road out and holds the lock (unguarded, `under_road = 3`:
+    /// moving-traffic dev 2 -> 7 frames above 1 deg, grid 0 -> 1 at a run's start); guarded,
+    /// dev / grid / hold-out keep 2 / 0 / 0 (docs/RESULTS.md, sixty-fourth session).
+    pub under_road_guard: bool,
     /// The bearing noise (radians) of the under-the-road test.
     pub under_road_noise: f64,
     /// The road's slope margin (radians) of the under-the-road test: the road may descend
@@ -483,6 +494,7 @@ impl Default for SeparateOptions {
             final_passes: 1,
             under_road: 0.0,
             under_road_rig: 0.0,
+            under_road_guard: true,
             under_road_noise: 0.0014,
             under_road_slope: 0.02,
             threshold_sigmas: 0.0,
@@ -1923,28 +1935,11 @@ fn separate_with(
     };
     // Leaves out the matches under the road (`under_road` on one camera, `under_road_rig` on
     // several; a test that would leave fewer than half leaves none).
-    let (ground_z, ground_pitch) = opts
-        .hypotheses()
-        .map_or((0.0, 0.0), |h| (h.ground_z, h.ground_pitch));
-    let sigmas = opts.under_road_factor(ctx.rig.len());
-    let road_on = sigmas > 0.0 && arc_length.is_some();
     let road = |mask: Vec<Vec<bool>>, params: &[f64]| -> Vec<Vec<bool>> {
-        if !road_on {
-            return mask;
-        }
-        let test = UnderRoad {
-            ground_z,
-            ground_pitch,
-            noise_angle: opts.under_road_noise,
-            sigmas,
-            slope: opts.under_road_slope,
-        };
-        let flagged = under_road_mask(ctx.rig, &ctx.estimator.motion(params), obs, &mask, &test);
-        let kept = and(&mask, &not(&flagged));
-        if 2 * count(&kept) >= count(&mask) {
-            kept
-        } else {
-            mask
+        let motion = ctx.estimator.motion(params);
+        match under_road_left_out(ctx.rig, &motion, obs, &mask, opts, arc_length.is_some()) {
+            Some(out) => and(&mask, &not(&out)),
+            None => mask,
         }
     };
     if opts.final_fit && !(opts.final_own_when_competing && outcome.competing) {
@@ -1986,20 +1981,8 @@ fn separate_with(
         } else {
             next
         };
-        // The matches under the road leave the final stage's (`under_road`, `under_road_rig`).
-        let next = match next {
-            NextStage::FinalFitOn(m) => NextStage::FinalFitOn(road(m, &sol.params)),
-            NextStage::FinalFit if road_on => {
-                let all = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
-                let kept = road(all, &sol.params);
-                if count(&kept) < n {
-                    NextStage::FinalFitOn(kept)
-                } else {
-                    NextStage::FinalFit
-                }
-            }
-            next => next,
-        };
+        // The matches under the road (`under_road`, `under_road_rig`) leave the stage in the
+        // odometry, with its other support tests ([`under_road_left_out`]).
         return (sol, outcome, next);
     }
     if !opts.final_stage || (opts.final_competing_only && !outcome.competing) {
@@ -2558,6 +2541,38 @@ fn score_bound(opts: &HypothesesOptions, rig: &Rig, obs: &FrameObservations) -> 
         })
         .collect();
     cells(rig, obs, &mask, grid)
+}
+
+/// The matches of `mask` (per camera, per match of `obs`) that the under-the-road test
+/// ([`SeparateOptions::under_road`] on one camera, [`SeparateOptions::under_road_rig`] on a
+/// rig; [`crate::hypotheses::under_road_mask`]) leaves out at the vehicle motion `motion`;
+/// `None` where the test is off, has no metric scale (`metric`: the odometry's arc length),
+/// flags nothing or would leave fewer than half of `mask`.
+pub fn under_road_left_out(
+    rig: &Rig,
+    motion: &Pose<f64>,
+    obs: &FrameObservations,
+    mask: &[Vec<bool>],
+    opts: &SeparateOptions,
+    metric: bool,
+) -> Option<Vec<Vec<bool>>> {
+    let sigmas = opts.under_road_factor(rig.len());
+    if !(sigmas > 0.0 && metric) {
+        return None;
+    }
+    let (ground_z, ground_pitch) = opts
+        .hypotheses()
+        .map_or((0.0, 0.0), |h| (h.ground_z, h.ground_pitch));
+    let test = UnderRoad {
+        ground_z,
+        ground_pitch,
+        noise_angle: opts.under_road_noise,
+        sigmas,
+        slope: opts.under_road_slope,
+    };
+    let out = and(mask, &under_road_mask(rig, motion, obs, mask, &test));
+    let left = count(&out);
+    (left > 0 && 2 * (count(mask) - left) >= count(mask)).then_some(out)
 }
 
 /// The fewest matches [`cell_capped`] keeps in a cell.

@@ -2,6 +2,7 @@
 //! run's measured noise above the noise they are stated for, and stay as written at or below
 //! it.
 
+use crate::support::along_kitti;
 use momo_vo::{Config, FrameDiagnostics, FrameStatus, Odometry};
 
 /// The threshold scale after a simulated `outliers` drive (30 % mismatches) of `frames` frames
@@ -116,15 +117,6 @@ fn the_final_stage_follows_the_noise_through_a_short_focal_length() {
     assert!(with < 0.9 * without, "{with} vs {without}");
 }
 
-/// The shared data folder: `$MOMO_DATA`, else `../shared/data` beside the repository.
-fn data_dir() -> std::path::PathBuf {
-    std::env::var_os("MOMO_DATA")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
-        })
-}
-
 /// `trust.start_own_noise` (default): before the run's noise is read, where the check finds no
 /// second motion, the recheck looks once more with the threshold at the frame's own noise, on
 /// frames of any size. The surround rig with traffic along KITTI 01, seed 2, at 2 px (the first frames of
@@ -140,7 +132,13 @@ fn data_dir() -> std::path::PathBuf {
 /// frame 3 right (0.08 deg): held off here.
 #[test]
 fn at_a_noisy_start_the_competing_check_reads_the_frames_own_noise() {
-    let Some(sim) = along_kitti("01", 5, momo_sim::SimConfig::moving_traffic_surround()) else {
+    let Some(sim) = along_kitti(
+        "01",
+        5,
+        2,
+        2.0,
+        momo_sim::SimConfig::moving_traffic_surround(),
+    ) else {
         return;
     };
     assert!(Config::default().trust.start_own_noise);
@@ -185,35 +183,6 @@ fn at_a_noisy_start_the_competing_check_reads_the_frames_own_noise() {
     }
 }
 
-/// The scenario `scenario` along the ground truth of KITTI sequence `seq` (as `momo simulate
-/// --trajectory` reads it: the whole trajectory moved to its first pose), `frames` frames, seed
-/// 2, 2 px. `None`, with a message, where the shared data is absent.
-fn along_kitti(
-    seq: &str,
-    frames: usize,
-    scenario: momo_sim::SimConfig,
-) -> Option<momo_sim::Simulation> {
-    let path = data_dir().join(format!("kitti_odometry_gt/poses/{seq}.txt"));
-    if !path.exists() {
-        eprintln!("SKIPPED: {} not found (set MOMO_DATA)", path.display());
-        return None;
-    }
-    let poses = momo_io::read_poses(&path).expect("readable");
-    let origin = poses[0].inverse();
-    let trajectory = poses
-        .iter()
-        .map(|p| origin.compose(p).orthonormalized())
-        .collect();
-    let sim = momo_sim::simulate(&momo_sim::SimConfig {
-        frames,
-        seed: 2,
-        pixel_noise: 2.0,
-        camera_trajectory: Some(trajectory),
-        ..scenario
-    });
-    Some(sim.expect("simulated"))
-}
-
 /// `trust.start_own_noise` stays report only over the frames after the one it flags: its second
 /// motion is not the next rechecks' start. `sparse_outliers` along KITTI 08, seed 2, at 2 px
 /// (`momo simulate --scenario sparse_outliers --trajectory 08.txt --seed 2 --pixel-noise 2`):
@@ -222,7 +191,7 @@ fn along_kitti(
 /// (sixty-second session).
 #[test]
 fn the_start_rule_changes_no_later_frame() {
-    let Some(sim) = along_kitti("08", 60, momo_sim::SimConfig::sparse_outliers()) else {
+    let Some(sim) = along_kitti("08", 60, 2, 2.0, momo_sim::SimConfig::sparse_outliers()) else {
         return;
     };
     let (off, on) = (start_rule_run(&sim, false), start_rule_run(&sim, true));

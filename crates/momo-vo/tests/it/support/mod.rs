@@ -191,3 +191,43 @@ pub fn sixteenth_session_defaults(separate: &str) -> String {
     s.push_str("[odometry.final_fit]\nneighbour_min_cameras = 2\n");
     s
 }
+
+/// The shared data folder: `$MOMO_DATA`, else `../shared/data` beside the repository.
+pub fn data_dir() -> std::path::PathBuf {
+    std::env::var_os("MOMO_DATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+        })
+}
+
+/// The scenario `scenario` along the ground truth of KITTI sequence `seq` (as `momo simulate
+/// --trajectory` reads it: the whole trajectory moved to its first pose), `frames` frames,
+/// seed `seed`, `pixel_noise` px. `None`, with a message, where the shared data is absent.
+pub fn along_kitti(
+    seq: &str,
+    frames: usize,
+    seed: u64,
+    pixel_noise: f64,
+    scenario: momo_sim::SimConfig,
+) -> Option<momo_sim::Simulation> {
+    let path = data_dir().join(format!("kitti_odometry_gt/poses/{seq}.txt"));
+    if !path.exists() {
+        eprintln!("SKIPPED: {} not found (set MOMO_DATA)", path.display());
+        return None;
+    }
+    let poses = momo_io::read_poses(&path).expect("readable");
+    let origin = poses[0].inverse();
+    let trajectory = poses
+        .iter()
+        .map(|p| origin.compose(p).orthonormalized())
+        .collect();
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames,
+        seed,
+        pixel_noise,
+        camera_trajectory: Some(trajectory),
+        ..scenario
+    });
+    Some(sim.expect("simulated"))
+}
