@@ -1103,6 +1103,8 @@ const SECTION_COMMENTS: &[(&str, &str)] = &[
          # under_road (one camera) / under_road_rig (several; 0: off): the final stage leaves\n\
          # out the matches below the horizon that lie beyond the road plane by this many\n\
          # sigmas of their parallax noise (under_road_noise, radians; needs odometry);\n\
+         # under_road_guard: on one camera only after a frame without competition and under\n\
+         # final_fit.neighbour_guard;\n\
          # ground_admit: a second motion failing the persistence test still competes if its\n\
          # ground score is at least ground_admit_min and ground_admit times the first's;\n\
          # memory_vote (0: off): where neither ground score is at least ground_admit_min and\n\
@@ -1833,7 +1835,7 @@ mod partial_tests {
             "[odometry.separate]\nfinal_robust = false\nfinal_fit = false\nmemory_radius = 0.0\n\
              memory_exclude = false\npersistence = 0.0\nown_share = 0.0\n\
              own_persistence = 0.0\ncell_cap = 0.0\ncell_cap_rig_scale = 1.0\ncell_cap_first = false\n\
-             under_road_rig = 0.0\n\
+             under_road = 0.0\nunder_road_rig = 0.0\n\
              ground_admit = 0.0\nmemory_vote = 0.0\nground_admit_own_share = 0.0\n\
              ground_drop = 0.0\ncandidate_by_road = false\ncount_reference = 0\n\
              second_soft_prior = 0.0\nyaw_votes = 0\n\

@@ -222,6 +222,10 @@ pub struct Odometry {
     /// `trust.unconfirmed_start`: a frame since the start (or the reset) was reported
     /// `estimated` without a competing motion.
     start_confirmed: bool,
+    /// `separate.under_road_guard`: a moving frame since the start (or the reset) where the
+    /// separation saw no second motion compete (the pose path's own notion of a settled start:
+    /// no trust flag, so no covariance, decides a pose).
+    separation_settled: bool,
     /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
     /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
     previous_omega: Option<nalgebra::Vector3<f64>>,
@@ -433,6 +437,7 @@ impl Odometry {
             previous_yaw: None,
             side_slip_centre: (0.0, 0),
             start_confirmed: false,
+            separation_settled: false,
             previous_omega: None,
             support_change_fired: false,
             last_competing: None,
@@ -1121,6 +1126,7 @@ impl Odometry {
         self.previous_yaw = None;
         self.side_slip_centre = (0.0, 0);
         self.start_confirmed = false;
+        self.separation_settled = false;
         self.previous_omega = None;
         self.support_change_fired = false;
         self.last_competing = None;
@@ -1502,11 +1508,11 @@ impl Odometry {
                     &mut self.hypotheses,
                     metric_arc_length,
                 );
-                // Guarded (one camera, `under_road_guard`): not before the run's start is
-                // confirmed, and with the neighbourhood test under `neighbour_guard`; else the
-                // stage is handed the matches without them.
+                // Guarded (one camera, `under_road_guard`): not before a frame whose
+                // separation saw no second motion compete, and with the neighbourhood test
+                // under `neighbour_guard`; else the stage is handed the matches without them.
                 let guarded = self.rig.len() == 1 && opts.under_road_guard;
-                let out = (!guarded || self.start_confirmed)
+                let out = (!guarded || self.separation_settled)
                     .then(|| next.given(obs))
                     .flatten()
                     .and_then(|given| {
@@ -1532,6 +1538,7 @@ impl Odometry {
                 };
                 ground_drop = o.ground_drop;
                 prior_kept = o.prior_kept;
+                self.separation_settled |= !o.competing;
                 self.quiet_streak = if o.competing {
                     0
                 } else {

@@ -99,11 +99,13 @@ pub struct SeparateOptions {
     /// odometry; not applied if fewer than half of the matches it would test remain. With
     /// [`SeparateOptions::final_fit`] (the default's stage) the test runs on the matches the
     /// stage is given (the chosen support where two motions competed, else all, after the
-    /// image-region cap), at the chosen motion. Off by default: on the single KITTI-like
-    /// camera the vehicles sit near the focus of expansion, where a static point's parallax
-    /// bounds nothing, and at 3 sigmas the moving-traffic family's median efficiency improved
-    /// (grid 1.11 -> 1.09, dev 1.10 -> 1.065) but frames above 1 deg rose (grid 0 -> 1, dev 2
-    /// -> 7: a lock-in prolonged; docs/RESULTS.md, sixty-third session).
+    /// image-region cap), at the chosen motion, and on one camera guarded
+    /// ([`SeparateOptions::under_road_guard`]). 0 in [`SeparateOptions::default`], 3 in
+    /// [`SeparateOptions::competition_over_time`] since the sixty-fourth session (moving-traffic
+    /// family, 1 px, 600 sequences: frames above 1 deg 4 -> 3, all flagged; mean efficiency
+    /// 0.3-1 % better on every set; docs/RESULTS.md, sixty-fourth session). Unguarded (the
+    /// sixty-third session) it raised frames above 1 deg (grid 0 -> 1, dev 2 -> 7: a lock-in
+    /// prolonged).
     pub under_road: f64,
     /// [`SeparateOptions::under_road`] on a rig of several cameras
     /// ([`SeparateOptions::under_road_factor`]; 0: off). 0 in [`SeparateOptions::default`], 3
@@ -114,9 +116,10 @@ pub struct SeparateOptions {
     /// 1.380 -> 1.320 / 1.385 / 1.330 / 1.360, 98 sequences better and 52 worse).
     pub under_road_rig: f64,
     /// On one camera the under-the-road test ([`SeparateOptions::under_road`]) is guarded
-    /// (default true since the sixty-fourth session; a rig's test is not): it acts only once
-    /// the run's start is confirmed (the first frame reported `estimated` without a competing
-    /// motion, as `trust.unconfirmed_start` reads it), and it is one of the final stage's
+    /// (default true since the sixty-fourth session; a rig's test is not): it acts only after
+    /// a moving frame of the run whose separation saw no second motion compete (the pose
+    /// path's own reading of a settled start: no trust flag, and so no covariance, moves a
+    /// pose), and it is one of the final stage's
     /// support tests that `odometry.final_fit.neighbour_guard` checks: where the stage without
     /// the matches they leave out turns more than that angle from the stage on the matches the
     /// separation handed it, the frame keeps the latter. Under a motion locked onto a vehicle
@@ -643,6 +646,7 @@ impl SeparateOptions {
             own_persistence: 0.2,
             cell_cap: 2.0,
             cell_cap_rig_scale: 0.5,
+            under_road: 3.0,
             under_road_rig: 3.0,
             cell_cap_first: true,
             ground_admit: 2.0,

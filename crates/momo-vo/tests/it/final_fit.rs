@@ -685,7 +685,8 @@ fn the_under_road_test_leaves_vehicles_out_of_a_rigs_support() {
     // ego vehicle beyond the road plane their rays meet, so object matches leave the final
     // stage's support and static ones stay (along KITTI 03, seed 1, 500 frames, the default
     // configuration: objects 14,165 -> 10,312, static 108,370 -> 107,100). On one camera the
-    // default does not test: off and on are the same bit for bit.
+    // rig's factor is not read (`under_road` is the one-camera test): off and on are the same
+    // bit for bit.
     let support_under_road = |cfg: &SimConfig, sigmas: f64| {
         // A partial `[odometry.separate]` keeps the default's separation.
         support_by_label_in(

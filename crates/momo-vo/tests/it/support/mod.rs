@@ -180,6 +180,8 @@ pub fn sixteenth_session_defaults(separate: &str) -> String {
         ("ground_drop", "ground_drop = 0.0\n"),
         ("ground_admit_own_share", "ground_admit_own_share = 0.0\n"),
         ("yaw_votes", "yaw_votes = 0\n"),
+        // The one-camera under-the-road test (default since the sixty-fourth session) off.
+        ("under_road =", "under_road = 0.0\n"),
     ] {
         if !separate.contains(key) {
             s.push_str(line);
