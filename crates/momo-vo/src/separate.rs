@@ -2892,11 +2892,13 @@ mod tests {
         assert!(o.validate().is_ok());
         assert_eq!(SeparateOptions::default().under_road, 0.0, "off by default");
         // One camera reads `under_road`, a rig of several `under_road_rig`; the default's
-        // separation tests on rigs only, the bare one nowhere.
+        // separation tests on both (one camera guarded, since the sixty-fourth session), the
+        // bare one nowhere.
         let o: SeparateOptions = toml::from_str("under_road = 3.0\nunder_road_rig = 0.5").unwrap();
         assert_eq!((o.under_road_factor(1), o.under_road_factor(4)), (3.0, 0.5));
         let d = SeparateOptions::competition_over_time();
-        assert_eq!((d.under_road_factor(1), d.under_road_factor(2)), (0.0, 3.0));
+        assert_eq!((d.under_road_factor(1), d.under_road_factor(2)), (3.0, 3.0));
+        assert!(d.under_road_guard);
         let b = SeparateOptions::default();
         assert_eq!((b.under_road_factor(1), b.under_road_factor(2)), (0.0, 0.0));
         for bad in [
