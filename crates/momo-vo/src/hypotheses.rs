@@ -2349,6 +2349,17 @@ mod tests {
         })
     }
 
+    /// Twelve points (camera frame of [`kitti_mono`]'s mount `p_vc`) of a car in the next lane,
+    /// 6 m ahead, below the horizon: moving with the ego vehicle they keep their place.
+    fn car_alongside(p_vc: &Pose<f64>) -> Vec<Vector3<f64>> {
+        (0..12)
+            .map(|i| {
+                let v = Vector3::new(6.0, 1.5 + 0.125 * i as f64, 0.2 + 0.07 * i as f64);
+                p_vc.rotation.transpose() * (v - p_vc.translation)
+            })
+            .collect()
+    }
+
     /// The under-the-road tests' ego motion (1 m ahead, a slight left turn) and test (3
     /// sigmas of a 0.0014 rad bearing noise, the road descending by up to 0.02).
     fn under_road_case() -> (Pose<f64>, UnderRoad) {
@@ -2536,15 +2547,7 @@ mod tests {
         // A car in the next lane, 6 m ahead, moving with the ego vehicle: its points keep
         // their place in the camera (the object's camera motion is the identity), below the
         // horizon but without parallax.
-        let car: Vec<Vector3<f64>> = (0..12)
-            .map(|i| {
-                to_cam(Vector3::new(
-                    6.0,
-                    1.5 + 0.125 * i as f64,
-                    0.2 + 0.07 * i as f64,
-                ))
-            })
-            .collect();
+        let car = car_alongside(&p_vc);
         let moving = obs_of(&car, &Pose::identity());
         let all = vec![vec![true; car.len()]];
         let flagged = under_road_mask(&rig, &ego, &moving, &all, &test);
@@ -2586,15 +2589,7 @@ mod tests {
                 to_cam(Vector3::new(5.0 + 1.2 * i as f64, y, 0.0))
             })
             .collect();
-        let car: Vec<Vector3<f64>> = (0..12)
-            .map(|i| {
-                to_cam(Vector3::new(
-                    6.0,
-                    1.5 + 0.125 * i as f64,
-                    0.2 + 0.07 * i as f64,
-                ))
-            })
-            .collect();
+        let car = car_alongside(&p_vc);
         let (static_obs, car_obs) = (obs_of(&road, &c), obs_of(&car, &Pose::identity()));
         let obs = FrameObservations {
             per_camera: vec![

@@ -148,16 +148,7 @@ fn at_a_noisy_start_the_competing_check_reads_the_frames_own_noise() {
         "frame 3 with the default: {} deg",
         default[2].0
     );
-    let no_road_test = || {
-        let mut config = Config::default();
-        config
-            .odometry
-            .separate
-            .as_mut()
-            .expect("the default separates motions")
-            .under_road_rig = 0.0;
-        config
-    };
+    let no_road_test = || default_separation_with(|s| s.under_road_rig = 0.0);
     let (off, on) = (
         start_rule_run_in(&sim, false, no_road_test()),
         start_rule_run_in(&sim, true, no_road_test()),
@@ -195,16 +186,7 @@ fn the_start_rule_changes_no_later_frame() {
     let Some(sim) = along_kitti("08", 60, 2, 2.0, momo_sim::SimConfig::sparse_outliers()) else {
         return;
     };
-    let as_measured = || {
-        let mut config = Config::default();
-        config
-            .odometry
-            .separate
-            .as_mut()
-            .expect("the default separates motions")
-            .under_road = 0.0;
-        config
-    };
+    let as_measured = || default_separation_with(|s| s.under_road = 0.0);
     let (off, on) = (
         start_rule_run_in(&sim, false, as_measured()),
         start_rule_run_in(&sim, true, as_measured()),
@@ -236,6 +218,19 @@ fn assert_report_only_adds(
 /// rotation error (deg) and diagnostics.
 fn start_rule_run(sim: &momo_sim::Simulation, on: bool) -> Vec<(f64, FrameDiagnostics)> {
     start_rule_run_in(sim, on, Config::default())
+}
+
+/// The default configuration with its separation edited by `edit`.
+fn default_separation_with(edit: impl Fn(&mut momo_vo::separate::SeparateOptions)) -> Config {
+    let mut config = Config::default();
+    edit(
+        config
+            .odometry
+            .separate
+            .as_mut()
+            .expect("the default separates motions"),
+    );
+    config
 }
 
 /// [`start_rule_run`] from the configuration `config`.
