@@ -242,7 +242,8 @@ pub struct FinalFitOptions {
     /// test over 840 sequences (5 and 5) at median efficiencies 1.06-1.18 (docs/RESULTS.md §9,
     /// forty-second session, nbdef57).
     pub neighbour_min_cameras: usize,
-    /// Where the neighbourhood test changed the final stage's matches, the stage runs on the
+    /// Where the neighbourhood test (or, on one camera, the guarded under-the-road test,
+    /// `separate.under_road_guard`) changed the final stage's matches, the stage runs on the
     /// matches it was given too, and the frame keeps that run where the two motions' rotations
     /// differ by more than this angle (radians; 0: off; default 0.001745, 0.1 deg, since the
     /// forty-second session, 0 before). A test that took the
