@@ -223,8 +223,8 @@ pub struct Odometry {
     /// `estimated` without a competing motion.
     start_confirmed: bool,
     /// `separate.under_road_guard`: a moving frame since the start (or the reset) where the
-    /// separation saw no second motion compete (the pose path's own notion of a settled start:
-    /// no trust flag, so no covariance, decides a pose).
+    /// separation saw no second motion compete (the separation's own notion of a settled
+    /// start, not the trust module's flags).
     separation_settled: bool,
     /// The rotation vector `ω = log R` of the previous frame's reported motion where that frame
     /// was estimated while moving, `None` otherwise (`trust.support_change_share`).
@@ -1531,9 +1531,9 @@ impl Odometry {
                         road_out = Some(out);
                         next
                     }
-                    Some((given, out)) => {
-                        crate::separate::NextStage::FinalFitOn(and_not(&given, &out))
-                    }
+                    Some((given, out)) => crate::separate::NextStage::FinalFitOn(
+                        crate::separate::and(&given, &crate::separate::not(&out)),
+                    ),
                     None => next,
                 };
                 ground_drop = o.ground_drop;
@@ -3016,7 +3016,10 @@ impl Odometry {
         let opts = &self.config.odometry.final_fit;
         let n = |m: &[Vec<bool>]| m.iter().flatten().filter(|k| **k).count();
         let handed = next.given(obs)?;
-        let given = road_out.map_or_else(|| handed.clone(), |out| and_not(&handed, out));
+        let given = road_out.map_or_else(
+            || handed.clone(),
+            |out| crate::separate::and(&handed, &crate::separate::not(out)),
+        );
         let neighbours = || {
             if !(opts.enabled
                 && opts.neighbour_share > 0.0
@@ -4698,14 +4701,6 @@ fn superset_mask(mask: &[Vec<bool>], kept: &[Vec<bool>]) -> Vec<Vec<bool>> {
                 .map(|&chosen| chosen && inner.next().copied().unwrap_or(false))
                 .collect()
         })
-        .collect()
-}
-
-/// Per camera, per match: `a` and not `b`.
-fn and_not(a: &[Vec<bool>], b: &[Vec<bool>]) -> Vec<Vec<bool>> {
-    a.iter()
-        .zip(b)
-        .map(|(a, b)| a.iter().zip(b).map(|(a, b)| *a && !*b).collect())
         .collect()
 }
 

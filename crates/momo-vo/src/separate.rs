@@ -102,8 +102,9 @@ pub struct SeparateOptions {
     /// image-region cap), at the chosen motion, and on one camera guarded
     /// ([`SeparateOptions::under_road_guard`]). 0 in [`SeparateOptions::default`], 3 in
     /// [`SeparateOptions::competition_over_time`] since the sixty-fourth session (moving-traffic
-    /// family, 1 px, 600 sequences: frames above 1 deg 4 -> 3, all flagged; mean efficiency
-    /// 0.3-1 % better on every set; docs/RESULTS.md, sixty-fourth session). Unguarded (the
+    /// family, 1 px, eight sets of 60-120 sequences: frames above 1 deg 17 -> 12, all flagged;
+    /// mean efficiency 0.3-1.2 % better on each set; docs/RESULTS.md, sixty-fourth session).
+    /// Unguarded (the
     /// sixty-third session) it raised frames above 1 deg (grid 0 -> 1, dev 2 -> 7: a lock-in
     /// prolonged).
     pub under_road: f64,
@@ -117,15 +118,16 @@ pub struct SeparateOptions {
     pub under_road_rig: f64,
     /// On one camera the under-the-road test ([`SeparateOptions::under_road`]) is guarded
     /// (default true since the sixty-fourth session; a rig's test is not): it acts only after
-    /// a moving frame of the run whose separation saw no second motion compete (the pose
-    /// path's own reading of a settled start: no trust flag, and so no covariance, moves a
-    /// pose), and it is one of the final stage's
+    /// a moving frame of the run whose separation saw no second motion compete (the
+    /// separation's own reading of a settled start, not the trust module's flags), and it is
+    /// one of the final stage's
     /// support tests that `odometry.final_fit.neighbour_guard` checks: where the stage without
     /// the matches they leave out turns more than that angle from the stage on the matches the
     /// separation handed it, the frame keeps the latter. Under a motion locked onto a vehicle
     /// the test takes the static road out and holds the lock (unguarded, `under_road = 3`:
     /// moving-traffic dev 2 -> 7 frames above 1 deg, grid 0 -> 1 at a run's start); guarded,
-    /// dev / grid / hold-out keep 2 / 0 / 0 (docs/RESULTS.md, sixty-fourth session).
+    /// dev / grid / hold-out have 0 / 0 / 0 (2 / 0 / 0 without the test; docs/RESULTS.md,
+    /// sixty-fourth session).
     pub under_road_guard: bool,
     /// The bearing noise (radians) of the under-the-road test.
     pub under_road_noise: f64,
@@ -2785,7 +2787,7 @@ pub fn persistence(labels: &[Vec<Option<bool>>], x: &[Vec<bool>], a: &[Vec<bool>
 }
 
 /// Element-wise `a && b` of two masks.
-fn and(a: &[Vec<bool>], b: &[Vec<bool>]) -> Vec<Vec<bool>> {
+pub(crate) fn and(a: &[Vec<bool>], b: &[Vec<bool>]) -> Vec<Vec<bool>> {
     a.iter()
         .zip(b)
         .map(|(a, b)| a.iter().zip(b).map(|(a, b)| *a && *b).collect())
@@ -2793,7 +2795,7 @@ fn and(a: &[Vec<bool>], b: &[Vec<bool>]) -> Vec<Vec<bool>> {
 }
 
 /// Element-wise `!a` of a mask.
-fn not(a: &[Vec<bool>]) -> Vec<Vec<bool>> {
+pub(crate) fn not(a: &[Vec<bool>]) -> Vec<Vec<bool>> {
     a.iter().map(|m| m.iter().map(|k| !k).collect()).collect()
 }
 

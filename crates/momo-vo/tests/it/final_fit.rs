@@ -716,15 +716,16 @@ fn the_under_road_test_leaves_vehicles_out_of_a_rigs_support() {
 }
 
 /// `separate.under_road_guard` (default): on one camera the under-the-road test acts only
-/// once the run's start is confirmed, and under `final_fit.neighbour_guard`. Moving traffic
-/// along KITTI 10, seed 2, 1 px (the first frames of `momo simulate --scenario moving_traffic
-/// --trajectory 10.txt --seed 2`): at frame 2 the run has no confirmed start (frame 1 is
-/// flagged), and with `under_road = 3` unguarded the test takes the static road out under a
-/// motion that follows a vehicle: 1.06 deg off, against 0.11 deg without the test (sixty-fourth
-/// session). Guarded, those frames are the ones without the test. Reads the KITTI poses from
+/// after a frame whose separation saw no second motion compete, and under
+/// `final_fit.neighbour_guard`. Moving traffic along KITTI 10, seed 2, 1 px (the first frames
+/// of `momo simulate --scenario moving_traffic --trajectory 10.txt --seed 2`): at the run's
+/// start, with `under_road = 3` unguarded, the test takes the static road out under a motion
+/// that follows a vehicle: frame 2 1.06 deg off, against 0.11 deg without the test
+/// (sixty-fourth session). Guarded, those frames are the ones without the test (which of the
+/// two safeguards acts here was not separated). Reads the KITTI poses from
 /// `MOMO_DATA` (else `../shared/data`) and skips with a message without them.
 #[test]
-fn on_one_camera_the_road_test_waits_for_the_runs_confirmed_start() {
+fn on_one_camera_the_road_test_is_guarded_at_the_runs_start() {
     let Some(sim) = crate::support::along_kitti("10", 8, 2, 1.0, SimConfig::moving_traffic())
     else {
         return;

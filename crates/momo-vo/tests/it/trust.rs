@@ -814,9 +814,9 @@ fn the_one_linearisation_jackknife_changes_only_the_covariance() {
 /// cells whose one-step re-estimate is undefined: on a clean drive (no such cell) the
 /// covariances are bit-identical to the default's; on a moving-traffic drive some frames'
 /// covariances change and their poses do not (on this drive: the option changes no status; a
-/// status the covariance moves can move the next frame's prior, and with the one-camera
-/// under-the-road test, default since the sixty-fourth session, one does here: measured
-/// without it).
+/// status the covariance moves can move the next frame's prior; with the one-camera
+/// under-the-road test, default since the sixty-fourth session, a pose moves on this drive,
+/// not traced further: measured without it).
 #[test]
 fn gauss_newton_steps_for_the_undefined_cells_change_only_their_covariances() {
     let run = |cfg: &momo_sim::SimConfig, config: Config| process_all(&simulated(cfg), config);
