@@ -231,6 +231,8 @@ pub struct Odometry {
     previous_omega: Option<nalgebra::Vector3<f64>>,
     /// The previous frame fired `trust.support_change_share` (whatever its status).
     support_change_fired: bool,
+    /// `trust.contested_yaw_change`'s history.
+    contested_yaw: trust::ContestedYaw,
     /// The frame and full parameters of the last competing motion found on a moving frame
     /// (`trust.competing_recheck_frames`).
     last_competing: Option<(usize, Vec<f64>)>,
@@ -440,6 +442,7 @@ impl Odometry {
             separation_settled: false,
             previous_omega: None,
             support_change_fired: false,
+            contested_yaw: trust::ContestedYaw::default(),
             last_competing: None,
             noise,
             scale_observable,
@@ -1129,6 +1132,7 @@ impl Odometry {
         self.separation_settled = false;
         self.previous_omega = None;
         self.support_change_fired = false;
+        self.contested_yaw = trust::ContestedYaw::default();
         self.last_competing = None;
         self.frame = 0;
         self.inlier_ratio_average = None;
@@ -2130,6 +2134,21 @@ impl Odometry {
         // start's confirmation and the noise reading are the ones without it).
         if let Some((b, w, true)) = &recheck {
             apply_recheck(&params, b, *w, &mut diag);
+        }
+        // A jump of the yaw where two motions compete (`trust.contested_yaw_change`), report
+        // only: the last flag, once every competing motion of the frame is known.
+        let frame = moving.then(|| trust::YawFrame {
+            yaw: so3_log(&motion.rotation).z,
+            competing: diag.competing.is_some(),
+            params: &params,
+        });
+        if let Some(before) = self.contested_yaw.step(&self.config.trust, frame)
+            && diag.status == FrameStatus::Estimated
+        {
+            flag_weak_report_only(&mut diag, Reason::YawChange);
+            let free = diag.free.clone();
+            let w = self.config.trust.yaw_change_weight;
+            Self::widen_by_alternatives_at(&[&before], w, &free, &params, &mut diag);
         }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
