@@ -1889,6 +1889,12 @@ mod tests {
             .collect()
     }
 
+    /// Whether [`contested`] fires on each frame of a run of moving frames.
+    fn fires(t: &TrustOptions, run: &[(f64, bool)]) -> Vec<bool> {
+        let frames: Vec<_> = run.iter().copied().map(Some).collect();
+        contested(t, &frames).iter().map(Option::is_some).collect()
+    }
+
     #[test]
     fn a_yaw_jump_is_flagged_only_where_two_motions_compete() {
         let t = TrustOptions::default();
@@ -1962,7 +1968,7 @@ mod tests {
         // The motion before the jump is the last three frames' median: a single wrong frame
         // (moving traffic along KITTI 07, 100 matches, seed 2, frames 8-14: frame 10 0.55 deg
         // off) before a jump back does not hold the correct frames after it.
-        let back: Vec<_> = [
+        let back = [
             (1.01, true),
             (1.14, true),
             (0.78, true),
@@ -1970,33 +1976,23 @@ mod tests {
             (1.40, true),
             (1.53, true),
             (1.76, true),
-        ]
-        .into_iter()
-        .map(Some)
-        .collect();
-        let fired = contested(&t, &back);
+        ];
         assert_eq!(
-            fired.iter().map(Option::is_some).collect::<Vec<_>>(),
+            fires(&t, &back),
             [false, false, false, true, false, false, false]
         );
-        assert!(fired[3].is_some_and(|y| (y - 1.01).abs() < 1e-9));
+        let named = contested(&t, &back.map(Some))[3];
+        assert!(named.is_some_and(|y| (y - 1.01).abs() < 1e-9), "{named:?}");
         // The hold ends after `contested_hold` frames however far the run stays.
-        let ramp: Vec<_> = [
+        let ramp = [
             (0.0, true),
             (0.6, false),
             (0.9, false),
             (1.2, false),
             (1.4, false),
             (1.6, false),
-        ]
-        .into_iter()
-        .map(Some)
-        .collect();
-        let fired = contested(&t, &ramp);
-        assert_eq!(
-            fired.iter().map(Option::is_some).collect::<Vec<_>>(),
-            [false, true, true, true, true, false]
-        );
+        ];
+        assert_eq!(fires(&t, &ramp), [false, true, true, true, true, false]);
     }
 
     #[test]
