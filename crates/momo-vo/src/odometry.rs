@@ -2139,6 +2139,7 @@ impl Odometry {
         // only: the last flag, once every competing motion of the frame is known.
         let frame = moving.then(|| trust::YawFrame {
             yaw: so3_log(&motion.rotation).z,
+            noise_scale: diag.noise_scale,
             competing: diag.competing.is_some(),
             params: &params,
         });

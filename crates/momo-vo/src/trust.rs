@@ -454,7 +454,8 @@ pub struct TrustOptions {
     /// changes of the per-frame yaw are below 0.49 deg; sixty-fifth session). On a moving frame
     /// where a competing motion was found (the diagnostics' `competing`, this frame's or one of
     /// the last [`TrustOptions::contested_frames`] moving frames'), a yaw `ω_z` (`ω = log R`,
-    /// vehicle frame) that differs from the previous moving frame's by more than this says
+    /// vehicle frame) that differs from the previous moving frame's by more than this (times
+    /// the run's noise at [`TrustOptions::contested_noise_slope`]) says
     /// that one of the two frames followed the other motion. The frame is flagged `weak` /
     /// `yaw_change` where it was `estimated`, and its reported covariance adds the motion
     /// before the jump `p` (of the last [`CONTESTED_ANCHOR_FRAMES`] moving frames, the one of
@@ -477,6 +478,13 @@ pub struct TrustOptions {
     /// The hold of [`TrustOptions::contested_yaw_change`] (moving frames after the jump; 0: the
     /// jump's frame only). Default 3.
     pub contested_hold: usize,
+    /// How [`TrustOptions::contested_yaw_change`]'s bound follows the run's measured noise:
+    /// `J · max(1, 1 + a (s − 1))` with `s` the frame's `noise_scale` (the factor the angular
+    /// thresholds follow, `odometry.noise_reference`; 1 at the configured noise) and `a` this
+    /// slope (0: the fixed bound). The estimate's yaw noise grows with the pixel noise, a
+    /// junction's change of the true yaw does not: `a = 1` would follow the first alone. Default
+    /// 0.5 (sixty-fifth session).
+    pub contested_noise_slope: f64,
 }
 
 impl Default for TrustOptions {
@@ -536,6 +544,7 @@ impl Default for TrustOptions {
             contested_yaw_change: 0.00873,
             contested_frames: 5,
             contested_hold: 3,
+            contested_noise_slope: 0.5,
         }
     }
 }
@@ -684,6 +693,15 @@ impl TrustOptions {
                 ));
             }
         }
+        if !(0.0..=1.0).contains(&self.contested_noise_slope) {
+            out.push((
+                vec!["trust.contested_noise_slope"],
+                format!(
+                    "trust.contested_noise_slope must be within 0..=1, got {}",
+                    self.contested_noise_slope
+                ),
+            ));
+        }
         if !(self.side_slip_lateral >= 0.0 && self.side_slip_lateral.is_finite()) {
             out.push((
                 vec!["trust.side_slip_lateral"],
@@ -774,6 +792,8 @@ pub const CONTESTED_ANCHOR_FRAMES: usize = 3;
 /// whether a competing motion was found on it, its parameters.
 pub(crate) struct YawFrame<'a> {
     pub yaw: f64,
+    /// The frame's `noise_scale` ([`TrustOptions::contested_noise_slope`]).
+    pub noise_scale: f64,
     pub competing: bool,
     pub params: &'a [f64],
 }
@@ -788,11 +808,12 @@ impl ContestedYaw {
         t: &TrustOptions,
         frame: Option<YawFrame<'_>>,
     ) -> Option<Vec<f64>> {
-        let j = t.contested_yaw_change;
-        let Some(frame) = frame.filter(|_| j > 0.0) else {
+        let Some(frame) = frame.filter(|_| t.contested_yaw_change > 0.0) else {
             *self = Self::default();
             return None;
         };
+        let slope = t.contested_noise_slope * (frame.noise_scale - 1.0);
+        let j = t.contested_yaw_change * (1.0 + slope).max(1.0);
         let contested = frame.competing
             || self
                 .since_competing
@@ -1872,6 +1893,15 @@ mod tests {
     /// Runs [`ContestedYaw`] over frames `(yaw in degrees, competing)` (`None`: not moving)
     /// and returns, per frame, the yaw (degrees) of the motion it names where it fires.
     fn contested(t: &TrustOptions, frames: &[Option<(f64, bool)>]) -> Vec<Option<f64>> {
+        contested_at(t, frames, 1.0)
+    }
+
+    /// [`contested`] with every frame's `noise_scale` at `noise_scale`.
+    fn contested_at(
+        t: &TrustOptions,
+        frames: &[Option<(f64, bool)>],
+        noise_scale: f64,
+    ) -> Vec<Option<f64>> {
         let mut state = ContestedYaw::default();
         frames
             .iter()
@@ -1881,6 +1911,7 @@ mod tests {
                     .zip(params.as_deref())
                     .map(|((yaw, competing), params)| YawFrame {
                         yaw: yaw.to_radians(),
+                        noise_scale,
                         competing,
                         params,
                     });
@@ -1993,6 +2024,28 @@ mod tests {
             (1.6, false),
         ];
         assert_eq!(fires(&t, &ramp), [false, true, true, true, true, false]);
+    }
+
+    #[test]
+    fn the_bound_follows_the_runs_noise_at_half_the_slope() {
+        let t = TrustOptions::default();
+        let run = |jump: f64, noise_scale: f64| {
+            let frames = [Some((0.0, true)), Some((jump, false))];
+            contested_at(&t, &frames, noise_scale)[1].is_some()
+        };
+        // At the configured noise the bound is 0.5 deg.
+        assert!(run(0.6, 1.0));
+        // At three times the noise it is 0.5 (1 + 0.5 (3 - 1)) = 1 deg.
+        assert!(!run(0.9, 3.0));
+        assert!(run(1.1, 3.0));
+        // Below the configured noise it stays 0.5 deg; with the slope 0 it is fixed.
+        assert!(run(0.6, 0.5));
+        let fixed = TrustOptions {
+            contested_noise_slope: 0.0,
+            ..TrustOptions::default()
+        };
+        let frames = [Some((0.0, true)), Some((0.6, false))];
+        assert!(contested_at(&fixed, &frames, 3.0)[1].is_some());
     }
 
     #[test]

@@ -1759,7 +1759,9 @@ fn a_yaw_jump_where_two_motions_compete_is_flagged_and_changes_no_pose() {
         e.to_radians() < 3.0 * sigma,
         "frame 18: {e} deg, yaw sigma {sigma} rad"
     );
-    // The option is checked.
+    // The options are checked.
     let e = config_error("[trust]\ncontested_yaw_change = -0.01\n");
     assert!(e.contains("trust.contested_yaw_change"), "{e}");
+    let e = config_error("[trust]\ncontested_noise_slope = 2.0\n");
+    assert!(e.contains("trust.contested_noise_slope"), "{e}");
 }
