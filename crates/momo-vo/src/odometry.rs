@@ -2013,8 +2013,9 @@ impl Odometry {
             && diag.covariance.len() == diag.free.len().pow(2);
         // The reported rotation vector, once, where a rule below reads it.
         let t = &self.config.trust;
-        let omega = (t.support_change_share > 0.0 || t.yaw_change > 0.0)
-            .then(|| momo_core::so3_log(&motion.rotation));
+        let omega =
+            (t.support_change_share > 0.0 || t.yaw_change > 0.0 || t.contested_yaw_change > 0.0)
+                .then(|| momo_core::so3_log(&motion.rotation));
         // A small support with a jump of the yaw or the tilt (`trust.support_change_share`),
         // report only; before `yaw_change`, so that a frame it flags keeps this reason.
         if let (true, Some(omega)) = (self.config.trust.support_change_share > 0.0, omega) {
@@ -2137,8 +2138,8 @@ impl Odometry {
         }
         // A jump of the yaw where two motions compete (`trust.contested_yaw_change`), report
         // only: the last flag, once every competing motion of the frame is known.
-        let frame = moving.then(|| trust::YawFrame {
-            yaw: so3_log(&motion.rotation).z,
+        let frame = omega.filter(|_| moving).map(|omega| trust::YawFrame {
+            yaw: omega.z,
             noise_scale: diag.noise_scale,
             competing: diag.competing.is_some(),
             params: &params,

@@ -456,9 +456,9 @@ pub struct TrustOptions {
     /// the last [`TrustOptions::contested_frames`] moving frames'), a yaw `ω_z` (`ω = log R`,
     /// vehicle frame) that differs from the previous moving frame's by more than this (times
     /// the run's noise at [`TrustOptions::contested_noise_slope`]) says
-    /// that one of the two frames followed the other motion. The frame is flagged `weak` /
-    /// `yaw_change` where it was `estimated`, and its reported covariance adds the motion
-    /// before the jump `p` (of the last [`CONTESTED_ANCHOR_FRAMES`] moving frames, the one of
+    /// that one of the two frames followed the other motion. A frame reported `estimated` is
+    /// flagged `weak` / `yaw_change`, and its reported covariance adds the motion before the
+    /// jump `p` (of the last [`CONTESTED_ANCHOR_FRAMES`] moving frames, the one of
     /// the median yaw: a single wrong frame before a jump back does not stand for the run) as
     /// an alternative, `Σ + w d dᵀ` with `d = p − a` and `w` =
     /// [`TrustOptions::yaw_change_weight`]. For up to [`TrustOptions::contested_hold`] moving
