@@ -13,7 +13,10 @@
 //! the reported motion: the final stage's trimmed MAD) and scales the angular thresholds
 //! ([`NoiseThresholds`]) by `s = median σ̂ / noise_reference` where that ratio exceeds
 //! `noise_band`, and by 1 otherwise: a run at or below the noise the thresholds were stated
-//! for keeps them exactly. The scale starts once half the window is filled.
+//! for keeps them exactly. The scale starts once `noise_start_frames` (3) readings are kept:
+//! a run that starts among traffic reads few frames without a competing motion, and until the
+//! scale starts its thresholds are the 1-px ones (sixty-sixth session; half the window, 10,
+//! before).
 //!
 //! With `odometry.noise_final_fit` (default, sixtieth session) the upper clamp of the final
 //! stage's noise estimate (`final_fit.max_scale_ratio`, in loss scales) scales by `s` too: as
@@ -113,10 +116,11 @@ impl NoiseAdapt {
         self.scale
     }
 
-    /// Whether the run's noise is read: half of `odometry.noise_frames` readings kept, the
-    /// scale computed from them (before that the thresholds are as configured).
+    /// Whether the run's noise is read: `odometry.noise_start_frames` readings kept (at most
+    /// `noise_frames`), the scale computed from them (before that the thresholds are as
+    /// configured).
     pub fn is_read(&self, config: &Config) -> bool {
-        2 * self.recent.len() >= config.odometry.noise_frames
+        self.recent.len() >= start_frames(config)
     }
 
     /// The scale one frame's own noise `sigma` would set on its own (`σ̂ / noise_reference`
@@ -142,7 +146,7 @@ impl NoiseAdapt {
         while self.recent.len() > o.noise_frames.max(1) {
             self.recent.pop_front();
         }
-        if 2 * self.recent.len() < o.noise_frames {
+        if self.recent.len() < start_frames(config) {
             return true;
         }
         let s = scale_for(&self.recent, o.noise_reference, o.noise_band);
@@ -152,6 +156,12 @@ impl NoiseAdapt {
         }
         true
     }
+}
+
+/// The readings the scale waits for: `noise_start_frames`, at most `noise_frames`, at least 1.
+fn start_frames(config: &Config) -> usize {
+    let o = &config.odometry;
+    o.noise_start_frames.min(o.noise_frames).max(1)
 }
 
 /// The thresholds' scale for the noise values `recent`: their median (the final stage's,
@@ -180,7 +190,7 @@ mod tests {
     }
 
     #[test]
-    fn a_frames_own_scale_and_the_window_half_read() {
+    fn a_frames_own_scale_and_the_noise_read_after_the_start_frames() {
         let mut config = Config::default();
         let r = config.odometry.noise_reference;
         let band = config.odometry.noise_band;
@@ -190,8 +200,9 @@ mod tests {
         assert_eq!(NoiseAdapt::frame_scale(f64::NAN, &config), 1.0);
         assert_eq!(NoiseAdapt::frame_scale(-1.0, &config), 1.0);
         let mut noise = NoiseAdapt::new(&config);
-        let half = config.odometry.noise_frames.div_ceil(2);
-        for k in 0..half {
+        let start = config.odometry.noise_start_frames;
+        assert!(start < config.odometry.noise_frames);
+        for k in 0..start {
             assert!(!noise.is_read(&config), "after {k} readings");
             assert!(noise.observe(2.0 * r, &mut config));
         }
@@ -206,9 +217,10 @@ mod tests {
         config.odometry.noise_reference = 0.002;
         config.odometry.noise_frames = 4;
         config.odometry.noise_band = 1.3;
+        config.odometry.noise_start_frames = 2;
         let base = NoiseThresholds::of(&config);
         let mut adapt = NoiseAdapt::new(&config);
-        // Half the window first.
+        // Two readings first.
         adapt.observe(0.004, &mut config);
         assert_eq!(adapt.scale(), 1.0);
         assert_eq!(NoiseThresholds::of(&config), base);
@@ -250,5 +262,30 @@ mod tests {
                 .abs()
                 < 1e-15
         );
+    }
+
+    #[test]
+    fn the_scale_waits_for_the_start_frames_and_at_most_the_window() {
+        let run = |start: usize, frames: usize, readings: usize| {
+            let mut config = Config::default();
+            config.odometry.noise_start_frames = start;
+            config.odometry.noise_frames = frames;
+            let r = config.odometry.noise_reference;
+            let mut adapt = NoiseAdapt::new(&config);
+            for _ in 0..readings {
+                adapt.observe(3.0 * r, &mut config);
+            }
+            (adapt.scale(), adapt.is_read(&config))
+        };
+        assert_eq!(run(3, 20, 2), (1.0, false));
+        let (s, read) = run(3, 20, 3);
+        assert!(read && (s - 3.0).abs() < 1e-12, "{s}");
+        // A start beyond the window waits for the window.
+        assert_eq!(run(50, 20, 19), (1.0, false));
+        assert!(run(50, 20, 20).1);
+        let mut zero = Config::default();
+        zero.odometry.noise_start_frames = 0;
+        let e = zero.validate("test").expect_err("0 start frames");
+        assert!(e.to_string().contains("odometry.noise_start_frames"), "{e}");
     }
 }
