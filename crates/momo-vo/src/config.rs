@@ -646,7 +646,7 @@ pub struct OdometryOptions {
     /// [`noise_reference`](Self::noise_reference) takes effect (at most `noise_frames`; until
     /// then the thresholds are as written). 3 (sixty-sixth session; half the window, 10, before):
     /// a run that starts among traffic at 2-3 px reports few frames `estimated` without a
-    /// competing motion, so at 3 px half the window was read only at frame 79 (median over the
+    /// competing motion, so at 3 px the scale took effect only at frame 79 (median over the
     /// development seeds at 3 px; 124 at the 90th percentile), and until then its thresholds
     /// sat at one noise sigma. At 1 px the median of the first three readings exceeds
     /// `noise_band` only where a model misfit reads as noise (KITTI 08's climbing start).

@@ -131,9 +131,19 @@ pub fn errors_and_diagnostics(
     sim: &momo_sim::Simulation,
     config: momo_vo::Config,
 ) -> Vec<(f64, momo_vo::FrameDiagnostics)> {
+    first_errors_and_diagnostics(sim, config, sim.sequence.num_frames() - 1)
+}
+
+/// [`errors_and_diagnostics`] over the first `pairs` frame pairs only (a prefix of a longer
+/// simulation, whose traffic depends on its length).
+pub fn first_errors_and_diagnostics(
+    sim: &momo_sim::Simulation,
+    config: momo_vo::Config,
+    pairs: usize,
+) -> Vec<(f64, momo_vo::FrameDiagnostics)> {
     let seq = &sim.sequence;
     let mut vo = momo_vo::Odometry::new(seq.rig.clone(), config).expect("valid config");
-    (1..seq.num_frames())
+    (1..=pairs.min(seq.num_frames() - 1))
         .map(|k| {
             let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
             let r = vo.process(&seq.frames[k], arc);
