@@ -219,9 +219,20 @@ pub struct Odometry {
     /// `trust.side_slip_change`: the centre of the side slip (its mean) and how many frames
     /// fed it.
     side_slip_centre: (f64, usize),
+    /// `trust.side_slip_hold`: moving frames left in the hold after a side-slip flag.
+    side_slip_hold_left: usize,
     /// `trust.unconfirmed_start`: a frame since the start (or the reset) was reported
     /// `estimated` without a competing motion.
     start_confirmed: bool,
+    /// `trust.unconfirmed_start_frames`: so many frames in a row since the start (or the reset)
+    /// were reported `estimated` without a competing motion.
+    start_settled: bool,
+    /// `trust.unconfirmed_start_frames`: the frames in a row reported `estimated` without a
+    /// competing motion.
+    start_clean: usize,
+    /// `trust.unconfirmed_start_frames`: a competing motion was found since the start (or the
+    /// reset).
+    start_contested: bool,
     /// `separate.under_road_guard`: a moving frame since the start (or the reset) where the
     /// separation saw no second motion compete (the separation's own notion of a settled
     /// start, not the trust module's flags).
@@ -438,7 +449,11 @@ impl Odometry {
             after_flag: false,
             previous_yaw: None,
             side_slip_centre: (0.0, 0),
+            side_slip_hold_left: 0,
             start_confirmed: false,
+            start_settled: false,
+            start_clean: 0,
+            start_contested: false,
             separation_settled: false,
             previous_omega: None,
             support_change_fired: false,
@@ -1128,7 +1143,11 @@ impl Odometry {
         self.after_flag = false;
         self.previous_yaw = None;
         self.side_slip_centre = (0.0, 0);
+        self.side_slip_hold_left = 0;
         self.start_confirmed = false;
+        self.start_settled = false;
+        self.start_clean = 0;
+        self.start_contested = false;
         self.separation_settled = false;
         self.previous_omega = None;
         self.support_change_fired = false;
@@ -2043,11 +2062,30 @@ impl Odometry {
         }
         // The direction of travel left the vehicle's (`trust.side_slip_change`), report only.
         let slip = moving.then(|| side_slip(&motion)).flatten();
-        if let Some(slip) = slip
-            && side_slip_jumps(&self.config.trust, self.side_slip_centre, slip)
-        {
+        // `trust.side_slip_hold`: for so many moving frames after a jump, half the jump is one;
+        // flagged at the end: every rule, reading and the centre read the frame as without it
+        // (the jump's flag keeps a frame from the noise reading, so a centre without the held
+        // frames would move poses at the noise the thresholds follow).
+        let t = &self.config.trust;
+        let jumps = slip.is_some_and(|slip| side_slip_jumps(t, self.side_slip_centre, slip, 1.0));
+        let held = !jumps
+            && self.side_slip_hold_left > 0
+            && slip.is_some_and(|slip| {
+                side_slip_jumps(
+                    t,
+                    self.side_slip_centre,
+                    slip,
+                    trust::SIDE_SLIP_HOLD_FRACTION,
+                )
+            });
+        if jumps {
             flag_weak_report_only(&mut diag, Reason::SideSlip);
         }
+        self.side_slip_hold_left = match (jumps, slip.is_some()) {
+            (true, _) => t.side_slip_hold,
+            (false, true) => self.side_slip_hold_left.saturating_sub(1),
+            (false, false) => 0,
+        };
         // Too small a support for the static scene (`trust.min_inlier_share`), report only.
         let share = self.config.trust.min_inlier_share;
         if moving && diag.matches > 0 && (diag.inliers as f64) < share * diag.matches as f64 {
@@ -2151,6 +2189,25 @@ impl Odometry {
             let free = diag.free.clone();
             let w = self.config.trust.yaw_change_weight;
             Self::widen_by_alternatives_at(&[&before], w, &free, &params, &mut diag);
+        }
+        // `trust.side_slip_hold`'s flag, report only.
+        if held {
+            flag_weak_report_only(&mut diag, Reason::SideSlip);
+        }
+        // `trust.unconfirmed_start_frames`, report only: the last flag, on the frame as every
+        // other rule reports it.
+        if self.config.trust.unconfirmed_start && self.config.trust.unconfirmed_start_frames > 1 {
+            let unsettled = !self.start_settled;
+            let clean = diag.status == FrameStatus::Estimated && diag.competing.is_none();
+            self.start_clean = if clean { self.start_clean + 1 } else { 0 };
+            self.start_contested |= diag.competing.is_some();
+            self.start_settled |= self.start_clean >= self.config.trust.unconfirmed_start_frames;
+            if unsettled
+                && (diag.competing.is_some()
+                    || (clean && self.start_contested && !self.start_settled))
+            {
+                flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
+            }
         }
         diag.params = params.clone();
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
@@ -4814,12 +4871,13 @@ fn side_slip_jumps(
     t: &crate::trust::TrustOptions,
     (centre, n): (f64, usize),
     (beta, travel): (f64, f64),
+    fraction: f64,
 ) -> bool {
     let d = (beta - centre).abs();
     t.side_slip_change > 0.0
         && n >= crate::trust::SIDE_SLIP_MIN_FRAMES
-        && d > t.side_slip_change
-        && travel * d.min(std::f64::consts::FRAC_PI_2).sin() > t.side_slip_lateral
+        && d > fraction * t.side_slip_change
+        && travel * d.min(std::f64::consts::FRAC_PI_2).sin() > fraction * t.side_slip_lateral
 }
 
 /// A report-only flag (`trust.support_change_share`, `trust.yaw_change`,
@@ -4890,16 +4948,21 @@ mod tests {
         let t = crate::trust::TrustOptions::default();
         let n = crate::trust::SIDE_SLIP_MIN_FRAMES;
         // 0.08 rad at 1.5 m: 0.12 m sideways; at 1.0 m only 0.08 m.
-        assert!(side_slip_jumps(&t, (0.01, n), (0.09, 1.5)));
-        assert!(!side_slip_jumps(&t, (0.01, n), (0.09, 1.0)));
+        assert!(side_slip_jumps(&t, (0.01, n), (0.09, 1.5), 1.0));
+        assert!(!side_slip_jumps(&t, (0.01, n), (0.09, 1.0), 1.0));
         // 0.05 rad at 3 m: 0.15 m sideways, but within the angle.
-        assert!(!side_slip_jumps(&t, (0.0, n), (-0.05, 3.0)));
-        assert!(!side_slip_jumps(&t, (0.01, n - 1), (0.09, 1.5)));
+        assert!(!side_slip_jumps(&t, (0.0, n), (-0.05, 3.0), 1.0));
+        assert!(!side_slip_jumps(&t, (0.01, n - 1), (0.09, 1.5), 1.0));
+        // In `side_slip_hold`'s hold, half of each: 0.05 rad at 3 m is one, 0.02 rad is not.
+        let half = crate::trust::SIDE_SLIP_HOLD_FRACTION;
+        assert!(side_slip_jumps(&t, (0.0, n), (-0.05, 3.0), half));
+        assert!(!side_slip_jumps(&t, (0.0, n), (-0.02, 3.0), half));
+        assert!(!side_slip_jumps(&t, (0.0, n), (-0.05, 0.9), half));
         let off = crate::trust::TrustOptions {
             side_slip_change: 0.0,
             ..t
         };
-        assert!(!side_slip_jumps(&off, (0.01, n), (0.09, 1.5)));
+        assert!(!side_slip_jumps(&off, (0.01, n), (0.09, 1.5), 1.0));
     }
 
     #[test]
