@@ -356,8 +356,9 @@ pub struct TrustOptions {
     /// frame without one ends the hold). A motion pulled sideways by a vehicle swings around
     /// the bound: at 3 px along the built-in drive (seed 11, frames 343-353) the direction of
     /// travel left the road by 0.048-0.076 rad, 1.0-1.15 deg off, and the frames at 0.048
-    /// were reported `estimated` between flagged ones. Report only, as
-    /// [`TrustOptions::side_slip_change`]. 0: off. Default 5 (sixty-seventh session).
+    /// were reported `estimated` between flagged ones. Report only, and flagged last: the
+    /// centre, the noise reading and every other rule read the frame as without the hold. 0:
+    /// off. Default 5 (sixty-seventh session).
     pub side_slip_hold: usize,
     /// Without odometry.csv, on one camera whose arc length comes from the road plane
     /// (`odometry.road_scale_frames`): a moving frame is flagged `weak` / `stale_scale` where it
@@ -390,16 +391,18 @@ pub struct TrustOptions {
     /// [`crate::estimate_batch`] is such a start. Report only, as
     /// [`TrustOptions::yaw_change`]: poses and covariances unchanged. Default true.
     pub unconfirmed_start: bool,
-    /// How many moving frames in a row reported `estimated` without a competing motion confirm
-    /// the start of [`TrustOptions::unconfirmed_start`] (at least 1; 1: the first such frame).
-    /// Once a competing motion was found, such frames before the confirming one are flagged
-    /// `weak` / `unconfirmed_start` too: a run that starts beside a large vehicle can follow it
+    /// How many frames in a row reported `estimated` without a competing motion settle the start
+    /// of [`TrustOptions::unconfirmed_start`] (at least 1; 1: the first such frame; any other
+    /// frame, a standstill included, starts the count again). Until then, once a competing
+    /// motion was found, every frame reported `estimated` with one, and every one without one
+    /// but the settling frame, is flagged `weak` / `unconfirmed_start`: a run that starts beside a large vehicle can follow it
     /// for several frames once the second motion is no longer found (fresh seeds at 3 px,
     /// built-in drive seed 17, frames 9-11: 1.3-1.45 deg off, `estimated`, after eight frames
     /// with a competing motion; few100 at 2 px, KITTI 04 seed 2: a single frame 1.0 deg off
     /// confirmed the start at frame 2, and frames 34-35, 1.4 deg off, were reported
-    /// `estimated` among frames flagged `competing_motions`). Report only, as
-    /// [`TrustOptions::unconfirmed_start`]. Default 3 (sixty-seventh session).
+    /// `estimated` among frames flagged `competing_motions`). Report only, and flagged last:
+    /// every pose, covariance and other flag is the one with 1. Default 3 (sixty-seventh
+    /// session).
     pub unconfirmed_start_frames: usize,
     /// Before the run's noise is read (`odometry.noise_reference`: fewer than half of
     /// `odometry.noise_frames` frames reported `estimated` without a competing motion), on a
