@@ -8,15 +8,20 @@
 //! 0.003 rad against 0.0036 measured): the static world's own noise tail can pass for a second
 //! motion (the likely mechanism; not traced frame by frame).
 //!
-//! [`NoiseAdapt`] keeps the noise `σ̂` of the last `noise_frames` frames reported `estimated`
-//! without a competing motion ([`crate::separate::noise_sigma`] of the epipolar angles under
-//! the reported motion: the final stage's trimmed MAD) and scales the angular thresholds
+//! [`NoiseAdapt`] keeps the noise `σ̂` of the last `noise_frames` frames `estimated` without a
+//! competing motion as the solve and the separation leave them, before any report-only rule
+//! ([`crate::separate::noise_sigma`] of the epipolar angles under the reported motion: the
+//! final stage's trimmed MAD) and scales the angular thresholds
 //! ([`NoiseThresholds`]) by `s = median σ̂ / noise_reference` where that ratio exceeds
 //! `noise_band`, and by 1 otherwise: a run at or below the noise the thresholds were stated
 //! for keeps them exactly. The scale starts once `noise_start_frames` (3) readings are kept:
 //! a run that starts among traffic reads few frames without a competing motion, and until the
 //! scale starts its thresholds are the 1-px ones (sixty-sixth session; half the window, 10,
-//! before).
+//! before). Until the sixty-eighth session the reading followed the reported status, after the
+//! report-only rules: at 2 px with 100 matches the competing-motions recheck, at the 1-px
+//! threshold, named a second motion on many early frames, and the scale started at frame 80
+//! (median over `few100`'s 60 runs; 4-395) instead of 27 (4-199) (docs/RESULTS.md,
+//! sixty-eighth session).
 //!
 //! With `odometry.noise_final_fit` (default, sixtieth session) the upper clamp of the final
 //! stage's noise estimate (`final_fit.max_scale_ratio`, in loss scales) scales by `s` too: as

@@ -135,8 +135,8 @@ pub struct FrameDiagnostics {
     /// (radians; the final stage's trimmed MAD of the epipolar angles at the reported motion
     /// with the stage's default options, [`crate::separate::noise_sigma`]: it stops at 5 loss
     /// scales, 0.005 rad, whatever the scale in force). `None` (not written) where the frame
-    /// was not read: not moving, not reported `estimated`, a competing motion found, or the
-    /// rule off.
+    /// was not read: not moving, not `estimated` or a competing motion found before the
+    /// report-only rules (a frame only they flag is read), or the rule off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<f64>,
     /// The final stage's support ([`crate::final_fit`]), with `odometry.report_support` only:
@@ -2024,6 +2024,12 @@ impl Odometry {
         if !standstill && enough {
             self.soft_moving += 1;
         }
+        // The frame as the solve and the separation left it, before any report-only rule: the
+        // run's noise reading follows it, so that no report-only flag moves a later pose.
+        let unflagged = diag.status == FrameStatus::Estimated && diag.competing.is_none();
+        // Its yaw sigma, for the yaw history (`yaw_history_slow_margin`) as the noise reading:
+        // the recheck's mixture below widens the reported one.
+        let unflagged_yaw_sigma = self.yaw_sigma(&params, &diag);
         // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
         // after the state above, so that it changes the report only.
         let motion = self.estimator.motion(&params);
@@ -2119,8 +2125,8 @@ impl Odometry {
             self.hypotheses.set_last_yaw(h, yaw);
             let (m0, k) = h.yaw_history_slow_margin;
             if m0 > 0.0 && k > 0.0 {
-                let sigma = self.yaw_sigma(&params, &diag).unwrap_or(f64::NAN);
-                self.hypotheses.set_last_yaw_sigma(sigma);
+                self.hypotheses
+                    .set_last_yaw_sigma(unflagged_yaw_sigma.unwrap_or(f64::NAN));
             }
         }
         // `trust.unconfirmed_scale`: the state of the arc length this frame was solved with.
@@ -2156,12 +2162,9 @@ impl Odometry {
         }
         self.start_confirmed |= diag.status == FrameStatus::Estimated && diag.competing.is_none();
         // `odometry.noise_reference`: the angular thresholds follow the run's noise, read off
-        // the frames reported `estimated` without a competing motion (from the next frame on).
-        if moving
-            && self.config.odometry.noise_reference > 0.0
-            && diag.status == FrameStatus::Estimated
-            && diag.competing.is_none()
-        {
+        // the frames `estimated` without a competing motion before the report-only rules (from
+        // the next frame on).
+        if moving && self.config.odometry.noise_reference > 0.0 && unflagged {
             let angles = crate::separate::epipolar_angles(&self.rig, &motion, obs);
             if let Some(sigma) = crate::separate::noise_sigma(&angles, self.config.loss.scale()) {
                 if self.noise.observe(sigma, &mut self.config) {

@@ -404,8 +404,8 @@ pub struct TrustOptions {
     /// every pose, covariance and other flag is the one with 1. Default 3 (sixty-seventh
     /// session).
     pub unconfirmed_start_frames: usize,
-    /// Before the run's noise is read (`odometry.noise_reference`: fewer than half of
-    /// `odometry.noise_frames` frames reported `estimated` without a competing motion), on a
+    /// Before the run's noise is read (`odometry.noise_reference`: fewer than
+    /// `odometry.noise_start_frames` readings, [`crate::noise`]), on a
     /// moving frame reported `estimated` where the competing-motions check and its recheck
     /// ([`TrustOptions::competing_recheck_frames`]) found no second motion, the recheck looks
     /// once more, on a frame of any size, from the check's starts and the recheck's, with the
