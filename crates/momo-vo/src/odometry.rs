@@ -2069,9 +2069,8 @@ impl Odometry {
         // The direction of travel left the vehicle's (`trust.side_slip_change`), report only.
         let slip = moving.then(|| side_slip(&motion)).flatten();
         // `trust.side_slip_hold`: for so many moving frames after a jump, half the jump is one;
-        // flagged at the end: every rule, reading and the centre read the frame as without it
-        // (the jump's flag keeps a frame from the noise reading, so a centre without the held
-        // frames would move poses at the noise the thresholds follow).
+        // flagged at the end: every rule and the centre read the frame as without it (a centre
+        // without the held frames moved later jumps' flags, sixty-seventh session).
         let t = &self.config.trust;
         let jumps = slip.is_some_and(|slip| side_slip_jumps(t, self.side_slip_centre, slip, 1.0));
         let held = !jumps
@@ -4117,8 +4116,8 @@ impl Odometry {
             }
         }
         let recorded = found.or_else(|| {
-            // Not the start rule's: the later rechecks, which the noise reading and the start's
-            // confirmation follow, start from what they would without it.
+            // Not the start rule's: the later rechecks, which the start's confirmation follows,
+            // start from what they would without it.
             result
                 .as_ref()
                 .filter(|(_, _, start)| !start)
