@@ -2027,9 +2027,26 @@ impl Odometry {
         // The frame as the solve and the separation left it, before any report-only rule: the
         // run's noise reading follows it, so that no report-only flag moves a later pose.
         let unflagged = diag.status == FrameStatus::Estimated && diag.competing.is_none();
-        // Its yaw sigma, for the yaw history (`yaw_history_slow_margin`) as the noise reading:
-        // the recheck's mixture below widens the reported one.
-        let unflagged_yaw_sigma = self.yaw_sigma(&params, &diag);
+        // `separate.hypotheses.yaw_history_final`: the yaw history holds the reported motion,
+        // with its yaw sigma before the report-only rules (the recheck's mixture widens it).
+        if !standstill
+            && let Some(h) = self
+                .config
+                .odometry
+                .separate
+                .as_ref()
+                .filter(|s| s.enabled)
+                .and_then(|s| s.hypotheses())
+                .filter(|h| h.yaw_history_final)
+        {
+            let yaw = so3_log(&self.estimator.motion(&params).rotation).z;
+            self.hypotheses.set_last_yaw(h, yaw);
+            let (m0, k) = h.yaw_history_slow_margin;
+            if m0 > 0.0 && k > 0.0 {
+                let sigma = self.yaw_sigma(&params, &diag).unwrap_or(f64::NAN);
+                self.hypotheses.set_last_yaw_sigma(sigma);
+            }
+        }
         // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
         // after the state above, so that it changes the report only.
         let motion = self.estimator.motion(&params);
@@ -2108,25 +2125,6 @@ impl Odometry {
             let (mean, n) = &mut self.side_slip_centre;
             *n += 1;
             *mean += (beta - *mean) / (*n).min(crate::trust::SIDE_SLIP_CENTRE_FRAMES) as f64;
-        }
-        // `separate.hypotheses.yaw_history_final`: the yaw history holds the reported motion.
-        if !standstill
-            && let Some(h) = self
-                .config
-                .odometry
-                .separate
-                .as_ref()
-                .filter(|s| s.enabled)
-                .and_then(|s| s.hypotheses())
-                .filter(|h| h.yaw_history_final)
-        {
-            let yaw = so3_log(&self.estimator.motion(&params).rotation).z;
-            self.hypotheses.set_last_yaw(h, yaw);
-            let (m0, k) = h.yaw_history_slow_margin;
-            if m0 > 0.0 && k > 0.0 {
-                self.hypotheses
-                    .set_last_yaw_sigma(unflagged_yaw_sigma.unwrap_or(f64::NAN));
-            }
         }
         // `trust.unconfirmed_scale`: the state of the arc length this frame was solved with.
         let unconfirmed = self.road_unconfirmed;
