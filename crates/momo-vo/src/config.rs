@@ -605,6 +605,18 @@ pub struct OdometryOptions {
     /// a step of its poses rather than of the car); at another frame rate scale it with the
     /// frame interval. 0: off.
     pub decide_by_road_yaw_jump: f64,
+    /// With `decide_by_road`: the separation's yaw-history margin applied to its replacements
+    /// too (radians per frame pair; 0: off). An alternative whose yaw lies more than this from
+    /// the previous frame's reported yaw, and further from it than the chosen motion's,
+    /// replaces the chosen motion only where its road score is decisive in the separation's
+    /// sense: at least `separate.ground_admit_min` (scaled to the frame's matches by
+    /// `separate.count_reference`) and at least `separate.ground_admit` times the chosen
+    /// motion's. The separation's ordinary choice lets such a switch through on the same
+    /// terms only (`hypotheses.yaw_history_margin`, 1 deg); without this bound
+    /// `decide_by_road` lets any switch within `decide_by_road_yaw_jump` (1.7 deg) through
+    /// on a margin of `decide_by_road` road cells. Default 0.01745 (1 deg, the separation's
+    /// margin) since the sixty-ninth session (docs/RESULTS.md, sixty-ninth session).
+    pub decide_by_road_yaw_margin: f64,
     /// With `decide_by_road`: only the alternatives whose tilt ([`crate::hypotheses::tilt`],
     /// the norm of roll and pitch) lies at least as close to the previous frame's reported
     /// motion's tilt as the chosen motion's compete (a tilt that leaves the run's tilt is no
@@ -762,6 +774,7 @@ impl Default for OdometryOptions {
             decide_by_road_continuing: false,
             decide_by_road_trusted_frames: 0,
             decide_by_road_yaw_jump: 0.03,
+            decide_by_road_yaw_margin: 0.01745,
             decide_by_road_tilt: true,
             decide_by_road_tilt_vector: false,
             decide_by_road_tilt_frames: 1,
@@ -1598,6 +1611,15 @@ impl Config {
                 format!(
                     "odometry.decide_by_road_yaw_jump must be finite and non-negative, got {}",
                     o.decide_by_road_yaw_jump
+                ),
+            );
+        }
+        if !(o.decide_by_road_yaw_margin.is_finite() && o.decide_by_road_yaw_margin >= 0.0) {
+            bad(
+                &["odometry.decide_by_road_yaw_margin"],
+                format!(
+                    "odometry.decide_by_road_yaw_margin must be finite and non-negative, got {}",
+                    o.decide_by_road_yaw_margin
                 ),
             );
         }

@@ -2477,12 +2477,36 @@ impl Odometry {
             })
             .filter_map(|a| self.road_score_of(obs, &a).map(|(s, sup)| (a, s, sup)))
             .collect();
+        // `decide_by_road_yaw_margin`: beyond the margin only a decisive road score replaces.
+        let decisive = self.decisive_road(obs.len());
+        let margin = o.decide_by_road_yaw_margin;
+        let scored: Vec<_> = scored
+            .into_iter()
+            .filter(|(a, s, _)| {
+                within_yaw_jump(yaw_previous, yaw_chosen, yaw(a), margin)
+                    || decisive.is_none_or(|d| road_decisive(*s, base, d))
+            })
+            .collect();
         let scores: Vec<usize> = scored.iter().map(|x| x.1).collect();
         let best = pick_by_road(base, &scores, self.config.odometry.decide_by_road)?;
         let (params, score, support) = scored.into_iter().nth(best)?;
         let keep_memory = self.config.odometry.decide_by_road_keep_memory;
         self.hand_off_separation(obs, &params, score, &support, !keep_memory);
         Some(params)
+    }
+
+    /// The separation's decisive road score for a frame of `matches` matches: its least road
+    /// score (`separate.ground_admit_min`, scaled by `separate.count_reference`) and its ratio
+    /// to the chosen motion's (`separate.ground_admit`); `None` where the separation is off.
+    fn decisive_road(&self, matches: usize) -> Option<(usize, f64)> {
+        let opts = self
+            .config
+            .odometry
+            .separate
+            .as_ref()
+            .filter(|s| s.enabled)?;
+        let scaled = opts.for_matches(matches);
+        Some((scaled.ground_admit_min, scaled.ground_admit))
     }
 
     /// The separation's match memory (where `memory`) and its tilt, yaw and road history moved
@@ -4364,6 +4388,14 @@ pub fn within_yaw_jump(previous: f64, chosen: f64, yaw: f64, bound: f64) -> bool
     !(bound > 0.0) || (yaw - previous).abs() <= bound.max((chosen - previous).abs())
 }
 
+/// `odometry.decide_by_road_yaw_margin`: whether an alternative's road score `score` is
+/// decisive against the chosen motion's `base` in the separation's sense (`decisive = (min,
+/// ratio)`: `separate.ground_admit_min`, `separate.ground_admit`): at least `min` and at least
+/// `ratio` times `base`.
+pub fn road_decisive(score: usize, base: usize, (min, ratio): (usize, f64)) -> bool {
+    score >= min && score as f64 >= ratio * base as f64
+}
+
 /// The choice of `odometry.decide_by_road`: the index of the highest of the alternatives' road
 /// `scores` (the first of equal ones) where it is at least `margin` above the chosen motion's
 /// `base`; `None` (the chosen motion stays) otherwise or where `margin` is 0.
@@ -5654,6 +5686,29 @@ mod tests {
         assert!(!within_yaw_jump(previous, 0.0, car, 0.03));
         assert!(!within_yaw_jump(previous, chosen, f64::NAN, 0.03));
         assert!(within_yaw_jump(previous, chosen, car, f64::NAN));
+    }
+
+    /// `decide_by_road_yaw_margin`: beyond the margin only a road score that would pass the
+    /// separation's own veto replaces (conf3 03 s82 frame 70, a lead car's motion 17 road
+    /// cells against the chosen motion's 12, 1.13 deg from the previous frame's yaw: not
+    /// decisive; the fiftieth session's 08 s7 frame 495, 8 against 1: below the least
+    /// score).
+    #[test]
+    fn beyond_the_yaw_margin_only_a_decisive_road_replaces() {
+        let decisive = (12, 2.0);
+        assert!(!road_decisive(17, 12, decisive));
+        assert!(!road_decisive(8, 1, decisive));
+        assert!(road_decisive(24, 12, decisive));
+        assert!(road_decisive(12, 0, decisive));
+        assert!(!road_decisive(11, 0, decisive));
+        assert!(road_decisive(usize::MAX, usize::MAX / 2, decisive));
+        // The margin's own test is `within_yaw_jump`'s: 1.13 deg from the previous frame's yaw
+        // while the chosen motion moved 0.13 deg is beyond 1 deg, and within 1.7.
+        let (previous, chosen, car) = (-0.68f64, -0.815f64, 0.450f64);
+        let (previous, chosen, car) =
+            (previous.to_radians(), chosen.to_radians(), car.to_radians());
+        assert!(!within_yaw_jump(previous, chosen, car, 0.01745));
+        assert!(within_yaw_jump(previous, chosen, car, 0.03));
     }
 
     /// `decide_by_road` in the driver, a single camera in traffic: off (the default) the
