@@ -451,6 +451,24 @@ pub struct HypothesesOptions {
     /// same road evidence then picks it. Off (`false`: `P` only, against every alternative;
     /// twenty-seventh session, tail41).
     pub predict_by_road_alternatives: bool,
+    /// With [`HypothesesOptions::predict_by_road`]: vehicle-model plausibility of the
+    /// direction of travel (in the model's own standard deviations; 0: off; seventieth
+    /// session, slip85). Where the motion the rules leave, `X`, jumped by more than `J'` (as
+    /// for the road rule) and the model's first prior residual at `X` (the soft single-track
+    /// model's side slip `(heading − ω_z / 2) / σ_slip`, [`momo_core::Manifold::prior_residuals`];
+    /// a model without prior residuals never qualifies) exceeds `k` in magnitude, the
+    /// re-solved prediction `P` (which continues the history, as for the road rule) replaces
+    /// `X` where its own residual is at most `k` and its road score is at least `X`'s and every
+    /// alternative's, ties included, whether or not `X`'s own road reaches `min_matches`. A
+    /// lead vehicle that follows the ego car through a curve explains a motion that turns less
+    /// than the car and slides sideways to make up for it (at 1.2 m per frame 7-9 deg of side
+    /// slip), which no car drives at speed, while the road cue ties (the lower half of the
+    /// vehicle earns cells too). Off in `HypothesesOptions::default()`; the default
+    /// configuration ([`crate::separate::SeparateOptions::competition_over_time`]) sets 6
+    /// (0.06 rad with the soft single-track model's default sigma: along the KITTI
+    /// trajectories 99.9 % of the frames estimated within 0.15 deg slide by less than 0.047 rad
+    /// at 0.6 m per frame or more; docs/RESULTS.md §9, seventieth session, slip85).
+    pub predict_by_slip: f64,
     /// The least median road score of the recent frames at which a scene shows a road at all,
     /// for [`HypothesisTracker::road_lost`] (`None`: [`HypothesesOptions::min_matches`]). Set
     /// only by [`crate::separate::SeparateOptions::for_matches`], which scales `min_matches`
@@ -515,6 +533,7 @@ impl Default for HypothesesOptions {
             predict_by_road_ratio: 1.0,
             predict_by_road_prior: false,
             predict_by_road_alternatives: false,
+            predict_by_slip: 0.0,
             road_visible_min: None,
         }
     }
@@ -593,6 +612,11 @@ impl HypothesesOptions {
         if !(self.predict_by_road.is_finite() && self.predict_by_road >= 0.0) {
             return Err(
                 "odometry.separate.hypotheses.predict_by_road must be a finite number >= 0".into(),
+            );
+        }
+        if !(self.predict_by_slip.is_finite() && self.predict_by_slip >= 0.0) {
+            return Err(
+                "odometry.separate.hypotheses.predict_by_slip must be a finite number >= 0".into(),
             );
         }
         if !(self.predict_by_road_ratio.is_finite() && self.predict_by_road_ratio >= 1.0) {

@@ -622,7 +622,10 @@ impl SeparateOptions {
     /// yaw jumps by more than 0.5 deg (or whose tilt jumps) without road is replaced by the
     /// previous motion re-solved on its support where that prediction's own road score beats
     /// the choice's and every alternative's (`hypotheses.predict_by_road = 0.00873`;
-    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40). Since the
+    /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40); since the
+    /// seventieth session also where the chosen motion slides sideways by more than 6 of the
+    /// model's slip sigmas and the prediction, which does not, has at least as much road
+    /// (`hypotheses.predict_by_slip = 6`; docs/RESULTS.md §9, seventieth session, slip85). Since the
     /// thirty-fifth session the ground cue's, the memory's and (since the thirty-sixth) the
     /// road tests' counts shrink in a frame with fewer than 300 matches (`count_reference =
     /// 300`; docs/RESULTS.md §9, thirty-fifth session, scale49, and thirty-sixth, scale50).
@@ -680,6 +683,7 @@ impl SeparateOptions {
                 yaw_history_predict_hold: true,
                 yaw_history_predict_road_frames: 10,
                 predict_by_road: 0.00873,
+                predict_by_slip: 6.0,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -2279,7 +2283,11 @@ fn road_prediction(
         return None;
     }
     let score_x = road_score(ctx, h, obs, x);
-    if score_x >= h.min_matches {
+    // `predict_by_slip`: the model's first prior residual (the side slip) in its own sigmas.
+    let slip =
+        |params: &[f64]| (ctx.estimator.prior_residuals(params).first()).map_or(0.0, |q| q.abs());
+    let slipping = h.predict_by_slip > 0.0 && slip(&x.0.params) > h.predict_by_slip;
+    if score_x >= h.min_matches && !slipping {
         return None;
     }
     // Its tilt against the least of the recent frames' (`tilt_weak_road_frames`, as for a
@@ -2305,9 +2313,13 @@ fn road_prediction(
             .iter()
             .map(|alt| road_score(ctx, h, obs, alt))
             .fold(score_x, usize::max);
-        return (score_p >= h.min_matches
-            && score_p as f64 > h.predict_by_road_ratio * best_other as f64)
-            .then_some(c);
+        let by_road = score_x < h.min_matches
+            && score_p >= h.min_matches
+            && score_p as f64 > h.predict_by_road_ratio * best_other as f64;
+        // `predict_by_slip`: `X` slides sideways as no car does, `P` does not, and the road
+        // does not speak against `P` (ties included).
+        let by_slip = slipping && slip(&c.0.params) <= h.predict_by_slip && score_p >= best_other;
+        return (by_road || by_slip).then_some(c);
     }
     // `predict_by_road_alternatives`: `P` and the alternatives that continue the history
     // within `J'` (not `X` itself) compete by road; the others and `X` are what the best
@@ -2331,7 +2343,9 @@ fn road_prediction(
         }
     }
     let (score_c, _) = *continuing.iter().rev().max_by_key(|(s, _)| *s)?;
-    (score_c >= h.min_matches && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
+    (score_x < h.min_matches
+        && score_c >= h.min_matches
+        && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
         .then(|| first_highest(continuing.into_iter()))
         .flatten()
 }
@@ -4411,6 +4425,81 @@ mod tests {
                     .expect_err("bad ratio")
                     .contains("predict_by_road_ratio")
             );
+        }
+    }
+
+    /// `predict_by_slip`: a motion that jumped by more than `J'` and slides sideways by more
+    /// than `k` of the model's slip sigmas is replaced by the re-solved prediction even where
+    /// its own road reaches `min_matches` (where the road rule does not act), if the
+    /// prediction's road is at least its; not a motion that jumped without sliding, not with
+    /// the option off; the option parses and validates.
+    #[test]
+    fn predict_by_slip_replaces_a_sliding_jump_by_the_prediction() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let deg = 1.0_f64.to_radians();
+        let support = |p: &[f64]| -> Vec<Vec<bool>> {
+            epipolar_angles(rig, &estimator.motion(p), obs)
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        };
+        let previous = f.turned(0.1 * deg, &none).0.params;
+        let heading = estimator
+            .param_names()
+            .iter()
+            .position(|n| *n == "heading")
+            .expect("heading");
+        // A road rule that does not act: every motion's road reaches `min_matches` (0).
+        let h = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            predict_by_road: 0.5 * deg,
+            predict_by_slip: 6.0,
+            min_matches: 0,
+            ..HypothesesOptions::default()
+        };
+        let mut tracker = HypothesisTracker::default();
+        tracker.record_yaw(&h, yaw_of(&ctx, &sol.params));
+        let predict = |h: &HypothesesOptions, x: &Candidate| {
+            road_prediction(&ctx, h, &tracker, obs, x, &[], &previous, &support)
+        };
+        // The chosen motion turns 0.8 deg less and slides 8 deg sideways (the default soft
+        // single-track model's slip sigma is 0.01 rad: 14 sigmas).
+        let mut car = f.turned(-0.8 * deg, &none);
+        car.0.params[heading] -= 8.0 * deg;
+        let q = estimator.prior_residuals(&car.0.params)[0].abs();
+        assert!(q > 10.0, "the car slides: {q}");
+        let (p, _) = predict(&h, &car).expect("replaced");
+        assert!((yaw_of(&ctx, &p.params) - yaw_of(&ctx, &sol.params)).abs() < 0.1 * deg);
+        assert!(estimator.prior_residuals(&p.params)[0].abs() <= h.predict_by_slip);
+        // The same jump without the slide, a slide below `k`, the option off: nothing.
+        let straight = f.turned(-0.8 * deg, &none);
+        assert!(predict(&h, &straight).is_none());
+        let wide = HypothesesOptions {
+            predict_by_slip: q + 1.0,
+            ..h.clone()
+        };
+        assert!(predict(&wide, &car).is_none());
+        let off = HypothesesOptions {
+            predict_by_slip: 0.0,
+            ..h.clone()
+        };
+        assert!(predict(&off, &car).is_none());
+        // Parses, validates, off by default.
+        let o: HypothesesOptions = toml::from_str("predict_by_slip = 6.0").expect("parses");
+        assert_eq!(o.predict_by_slip, 6.0);
+        assert!(o.validate().is_ok());
+        assert_eq!(HypothesesOptions::default().predict_by_slip, 0.0);
+        for k in [-1.0, f64::NAN, f64::INFINITY] {
+            let bad = HypothesesOptions {
+                predict_by_slip: k,
+                ..HypothesesOptions::default()
+            };
+            assert!(bad.validate().expect_err("bad").contains("predict_by_slip"));
         }
     }
 
