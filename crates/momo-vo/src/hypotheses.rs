@@ -461,7 +461,7 @@ pub struct HypothesesOptions {
     /// `X` where its own residual is at most `k` and its road score is at least `X`'s and every
     /// alternative's, ties included, whether or not `X`'s own road reaches `min_matches`. A
     /// lead vehicle that follows the ego car through a curve explains a motion that turns less
-    /// than the car and slides sideways to make up for it (at 1.2 m per frame 7-9 deg of side
+    /// than the car and slides sideways to make up for it (at 1.2 m per frame 6-9 deg of side
     /// slip), which no car drives at speed, while the road cue ties (the lower half of the
     /// vehicle earns cells too). Off in `HypothesesOptions::default()`; the default
     /// configuration ([`crate::separate::SeparateOptions::competition_over_time`]) sets 6
