@@ -3709,6 +3709,15 @@ mod tests {
                 .collect()
         }
 
+        /// The matches a motion explains: within 0.003 rad of their epipolar plane.
+        fn explained(&self, p: &[f64]) -> Vec<Vec<bool>> {
+            let motion = self.counted.estimator.motion(p);
+            epipolar_angles(self.rig(), &motion, self.obs())
+                .into_iter()
+                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
+                .collect()
+        }
+
         /// The frame's solution turned by `d` radians of yaw, with `support`.
         fn turned(&self, d: f64, support: &[Vec<bool>]) -> Candidate {
             let mut s = self.sol.clone();
@@ -4176,12 +4185,7 @@ mod tests {
             yaw_history_predict: deg,
             ..HypothesesOptions::default()
         };
-        let support = |p: &[f64]| -> Vec<Vec<bool>> {
-            epipolar_angles(rig, &estimator.motion(p), obs)
-                .into_iter()
-                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
-                .collect()
-        };
+        let support = |p: &[f64]| f.explained(p);
         // A on an object: 5 deg less turn, no road under its (empty) support.
         let car = f.turned(-5.0 * deg, &none);
         let previous = f.turned(0.2 * deg, &none).0.params;
@@ -4292,17 +4296,11 @@ mod tests {
     fn predict_by_road_replaces_a_roadless_jump_by_the_prediction_with_road() {
         let f = TurnedFrame::new();
         let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
-        let estimator = f.counted.estimator.as_ref();
         let ctx = f.counted.ctx(rig);
         let none = f.support(false);
         let w = yaw_of(&ctx, &sol.params);
         let deg = 1.0_f64.to_radians();
-        let support = |p: &[f64]| -> Vec<Vec<bool>> {
-            epipolar_angles(rig, &estimator.motion(p), obs)
-                .into_iter()
-                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
-                .collect()
-        };
+        let support = |p: &[f64]| f.explained(p);
         let previous = f.turned(0.1 * deg, &none).0.params;
         // The road score of the static world's motion on the matches it explains.
         let truth = (sol.clone(), support(&sol.params));
@@ -4441,12 +4439,7 @@ mod tests {
         let ctx = f.counted.ctx(rig);
         let none = f.support(false);
         let deg = 1.0_f64.to_radians();
-        let support = |p: &[f64]| -> Vec<Vec<bool>> {
-            epipolar_angles(rig, &estimator.motion(p), obs)
-                .into_iter()
-                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
-                .collect()
-        };
+        let support = |p: &[f64]| f.explained(p);
         let previous = f.turned(0.1 * deg, &none).0.params;
         let heading = estimator
             .param_names()
@@ -4512,17 +4505,11 @@ mod tests {
     fn predict_by_road_alternatives_let_a_continuing_alternative_win_by_road() {
         let f = TurnedFrame::new();
         let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
-        let estimator = f.counted.estimator.as_ref();
         let ctx = f.counted.ctx(rig);
         let none = f.support(false);
         let w = yaw_of(&ctx, &sol.params);
         let deg = 1.0_f64.to_radians();
-        let support = |p: &[f64]| -> Vec<Vec<bool>> {
-            epipolar_angles(rig, &estimator.motion(p), obs)
-                .into_iter()
-                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
-                .collect()
-        };
+        let support = |p: &[f64]| f.explained(p);
         let previous = f.turned(0.1 * deg, &none).0.params;
         let truth = (sol.clone(), support(&sol.params));
         let s_truth = road_score(&ctx, &HypothesesOptions::default(), obs, &truth);
@@ -4661,7 +4648,6 @@ mod tests {
     fn yaw_history_predict_road_guard_acts_where_the_road_was_lost_only() {
         let f = TurnedFrame::new();
         let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
-        let estimator = f.counted.estimator.as_ref();
         let ctx = f.counted.ctx(rig);
         let none = f.support(false);
         let w = yaw_of(&ctx, &sol.params);
@@ -4674,12 +4660,7 @@ mod tests {
             yaw_history_predict_road_frames: 3,
             ..HypothesesOptions::default()
         };
-        let support = |p: &[f64]| -> Vec<Vec<bool>> {
-            epipolar_angles(rig, &estimator.motion(p), obs)
-                .into_iter()
-                .map(|a| a.into_iter().map(|x| x < 0.003).collect())
-                .collect()
-        };
+        let support = |p: &[f64]| f.explained(p);
         // A on an object (or a true sharp turn): 5 deg from the recorded yaw, no road under
         // its support (score 0 < `min_matches` = 10).
         let car = f.turned(-5.0 * deg, &none);
