@@ -463,7 +463,8 @@ pub struct HypothesesOptions {
     /// lead vehicle that follows the ego car through a curve explains a motion that turns less
     /// than the car and slides sideways to make up for it (at 1.2 m per frame 6-9 deg of side
     /// slip), which no car drives at speed, while the road cue ties (the lower half of the
-    /// vehicle earns cells too). Off in `HypothesesOptions::default()`; the default
+    /// vehicle earns cells too). Not read with [`HypothesesOptions::predict_by_road_alternatives`].
+    /// Off in `HypothesesOptions::default()`; the default
     /// configuration ([`crate::separate::SeparateOptions::competition_over_time`]) sets 6
     /// (0.06 rad with the soft single-track model's default sigma: along the KITTI
     /// trajectories 99.9 % of the frames estimated within 0.15 deg slide by less than 0.047 rad

@@ -2376,6 +2376,11 @@ impl Odometry {
         })
     }
 
+    /// The motion separation's options (`odometry.separate`); `None` where it is off.
+    fn separation(&self) -> Option<&crate::separate::SeparateOptions> {
+        self.config.odometry.separate.as_ref().filter(|s| s.enabled)
+    }
+
     /// The separation's hypotheses options and the support its road cues read under `motion`
     /// (the matches within the separation's threshold of its epipolar geometry); `None` where
     /// the separation or its hypotheses are off.
@@ -2384,12 +2389,7 @@ impl Odometry {
         obs: &FrameObservations,
         motion: &Pose<f64>,
     ) -> Option<(&crate::hypotheses::HypothesesOptions, Vec<Vec<bool>>)> {
-        let opts = self
-            .config
-            .odometry
-            .separate
-            .as_ref()
-            .filter(|o| o.enabled)?;
+        let opts = self.separation()?;
         let h = opts.hypotheses()?;
         Some((
             h,
@@ -2499,13 +2499,7 @@ impl Odometry {
     /// score (`separate.ground_admit_min`, scaled by `separate.count_reference`) and its ratio
     /// to the chosen motion's (`separate.ground_admit`); `None` where the separation is off.
     fn decisive_road(&self, matches: usize) -> Option<(usize, f64)> {
-        let opts = self
-            .config
-            .odometry
-            .separate
-            .as_ref()
-            .filter(|s| s.enabled)?;
-        let scaled = opts.for_matches(matches);
+        let scaled = self.separation()?.for_matches(matches);
         Some((scaled.ground_admit_min, scaled.ground_admit))
     }
 
@@ -3386,13 +3380,7 @@ impl Odometry {
         previous: &[f64],
         fixed: &[bool],
     ) -> Option<FrameSolution> {
-        let h = self
-            .config
-            .odometry
-            .separate
-            .as_ref()
-            .filter(|s| s.enabled)?
-            .hypotheses()?;
+        let h = self.separation()?.hypotheses()?;
         let all: Vec<Vec<bool>> = obs.per_camera.iter().map(|m| vec![true; m.len()]).collect();
         let road = crate::hypotheses::ground_mask(
             &self.rig,

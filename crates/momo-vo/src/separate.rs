@@ -2283,10 +2283,13 @@ fn road_prediction(
         return None;
     }
     let score_x = road_score(ctx, h, obs, x);
-    // `predict_by_slip`: the model's first prior residual (the side slip) in its own sigmas.
+    // `predict_by_slip` (the prediction alone, not with `predict_by_road_alternatives`): the
+    // model's first prior residual (the side slip) in its own sigmas.
     let slip =
         |params: &[f64]| (ctx.estimator.prior_residuals(params).first()).map_or(0.0, |q| q.abs());
-    let slipping = h.predict_by_slip > 0.0 && slip(&x.0.params) > h.predict_by_slip;
+    let slipping = h.predict_by_slip > 0.0
+        && !h.predict_by_road_alternatives
+        && slip(&x.0.params) > h.predict_by_slip;
     if score_x >= h.min_matches && !slipping {
         return None;
     }
@@ -2343,9 +2346,7 @@ fn road_prediction(
         }
     }
     let (score_c, _) = *continuing.iter().rev().max_by_key(|(s, _)| *s)?;
-    (score_x < h.min_matches
-        && score_c >= h.min_matches
-        && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
+    (score_c >= h.min_matches && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
         .then(|| first_highest(continuing.into_iter()))
         .flatten()
 }
