@@ -470,6 +470,15 @@ pub struct HypothesesOptions {
     /// trajectories 99.9 % of the frames estimated within 0.15 deg slide by less than 0.047 rad
     /// at 0.6 m per frame or more; docs/RESULTS.md §9, seventieth session, slip85).
     pub predict_by_slip: f64,
+    /// With [`HypothesesOptions::predict_by_slip`]: where `X` slides by more than `k`, the
+    /// alternatives formed this frame that continue the history (yaw within `J'` of `r`, tilt
+    /// not jumping) and slide by at most `k` compete with `P` (itself sliding by at most `k`):
+    /// the one with the highest road score (`P` first among equals) replaces `X` where that
+    /// score is at least `X`'s and every other alternative's. At a lead vehicle's slide the
+    /// static world's own fit is sometimes formed as an alternative with more road than the
+    /// prediction, and the plain rule (the prediction against every alternative) then does
+    /// not act. Off (`false`: `P` only; seventy-first session, slip86).
+    pub predict_by_slip_alternatives: bool,
     /// The least median road score of the recent frames at which a scene shows a road at all,
     /// for [`HypothesisTracker::road_lost`] (`None`: [`HypothesesOptions::min_matches`]). Set
     /// only by [`crate::separate::SeparateOptions::for_matches`], which scales `min_matches`
@@ -535,6 +544,7 @@ impl Default for HypothesesOptions {
             predict_by_road_prior: false,
             predict_by_road_alternatives: false,
             predict_by_slip: 0.0,
+            predict_by_slip_alternatives: false,
             road_visible_min: None,
         }
     }

@@ -2310,19 +2310,57 @@ fn road_prediction(
             (p, sup)
         });
     if !h.predict_by_road_alternatives {
-        let c = p?;
-        let score_p = road_score(ctx, h, obs, &c);
-        let best_other = alternatives
+        let scores: Vec<usize> = alternatives
             .iter()
             .map(|alt| road_score(ctx, h, obs, alt))
-            .fold(score_x, usize::max);
-        let by_road = score_x < h.min_matches
-            && score_p >= h.min_matches
-            && score_p as f64 > h.predict_by_road_ratio * best_other as f64;
-        // `predict_by_slip`: `X` slides sideways as no car does, `P` does not, and the road
-        // does not speak against `P` (ties included).
-        let by_slip = slipping && slip(&c.0.params) <= h.predict_by_slip && score_p >= best_other;
-        return (by_road || by_slip).then_some(c);
+            .collect();
+        let p_scored = p.map(|c| (road_score(ctx, h, obs, &c), c));
+        if let Some((score_p, c)) = &p_scored {
+            let best_other = scores.iter().copied().fold(score_x, usize::max);
+            let by_road = score_x < h.min_matches
+                && *score_p >= h.min_matches
+                && *score_p as f64 > h.predict_by_road_ratio * best_other as f64;
+            // `predict_by_slip`: `X` slides sideways as no car does, `P` does not, and the
+            // road does not speak against `P` (ties included).
+            let by_slip = slipping
+                && !h.predict_by_slip_alternatives
+                && slip(&c.0.params) <= h.predict_by_slip
+                && *score_p >= best_other;
+            if by_road || by_slip {
+                return Some(c.clone());
+            }
+        }
+        if !(slipping && h.predict_by_slip_alternatives) {
+            return None;
+        }
+        // `predict_by_slip_alternatives`: `P` and the alternatives that continue the history
+        // within `J'` without sliding compete by road (`P` first); the best replaces `X` where
+        // its road is at least `X`'s and every other alternative's.
+        let mut beat = score_x;
+        let mut steady: Vec<(usize, &Candidate)> = Vec::new();
+        steady.extend(
+            p_scored
+                .as_ref()
+                .filter(|(_, c)| slip(&c.0.params) <= h.predict_by_slip)
+                .map(|(s, c)| (*s, c)),
+        );
+        for (alt, &s) in alternatives.iter().zip(&scores) {
+            if alt.0.params == x.0.params {
+                continue;
+            }
+            if (yaw_of(ctx, &alt.0.params) - r).abs() <= h.predict_by_road
+                && continues(&alt.0.params)
+                && slip(&alt.0.params) <= h.predict_by_slip
+            {
+                steady.push((s, alt));
+            } else {
+                beat = beat.max(s);
+            }
+        }
+        let (score_c, _) = *steady.iter().rev().max_by_key(|(s, _)| *s)?;
+        return (score_c >= beat)
+            .then(|| first_highest(steady.into_iter()))
+            .flatten();
     }
     // `predict_by_road_alternatives`: `P` and the alternatives that continue the history
     // within `J'` (not `X` itself) compete by road; the others and `X` are what the best
@@ -4495,6 +4533,86 @@ mod tests {
             };
             assert!(bad.validate().expect_err("bad").contains("predict_by_slip"));
         }
+    }
+
+    /// `predict_by_slip_alternatives`: where `X` slides, an alternative that continues the
+    /// history without sliding (here the static world's motion on every match, more road than
+    /// the prediction) competes with the prediction by road: off, the prediction loses to it
+    /// and nothing replaces `X`; on, it replaces `X`; a sliding alternative does not compete
+    /// but is what the others must beat; a motion that does not slide is left to the road rule.
+    #[test]
+    fn predict_by_slip_alternatives_lets_a_steady_alternative_replace_a_sliding_jump() {
+        let f = TurnedFrame::new();
+        let (rig, obs, sol) = (f.rig(), f.obs(), &f.sol);
+        let estimator = f.counted.estimator.as_ref();
+        let ctx = f.counted.ctx(rig);
+        let none = f.support(false);
+        let deg = 1.0_f64.to_radians();
+        let support = |p: &[f64]| f.explained(p);
+        let previous = f.turned(0.1 * deg, &none).0.params;
+        let heading = estimator
+            .param_names()
+            .iter()
+            .position(|n| *n == "heading")
+            .expect("heading");
+        let plain = HypothesesOptions {
+            yaw_history_frames: 1,
+            yaw_history_margin: deg,
+            predict_by_road: 0.5 * deg,
+            predict_by_slip: 6.0,
+            min_matches: 0,
+            ..HypothesesOptions::default()
+        };
+        let on = HypothesesOptions {
+            predict_by_slip_alternatives: true,
+            ..plain.clone()
+        };
+        let mut tracker = HypothesisTracker::default();
+        tracker.record_yaw(&plain, yaw_of(&ctx, &sol.params));
+        let predict = |h: &HypothesesOptions, x: &Candidate, alts: &[Candidate]| {
+            road_prediction(&ctx, h, &tracker, obs, x, alts, &previous, &support)
+        };
+        let mut car = f.turned(-0.8 * deg, &none);
+        car.0.params[heading] -= 8.0 * deg;
+        assert!(estimator.prior_residuals(&car.0.params)[0].abs() > 10.0);
+        // The static world's motion on every match: more road than the prediction's support.
+        let world = (sol.clone(), f.support(true));
+        assert!(estimator.prior_residuals(&sol.params)[0].abs() <= plain.predict_by_slip);
+        let p = predict(&plain, &car, &[]).expect("the prediction alone replaces X");
+        let (s_p, s_world) = (
+            road_score(&ctx, &plain, obs, &p),
+            road_score(&ctx, &plain, obs, &world),
+        );
+        assert!(
+            s_world > s_p,
+            "the world's road {s_world} above the prediction's {s_p}"
+        );
+        let alts = std::slice::from_ref(&world);
+        assert!(predict(&plain, &car, alts).is_none());
+        let (w, _) = predict(&on, &car, alts).expect("the world replaces X");
+        assert_eq!(w.params, sol.params);
+        // The same alternative sliding does not compete (the prediction, with more road than
+        // it, replaces `X`); an alternative that jumped as far as `X` does not either, and the
+        // prediction must reach its road.
+        let mut sliding = world.clone();
+        sliding.0.params[heading] -= 8.0 * deg;
+        let (q, _) = predict(&on, &car, std::slice::from_ref(&sliding)).expect("the prediction");
+        assert_eq!(q.params, p.0.params);
+        let jumped = f.turned(3.0 * deg, &f.support(true));
+        let s_jumped = road_score(&ctx, &plain, obs, &jumped);
+        assert_eq!(
+            predict(&on, &car, std::slice::from_ref(&jumped)).map(|(c, _)| c.params),
+            (s_p >= s_jumped).then(|| p.0.params.clone())
+        );
+        // `X` that does not slide: the slip rule does not act (its road reaches `min_matches`).
+        let straight = f.turned(-0.8 * deg, &none);
+        assert!(predict(&on, &straight, alts).is_none());
+        // Parses; off by default.
+        let o: HypothesesOptions =
+            toml::from_str("predict_by_slip = 6.0\npredict_by_slip_alternatives = true")
+                .expect("parses");
+        assert!(o.predict_by_slip_alternatives && o.validate().is_ok());
+        assert!(!HypothesesOptions::default().predict_by_slip_alternatives);
     }
 
     /// `predict_by_road_alternatives`: an alternative that continues the history (here the

@@ -331,3 +331,50 @@ fn predict_by_slip_takes_the_turn_from_a_sliding_lead_vehicle() {
     assert!(without > 1.0, "frames 166-169 without the rule: {without}");
     assert!(with < 0.6, "frames 166-169 with the rule: {with}");
 }
+
+/// `predict_by_slip_alternatives`: the built-in drive with moving traffic, seed 44 (dev3's
+/// drive s44), frame pairs 103-107. The chosen motion follows a lead vehicle: it turns 0.7-0.9
+/// deg less than the car and slides sideways, flagged `side_slip`. The re-solved prediction has
+/// less road than an alternative that itself continues the yaw history without sliding (the
+/// static world's own fit), so the prediction alone, which must match every alternative's
+/// road, does not act; with the steady alternatives competing, that alternative replaces the
+/// slide. The simulation is the set's (500 frames), run over its first 107 frame pairs.
+#[test]
+fn predict_by_slip_alternatives_take_the_static_world_from_a_sliding_lead_vehicle() {
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames: 500,
+        seed: 44,
+        ..momo_sim::SimConfig::moving_traffic()
+    })
+    .expect("simulation");
+    let with = |on: bool| {
+        let mut c = Config::default();
+        if let Some(h) = c
+            .odometry
+            .separate
+            .as_mut()
+            .and_then(|s| s.hypotheses.as_mut())
+        {
+            h.predict_by_slip_alternatives = on;
+        }
+        c
+    };
+    let worst = |config: Config| {
+        crate::support::first_errors_and_diagnostics(&sim, config, 107)[102..]
+            .iter()
+            .map(|(e, _)| *e)
+            .fold(0.0, f64::max)
+    };
+    let (plain, steady) = (worst(with(false)), worst(with(true)));
+    eprintln!(
+        "frames 103-107: the prediction alone {plain:.3} deg, with the steady alternatives {steady:.3} deg"
+    );
+    assert!(
+        plain > 0.6,
+        "frames 103-107 with the prediction alone: {plain}"
+    );
+    assert!(
+        steady < 0.3,
+        "frames 103-107 with the steady alternatives: {steady}"
+    );
+}
