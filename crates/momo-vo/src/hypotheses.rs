@@ -477,7 +477,9 @@ pub struct HypothesesOptions {
     /// score is at least `X`'s and every other alternative's. At a lead vehicle's slide the
     /// static world's own fit is sometimes formed as an alternative with more road than the
     /// prediction, and the plain rule (the prediction against every alternative) then does
-    /// not act. Off (`false`: `P` only; seventy-first session, slip86).
+    /// not act. Off in `HypothesesOptions::default()` (`false`: `P` only); the default
+    /// configuration ([`crate::separate::SeparateOptions::competition_over_time`]) sets it
+    /// (docs/RESULTS.md §9, seventy-first session, slip86).
     pub predict_by_slip_alternatives: bool,
     /// The least median road score of the recent frames at which a scene shows a road at all,
     /// for [`HypothesisTracker::road_lost`] (`None`: [`HypothesesOptions::min_matches`]). Set

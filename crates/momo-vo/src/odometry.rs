@@ -1491,6 +1491,9 @@ impl Odometry {
         let mut ground_drop = false;
         // Only the road prediction competed and may keep the prior (`predict_by_road_prior`).
         let mut prior_kept = false;
+        // A rule replaced a motion that a vehicle pulled away (`SeparationOutcome::pulled`):
+        // starts `trust.side_slip_hold`'s hold.
+        let mut pulled = false;
         let (result, competing) = match (
             result,
             self.config.odometry.separate.as_ref().filter(|s| s.enabled),
@@ -1561,6 +1564,7 @@ impl Odometry {
                 };
                 ground_drop = o.ground_drop;
                 prior_kept = o.prior_kept;
+                pulled = o.pulled;
                 self.separation_settled |= !o.competing;
                 self.quiet_streak = if o.competing {
                     0
@@ -2103,11 +2107,14 @@ impl Odometry {
         if jumps {
             flag_weak_report_only(&mut diag, Reason::SideSlip);
         }
-        self.side_slip_hold_left = match (jumps, slip.is_some()) {
-            (true, _) => t.side_slip_hold,
-            (false, true) => self.side_slip_hold_left.saturating_sub(1),
-            (false, false) => 0,
-        };
+        // A frame whose first motion a vehicle pulled away starts the hold as a flagged one
+        // does: the vehicle is still there.
+        self.side_slip_hold_left =
+            match (jumps || (pulled && t.side_slip_hold_pulled), slip.is_some()) {
+                (true, _) => t.side_slip_hold,
+                (false, true) => self.side_slip_hold_left.saturating_sub(1),
+                (false, false) => 0,
+            };
         // Too small a support for the static scene (`trust.min_inlier_share`), report only.
         let share = self.config.trust.min_inlier_share;
         if moving && diag.matches > 0 && (diag.inliers as f64) < share * diag.matches as f64 {

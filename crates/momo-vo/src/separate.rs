@@ -625,7 +625,10 @@ impl SeparateOptions {
     /// docs/RESULTS.md §9, twenty-fifth session, tail39, and twenty-sixth, road40); since the
     /// seventieth session also where the chosen motion slides sideways by more than 6 of the
     /// model's slip sigmas and the prediction, which does not, has at least as much road
-    /// (`hypotheses.predict_by_slip = 6`; docs/RESULTS.md §9, seventieth session, slip85). Since the
+    /// (`hypotheses.predict_by_slip = 6`; docs/RESULTS.md §9, seventieth session, slip85), and
+    /// since the seventy-first an alternative that continues the yaw history without sliding
+    /// competes with that prediction by road (`hypotheses.predict_by_slip_alternatives`;
+    /// docs/RESULTS.md §9, seventy-first session, slip86). Since the
     /// thirty-fifth session the ground cue's, the memory's and (since the thirty-sixth) the
     /// road tests' counts shrink in a frame with fewer than 300 matches (`count_reference =
     /// 300`; docs/RESULTS.md §9, thirty-fifth session, scale49, and thirty-sixth, scale50).
@@ -684,6 +687,7 @@ impl SeparateOptions {
                 yaw_history_predict_road_frames: 10,
                 predict_by_road: 0.00873,
                 predict_by_slip: 6.0,
+                predict_by_slip_alternatives: true,
                 ..HypothesesOptions::default()
             }),
             ..Self::default()
@@ -891,6 +895,13 @@ pub struct SeparationOutcome {
     /// The re-solved prediction replaced the motion the rules left
     /// ([`crate::hypotheses::HypothesesOptions::predict_by_road`]).
     pub road_predicted: bool,
+    /// A rule of the multi-frame choice replaced the first motion because it left the recent
+    /// frames' motion (its yaw jumped: [`crate::hypotheses::HypothesesOptions::yaw_jump`],
+    /// `yaw_history_replace`, `yaw_history_predict`, `predict_by_road`; or it slid:
+    /// `predict_by_slip`): a vehicle pulled the choice away, as where
+    /// `trust.side_slip_change` flags a reported motion, and `trust.side_slip_hold` starts its
+    /// hold (the vehicle is still there in the next frames).
+    pub pulled: bool,
     /// The frame is `competing` only because the re-solved prediction replaced the motion,
     /// and [`crate::hypotheses::HypothesesOptions::predict_by_road_prior`] lets it centre the
     /// next frame's change-of-motion prior all the same.
@@ -1664,7 +1675,10 @@ fn separate_with(
                 starts.first()?,
                 &support,
             )
+            .map(|c| (c, slides(ctx, h, tracker, x)))
         });
+    let slide_replaced = road_predicted.as_ref().is_some_and(|(_, s)| *s);
+    let road_predicted = road_predicted.map(|(c, _)| c);
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
@@ -1730,6 +1744,11 @@ fn separate_with(
         || predicted_a.is_some();
     outcome.competing = others_competed || road_predicted.is_some();
     outcome.road_predicted = road_predicted.is_some();
+    outcome.pulled = slide_replaced
+        || jumped_a.is_some()
+        || turned_a.is_some()
+        || predicted_a.is_some()
+        || road_predicted.is_some();
     outcome.prior_kept = prior_kept(opts.hypotheses(), road_predicted.is_some(), others_competed);
     // Whether the alternative `b` may replace `a` by the spatial plausibility of its support.
     let spread_ok = |b: &[Vec<bool>], a: &[Vec<bool>]| {
@@ -2247,6 +2266,38 @@ fn yaw_history_prediction(
     Some((p, sup_p))
 }
 
+/// The model's first prior residual at `params` in magnitude, in its own standard deviations
+/// (the soft single-track model's side slip `(heading − ω_z / 2) / σ_slip`; 0 for a model
+/// without prior residuals).
+fn slip_residual(ctx: &SolveContext<'_>, params: &[f64]) -> f64 {
+    (ctx.estimator.prior_residuals(params).first()).map_or(0.0, |q| q.abs())
+}
+
+/// Whether `x` qualifies for [`HypothesesOptions::predict_by_slip`]: it jumped as for
+/// [`road_prediction`] (yaw more than `J'` from the recent frames' reference, a NaN yaw
+/// counting as a jump, or a tilt that jumps, its road weak) and slides by more than `k` (not
+/// with [`HypothesesOptions::predict_by_road_alternatives`]).
+fn slides(
+    ctx: &SolveContext<'_>,
+    h: &HypothesesOptions,
+    tracker: &HypothesisTracker,
+    x: &Candidate,
+) -> bool {
+    let Some(r) = tracker.yaw_reference() else {
+        return false;
+    };
+    h.predict_by_slip > 0.0
+        && h.predict_by_road > 0.0
+        && !h.predict_by_road_alternatives
+        && slip_residual(ctx, &x.0.params) > h.predict_by_slip
+        && (!((yaw_of(ctx, &x.0.params) - r).abs() <= h.predict_by_road)
+            || tracker.tilt_jumps_given_road(
+                h,
+                crate::hypotheses::tilt(&ctx.estimator.motion(&x.0.params)),
+                true,
+            ))
+}
+
 /// The previous frame's motion re-solved on its support, chosen by its own road evidence
 /// ([`HypothesesOptions::predict_by_road`] `= J'`): where `x` (the motion the rules leave:
 /// an alternative a rule chose to replace A, else A) has `|ω_z(x) − r| > J'` (`r` the recent
@@ -2283,13 +2334,8 @@ fn road_prediction(
         return None;
     }
     let score_x = road_score(ctx, h, obs, x);
-    // `predict_by_slip` (the prediction alone, not with `predict_by_road_alternatives`): the
-    // model's first prior residual (the side slip) in its own sigmas.
-    let slip =
-        |params: &[f64]| (ctx.estimator.prior_residuals(params).first()).map_or(0.0, |q| q.abs());
-    let slipping = h.predict_by_slip > 0.0
-        && !h.predict_by_road_alternatives
-        && slip(&x.0.params) > h.predict_by_slip;
+    let slip = |params: &[f64]| slip_residual(ctx, params);
+    let slipping = slides(ctx, h, tracker, x);
     if score_x >= h.min_matches && !slipping {
         return None;
     }

@@ -360,6 +360,14 @@ pub struct TrustOptions {
     /// centre, the noise reading and every other rule read the frame as without the hold. 0:
     /// off. Default 5 (sixty-seventh session).
     pub side_slip_hold: usize,
+    /// [`TrustOptions::side_slip_hold`]'s hold also starts after a frame whose first motion a
+    /// rule of the separation's multi-frame choice replaced because it left the recent frames'
+    /// motion (its yaw jumped or it slid: `SeparationOutcome::pulled`): the vehicle that pulled
+    /// it is still there, and the next frames' direction of travel may follow it by less than
+    /// the full angle. At 3 px along the built-in drive (seed 11) a replaced frame 346 was
+    /// followed by frames 347-348 that slid 0.046 rad, 1.04-1.06 deg off, reported `estimated`
+    /// (seventy-first session, slip86). Report only. Default true.
+    pub side_slip_hold_pulled: bool,
     /// Without odometry.csv, on one camera whose arc length comes from the road plane
     /// (`odometry.road_scale_frames`): a moving frame is flagged `weak` / `stale_scale` where it
     /// was `estimated` once this many frames in a row, itself included, admitted no road arc
@@ -556,6 +564,7 @@ impl Default for TrustOptions {
             side_slip_change: 0.06,
             side_slip_lateral: 0.1,
             side_slip_hold: 5,
+            side_slip_hold_pulled: true,
             stale_scale_frames: 8,
             unconfirmed_scale: true,
             unconfirmed_start: true,

@@ -341,6 +341,14 @@ fn predict_by_slip_takes_the_turn_from_a_sliding_lead_vehicle() {
 /// slide. The simulation is the set's (500 frames), run over its first 107 frame pairs.
 #[test]
 fn predict_by_slip_alternatives_take_the_static_world_from_a_sliding_lead_vehicle() {
+    let on = |c: &Config| {
+        c.odometry
+            .separate
+            .as_ref()
+            .and_then(|s| s.hypotheses.as_ref())
+            .map(|h| h.predict_by_slip_alternatives)
+    };
+    assert_eq!(on(&Config::default()), Some(true));
     let sim = momo_sim::simulate(&momo_sim::SimConfig {
         frames: 500,
         seed: 44,

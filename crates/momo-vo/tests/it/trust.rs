@@ -1870,3 +1870,42 @@ fn a_yaw_jump_where_two_motions_compete_is_flagged_and_changes_no_pose() {
     let e = config_error("[trust]\ncontested_noise_slope = 2.0\n");
     assert!(e.contains("trust.contested_noise_slope"), "{e}");
 }
+
+/// `trust.side_slip_hold_pulled` (report only): along the built-in drive with moving traffic at
+/// 3 px, seed 11 (the hold-out set's drive s11 at 3 px, 500 frames; the first 348 frame pairs
+/// run here), a vehicle pulls the estimate sideways through frames 340-352. The separation's
+/// multi-frame choice replaces the pulled motion in frames 344-346, so no reported motion
+/// there slides and the side-slip hold does not start from them; frames 347-348 then slide by
+/// 0.046 rad (1.04-1.06 deg off), below the full angle of `trust.side_slip_change`. With the
+/// hold started by the replaced frame they are flagged `weak` / `side_slip`; without it they
+/// are `estimated`. The poses are the same.
+#[test]
+fn the_side_slip_hold_starts_after_a_frame_a_vehicle_pulled() {
+    use crate::support::first_errors_and_diagnostics;
+    assert!(Config::default().trust.side_slip_hold_pulled);
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames: 500,
+        seed: 11,
+        pixel_noise: 3.0,
+        ..momo_sim::SimConfig::moving_traffic()
+    })
+    .expect("simulated");
+    let mut off = Config::default();
+    off.trust.side_slip_hold_pulled = false;
+    let on = first_errors_and_diagnostics(&sim, Config::default(), 348);
+    let off = first_errors_and_diagnostics(&sim, off, 348);
+    for (k, ((_, a), (_, b))) in off.iter().zip(&on).enumerate() {
+        assert_eq!(a.params, b.params, "frame {}", k + 1);
+    }
+    for k in [347, 348] {
+        let ((e, a), (_, b)) = (&off[k - 1], &on[k - 1]);
+        assert!(*e > 1.0, "frame {k}: {e}");
+        assert_eq!(
+            a.status,
+            FrameStatus::Estimated,
+            "frame {k} without the pull's hold"
+        );
+        assert_eq!(b.status, FrameStatus::Weak, "frame {k} with it");
+        assert_eq!(b.reason, Some(Reason::SideSlip), "frame {k}");
+    }
+}
