@@ -3809,6 +3809,34 @@ mod tests {
             s.params[self.yaw_index] += d;
             (s, support.to_vec())
         }
+
+        /// `predict_by_slip`'s set-up: the options (the slip rule at `k = 6` beside a road rule
+        /// that does not act, every motion's road reaching `min_matches` 0), the previous
+        /// motion (0.1 deg off the truth), the `heading` parameter's index and a chosen motion
+        /// without support that turns 0.8 deg less than the truth and slides 8 deg sideways
+        /// (the default soft single-track model's slip sigma is 0.01 rad: 14 sigmas).
+        fn slip_case(&self) -> (HypothesesOptions, Vec<f64>, usize, Candidate) {
+            let deg = 1.0_f64.to_radians();
+            let none = self.support(false);
+            let heading = self
+                .counted
+                .estimator
+                .param_names()
+                .iter()
+                .position(|n| *n == "heading")
+                .expect("heading");
+            let h = HypothesesOptions {
+                yaw_history_frames: 1,
+                yaw_history_margin: deg,
+                predict_by_road: 0.5 * deg,
+                predict_by_slip: 6.0,
+                min_matches: 0,
+                ..HypothesesOptions::default()
+            };
+            let mut car = self.turned(-0.8 * deg, &none);
+            car.0.params[heading] -= 8.0 * deg;
+            (h, self.turned(0.1 * deg, &none).0.params, heading, car)
+        }
     }
 
     /// The default configuration's estimator and loss, a solver that counts its solves, and
@@ -4525,30 +4553,14 @@ mod tests {
         let none = f.support(false);
         let deg = 1.0_f64.to_radians();
         let support = |p: &[f64]| f.explained(p);
-        let previous = f.turned(0.1 * deg, &none).0.params;
-        let heading = estimator
-            .param_names()
-            .iter()
-            .position(|n| *n == "heading")
-            .expect("heading");
         // A road rule that does not act: every motion's road reaches `min_matches` (0).
-        let h = HypothesesOptions {
-            yaw_history_frames: 1,
-            yaw_history_margin: deg,
-            predict_by_road: 0.5 * deg,
-            predict_by_slip: 6.0,
-            min_matches: 0,
-            ..HypothesesOptions::default()
-        };
+        let (h, previous, _, car) = f.slip_case();
         let mut tracker = HypothesisTracker::default();
         tracker.record_yaw(&h, yaw_of(&ctx, &sol.params));
         let predict = |h: &HypothesesOptions, x: &Candidate| {
             road_prediction(&ctx, h, &tracker, obs, x, &[], &previous, &support)
         };
-        // The chosen motion turns 0.8 deg less and slides 8 deg sideways (the default soft
-        // single-track model's slip sigma is 0.01 rad: 14 sigmas).
-        let mut car = f.turned(-0.8 * deg, &none);
-        car.0.params[heading] -= 8.0 * deg;
+        // The chosen motion turns 0.8 deg less and slides 8 deg sideways.
         let q = estimator.prior_residuals(&car.0.params)[0].abs();
         assert!(q > 10.0, "the car slides: {q}");
         let (p, _) = predict(&h, &car).expect("replaced");
@@ -4585,7 +4597,8 @@ mod tests {
     /// history without sliding (here the static world's motion on every match, more road than
     /// the prediction) competes with the prediction by road: off, the prediction loses to it
     /// and nothing replaces `X`; on, it replaces `X`; a sliding alternative does not compete
-    /// but is what the others must beat; a motion that does not slide is left to the road rule.
+    /// (the prediction, with more road, replaces `X`); an alternative that jumped as far as `X`
+    /// is what the prediction must beat; a motion that does not slide is left to the road rule.
     #[test]
     fn predict_by_slip_alternatives_lets_a_steady_alternative_replace_a_sliding_jump() {
         let f = TurnedFrame::new();
@@ -4595,20 +4608,7 @@ mod tests {
         let none = f.support(false);
         let deg = 1.0_f64.to_radians();
         let support = |p: &[f64]| f.explained(p);
-        let previous = f.turned(0.1 * deg, &none).0.params;
-        let heading = estimator
-            .param_names()
-            .iter()
-            .position(|n| *n == "heading")
-            .expect("heading");
-        let plain = HypothesesOptions {
-            yaw_history_frames: 1,
-            yaw_history_margin: deg,
-            predict_by_road: 0.5 * deg,
-            predict_by_slip: 6.0,
-            min_matches: 0,
-            ..HypothesesOptions::default()
-        };
+        let (plain, previous, heading, car) = f.slip_case();
         let on = HypothesesOptions {
             predict_by_slip_alternatives: true,
             ..plain.clone()
@@ -4618,8 +4618,6 @@ mod tests {
         let predict = |h: &HypothesesOptions, x: &Candidate, alts: &[Candidate]| {
             road_prediction(&ctx, h, &tracker, obs, x, alts, &previous, &support)
         };
-        let mut car = f.turned(-0.8 * deg, &none);
-        car.0.params[heading] -= 8.0 * deg;
         assert!(estimator.prior_residuals(&car.0.params)[0].abs() > 10.0);
         // The static world's motion on every match: more road than the prediction's support.
         let world = (sol.clone(), f.support(true));
