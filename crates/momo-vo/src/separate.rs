@@ -1675,10 +1675,7 @@ fn separate_with(
                 starts.first()?,
                 &support,
             )
-            .map(|c| (c, slides(ctx, h, tracker, x)))
         });
-    let slide_replaced = road_predicted.as_ref().is_some_and(|(_, s)| *s);
-    let road_predicted = road_predicted.map(|(c, _)| c);
     // Competition over time (`persistence`): an alternative whose split from A the memory
     // does not follow is A's noise tail, not a second motion.
     if opts.persistence > 0.0 {
@@ -1744,8 +1741,8 @@ fn separate_with(
         || predicted_a.is_some();
     outcome.competing = others_competed || road_predicted.is_some();
     outcome.road_predicted = road_predicted.is_some();
-    outcome.pulled = slide_replaced
-        || jumped_a.is_some()
+    // (A replacement by `predict_by_slip` is one by `road_prediction`.)
+    outcome.pulled = jumped_a.is_some()
         || turned_a.is_some()
         || predicted_a.is_some()
         || road_predicted.is_some();
@@ -2273,31 +2270,6 @@ fn slip_residual(ctx: &SolveContext<'_>, params: &[f64]) -> f64 {
     (ctx.estimator.prior_residuals(params).first()).map_or(0.0, |q| q.abs())
 }
 
-/// Whether `x` qualifies for [`HypothesesOptions::predict_by_slip`]: it jumped as for
-/// [`road_prediction`] (yaw more than `J'` from the recent frames' reference, a NaN yaw
-/// counting as a jump, or a tilt that jumps, its road weak) and slides by more than `k` (not
-/// with [`HypothesesOptions::predict_by_road_alternatives`]).
-fn slides(
-    ctx: &SolveContext<'_>,
-    h: &HypothesesOptions,
-    tracker: &HypothesisTracker,
-    x: &Candidate,
-) -> bool {
-    let Some(r) = tracker.yaw_reference() else {
-        return false;
-    };
-    h.predict_by_slip > 0.0
-        && h.predict_by_road > 0.0
-        && !h.predict_by_road_alternatives
-        && slip_residual(ctx, &x.0.params) > h.predict_by_slip
-        && (!((yaw_of(ctx, &x.0.params) - r).abs() <= h.predict_by_road)
-            || tracker.tilt_jumps_given_road(
-                h,
-                crate::hypotheses::tilt(&ctx.estimator.motion(&x.0.params)),
-                true,
-            ))
-}
-
 /// The previous frame's motion re-solved on its support, chosen by its own road evidence
 /// ([`HypothesesOptions::predict_by_road`] `= J'`): where `x` (the motion the rules leave:
 /// an alternative a rule chose to replace A, else A) has `|ω_z(x) − r| > J'` (`r` the recent
@@ -2334,8 +2306,12 @@ fn road_prediction(
         return None;
     }
     let score_x = road_score(ctx, h, obs, x);
+    // `predict_by_slip` (the prediction alone, not with `predict_by_road_alternatives`): `X`,
+    // which jumped, slides by more than `k` of the model's slip sigmas.
     let slip = |params: &[f64]| slip_residual(ctx, params);
-    let slipping = slides(ctx, h, tracker, x);
+    let slipping = h.predict_by_slip > 0.0
+        && !h.predict_by_road_alternatives
+        && slip(&x.0.params) > h.predict_by_slip;
     if score_x >= h.min_matches && !slipping {
         return None;
     }
@@ -2353,86 +2329,71 @@ fn road_prediction(
         .filter(|p| continues(&p.params))
         .map(|p| {
             let sup = support(&p.params);
-            (p, sup)
+            let c = (p, sup);
+            (road_score(ctx, h, obs, &c), c)
         });
-    if !h.predict_by_road_alternatives {
-        let scores: Vec<usize> = alternatives
-            .iter()
-            .map(|alt| road_score(ctx, h, obs, alt))
-            .collect();
-        let p_scored = p.map(|c| (road_score(ctx, h, obs, &c), c));
-        if let Some((score_p, c)) = &p_scored {
-            let best_other = scores.iter().copied().fold(score_x, usize::max);
-            let by_road = score_x < h.min_matches
-                && *score_p >= h.min_matches
-                && *score_p as f64 > h.predict_by_road_ratio * best_other as f64;
-            // `predict_by_slip`: `X` slides sideways as no car does, `P` does not, and the
-            // road does not speak against `P` (ties included).
-            let by_slip = slipping
-                && !h.predict_by_slip_alternatives
-                && slip(&c.0.params) <= h.predict_by_slip
-                && *score_p >= best_other;
-            if by_road || by_slip {
-                return Some(c.clone());
-            }
-        }
-        if !(slipping && h.predict_by_slip_alternatives) {
-            return None;
-        }
-        // `predict_by_slip_alternatives`: `P` and the alternatives that continue the history
-        // within `J'` without sliding compete by road (`P` first); the best replaces `X` where
-        // its road is at least `X`'s and every other alternative's.
+    let scores: Vec<usize> = alternatives
+        .iter()
+        .map(|alt| road_score(ctx, h, obs, alt))
+        .collect();
+    // The contest of `predict_by_road_alternatives` and `predict_by_slip_alternatives`: of
+    // `P` and the alternatives (not `X` itself) that continue the history within `J'` of `r`
+    // (not the wider margin `P` may use: an alternative that moved as far as `X` did is no
+    // continuation, as a bus 0.8 deg off with its road-coloured lower part would be), those
+    // that pass `keep`, the one with the highest road score (`P` first of equals), with that
+    // score and the highest of `X`'s and the other alternatives' scores, which it must beat.
+    let contest = |keep: &dyn Fn(&[f64]) -> bool| -> Option<(usize, Candidate, usize)> {
         let mut beat = score_x;
-        let mut steady: Vec<(usize, &Candidate)> = Vec::new();
-        steady.extend(
-            p_scored
-                .as_ref()
-                .filter(|(_, c)| slip(&c.0.params) <= h.predict_by_slip)
-                .map(|(s, c)| (*s, c)),
-        );
+        let mut entrants: Vec<(usize, &Candidate)> = p
+            .iter()
+            .filter(|(_, c)| keep(&c.0.params))
+            .map(|(s, c)| (*s, c))
+            .collect();
         for (alt, &s) in alternatives.iter().zip(&scores) {
             if alt.0.params == x.0.params {
                 continue;
             }
             if (yaw_of(ctx, &alt.0.params) - r).abs() <= h.predict_by_road
                 && continues(&alt.0.params)
-                && slip(&alt.0.params) <= h.predict_by_slip
+                && keep(&alt.0.params)
             {
-                steady.push((s, alt));
+                entrants.push((s, alt));
             } else {
                 beat = beat.max(s);
             }
         }
-        let (score_c, _) = *steady.iter().rev().max_by_key(|(s, _)| *s)?;
-        return (score_c >= beat)
-            .then(|| first_highest(steady.into_iter()))
-            .flatten();
+        // `max_by_key` keeps the last of equal keys: over the reversed order, the first.
+        let (s, c) = entrants.into_iter().rev().max_by_key(|(s, _)| *s)?;
+        Some((s, c.clone(), beat))
+    };
+    if h.predict_by_road_alternatives {
+        let (score_c, c, beat) = contest(&|_| true)?;
+        return (score_c >= h.min_matches
+            && score_c as f64 > h.predict_by_road_ratio * beat as f64)
+            .then_some(c);
     }
-    // `predict_by_road_alternatives`: `P` and the alternatives that continue the history
-    // within `J'` (not `X` itself) compete by road; the others and `X` are what the best
-    // must beat.
-    let mut best_other = score_x;
-    let mut continuing: Vec<(usize, &Candidate)> = Vec::new();
-    let p_scored = p.as_ref().map(|c| (road_score(ctx, h, obs, c), c));
-    continuing.extend(p_scored);
-    for alt in alternatives {
-        if alt.0.params == x.0.params {
-            continue;
-        }
-        let s = road_score(ctx, h, obs, alt);
-        // Within `J'` of `r` (not the wider margin `P` may use): an alternative that moved
-        // as far as `X` did is no continuation (a bus 0.8 deg off with its road-coloured
-        // lower part would be).
-        if (yaw_of(ctx, &alt.0.params) - r).abs() <= h.predict_by_road && continues(&alt.0.params) {
-            continuing.push((s, alt));
-        } else {
-            best_other = best_other.max(s);
+    if let Some((score_p, c)) = &p {
+        let best_other = scores.iter().copied().fold(score_x, usize::max);
+        let by_road = score_x < h.min_matches
+            && *score_p >= h.min_matches
+            && *score_p as f64 > h.predict_by_road_ratio * best_other as f64;
+        // `predict_by_slip`: `X` slides sideways as no car does, `P` does not, and the road
+        // does not speak against `P` (ties included).
+        let by_slip = slipping
+            && !h.predict_by_slip_alternatives
+            && slip(&c.0.params) <= h.predict_by_slip
+            && *score_p >= best_other;
+        if by_road || by_slip {
+            return Some(c.clone());
         }
     }
-    let (score_c, _) = *continuing.iter().rev().max_by_key(|(s, _)| *s)?;
-    (score_c >= h.min_matches && score_c as f64 > h.predict_by_road_ratio * best_other as f64)
-        .then(|| first_highest(continuing.into_iter()))
-        .flatten()
+    // `predict_by_slip_alternatives`: the entrants that do not slide; the best replaces `X`
+    // where its road is at least `X`'s and every other alternative's.
+    if !(slipping && h.predict_by_slip_alternatives) {
+        return None;
+    }
+    let (score_c, c, beat) = contest(&|params: &[f64]| slip(params) <= h.predict_by_slip)?;
+    (score_c >= beat).then_some(c)
 }
 
 /// Whether a frame keeps the next frame's change-of-motion prior although the separation

@@ -334,7 +334,7 @@ fn predict_by_slip_takes_the_turn_from_a_sliding_lead_vehicle() {
 
 /// `predict_by_slip_alternatives`: the built-in drive with moving traffic, seed 44 (dev3's
 /// drive s44), frame pairs 103-107. The chosen motion follows a lead vehicle: it turns 0.7-0.9
-/// deg less than the car and slides sideways, flagged `side_slip`. The re-solved prediction has
+/// deg less than the car and slides sideways, flagged `weak`. The re-solved prediction has
 /// less road than an alternative that itself continues the yaw history without sliding (the
 /// static world's own fit), so the prediction alone, which must match every alternative's
 /// road, does not act; with the steady alternatives competing, that alternative replaces the
