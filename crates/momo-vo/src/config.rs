@@ -178,6 +178,22 @@ pub struct OdometryOptions {
     /// together, their errors run on from frame to frame, and a prior centred on the previous
     /// frame carries them on (simulated KITTI 07 and 08 drives, docs/RESULTS.md). 0: always.
     pub prior_min_arc_length: f64,
+    /// The tilt hold: where the change-of-motion prior has no centre because the frames since
+    /// the last trusted one (estimated, its inlier ratio within `prior_min_inlier_ratio`, no
+    /// competing motion: the frames that centre that prior) were doubted, a Gaussian prior on
+    /// the tilt parameters `rot_x` and `rot_y` (roll and pitch of the vehicle's rotation
+    /// vector) centred on the trusted frames' running mean, with standard deviation
+    /// `tilt_hold_sigma` radians, up to `tilt_hold_frames` frames after the last trusted one
+    /// (none after a standstill). A frame whose static matches are few or far sees its tilt only
+    /// together with its direction of travel; where objects hold most matches its tilt error
+    /// reaches 1-1.5 deg with a roll or pitch sigma of 0.6-2 deg while the vehicle's own tilt
+    /// changes by tenths of a degree per frame. 0 (the default): off; at 0.003 it helped on
+    /// some sets and hurt on others, as it also moves the separation's choice between motions
+    /// (docs/RESULTS.md, seventy-second session). Models without `rot_x` / `rot_y` parameters
+    /// are not affected.
+    pub tilt_hold_sigma: f64,
+    /// With `tilt_hold_sigma`: the most frames after the last trusted one the hold applies to.
+    pub tilt_hold_frames: usize,
     /// Motion separation after each frame's solve ([`crate::separate`]); by default
     /// [`SeparateOptions::competition_over_time`](crate::separate::SeparateOptions::competition_over_time)
     /// (since 2026-11-28; `enabled = false` turns it off). A config file's
@@ -717,6 +733,8 @@ impl Default for OdometryOptions {
             rotation_change_sigma: 0.002,
             prior_min_inlier_ratio: 0.85,
             prior_min_arc_length: 0.0,
+            tilt_hold_sigma: 0.0,
+            tilt_hold_frames: 30,
             separate: Some(crate::separate::SeparateOptions::competition_over_time()),
             final_fit: crate::final_fit::FinalFitOptions::default(),
             soft_prior_centring_frames: 100,
@@ -1661,6 +1679,12 @@ impl Config {
                     "odometry.restart_yaw_offsets has {} entries; at most {MAX_RESTART_OFFSETS}",
                     o.restart_yaw_offsets.len()
                 ),
+            );
+        }
+        if !finite_nonneg(o.tilt_hold_sigma) {
+            bad(
+                &["odometry.tilt_hold_sigma"],
+                "odometry.tilt_hold_sigma must be finite and >= 0 (0: off)".into(),
             );
         }
         if !finite_nonneg(o.prior_min_arc_length) {

@@ -185,6 +185,12 @@ pub const CONSISTENCY_QUIET_FRAMES: usize = 100;
 /// The median of a chi-square variable with one degree of freedom.
 const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_8;
 
+/// `odometry.tilt_hold_sigma`: the trusted frames' tilts are averaged exponentially over
+/// this many frames (the hold's centre: KITTI's per-frame roll and pitch scatter by about
+/// 0.002 rad from frame to frame, nearly independently, while a road's grade or a mount's
+/// offset moves the centre slowly).
+const TILT_HOLD_MEAN_FRAMES: f64 = 10.0;
+
 /// The frame-to-frame odometry: feed it frame pairs in order with [`Odometry::process`].
 ///
 /// Behaviour on degenerate frames (documented in the README and tested):
@@ -273,6 +279,11 @@ pub struct Odometry {
     /// average (a prior centred on a doubtful frame would hold a wrong motion from frame to
     /// frame while the inliers drain slowly: the KITTI 08 trajectory's slow tight turn).
     prior_ready: bool,
+    /// `odometry.tilt_hold_sigma`: the running mean of the trusted frames' tilts `(ω_x, ω_y)`
+    /// (the frames after which `prior_ready` held; exponential over
+    /// [`TILT_HOLD_MEAN_FRAMES`]) and the frames since the last of them (1 on the frame after
+    /// it); `None` before any and after a standstill.
+    tilt_hold: Option<([f64; 2], usize)>,
     /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
     /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
     trusted_streak: usize,
@@ -471,6 +482,7 @@ impl Odometry {
             param_inv_sigma: if has_params { inv_sigma } else { Vec::new() },
             rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
             prior_ready: false,
+            tilt_hold: None,
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
@@ -752,6 +764,31 @@ impl Odometry {
                 || self.config.odometry.final_fit.learnt_least_squares_share > 0.0)
                 .then_some(&self.parallax_tally),
         }
+    }
+
+    /// `odometry.tilt_hold_sigma`: the per-parameter prior (centre, inverse sigmas; full
+    /// vectors) of a frame whose change-of-motion prior has no centre: `rot_x` and `rot_y`
+    /// held at the trusted frames' running mean tilt with standard deviation
+    /// `tilt_hold_sigma`, at most `tilt_hold_frames` after the last trusted frame; the other
+    /// parameters free. None where the hold is off, no trusted frame is recent, or the model
+    /// has no `rot_x` / `rot_y`.
+    fn tilt_hold_prior(&self, init: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let o = &self.config.odometry;
+        let (tilt, n) = self.tilt_hold?;
+        if !(o.tilt_hold_sigma > 0.0) || n == 0 || n > o.tilt_hold_frames {
+            return None;
+        }
+        let names = self.estimator.param_names();
+        let ix = names.iter().position(|s| *s == "rot_x")?;
+        let iy = names.iter().position(|s| *s == "rot_y")?;
+        let mut center = init.to_vec();
+        let mut inv_sigma = vec![0.0; init.len()];
+        let w = 1.0 / o.tilt_hold_sigma;
+        for (i, t) in [(ix, tilt[0]), (iy, tilt[1])] {
+            *center.get_mut(i)? = t;
+            *inv_sigma.get_mut(i)? = w;
+        }
+        Some((center, inv_sigma))
     }
 
     /// The soft prior's residuals at `params` and their Jacobian over the free parameters
@@ -1157,6 +1194,7 @@ impl Odometry {
         self.inlier_ratio_average = None;
         self.inlier_share_peak = None;
         self.prior_ready = false;
+        self.tilt_hold = None;
         self.trusted_streak = 0;
         self.recent_tilts.clear();
         self.recent_motions.clear();
@@ -1360,11 +1398,19 @@ impl Odometry {
             let fast = arc_index
                 .is_none_or(|i| init[i].abs() >= self.config.odometry.prior_min_arc_length);
             let use_prior = self.prior_ready && fast;
+            let tilt_hold = if use_prior {
+                None
+            } else {
+                self.tilt_hold_prior(&init)
+            };
             let consistency = consistency_acts(self.since_competing, &self.config.odometry);
             let prior = &mut self.motion_prior;
             if use_prior && !self.param_inv_sigma.is_empty() {
                 prior.center.clone_from(&init);
                 prior.inv_sigma.clone_from(&self.param_inv_sigma);
+            } else if let Some((center, inv_sigma)) = tilt_hold {
+                prior.center = center;
+                prior.inv_sigma = inv_sigma;
             } else {
                 prior.center.clear();
                 prior.inv_sigma.clear();
@@ -1979,6 +2025,21 @@ impl Odometry {
         // only the road prediction did and `predict_by_road_prior` keeps it.
         self.prior_ready =
             diag.status == FrameStatus::Estimated && trusted && (!competing || prior_kept);
+        if standstill {
+            self.tilt_hold = None;
+        } else if self.prior_ready {
+            let w = so3_log(&self.estimator.motion(&params).rotation);
+            let mean = match self.tilt_hold {
+                Some((m, _)) => {
+                    let a = 1.0 / TILT_HOLD_MEAN_FRAMES;
+                    [m[0] + a * (w.x - m[0]), m[1] + a * (w.y - m[1])]
+                }
+                None => [w.x, w.y],
+            };
+            self.tilt_hold = Some((mean, 1));
+        } else if let Some((_, n)) = self.tilt_hold.as_mut() {
+            *n = n.saturating_add(1);
+        }
         self.trusted_streak = if self.prior_ready {
             self.trusted_streak.saturating_add(1)
         } else {
