@@ -194,6 +194,11 @@ pub struct OdometryOptions {
     pub tilt_hold_sigma: f64,
     /// With `tilt_hold_sigma`: the most frames after the last trusted one the hold applies to.
     pub tilt_hold_frames: usize,
+    /// With `tilt_hold_sigma`: the hold applies only to the final stage's refits
+    /// ([`crate::final_fit`]), after the motion separation has chosen among the frame's
+    /// motions, so it levels the chosen motion's tilt without moving the choice. false (the
+    /// default): every solve of the frame sees it.
+    pub tilt_hold_final: bool,
     /// Motion separation after each frame's solve ([`crate::separate`]); by default
     /// [`SeparateOptions::competition_over_time`](crate::separate::SeparateOptions::competition_over_time)
     /// (since 2026-11-28; `enabled = false` turns it off). A config file's
@@ -735,6 +740,7 @@ impl Default for OdometryOptions {
             prior_min_arc_length: 0.0,
             tilt_hold_sigma: 0.0,
             tilt_hold_frames: 30,
+            tilt_hold_final: false,
             separate: Some(crate::separate::SeparateOptions::competition_over_time()),
             final_fit: crate::final_fit::FinalFitOptions::default(),
             soft_prior_centring_frames: 100,

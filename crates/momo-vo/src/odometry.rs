@@ -284,6 +284,9 @@ pub struct Odometry {
     /// [`TILT_HOLD_MEAN_FRAMES`]) and the frames since the last of them (1 on the frame after
     /// it); `None` before any and after a standstill.
     tilt_hold: Option<([f64; 2], usize)>,
+    /// `odometry.tilt_hold_final`: this frame's tilt hold (centre, inverse sigmas), for the
+    /// final stage's prior ([`Odometry::final_fit`]).
+    frame_tilt_hold: Option<(Vec<f64>, Vec<f64>)>,
     /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
     /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
     trusted_streak: usize,
@@ -483,6 +486,7 @@ impl Odometry {
             rotation_inv_sigma: if sigma_w > 0.0 { 1.0 / sigma_w } else { 0.0 },
             prior_ready: false,
             tilt_hold: None,
+            frame_tilt_hold: None,
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
@@ -1195,6 +1199,7 @@ impl Odometry {
         self.inlier_share_peak = None;
         self.prior_ready = false;
         self.tilt_hold = None;
+        self.frame_tilt_hold = None;
         self.trusted_streak = 0;
         self.recent_tilts.clear();
         self.recent_motions.clear();
@@ -1398,11 +1403,15 @@ impl Odometry {
             let fast = arc_index
                 .is_none_or(|i| init[i].abs() >= self.config.odometry.prior_min_arc_length);
             let use_prior = self.prior_ready && fast;
-            let tilt_hold = if use_prior {
+            let mut tilt_hold = if use_prior {
                 None
             } else {
                 self.tilt_hold_prior(&init)
             };
+            self.frame_tilt_hold = None;
+            if self.config.odometry.tilt_hold_final {
+                self.frame_tilt_hold = tilt_hold.take();
+            }
             let consistency = consistency_acts(self.since_competing, &self.config.odometry);
             let prior = &mut self.motion_prior;
             if use_prior && !self.param_inv_sigma.is_empty() {
@@ -2939,6 +2948,16 @@ impl Odometry {
         let mut ctx = self.final_fit_context(&fixed, competing);
         ctx.constants = constants;
         ctx.stage = stage;
+        // `odometry.tilt_hold_final`: the frame's tilt hold in this stage's prior only.
+        let held;
+        if let Some((center, inv_sigma)) = &self.frame_tilt_hold {
+            held = MotionPrior {
+                center: center.clone(),
+                inv_sigma: inv_sigma.clone(),
+                ..self.motion_prior.clone()
+            };
+            ctx.motion_prior = &held;
+        }
         crate::final_fit::refit_supported(&ctx, opts, obs, sol)
     }
 
