@@ -774,19 +774,19 @@ impl Odometry {
     /// vectors) of a frame whose change-of-motion prior has no centre: `rot_x` and `rot_y`
     /// held at the trusted frames' running mean tilt with standard deviation
     /// `tilt_hold_sigma`, at most `tilt_hold_frames` after the last trusted frame; the other
-    /// parameters free. None where the hold is off, no trusted frame is recent, or the model
-    /// has no `rot_x` / `rot_y`.
-    fn tilt_hold_prior(&self, init: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+    /// parameters free (inverse sigma 0, centre 0). None where the hold is off, no trusted
+    /// frame is recent, or the model has no `rot_x` / `rot_y`.
+    fn tilt_hold_prior(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let o = &self.config.odometry;
         let (tilt, n) = self.tilt_hold?;
-        if !(o.tilt_hold_sigma > 0.0) || n == 0 || n > o.tilt_hold_frames {
+        if !(o.tilt_hold_sigma > 0.0) || n > o.tilt_hold_frames {
             return None;
         }
         let names = self.estimator.param_names();
         let ix = names.iter().position(|s| *s == "rot_x")?;
         let iy = names.iter().position(|s| *s == "rot_y")?;
-        let mut center = init.to_vec();
-        let mut inv_sigma = vec![0.0; init.len()];
+        let mut center = vec![0.0; names.len()];
+        let mut inv_sigma = vec![0.0; names.len()];
         let w = 1.0 / o.tilt_hold_sigma;
         for (i, t) in [(ix, tilt[0]), (iy, tilt[1])] {
             *center.get_mut(i)? = t;
@@ -1406,7 +1406,7 @@ impl Odometry {
             let mut tilt_hold = if use_prior {
                 None
             } else {
-                self.tilt_hold_prior(&init)
+                self.tilt_hold_prior()
             };
             self.frame_tilt_hold = None;
             if self.config.odometry.tilt_hold_final {
