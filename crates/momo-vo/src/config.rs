@@ -187,18 +187,16 @@ pub struct OdometryOptions {
     /// (none after a standstill). A frame whose static matches are few or far sees its tilt only
     /// together with its direction of travel; where objects hold most matches its tilt error
     /// reaches 1-1.5 deg with a roll or pitch sigma of 0.6-2 deg while the vehicle's own tilt
-    /// changes by tenths of a degree per frame. 0 (the default): off; at 0.003 it helped on
-    /// some sets and hurt on others, as it also moves the separation's choice between motions
-    /// (docs/RESULTS.md, seventy-second session). Models without `rot_x` / `rot_y` parameters
-    /// are not affected.
+    /// changes by tenths of a degree per frame. 0.003 (the default, from the ground truth's
+    /// scatter), in the report only (`tilt_hold_stage`, docs/RESULTS.md, seventy-third
+    /// session); 0: off. In every solve it helped on some sets and hurt on others, as it also
+    /// moves the separation's choice between motions (seventy-second session). Models without
+    /// `rot_x` / `rot_y` parameters are not affected.
     pub tilt_hold_sigma: f64,
     /// With `tilt_hold_sigma`: the most frames after the last trusted one the hold applies to.
     pub tilt_hold_frames: usize,
-    /// With `tilt_hold_sigma`: the hold applies only to the final stage's refits
-    /// ([`crate::final_fit`]), after the motion separation has chosen among the frame's
-    /// motions, so it levels the chosen motion's tilt without moving the choice. false (the
-    /// default): every solve of the frame sees it.
-    pub tilt_hold_final: bool,
+    /// With `tilt_hold_sigma`: where the hold acts ([`TiltHoldStage`]).
+    pub tilt_hold_stage: TiltHoldStage,
     /// Motion separation after each frame's solve ([`crate::separate`]); by default
     /// [`SeparateOptions::competition_over_time`](crate::separate::SeparateOptions::competition_over_time)
     /// (since 2026-11-28; `enabled = false` turns it off). A config file's
@@ -701,6 +699,26 @@ pub struct OdometryOptions {
 /// separation (a support drop: a new object or a compromise motion).
 pub const QUIET_SUPPORT_DROP: f64 = 0.9;
 
+/// `odometry.tilt_hold_stage`: where the tilt hold (`odometry.tilt_hold_sigma`) acts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TiltHoldStage {
+    /// In every solve of the frame: it also moves the motion separation's choice between
+    /// motions, and through the run's state (warm start, histories, match memory, the priors'
+    /// centres) later frames.
+    Solves,
+    /// In the final stage's refits ([`crate::final_fit`]) only, after the separation has chosen;
+    /// the run's state reads the held motion, so later frames still move.
+    Final,
+    /// In the report only: the final stage's refits are run once more with the hold, and the
+    /// frame reports the held refit of the motion it goes on with (its reported covariance is
+    /// the one without the hold). The run's state reads the motion without it, so no other
+    /// frame moves. Where the frame's motion is not a final-stage refit (a rule replaced it
+    /// afterwards), nothing is held.
+    #[default]
+    Report,
+}
+
 /// `odometry.road_scale_mount`: what a run over a whole sequence without odometry.csv does with
 /// the mount before the road gives the scale.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -738,9 +756,9 @@ impl Default for OdometryOptions {
             rotation_change_sigma: 0.002,
             prior_min_inlier_ratio: 0.85,
             prior_min_arc_length: 0.0,
-            tilt_hold_sigma: 0.0,
+            tilt_hold_sigma: 0.003,
             tilt_hold_frames: 30,
-            tilt_hold_final: false,
+            tilt_hold_stage: TiltHoldStage::Report,
             separate: Some(crate::separate::SeparateOptions::competition_over_time()),
             final_fit: crate::final_fit::FinalFitOptions::default(),
             soft_prior_centring_frames: 100,

@@ -45,7 +45,7 @@ pub use calibrate::{
 };
 pub use config::{
     Config, ConfigError, FivePointOptions, MAX_CONFIG_BYTES, OdometryOptions, Origin,
-    RoadScaleMount,
+    RoadScaleMount, TiltHoldStage,
 };
 pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,

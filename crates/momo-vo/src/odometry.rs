@@ -1,7 +1,7 @@
 //! The odometry driver: one frame pair's matches in, the vehicle motion and diagnostics out,
 //! warm-started from the previous motion (the paper's prior).
 
-use crate::config::{Config, ConfigError};
+use crate::config::{Config, ConfigError, TiltHoldStage};
 use crate::trust::{self, Constraint, Reason};
 use momo_core::{
     CameraModel, CoreError, FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose,
@@ -284,9 +284,13 @@ pub struct Odometry {
     /// [`TILT_HOLD_MEAN_FRAMES`]) and the frames since the last of them (1 on the frame after
     /// it); `None` before any and after a standstill.
     tilt_hold: Option<([f64; 2], usize)>,
-    /// `odometry.tilt_hold_final`: this frame's tilt hold (centre, inverse sigmas), for the
+    /// `odometry.tilt_hold_stage` final or report: this frame's tilt hold (centre, inverse
+    /// sigmas), for the
     /// final stage's prior ([`Odometry::final_fit`]).
     frame_tilt_hold: Option<(Vec<f64>, Vec<f64>)>,
+    /// `odometry.tilt_hold_stage = "report"`: the final stage's refits of this frame with its tilt hold,
+    /// each beside the refit without it (the one the frame goes on with).
+    held_refits: std::sync::Mutex<Vec<(Vec<f64>, Vec<f64>)>>,
     /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
     /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
     trusted_streak: usize,
@@ -487,6 +491,7 @@ impl Odometry {
             prior_ready: false,
             tilt_hold: None,
             frame_tilt_hold: None,
+            held_refits: std::sync::Mutex::new(Vec::new()),
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
@@ -1200,6 +1205,9 @@ impl Odometry {
         self.prior_ready = false;
         self.tilt_hold = None;
         self.frame_tilt_hold = None;
+        if let Ok(refits) = self.held_refits.get_mut() {
+            refits.clear();
+        }
         self.trusted_streak = 0;
         self.recent_tilts.clear();
         self.recent_motions.clear();
@@ -1409,7 +1417,10 @@ impl Odometry {
                 self.tilt_hold_prior()
             };
             self.frame_tilt_hold = None;
-            if self.config.odometry.tilt_hold_final {
+            if let Ok(refits) = self.held_refits.get_mut() {
+                refits.clear();
+            }
+            if self.config.odometry.tilt_hold_stage != TiltHoldStage::Solves {
                 self.frame_tilt_hold = tilt_hold.take();
             }
             let consistency = consistency_acts(self.since_competing, &self.config.odometry);
@@ -2286,7 +2297,25 @@ impl Odometry {
                 flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
             }
         }
-        diag.params = params.clone();
+        // `odometry.tilt_hold_stage = "report"`: the reported motion is the final stage's refit with the
+        // frame's tilt hold; every state above and the next frame's warm start read the motion
+        // without it.
+        let held = self.held_refits.get_mut().map(std::mem::take).ok();
+        let held = held
+            .into_iter()
+            .flatten()
+            .filter(|_| !standstill)
+            .find_map(|(free, held)| (free == params).then_some(held));
+        let motion = match held {
+            Some(held) => {
+                diag.params = held;
+                self.estimator.motion(&diag.params)
+            }
+            None => {
+                diag.params = params.clone();
+                motion
+            }
+        };
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
         if let (Some(i), Some(l)) = (arc_index, self.last_arc_length)
@@ -2948,9 +2977,13 @@ impl Odometry {
         let mut ctx = self.final_fit_context(&fixed, competing);
         ctx.constants = constants;
         ctx.stage = stage;
-        // `odometry.tilt_hold_final`: the frame's tilt hold in this stage's prior only.
+        // `odometry.tilt_hold_stage = "final"`: the frame's tilt hold in this stage's prior only.
         let held;
-        if let Some((center, inv_sigma)) = &self.frame_tilt_hold {
+        if let Some((center, inv_sigma)) = self
+            .frame_tilt_hold
+            .as_ref()
+            .filter(|_| self.config.odometry.tilt_hold_stage == TiltHoldStage::Final)
+        {
             held = MotionPrior {
                 center: center.clone(),
                 inv_sigma: inv_sigma.clone(),
@@ -2958,7 +2991,24 @@ impl Odometry {
             };
             ctx.motion_prior = &held;
         }
-        crate::final_fit::refit_supported(&ctx, opts, obs, sol)
+        let report = (self.config.odometry.tilt_hold_stage == TiltHoldStage::Report
+            && self.frame_tilt_hold.is_some())
+        .then(|| sol.clone());
+        let out = crate::final_fit::refit_supported(&ctx, opts, obs, sol);
+        // `tilt_hold_stage = "report"`: the same refit with the frame's hold, kept for the report.
+        if let (Some(start), Some((center, inv_sigma))) = (report, &self.frame_tilt_hold) {
+            let held = MotionPrior {
+                center: center.clone(),
+                inv_sigma: inv_sigma.clone(),
+                ..self.motion_prior.clone()
+            };
+            ctx.motion_prior = &held;
+            let (fin, _, _) = crate::final_fit::refit_supported(&ctx, opts, obs, start);
+            if let Ok(mut refits) = self.held_refits.lock() {
+                refits.push((out.0.params.clone(), fin.params));
+            }
+        }
+        out
     }
 
     /// The previous motion's basin on a rig (`odometry.previous_basin_change`, 1 deg by default, off at 0): where
