@@ -284,12 +284,11 @@ pub struct Odometry {
     /// [`TILT_HOLD_MEAN_FRAMES`]) and the frames since the last of them (1 on the frame after
     /// it); `None` before any and after a standstill.
     tilt_hold: Option<([f64; 2], usize)>,
-    /// `odometry.tilt_hold_stage` final or report: this frame's tilt hold (centre, inverse
-    /// sigmas), for the
-    /// final stage's prior ([`Odometry::final_fit`]).
+    /// `odometry.tilt_hold_stage` `"final"` or `"report"`: this frame's tilt hold (centre,
+    /// inverse sigmas), for the final stage's prior ([`Odometry::final_fit`]).
     frame_tilt_hold: Option<(Vec<f64>, Vec<f64>)>,
-    /// `odometry.tilt_hold_stage = "report"`: the final stage's refits of this frame with its tilt hold,
-    /// each beside the refit without it (the one the frame goes on with).
+    /// `odometry.tilt_hold_stage = "report"`: the final stage's refits of this frame with its
+    /// tilt hold, each beside the refit without it (the one the frame goes on with).
     held_refits: std::sync::Mutex<Vec<(Vec<f64>, Vec<f64>)>>,
     /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
     /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
@@ -2297,9 +2296,9 @@ impl Odometry {
                 flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
             }
         }
-        // `odometry.tilt_hold_stage = "report"`: the reported motion is the final stage's refit with the
-        // frame's tilt hold; every state above and the next frame's warm start read the motion
-        // without it.
+        // `odometry.tilt_hold_stage = "report"`: the reported motion is the final stage's refit
+        // with the frame's tilt hold; every state above and the next frame's warm start read the
+        // motion without it.
         let held = self.held_refits.get_mut().map(std::mem::take).ok();
         let held = held
             .into_iter()
