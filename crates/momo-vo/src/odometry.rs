@@ -2299,12 +2299,18 @@ impl Odometry {
         // `odometry.tilt_hold_stage = "report"`: the reported motion is the final stage's refit
         // with the frame's tilt hold; every state above and the next frame's warm start read the
         // motion without it.
-        let held = self.held_refits.get_mut().map(std::mem::take).ok();
-        let held = held
-            .into_iter()
-            .flatten()
-            .filter(|_| !standstill)
-            .find_map(|(free, held)| (free == params).then_some(held));
+        let refits = self
+            .held_refits
+            .get_mut()
+            .map(std::mem::take)
+            .unwrap_or_default();
+        let held = (!standstill)
+            .then(|| {
+                refits
+                    .into_iter()
+                    .find_map(|(free, held)| (free == params).then_some(held))
+            })
+            .flatten();
         let motion = match held {
             Some(held) => {
                 diag.params = held;
@@ -2977,37 +2983,36 @@ impl Odometry {
         ctx.constants = constants;
         ctx.stage = stage;
         // `odometry.tilt_hold_stage = "final"`: the frame's tilt hold in this stage's prior only.
-        let held;
-        if let Some((center, inv_sigma)) = self
-            .frame_tilt_hold
-            .as_ref()
-            .filter(|_| self.config.odometry.tilt_hold_stage == TiltHoldStage::Final)
-        {
-            held = MotionPrior {
-                center: center.clone(),
-                inv_sigma: inv_sigma.clone(),
-                ..self.motion_prior.clone()
-            };
-            ctx.motion_prior = &held;
+        let stage_hold = self.frame_hold_prior(TiltHoldStage::Final);
+        if let Some(held) = &stage_hold {
+            ctx.motion_prior = held;
         }
-        let report = (self.config.odometry.tilt_hold_stage == TiltHoldStage::Report
-            && self.frame_tilt_hold.is_some())
-        .then(|| sol.clone());
+        // `"report"`: the same refit once more with the hold, kept beside it for the report.
+        let report_hold = self.frame_hold_prior(TiltHoldStage::Report);
+        let start = report_hold.as_ref().map(|_| sol.clone());
         let out = crate::final_fit::refit_supported(&ctx, opts, obs, sol);
-        // `tilt_hold_stage = "report"`: the same refit with the frame's hold, kept for the report.
-        if let (Some(start), Some((center, inv_sigma))) = (report, &self.frame_tilt_hold) {
-            let held = MotionPrior {
-                center: center.clone(),
-                inv_sigma: inv_sigma.clone(),
-                ..self.motion_prior.clone()
-            };
-            ctx.motion_prior = &held;
+        if let (Some(held), Some(start)) = (&report_hold, start) {
+            ctx.motion_prior = held;
             let (fin, _, _) = crate::final_fit::refit_supported(&ctx, opts, obs, start);
             if let Ok(mut refits) = self.held_refits.lock() {
                 refits.push((out.0.params.clone(), fin.params));
             }
         }
         out
+    }
+
+    /// The final stage's motion prior with this frame's tilt hold, where the hold acts on the
+    /// frame and `odometry.tilt_hold_stage` is `stage`.
+    fn frame_hold_prior(&self, stage: TiltHoldStage) -> Option<MotionPrior> {
+        if self.config.odometry.tilt_hold_stage != stage {
+            return None;
+        }
+        let (center, inv_sigma) = self.frame_tilt_hold.as_ref()?;
+        Some(MotionPrior {
+            center: center.clone(),
+            inv_sigma: inv_sigma.clone(),
+            ..self.motion_prior.clone()
+        })
     }
 
     /// The previous motion's basin on a rig (`odometry.previous_basin_change`, 1 deg by default, off at 0): where

@@ -333,9 +333,9 @@ fn slow_frames_can_be_solved_without_the_rotation_prior() {
 /// with the hold in the final stage only; over whole sets both moved later frames' choices and
 /// helped as often as they hurt (docs/RESULTS.md, seventy-second session). In the report only
 /// (the default stage; the hold is off by default) the run's state and every other frame stay
-/// as without the hold; frames 78-80
-/// do not move (rules chose their motions after the final stage), 18 of the first 80 frames
-/// do, and their error sum drops (seventy-third session). Needs `MOMO_DATA` (skips without it).
+/// as without the hold; frames 78-80 do not move (rules chose their motions after the final
+/// stage), 18 of the first 80 frames do, and their error sum drops (seventy-third session).
+/// Needs `MOMO_DATA` (skips without it).
 #[test]
 fn the_tilt_hold_keeps_doubted_frames_level() {
     let Some(sim) =
