@@ -187,13 +187,12 @@ pub struct OdometryOptions {
     /// (none after a standstill). A frame whose static matches are few or far sees its tilt only
     /// together with its direction of travel; where objects hold most matches its tilt error
     /// reaches 1-1.5 deg with a roll or pitch sigma of 0.6-2 deg while the vehicle's own tilt
-    /// changes by tenths of a degree per frame. 0 (the default): off. 0.003 (the ground truth's
-    /// scatter) in the report only (`tilt_hold_stage`) took frames above 1 deg 5 -> 3 at 1 px
-    /// and 333 -> 304 at 2 px, but the report-only trust rules and the covariance's widening by
-    /// alternatives still read the motion without the hold (docs/RESULTS.md, seventy-third
-    /// session); in every solve it helped on some sets and hurt on others, as it also moves the
-    /// separation's choice between motions (seventy-second session). Models without `rot_x` /
-    /// `rot_y` parameters are not affected.
+    /// changes by tenths of a degree per frame. 0.003 (the default since the seventy-fourth
+    /// session; the ground truth's scatter) in the report only (`tilt_hold_stage`, the default)
+    /// took frames above 1 deg 5 -> 3 at 1 px and 333 -> 304 at 2 px (docs/RESULTS.md,
+    /// seventy-third and seventy-fourth sessions); in every solve it helped on some sets and
+    /// hurt on others, as it also moves the separation's choice between motions (seventy-second
+    /// session). 0: off. Models without `rot_x` / `rot_y` parameters are not affected.
     pub tilt_hold_sigma: f64,
     /// With `tilt_hold_sigma`: the most frames after the last trusted one the hold applies to.
     pub tilt_hold_frames: usize,
@@ -713,10 +712,11 @@ pub enum TiltHoldStage {
     /// the run's state reads the held motion, so later frames still move.
     Final,
     /// In the report only: the final stage's refits are run once more with the hold, and the
-    /// frame reports the held refit of the motion it goes on with (its reported covariance is
-    /// the one without the hold). The run's state reads the motion without it, so no other
-    /// frame moves. Where the frame's motion is not a final-stage refit (a rule replaced it
-    /// afterwards), nothing is held.
+    /// frame reports the held refit of the motion it goes on with. Its reported covariance is
+    /// widened about the held refit (competing motions, the road's alternatives, the previous
+    /// reported motion after a flag), and the report-only trust rules read it. The run's state
+    /// reads the motion without it, so no other frame's motion moves. Where the frame's motion
+    /// is not a final-stage refit (a rule replaced it afterwards), nothing is held.
     #[default]
     Report,
 }
@@ -758,7 +758,7 @@ impl Default for OdometryOptions {
             rotation_change_sigma: 0.002,
             prior_min_inlier_ratio: 0.85,
             prior_min_arc_length: 0.0,
-            tilt_hold_sigma: 0.0,
+            tilt_hold_sigma: 0.003,
             tilt_hold_frames: 30,
             tilt_hold_stage: TiltHoldStage::Report,
             separate: Some(crate::separate::SeparateOptions::competition_over_time()),

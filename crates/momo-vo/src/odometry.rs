@@ -290,6 +290,9 @@ pub struct Odometry {
     /// `odometry.tilt_hold_stage = "report"`: the final stage's refits of this frame with its
     /// tilt hold, each beside the refit without it (the one the frame goes on with).
     held_refits: std::sync::Mutex<Vec<(Vec<f64>, Vec<f64>)>>,
+    /// `tilt_hold_stage = "report"`: the previous frame's reported motion where it differs from
+    /// the motion the run went on with (empty otherwise), for `trust.after_flag_weight`.
+    previous_reported: Vec<f64>,
     /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
     /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
     trusted_streak: usize,
@@ -491,6 +494,7 @@ impl Odometry {
             tilt_hold: None,
             frame_tilt_hold: None,
             held_refits: std::sync::Mutex::new(Vec::new()),
+            previous_reported: Vec::new(),
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
@@ -1207,6 +1211,7 @@ impl Odometry {
         if let Ok(refits) = self.held_refits.get_mut() {
             refits.clear();
         }
+        self.previous_reported.clear();
         self.trusted_streak = 0;
         self.recent_tilts.clear();
         self.recent_motions.clear();
@@ -1650,6 +1655,9 @@ impl Odometry {
         let mut soft_sample = None;
         // Its data-only level of the soft-prior residuals (odometry.soft_prior_trend_frames).
         let mut soft_level = None;
+        // The alternatives the reported covariance is widened by about the frame's solution
+        // (`tilt_hold_stage = "report"` moves those terms to the held twin it reports).
+        let mut widened = Widened::default();
         let params = match result {
             Some(sol) => {
                 if standstill {
@@ -1856,6 +1864,12 @@ impl Odometry {
                     floor.as_ref(),
                     &mut diag,
                 );
+                widened.about.clone_from(&sol.params);
+                if let Some((b, w)) = &diag.competing
+                    && !diag.covariance.is_empty()
+                {
+                    widened.by.push((b.clone(), w * (1.0 - w)));
+                }
                 if standstill
                     && self.config.odometry.standstill_jackknife
                     && self.config.odometry.standstill_at_rest
@@ -1906,8 +1920,14 @@ impl Odometry {
                 // whatever the weight, so that the weight widens only the reported covariance.
                 let mut road_candidate = None;
                 if ground_drop && !standstill {
-                    road_candidate =
-                        self.widen_by_road_alternative(obs, &init, &fixed, &sol, &mut diag);
+                    road_candidate = self.widen_by_road_alternative(
+                        obs,
+                        &init,
+                        &fixed,
+                        &sol,
+                        &mut diag,
+                        &mut widened.by,
+                    );
                 }
                 if diag.constraint == Constraint::Weak {
                     diag.status = FrameStatus::Weak;
@@ -1919,12 +1939,21 @@ impl Odometry {
                     && diag.status == FrameStatus::Estimated
                     && self.config.trust.after_flag_weight > 0.0
                 {
-                    Self::widen_by_alternatives(
-                        &[&init],
-                        self.config.trust.after_flag_weight,
-                        &sol,
+                    // And the previous frame's reported motion, where its tilt was held.
+                    let reported = &self.previous_reported;
+                    let previous: Vec<&[f64]> = std::iter::once(init.as_slice())
+                        .chain((!reported.is_empty()).then_some(reported.as_slice()))
+                        .collect();
+                    let w = self.config.trust.after_flag_weight;
+                    if Self::widen_by_alternatives_at(
+                        &previous,
+                        w,
+                        &sol.free,
+                        &sol.params,
                         &mut diag,
-                    );
+                    ) {
+                        widened.by.extend(previous.iter().map(|p| (p.to_vec(), w)));
+                    }
                 }
                 // Standstill frames score another residual (rotation only): they do not count
                 // towards the running inlier ratio of the moving frames.
@@ -2019,6 +2048,13 @@ impl Odometry {
             }
         };
 
+        // `odometry.tilt_hold_stage = "report"`: the frame reports the held twin of its motion
+        // where that is one of the final stage's refits; every report-only rule below reads the
+        // reported motion (and the covariance is widened about it, below), the run's state the
+        // motion without the hold.
+        let report = self
+            .take_held_refit(&params, standstill)
+            .unwrap_or_else(|| params.clone());
         // `trust.competing_recheck_frames`: the competing-motions check once more from more
         // starts (report only: applied below, after the frame's state).
         let recheck = self.competing_recheck(obs, &params, standstill, &diag);
@@ -2131,9 +2167,22 @@ impl Odometry {
                 self.hypotheses.set_last_yaw_sigma(sigma);
             }
         }
+        // `tilt_hold_stage = "report"`, after the state above: the covariance's widenings about
+        // the solution are moved to the held twin the frame reports.
+        if report != params && widened.about == params {
+            let d = &mut diag;
+            widened.recentre(
+                &params,
+                &report,
+                &d.free,
+                &mut d.covariance,
+                &mut d.param_sigmas,
+            );
+        }
         // The yaw's change against the previous frame's reported motion (`trust.yaw_change`):
         // after the state above, so that it changes the report only.
         let motion = self.estimator.motion(&params);
+        let reported = self.estimator.motion(&report);
         let moving = !standstill
             && matches!(diag.status, FrameStatus::Estimated | FrameStatus::Weak)
             && diag.covariance.len() == diag.free.len().pow(2);
@@ -2141,7 +2190,7 @@ impl Odometry {
         let t = &self.config.trust;
         let omega =
             (t.support_change_share > 0.0 || t.yaw_change > 0.0 || t.contested_yaw_change > 0.0)
-                .then(|| momo_core::so3_log(&motion.rotation));
+                .then(|| momo_core::so3_log(&reported.rotation));
         // A small support with a jump of the yaw or the tilt (`trust.support_change_share`),
         // report only; before `yaw_change`, so that a frame it flags keeps this reason.
         if let (true, Some(omega)) = (self.config.trust.support_change_share > 0.0, omega) {
@@ -2158,17 +2207,17 @@ impl Odometry {
         if let (true, Some(omega)) = (self.config.trust.yaw_change > 0.0, omega) {
             let yaw = omega.z;
             if moving && let Some(previous_yaw) = self.previous_yaw {
-                self.flag_yaw_change(yaw - previous_yaw, &params, &mut diag);
+                self.flag_yaw_change(yaw - previous_yaw, &report, &mut diag);
             }
             self.previous_yaw = moving.then_some(yaw);
         }
         // The competing motion found by the recheck, report only: the mixture's covariance and,
         // where it dominates, the flag.
         if let Some((b, w, false)) = &recheck {
-            apply_recheck(&params, b, *w, &mut diag);
+            apply_recheck(&report, b, *w, &mut diag);
         }
         // The direction of travel left the vehicle's (`trust.side_slip_change`), report only.
-        let slip = moving.then(|| side_slip(&motion)).flatten();
+        let slip = moving.then(|| side_slip(&reported)).flatten();
         // `trust.side_slip_hold`: for so many moving frames after a jump, half the jump is one;
         // flagged at the end: every rule and the centre read the frame as without it (a centre
         // without the held frames moved later jumps' flags, sixty-seventh session).
@@ -2259,7 +2308,7 @@ impl Odometry {
         // `trust.start_own_noise`'s second motion, report only: after the frame's state (the
         // start's confirmation and the noise reading are the ones without it).
         if let Some((b, w, true)) = &recheck {
-            apply_recheck(&params, b, *w, &mut diag);
+            apply_recheck(&report, b, *w, &mut diag);
         }
         // A jump of the yaw where two motions compete (`trust.contested_yaw_change`), report
         // only: the last flag, once every competing motion of the frame is known.
@@ -2267,7 +2316,7 @@ impl Odometry {
             yaw: omega.z,
             noise_scale: diag.noise_scale,
             competing: diag.competing.is_some(),
-            params: &params,
+            params: &report,
         });
         if let Some(before) = self.contested_yaw.step(&self.config.trust, frame)
             && diag.status == FrameStatus::Estimated
@@ -2275,7 +2324,7 @@ impl Odometry {
             flag_weak_report_only(&mut diag, Reason::YawChange);
             let free = diag.free.clone();
             let w = self.config.trust.yaw_change_weight;
-            Self::widen_by_alternatives_at(&[&before], w, &free, &params, &mut diag);
+            Self::widen_by_alternatives_at(&[&before], w, &free, &report, &mut diag);
         }
         // `trust.side_slip_hold`'s flag, report only.
         if held {
@@ -2296,31 +2345,12 @@ impl Odometry {
                 flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
             }
         }
-        // `odometry.tilt_hold_stage = "report"`: the reported motion is the final stage's refit
-        // with the frame's tilt hold; every state above and the next frame's warm start read the
-        // motion without it.
-        let refits = self
-            .held_refits
-            .get_mut()
-            .map(std::mem::take)
-            .unwrap_or_default();
-        let held = (!standstill)
-            .then(|| {
-                refits
-                    .into_iter()
-                    .find_map(|(free, held)| (free == params).then_some(held))
-            })
-            .flatten();
-        let motion = match held {
-            Some(held) => {
-                diag.params = held;
-                self.estimator.motion(&diag.params)
-            }
-            None => {
-                diag.params = params.clone();
-                motion
-            }
+        self.previous_reported = if report != params {
+            report.clone()
+        } else {
+            Vec::new()
         };
+        diag.params = report;
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
         if let (Some(i), Some(l)) = (arc_index, self.last_arc_length)
@@ -2339,9 +2369,22 @@ impl Odometry {
         }
         diag.time_us = start.elapsed().as_secs_f64() * 1e6;
         FrameResult {
-            motion,
+            motion: reported,
             diagnostics: diag,
         }
+    }
+
+    /// `odometry.tilt_hold_stage = "report"`: the final stage's held twin of the frame's motion
+    /// `params`, where `params` is one of this frame's refits (none on a standstill); the
+    /// frame's list of refits is emptied.
+    fn take_held_refit(&mut self, params: &[f64], standstill: bool) -> Option<Vec<f64>> {
+        let refits = std::mem::take(self.held_refits.get_mut().ok()?);
+        if standstill {
+            return None;
+        }
+        refits
+            .into_iter()
+            .find_map(|(free, held)| (free == params && held != params).then_some(held))
     }
 
     /// Adds a frame's road arc length to the history of `odometry.road_scale_frames` unless it
@@ -3553,7 +3596,7 @@ impl Odometry {
     /// alternatives (`trust.road_alternative_weight` `w`): `Σ + w (d_c d_cᵀ + d_p d_pᵀ)`, `d_c`
     /// the road's alternative ([`Odometry::road_alternative`], where there is one) less the
     /// estimate, `d_p` the previous frame's motion `previous` less the estimate
-    /// ([`Odometry::widen_by_alternatives`]). Nothing where the weight is 0.
+    /// ([`Odometry::widen_by_alternatives_at`]). Nothing where the weight is 0.
     ///
     /// Returns the road's alternative's parameters where `odometry.decide_by_road` is to see
     /// them: where the frame's covariance can be widened (a free parameter, a covariance), as
@@ -3565,6 +3608,7 @@ impl Odometry {
         fixed: &[bool],
         sol: &FrameSolution,
         diag: &mut FrameDiagnostics,
+        widened: &mut Vec<(Vec<f64>, f64)>,
     ) -> Option<Vec<f64>> {
         let w = self.config.trust.road_alternative_weight;
         let k = sol.free.len();
@@ -3577,7 +3621,8 @@ impl Odometry {
             .map(|c| c.params);
         let mut alternatives = vec![previous];
         alternatives.extend(c.as_deref());
-        if Self::widen_by_alternatives(&alternatives, w, sol, diag) {
+        if Self::widen_by_alternatives_at(&alternatives, w, &sol.free, &sol.params, diag) {
+            widened.extend(alternatives.iter().map(|a| (a.to_vec(), w)));
             diag.road_alternative = c.clone();
         }
         c.filter(|_| widenable)
@@ -3649,24 +3694,21 @@ impl Odometry {
         }
         flag_weak_report_only(diag, Reason::YawChange);
         let free = diag.free.clone();
-        Self::widen_by_alternatives_at(&[&self.previous], t.yaw_change_weight, &free, params, diag);
+        // The previous frame's reported motion (its held twin where `tilt_hold_stage =
+        // "report"` reported one).
+        let previous = if self.previous_reported.is_empty() {
+            &self.previous
+        } else {
+            &self.previous_reported
+        };
+        Self::widen_by_alternatives_at(&[previous], t.yaw_change_weight, &free, params, diag);
     }
 
-    /// Widens the reported covariance by alternatives to the estimate (each all of the model's
-    /// parameters) with weight `w` ([`trust::alternatives_covariance`] over the free
-    /// parameters): `Σ + w Σ_j d_j d_jᵀ`; the sigmas grow by the same variances. Returns
-    /// whether it did (not where `w` is 0 or the frame has no covariance).
-    fn widen_by_alternatives(
-        alternatives: &[&[f64]],
-        w: f64,
-        sol: &FrameSolution,
-        diag: &mut FrameDiagnostics,
-    ) -> bool {
-        Self::widen_by_alternatives_at(alternatives, w, &sol.free, &sol.params, diag)
-    }
-
-    /// [`widen_by_alternatives`](Self::widen_by_alternatives) about the estimate `params` with
-    /// the free parameters `free`.
+    /// Widens the reported covariance by alternatives to the estimate `params` (each all of the
+    /// model's parameters; `free` the free ones) with weight `w`
+    /// ([`trust::alternatives_covariance`] over the free parameters): `Σ + w Σ_j d_j d_jᵀ`; the
+    /// sigmas grow by the same variances. Returns whether it did (not where `w` is 0 or the
+    /// frame has no covariance).
     fn widen_by_alternatives_at(
         alternatives: &[&[f64]],
         w: f64,
@@ -4407,6 +4449,66 @@ impl Odometry {
     }
 }
 
+/// The rank-one widenings of a frame's reported covariance about its solution `about`: each
+/// alternative `c` (all of the model's parameters) with its weight `w`, the term `w (c − a)(c −
+/// a)ᵀ` over the free parameters (a competing motion's mixture at `w (1 − w)`,
+/// [`trust::mixture_covariance`]; the road's alternatives and the previous motion after a flag,
+/// [`trust::alternatives_covariance`]).
+#[derive(Default)]
+struct Widened {
+    about: Vec<f64>,
+    by: Vec<(Vec<f64>, f64)>,
+}
+
+impl Widened {
+    /// Moves the widenings from `from` to `to` (`odometry.tilt_hold_stage = "report"`: the
+    /// frame reports its held twin `to`): `Σ' = Σ + Σ_j w_j (d_j d_jᵀ − e_j e_jᵀ)`, `d_j = c_j −
+    /// to`, `e_j = c_j − from`, the same covariance as had the terms been added about `to`; the
+    /// sigmas (of all parameters) change by the same variances. `covariance`: row-major over
+    /// the free parameters `free`. Nothing where the frame has no finite covariance.
+    fn recentre(
+        &self,
+        from: &[f64],
+        to: &[f64],
+        free_params: &[usize],
+        covariance: &mut Vec<f64>,
+        sigmas: &mut [f64],
+    ) {
+        let k = free_params.len();
+        if self.by.is_empty()
+            || k == 0
+            || covariance.len() != k * k
+            || covariance.iter().any(|v| !v.is_finite())
+        {
+            return;
+        }
+        let free = |p: &[f64]| -> Vec<f64> {
+            free_params
+                .iter()
+                .map(|&i| p.get(i).copied().unwrap_or(f64::NAN))
+                .collect()
+        };
+        let (a, b) = (free(from), free(to));
+        let cov = nalgebra::DMatrix::from_row_slice(k, k, covariance);
+        let mut wide = cov.clone();
+        for (c, w) in &self.by {
+            let c = free(c);
+            let d = nalgebra::DVector::from_iterator(k, c.iter().zip(&b).map(|(c, b)| c - b));
+            let e = nalgebra::DVector::from_iterator(k, c.iter().zip(&a).map(|(c, a)| c - a));
+            if d.iter().chain(e.iter()).all(|v| v.is_finite()) {
+                wide += (&d * d.transpose() - &e * e.transpose()) * *w;
+            }
+        }
+        for (j, &i) in free_params.iter().enumerate() {
+            let change = wide[(j, j)] - cov[(j, j)];
+            if let Some(s) = sigmas.get_mut(i) {
+                *s = (s.powi(2) + change).max(0.0).sqrt();
+            }
+        }
+        *covariance = wide.transpose().iter().copied().collect();
+    }
+}
+
 /// Reports `wide`, a widening of the frame's reported covariance `cov` over the free parameters
 /// `free`: the covariance (row by row) and each sigma grown by the variance added on its
 /// diagonal (the sigmas may already hold more than `cov`, e.g. an arc length's own sigma).
@@ -5082,6 +5184,58 @@ fn flag_ill_conditioned(diag: &mut FrameDiagnostics) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`Widened::recentre`]: widenings added about `from` (a competing motion's mixture and
+    /// two alternatives, over the free parameters 0, 1 and 3 of four) and moved to `to` give the
+    /// covariance and sigmas of the same widenings added about `to`; a parameter that is not
+    /// free keeps its sigma.
+    #[test]
+    fn recentred_widenings_equal_the_widenings_about_the_new_centre() {
+        let free = [0, 1, 3];
+        let base = nalgebra::DMatrix::from_row_slice(
+            3,
+            3,
+            &[4e-6, 1e-6, 0.0, 1e-6, 9e-6, -2e-6, 0.0, -2e-6, 1e-4],
+        );
+        let (from, to) = ([0.01, -0.02, 5.0, 1.2], [0.012, -0.021, 5.0, 1.19]);
+        let (b, w) = ([0.02, -0.01, 5.0, 1.3], 0.3);
+        let alternatives = [[0.0, 0.0, 5.0, 1.0], [0.015, -0.03, 5.0, 1.25]];
+        let at = |p: &[f64]| -> Vec<f64> { free.iter().map(|&i| p[i]).collect() };
+        let widen_about = |centre: &[f64]| {
+            let a = at(centre);
+            let mixed = trust::mixture_covariance(&base, &a, &at(&b), w);
+            let alts: Vec<Vec<f64>> = alternatives.iter().map(|c| at(c)).collect();
+            let alts: Vec<&[f64]> = alts.iter().map(Vec::as_slice).collect();
+            trust::alternatives_covariance(&mixed, &a, &alts, 1.0)
+        };
+        let widened = Widened {
+            about: from.to_vec(),
+            by: std::iter::once((b.to_vec(), w * (1.0 - w)))
+                .chain(alternatives.iter().map(|c| (c.to_vec(), 1.0)))
+                .collect(),
+        };
+        let sigmas_of = |m: &nalgebra::DMatrix<f64>| {
+            let mut s = vec![0.5; 4];
+            for (j, &i) in free.iter().enumerate() {
+                s[i] = m[(j, j)].sqrt();
+            }
+            s
+        };
+        let before = widen_about(&from);
+        let mut covariance: Vec<f64> = before.transpose().iter().copied().collect();
+        let mut sigmas = sigmas_of(&before);
+        widened.recentre(&from, &to, &free, &mut covariance, &mut sigmas);
+        let expected = widen_about(&to);
+        let got = nalgebra::DMatrix::from_row_slice(3, 3, &covariance);
+        assert!((&got - &expected).norm() < 1e-15, "{got} vs {expected}");
+        for (s, e) in sigmas.iter().zip(sigmas_of(&expected)) {
+            assert!((s - e).abs() < 1e-12, "{s} vs {e}");
+        }
+        assert!(
+            (got - &before).norm() > 1e-6,
+            "the centre moved the covariance"
+        );
+    }
 
     /// [`side_slip`]: a planar arc (translation along half the yaw) has no slip, a sideways
     /// step has a quarter turn less half the yaw, a backward step is read as its reverse, and

@@ -3,7 +3,7 @@
 use momo_core::{FrameObservations, Manifold};
 use momo_models::{Se3, SoftSingleTrack};
 use momo_testing::canned;
-use momo_vo::{Config, Odometry, TiltHoldStage};
+use momo_vo::{Config, Odometry, Reason, TiltHoldStage};
 
 fn obs_of(params: &[f64], seed: u64) -> FrameObservations {
     canned::synthetic_observations(&canned::pinhole_rig(), &Se3.motion(params), 150, 0, seed)
@@ -332,10 +332,10 @@ fn slow_frames_can_be_solved_without_the_rotation_prior() {
 /// frames' mean tilt (`tilt_hold_sigma = 0.003`) in every solve the worst is 0.10 deg, 0.11
 /// with the hold in the final stage only; over whole sets both moved later frames' choices and
 /// helped as often as they hurt (docs/RESULTS.md, seventy-second session). In the report only
-/// (the default stage; the hold is off by default) the run's state and every other frame stay
-/// as without the hold; frames 78-80 do not move (rules chose their motions after the final
-/// stage), 18 of the first 80 frames do, and their error sum drops (seventy-third session).
-/// Needs `MOMO_DATA` (skips without it).
+/// (the default since the seventy-fourth session) the run's state stays as without the hold;
+/// frames 78-80 do not move (rules chose their motions after the final stage), 18 of the first
+/// 80 frames do, and their error sum drops (9.248 -> 8.995 deg); no status changes, and 17
+/// covariances do (widened about the held twins). Needs `MOMO_DATA` (skips without it).
 #[test]
 fn the_tilt_hold_keeps_doubted_frames_level() {
     let Some(sim) =
@@ -355,7 +355,7 @@ fn the_tilt_hold_keeps_doubted_frames_level() {
     let defaults = Config::default().odometry;
     assert_eq!(
         (defaults.tilt_hold_sigma, defaults.tilt_hold_stage),
-        (0.0, TiltHoldStage::Report)
+        (0.003, TiltHoldStage::Report)
     );
     let plain = run(0.0, TiltHoldStage::Solves);
     let free = worst(&plain);
@@ -373,22 +373,50 @@ fn the_tilt_hold_keeps_doubted_frames_level() {
         held_final < 0.3,
         "frames 78-80, the hold in the final stage: {held_final}"
     );
-    // In the report only, the run's state is the one without the hold: every frame keeps its
-    // status, flag and reported sigmas, and only the reported motions of the frames it acts on
-    // move (here not frames 78-80, whose motions rules chose after the final stage).
-    let bits = |d: &momo_vo::FrameDiagnostics| {
-        d.param_sigmas
-            .iter()
-            .map(|x| x.to_bits())
-            .collect::<Vec<_>>()
+    // In the report only, the run's state is the one without the hold: only the reported
+    // motions of the frames it acts on move (here not frames 78-80, whose motions rules chose
+    // after the final stage). The report-only rules read the reported motions and the
+    // covariance is widened about the held twin, so a frame may change a report-only flag or
+    // its covariance only where it or the frame before it moved.
+    let report_only = |r: Option<Reason>| {
+        matches!(
+            r,
+            None | Some(
+                Reason::YawChange
+                    | Reason::SupportChange
+                    | Reason::SideSlip
+                    | Reason::LowSupport
+                    | Reason::StaleScale
+                    | Reason::UnconfirmedStart
+                    | Reason::IllConditioned
+            )
+        )
     };
-    let mut moved = 0;
-    for (k, ((_, a), (_, b))) in plain.iter().zip(&reported).enumerate() {
-        assert_eq!(a.status, b.status, "frame {}", k + 1);
-        assert_eq!(a.reason, b.reason, "frame {}", k + 1);
-        assert_eq!(bits(a), bits(b), "frame {}", k + 1);
+    let bits = |d: &momo_vo::FrameDiagnostics| {
+        d.covariance.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+    };
+    let (mut moved, mut widened) = (0, 0);
+    for k in 0..plain.len() {
+        let (a, b) = (&plain[k].1, &reported[k].1);
+        let touched = (k.saturating_sub(1)..=k).any(|j| plain[j].1.params != reported[j].1.params);
         moved += usize::from(a.params != b.params);
+        if (a.status, a.reason) != (b.status, b.reason) {
+            assert!(
+                touched && report_only(a.reason) && report_only(b.reason),
+                "frame {}: {:?} {:?} -> {:?} {:?}",
+                k + 1,
+                a.status,
+                a.reason,
+                b.status,
+                b.reason
+            );
+        }
+        if bits(a) != bits(b) {
+            assert!(touched, "frame {}: the covariance changed", k + 1);
+            widened += 1;
+        }
     }
+    eprintln!("report only: {widened} covariances changed");
     let sum = |f: &[(f64, momo_vo::FrameDiagnostics)]| f.iter().map(|(e, _)| e).sum::<f64>();
     eprintln!(
         "report only: {moved} frames moved; error sum {:.3} -> {:.3} deg",
