@@ -1864,11 +1864,10 @@ impl Odometry {
                     floor.as_ref(),
                     &mut diag,
                 );
-                widened.about.clone_from(&sol.params);
                 if let Some((b, w)) = &diag.competing
                     && !diag.covariance.is_empty()
                 {
-                    widened.by.push((b.clone(), w * (1.0 - w)));
+                    widened.add(&sol.params, [b.as_slice()], w * (1.0 - w));
                 }
                 if standstill
                     && self.config.odometry.standstill_jackknife
@@ -1926,7 +1925,7 @@ impl Odometry {
                         &fixed,
                         &sol,
                         &mut diag,
-                        &mut widened.by,
+                        &mut widened,
                     );
                 }
                 if diag.constraint == Constraint::Weak {
@@ -1952,7 +1951,7 @@ impl Odometry {
                         &sol.params,
                         &mut diag,
                     ) {
-                        widened.by.extend(previous.iter().map(|p| (p.to_vec(), w)));
+                        widened.add(&sol.params, previous.iter().copied(), w);
                     }
                 }
                 // Standstill frames score another residual (rotation only): they do not count
@@ -2013,13 +2012,10 @@ impl Odometry {
                         // that the report covers them from where the frame now is.
                         let mut others: Vec<&[f64]> = vec![params.as_slice()];
                         others.extend(alternatives.iter().map(Vec::as_slice));
-                        Self::widen_by_alternatives_at(
-                            &others,
-                            self.config.trust.road_alternative_weight,
-                            &sol.free,
-                            &p,
-                            &mut diag,
-                        );
+                        let w = self.config.trust.road_alternative_weight;
+                        if Self::widen_by_alternatives_at(&others, w, &sol.free, &p, &mut diag) {
+                            widened.add(&p, others.iter().copied(), w);
+                        }
                         params = p;
                     }
                 }
@@ -2169,7 +2165,7 @@ impl Odometry {
         }
         // `tilt_hold_stage = "report"`, after the state above: the covariance's widenings about
         // the solution are moved to the held twin the frame reports.
-        if report != params && widened.about == params {
+        if report != params {
             let d = &mut diag;
             widened.recentre(
                 &params,
@@ -3608,7 +3604,7 @@ impl Odometry {
         fixed: &[bool],
         sol: &FrameSolution,
         diag: &mut FrameDiagnostics,
-        widened: &mut Vec<(Vec<f64>, f64)>,
+        widened: &mut Widened,
     ) -> Option<Vec<f64>> {
         let w = self.config.trust.road_alternative_weight;
         let k = sol.free.len();
@@ -3622,7 +3618,7 @@ impl Odometry {
         let mut alternatives = vec![previous];
         alternatives.extend(c.as_deref());
         if Self::widen_by_alternatives_at(&alternatives, w, &sol.free, &sol.params, diag) {
-            widened.extend(alternatives.iter().map(|a| (a.to_vec(), w)));
+            widened.add(&sol.params, alternatives.iter().copied(), w);
             diag.road_alternative = c.clone();
         }
         c.filter(|_| widenable)
@@ -4449,23 +4445,35 @@ impl Odometry {
     }
 }
 
-/// The rank-one widenings of a frame's reported covariance about its solution `about`: each
-/// alternative `c` (all of the model's parameters) with its weight `w`, the term `w (c − a)(c −
-/// a)ᵀ` over the free parameters (a competing motion's mixture at `w (1 − w)`,
-/// [`trust::mixture_covariance`]; the road's alternatives and the previous motion after a flag,
-/// [`trust::alternatives_covariance`]).
+/// The rank-one widenings of a frame's reported covariance: each term an estimate `a` it was
+/// added about, an alternative `c` (both all of the model's parameters) and a weight `w`, the
+/// term `w (c − a)(c − a)ᵀ` over the free parameters (a competing motion's mixture at
+/// `w (1 − w)`, [`trust::mixture_covariance`]; the road's alternatives, the previous motion
+/// after a flag and `decide_by_road`'s candidates, [`trust::alternatives_covariance`]).
 #[derive(Default)]
 struct Widened {
-    about: Vec<f64>,
-    by: Vec<(Vec<f64>, f64)>,
+    terms: Vec<(Vec<f64>, Vec<f64>, f64)>,
 }
 
 impl Widened {
-    /// Moves the widenings from `from` to `to` (`odometry.tilt_hold_stage = "report"`: the
-    /// frame reports its held twin `to`): `Σ' = Σ + Σ_j w_j (d_j d_jᵀ − e_j e_jᵀ)`, `d_j = c_j −
-    /// to`, `e_j = c_j − from`, the same covariance as had the terms been added about `to`; the
-    /// sigmas (of all parameters) change by the same variances. `covariance`: row-major over
-    /// the free parameters `free`. Nothing where the frame has no finite covariance.
+    /// Records the terms of `alternatives` with weight `w` about `about`.
+    fn add<'a>(
+        &mut self,
+        about: &[f64],
+        alternatives: impl IntoIterator<Item = &'a [f64]>,
+        w: f64,
+    ) {
+        for c in alternatives {
+            self.terms.push((about.to_vec(), c.to_vec(), w));
+        }
+    }
+
+    /// Moves the widenings added about `from` to `to` (`odometry.tilt_hold_stage = "report"`:
+    /// the frame reports the held twin `to` of its motion `from`): `Σ' = Σ + Σ_j w_j (d_j d_jᵀ
+    /// − e_j e_jᵀ)` over those terms, `d_j = c_j − to`, `e_j = c_j − from`, the same covariance
+    /// as had they been added about `to`; the sigmas (of all parameters) change by the same
+    /// variances. `covariance`: row-major over the free parameters `free`. Terms added about
+    /// another motion stay; nothing where the frame has no finite covariance.
     fn recentre(
         &self,
         from: &[f64],
@@ -4475,7 +4483,7 @@ impl Widened {
         sigmas: &mut [f64],
     ) {
         let k = free_params.len();
-        if self.by.is_empty()
+        if !self.terms.iter().any(|(a, _, _)| a == from)
             || k == 0
             || covariance.len() != k * k
             || covariance.iter().any(|v| !v.is_finite())
@@ -4491,7 +4499,7 @@ impl Widened {
         let (a, b) = (free(from), free(to));
         let cov = nalgebra::DMatrix::from_row_slice(k, k, covariance);
         let mut wide = cov.clone();
-        for (c, w) in &self.by {
+        for (_, c, w) in self.terms.iter().filter(|(a, _, _)| a == from) {
             let c = free(c);
             let d = nalgebra::DVector::from_iterator(k, c.iter().zip(&b).map(|(c, b)| c - b));
             let e = nalgebra::DVector::from_iterator(k, c.iter().zip(&a).map(|(c, a)| c - a));
@@ -5187,8 +5195,8 @@ mod tests {
 
     /// [`Widened::recentre`]: widenings added about `from` (a competing motion's mixture and
     /// two alternatives, over the free parameters 0, 1 and 3 of four) and moved to `to` give the
-    /// covariance and sigmas of the same widenings added about `to`; a parameter that is not
-    /// free keeps its sigma.
+    /// covariance and sigmas of the same widenings added about `to`; a term added about another
+    /// motion stays, and a parameter that is not free keeps its sigma.
     #[test]
     fn recentred_widenings_equal_the_widenings_about_the_new_centre() {
         let free = [0, 1, 3];
@@ -5208,11 +5216,15 @@ mod tests {
             let alts: Vec<&[f64]> = alts.iter().map(Vec::as_slice).collect();
             trust::alternatives_covariance(&mixed, &a, &alts, 1.0)
         };
-        let widened = Widened {
-            about: from.to_vec(),
-            by: std::iter::once((b.to_vec(), w * (1.0 - w)))
-                .chain(alternatives.iter().map(|c| (c.to_vec(), 1.0)))
-                .collect(),
+        let mut widened = Widened::default();
+        widened.add(&from, [b.as_slice()], w * (1.0 - w));
+        widened.add(&from, alternatives.iter().map(|c| c.as_slice()), 1.0);
+        // A term about another motion is not moved.
+        let other = [0.0, 0.0, 5.0, 1.1];
+        widened.add(&other, [alternatives[0].as_slice()], 1.0);
+        let extra = |centre: &[f64], cov: nalgebra::DMatrix<f64>| {
+            let alt = at(&alternatives[0]);
+            trust::alternatives_covariance(&cov, &at(centre), &[alt.as_slice()], 1.0)
         };
         let sigmas_of = |m: &nalgebra::DMatrix<f64>| {
             let mut s = vec![0.5; 4];
@@ -5221,11 +5233,11 @@ mod tests {
             }
             s
         };
-        let before = widen_about(&from);
+        let before = extra(&other, widen_about(&from));
         let mut covariance: Vec<f64> = before.transpose().iter().copied().collect();
         let mut sigmas = sigmas_of(&before);
         widened.recentre(&from, &to, &free, &mut covariance, &mut sigmas);
-        let expected = widen_about(&to);
+        let expected = extra(&other, widen_about(&to));
         let got = nalgebra::DMatrix::from_row_slice(3, 3, &covariance);
         assert!((&got - &expected).norm() < 1e-15, "{got} vs {expected}");
         for (s, e) in sigmas.iter().zip(sigmas_of(&expected)) {
