@@ -291,8 +291,8 @@ pub struct Odometry {
     /// tilt hold, each beside the refit without it (the one the frame goes on with).
     held_refits: std::sync::Mutex<Vec<(Vec<f64>, Vec<f64>)>>,
     /// `tilt_hold_stage = "report"`: the previous frame's reported motion where it differs from
-    /// the motion the run went on with (empty otherwise), for `trust.after_flag_weight`.
-    previous_reported: Vec<f64>,
+    /// the motion the run went on with (its held twin), for the report-only widenings.
+    previous_reported: Option<Vec<f64>>,
     /// Consecutive frames, up to the last one, after which `prior_ready` held (estimated,
     /// trusted, no competing motion; `odometry.decide_by_road_trusted_frames`).
     trusted_streak: usize,
@@ -494,7 +494,7 @@ impl Odometry {
             tilt_hold: None,
             frame_tilt_hold: None,
             held_refits: std::sync::Mutex::new(Vec::new()),
-            previous_reported: Vec::new(),
+            previous_reported: None,
             trusted_streak: 0,
             recent_tilts: std::collections::VecDeque::new(),
             recent_motions: std::collections::VecDeque::new(),
@@ -1211,7 +1211,7 @@ impl Odometry {
         if let Ok(refits) = self.held_refits.get_mut() {
             refits.clear();
         }
-        self.previous_reported.clear();
+        self.previous_reported = None;
         self.trusted_streak = 0;
         self.recent_tilts.clear();
         self.recent_motions.clear();
@@ -1864,6 +1864,8 @@ impl Odometry {
                     floor.as_ref(),
                     &mut diag,
                 );
+                // The competing motion's mixture (`fill_diagnostics` adds it wherever the frame
+                // has a covariance).
                 if let Some((b, w)) = &diag.competing
                     && !diag.covariance.is_empty()
                 {
@@ -1939,20 +1941,11 @@ impl Odometry {
                     && self.config.trust.after_flag_weight > 0.0
                 {
                     // And the previous frame's reported motion, where its tilt was held.
-                    let reported = &self.previous_reported;
                     let previous: Vec<&[f64]> = std::iter::once(init.as_slice())
-                        .chain((!reported.is_empty()).then_some(reported.as_slice()))
+                        .chain(self.previous_reported.as_deref())
                         .collect();
                     let w = self.config.trust.after_flag_weight;
-                    if Self::widen_by_alternatives_at(
-                        &previous,
-                        w,
-                        &sol.free,
-                        &sol.params,
-                        &mut diag,
-                    ) {
-                        widened.add(&sol.params, previous.iter().copied(), w);
-                    }
+                    widened.widen(&previous, w, &sol.free, &sol.params, &mut diag);
                 }
                 // Standstill frames score another residual (rotation only): they do not count
                 // towards the running inlier ratio of the moving frames.
@@ -2013,9 +2006,7 @@ impl Odometry {
                         let mut others: Vec<&[f64]> = vec![params.as_slice()];
                         others.extend(alternatives.iter().map(Vec::as_slice));
                         let w = self.config.trust.road_alternative_weight;
-                        if Self::widen_by_alternatives_at(&others, w, &sol.free, &p, &mut diag) {
-                            widened.add(&p, others.iter().copied(), w);
-                        }
+                        widened.widen(&others, w, &sol.free, &p, &mut diag);
                         params = p;
                     }
                 }
@@ -2341,11 +2332,7 @@ impl Odometry {
                 flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
             }
         }
-        self.previous_reported = if report != params {
-            report.clone()
-        } else {
-            Vec::new()
-        };
+        self.previous_reported = (report != params).then(|| report.clone());
         diag.params = report;
         // The warm start keeps the last moving arc length so that the next frame's start is sane.
         self.previous = params;
@@ -3617,8 +3604,7 @@ impl Odometry {
             .map(|c| c.params);
         let mut alternatives = vec![previous];
         alternatives.extend(c.as_deref());
-        if Self::widen_by_alternatives_at(&alternatives, w, &sol.free, &sol.params, diag) {
-            widened.add(&sol.params, alternatives.iter().copied(), w);
+        if widened.widen(&alternatives, w, &sol.free, &sol.params, diag) {
             diag.road_alternative = c.clone();
         }
         c.filter(|_| widenable)
@@ -3692,11 +3678,7 @@ impl Odometry {
         let free = diag.free.clone();
         // The previous frame's reported motion (its held twin where `tilt_hold_stage =
         // "report"` reported one).
-        let previous = if self.previous_reported.is_empty() {
-            &self.previous
-        } else {
-            &self.previous_reported
-        };
+        let previous = self.previous_reported.as_ref().unwrap_or(&self.previous);
         Self::widen_by_alternatives_at(&[previous], t.yaw_change_weight, &free, params, diag);
     }
 
@@ -4466,6 +4448,24 @@ impl Widened {
         for c in alternatives {
             self.terms.push((about.to_vec(), c.to_vec(), w));
         }
+    }
+
+    /// Widens the reported covariance by `alternatives` with weight `w` about `about`
+    /// ([`Odometry::widen_by_alternatives_at`]) and records the terms where it did; returns
+    /// whether it did.
+    fn widen(
+        &mut self,
+        alternatives: &[&[f64]],
+        w: f64,
+        free: &[usize],
+        about: &[f64],
+        diag: &mut FrameDiagnostics,
+    ) -> bool {
+        let done = Odometry::widen_by_alternatives_at(alternatives, w, free, about, diag);
+        if done {
+            self.add(about, alternatives.iter().copied(), w);
+        }
+        done
     }
 
     /// Moves the widenings added about `from` to `to` (`odometry.tilt_hold_stage = "report"`:
