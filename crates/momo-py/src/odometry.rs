@@ -274,6 +274,16 @@ impl PyDiagnostics {
             .as_ref()
             .map(|p| PyArray1::from_slice(py, p))
     }
+    /// The final stage's motion without the matches its support tests left out, where the
+    /// neighbourhood guard kept the stage on the given matches instead (all of the model's
+    /// parameters; it widened the covariance), or None.
+    #[getter]
+    fn guard_alternative<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .guard_alternative
+            .as_ref()
+            .map(|p| PyArray1::from_slice(py, p))
+    }
     /// Whether the leave-one-cell-out jackknife of the covariance ran on this frame.
     #[getter]
     fn jackknife(&self) -> bool {
@@ -332,6 +342,7 @@ impl PyDiagnostics {
             "competing",
             "residual_clustering",
             "road_alternative",
+            "guard_alternative",
             "noise_scale",
             "noise",
             "support",

@@ -128,6 +128,7 @@ impl MotionDriver for FivePointBaseline {
             competing: None,
             residual_clustering: f64::NAN,
             road_alternative: None,
+            guard_alternative: None,
             noise_scale: 1.0,
             noise: None,
             support: None,

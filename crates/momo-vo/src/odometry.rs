@@ -126,6 +126,15 @@ pub struct FrameDiagnostics {
     /// (all of the model's); `None` where there was none.
     #[serde(default)]
     pub road_alternative: Option<Vec<f64>>,
+    /// The final stage's motion without the matches the neighbourhood test (or, on one
+    /// camera, the guarded under-the-road test) left out, where `odometry.final_fit
+    /// .neighbour_guard` kept the stage on the matches it was given instead (the two turned
+    /// apart by more than the guard's angle): its parameters (all of the model's). It widened
+    /// the reported covariance (`trust.guard_alternative_weight`,
+    /// [`trust::alternatives_covariance`]) where that weight is positive. `None` (not
+    /// written) where the guard did not act.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub guard_alternative: Option<Vec<f64>>,
     /// The factor the driver's angular thresholds were scaled by on this frame for the run's
     /// measured noise (`odometry.noise_reference`, [`crate::noise`]): 1 while the noise read so
     /// far lies within `noise_band` times the reference, or with the rule off.
@@ -1403,6 +1412,7 @@ impl Odometry {
             competing: None,
             residual_clustering: f64::NAN,
             road_alternative: None,
+            guard_alternative: None,
             noise_scale: self.noise.scale(),
             noise: None,
             support: None,
@@ -1658,6 +1668,9 @@ impl Odometry {
         // The alternatives the reported covariance is widened by about the frame's solution
         // (`tilt_hold_stage = "report"` moves those terms to the held twin it reports).
         let mut widened = Widened::default();
+        // The reduced stage's motion where `neighbour_guard` kept the given matches' stage
+        // (`trust.guard_alternative_weight`).
+        let mut guard_alternative: Option<Vec<f64>> = None;
         let params = match result {
             Some(sol) => {
                 if standstill {
@@ -1764,6 +1777,7 @@ impl Odometry {
                         if so3_log(&(ra.transpose() * rb)).norm()
                             > self.config.odometry.final_fit.neighbour_guard
                         {
+                            guard_alternative = Some(sol.params.clone());
                             (sol, tally, support) = (alt, alt_tally, alt_support);
                             next_stage = given;
                         }
@@ -1947,6 +1961,15 @@ impl Odometry {
                     let w = self.config.trust.after_flag_weight;
                     widened.widen(&previous, w, &sol.free, &sol.params, &mut diag);
                 }
+                // The neighbourhood guard's reduced stage (`trust.guard_alternative_weight`).
+                let w = self.config.trust.guard_alternative_weight;
+                if let Some(r) = guard_alternative.as_deref()
+                    && !standstill
+                    && w > 0.0
+                {
+                    widened.widen(&[r], w, &sol.free, &sol.params, &mut diag);
+                }
+                diag.guard_alternative = guard_alternative.take();
                 // Standstill frames score another residual (rotation only): they do not count
                 // towards the running inlier ratio of the moving frames.
                 if !standstill {

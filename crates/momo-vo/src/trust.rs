@@ -241,6 +241,17 @@ pub struct TrustOptions {
     /// neither estimate is trusted more. The estimate and the status are unchanged. Default 1;
     /// 0: off.
     pub after_flag_weight: f64,
+    /// Where `odometry.final_fit.neighbour_guard` kept the stage on the matches it was given
+    /// (the neighbourhood test or, on one camera, the guarded under-the-road test left matches
+    /// out, and the stage without them turned by more than the guard's angle), the reported
+    /// covariance includes the reduced stage's motion `r` as an alternative
+    /// ([`alternatives_covariance`] with this weight `w`): `Σ + w d dᵀ`, `d = r - a`. The two
+    /// stages disagree about which matches are static: a vehicle that moves with the ego car
+    /// fits the static epipolar geometry like points at infinity, and the guard cannot tell
+    /// whether the left-out matches were the vehicle's (the reduced stage is right) or the
+    /// static road's under a motion locked onto the vehicle (the kept stage is right). The
+    /// estimate and the status are unchanged. Default 1 (seventy-fifth session); 0: off.
+    pub guard_alternative_weight: f64,
     /// The reported covariance of a moving frame is at least this factor `ρ` times the
     /// previous frame's (in every direction: [`widen`] with ratio 1; the previous frame's
     /// before any competing or alternative motion was added, itself floored, where it was the
@@ -552,6 +563,7 @@ impl Default for TrustOptions {
             clustering_grids: vec![[1, 2], [2, 1]],
             road_alternative_weight: 1.0,
             after_flag_weight: 1.0,
+            guard_alternative_weight: 1.0,
             covariance_memory: 0.0,
             report_grids: vec![[3, 1]],
             report_min_ratio: 3.0,
@@ -696,6 +708,10 @@ impl TrustOptions {
                 self.road_alternative_weight,
             ),
             ("trust.after_flag_weight", self.after_flag_weight),
+            (
+                "trust.guard_alternative_weight",
+                self.guard_alternative_weight,
+            ),
             ("trust.yaw_change_weight", self.yaw_change_weight),
         ] {
             if !(0.0..=1.0).contains(&v) {

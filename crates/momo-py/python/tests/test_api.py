@@ -50,6 +50,8 @@ def test_process_returns_motion_and_diagnostics(sim):
     assert d.to_dict()["status"] == "estimated"
     # Trusted, no second motion, the thresholds as written (no noise read yet).
     assert (d.constraint, d.reason, d.competing) == ("well", None, None)
+    # No support test disagreed with the stage (the neighbourhood guard did not act).
+    assert d.guard_alternative is None and d.to_dict()["guard_alternative"] is None
     assert d.noise_scale == 1.0 and d.to_dict()["noise_scale"] == 1.0
     # Against the truth: the vehicle moved forward by the arc length.
     v = sim.vehicle_poses

@@ -1030,10 +1030,63 @@ fn the_road_alternatives_covariance_covers_each_alternative() {
         ("road_alternative_weight", "-0.1"),
         ("after_flag_weight", "1.5"),
         ("after_flag_weight", "-0.1"),
+        ("guard_alternative_weight", "1.5"),
+        ("guard_alternative_weight", "-0.1"),
     ] {
         let e = config_error(&format!("[trust]\n{key} = {v}\n"));
         assert!(e.contains(&format!("trust.{key}")), "{e}");
     }
+}
+
+/// `trust.guard_alternative_weight` (default 1, report only): where the final stage's
+/// neighbourhood guard (`odometry.final_fit.neighbour_guard`) kept the stage on the matches it
+/// was given, the diagnostics carry the stage's motion without the matches its tests left out
+/// (`guard_alternative`), and the reported covariance covers that motion at one standard
+/// deviation from the reported one (`dᵀ Σ⁻¹ d <= 1/w`). Every pose, status and
+/// `guard_alternative` is the run's with the weight 0, and every other frame's covariance is
+/// that run's bit for bit. Moving traffic (100 matches per frame pair, a bus holding most of
+/// them: the guard acts there), seeds 4 and 5, 120 frames.
+#[test]
+fn a_guarded_frames_covariance_covers_the_stage_without_the_left_out_matches() {
+    let bits = |d: &momo_vo::FrameDiagnostics| -> Vec<u64> {
+        d.covariance.iter().map(|v| v.to_bits()).collect()
+    };
+    let mut covered = 0;
+    for seed in [4, 5] {
+        let mut traffic = momo_sim::SimConfig::moving_traffic();
+        traffic.frames = 120;
+        traffic.seed = seed;
+        traffic.matches_per_camera = 100;
+        let seq = simulated(&traffic);
+        let mut off = Config::default();
+        off.trust.guard_alternative_weight = 0.0;
+        let off = process_all(&seq, off);
+        let on = process_all(&seq, Config::default());
+        for ((pa, da), (pb, db)) in off.iter().zip(&on) {
+            let k = da.frame;
+            assert_eq!(pa, pb, "frame {k}: the pose is unchanged");
+            assert_eq!((da.status, da.reason), (db.status, db.reason), "frame {k}");
+            assert_eq!(da.guard_alternative, db.guard_alternative, "frame {k}");
+            let Some(r) = &db.guard_alternative else {
+                assert_eq!(bits(da), bits(db), "frame {k}: no guard, no widening");
+                continue;
+            };
+            // The reduced stage's motion is a full parameter vector, apart from the reported one.
+            assert_eq!(r.len(), db.params.len(), "frame {k}");
+            let n = db.free.len();
+            let cov = nalgebra::DMatrix::from_row_slice(n, n, &db.covariance);
+            if !cov.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            let d =
+                nalgebra::DVector::from_iterator(n, db.free.iter().map(|&i| r[i] - db.params[i]));
+            let inv = cov.try_inverse().expect("invertible covariance");
+            let m = (d.transpose() * inv * &d)[(0, 0)];
+            assert!(m <= 1.0 + 1e-6, "frame {k}: d'S^-1 d = {m}");
+            covered += 1;
+        }
+    }
+    assert!(covered >= 3, "{covered} guarded frames covered");
 }
 
 /// `trust.covariance_memory` (off by default): a moving frame's reported covariance is at least
