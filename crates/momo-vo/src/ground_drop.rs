@@ -30,14 +30,20 @@ pub fn dropped(recent: impl Iterator<Item = usize>, score: usize, ratio: f64, mi
         .is_some_and(|m| m >= min as f64 && score as f64 <= ratio * m)
 }
 
-/// Records the chosen motion's road score `score` of the frame in `history` (the last
-/// [`GROUND_DROP_WINDOW`] frames' scores) and returns whether it dropped: the median `m` of the
-/// scores before it (at least [`GROUND_DROP_MIN_FRAMES`]) is at least `min` and
-/// `score <= ratio · m` (`ratio > 0`).
-pub fn observe(history: &mut VecDeque<usize>, score: usize, ratio: f64, min: usize) -> bool {
-    let dropped = ratio > 0.0
+/// Whether the frame's road score `score` dropped against `history` (the last
+/// [`GROUND_DROP_WINDOW`] frames' scores, before this frame's): the median `m` of at least
+/// [`GROUND_DROP_MIN_FRAMES`] scores is at least `min` and `score <= ratio · m` (`ratio > 0`).
+pub fn fires(history: &VecDeque<usize>, score: usize, ratio: f64, min: usize) -> bool {
+    ratio > 0.0
         && history.len() >= GROUND_DROP_MIN_FRAMES
-        && dropped(history.iter().copied(), score, ratio, min);
+        && dropped(history.iter().copied(), score, ratio, min)
+}
+
+/// Records the chosen motion's road score `score` of the frame in `history` (the last
+/// [`GROUND_DROP_WINDOW`] frames' scores) and returns whether it dropped ([`fires`], against
+/// the scores before it).
+pub fn observe(history: &mut VecDeque<usize>, score: usize, ratio: f64, min: usize) -> bool {
+    let dropped = fires(history, score, ratio, min);
     history.push_back(score);
     while history.len() > GROUND_DROP_WINDOW {
         history.pop_front();

@@ -1569,6 +1569,8 @@ impl Odometry {
         let mut road_out = None;
         // The chosen motion's road score dropped (`separate.ground_drop`).
         let mut ground_drop = false;
+        // Only against `ground_drop_min` scaled to the frame's matches (`trust.road_drop_scaled`).
+        let mut ground_drop_scaled = false;
         // Only the road prediction competed and may keep the prior (`predict_by_road_prior`).
         let mut prior_kept = false;
         // A rule replaced a motion that a vehicle pulled away (`SeparationOutcome::pulled`):
@@ -1643,6 +1645,7 @@ impl Odometry {
                     None => next,
                 };
                 ground_drop = o.ground_drop;
+                ground_drop_scaled = o.ground_drop_scaled;
                 prior_kept = o.prior_kept;
                 pulled = o.pulled;
                 self.separation_settled |= !o.competing;
@@ -2353,6 +2356,27 @@ impl Odometry {
                     || (clean && self.start_contested && !self.start_settled))
             {
                 flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
+            }
+        }
+        // The road score's drop on a frame with few matches (`trust.road_drop_scaled`), report
+        // only and the last flag (no other rule's state reads it): flagged as
+        // `road_score_drop`, the covariance widened about the reported motion by the road's
+        // alternatives as where the drop flags the frame in the run.
+        if self.config.trust.road_drop_scaled
+            && ground_drop_scaled
+            && moving
+            && diag.status == FrameStatus::Estimated
+        {
+            flag_weak_report_only(&mut diag, Reason::RoadScoreDrop);
+            let w = self.config.trust.road_alternative_weight;
+            if w > 0.0 {
+                let c = self.road_alternative(obs, &init, &fixed).map(|c| c.params);
+                let mut alternatives = vec![init.as_slice()];
+                alternatives.extend(c.as_deref());
+                let free = diag.free.clone();
+                if Self::widen_by_alternatives_at(&alternatives, w, &free, &report, &mut diag) {
+                    diag.road_alternative = c;
+                }
             }
         }
         self.previous_reported = (report != params).then(|| report.clone());

@@ -715,7 +715,7 @@ impl SeparateOptions {
         if reference == 0 || matches >= reference {
             return std::borrow::Cow::Borrowed(self);
         }
-        let scale = |t: usize| (t * matches).div_ceil(reference).max(1);
+        let scale = |t: usize| self.count_scaled(t, matches);
         let mut o = self.clone();
         o.ground_admit_min = scale(o.ground_admit_min);
         o.memory_vote_min = scale(o.memory_vote_min);
@@ -725,6 +725,17 @@ impl SeparateOptions {
             h.track_min_labelled = scale(h.track_min_labelled);
         }
         std::borrow::Cow::Owned(o)
+    }
+
+    /// The count `t` scaled to a frame of `matches` matches as [`SeparateOptions::for_matches`]
+    /// scales its counts: `ceil(t · matches / N)`, at least 1, with
+    /// [`SeparateOptions::count_reference`] `N > matches`; `t` otherwise.
+    pub fn count_scaled(&self, t: usize, matches: usize) -> usize {
+        let reference = self.count_reference;
+        if reference == 0 || matches >= reference {
+            return t;
+        }
+        (t * matches).div_ceil(reference).max(1)
     }
 
     /// The multi-frame choice's options where it is on ([`HypothesesOptions::enabled`]).
@@ -892,6 +903,11 @@ pub struct SeparationOutcome {
     pub switched: bool,
     /// The chosen motion's road score dropped ([`SeparateOptions::ground_drop`]).
     pub ground_drop: bool,
+    /// On a frame with fewer matches than [`SeparateOptions::count_reference`], the road
+    /// score dropped against [`SeparateOptions::ground_drop_min`] scaled to the frame's
+    /// matches ([`SeparateOptions::count_scaled`]) though not against it as written: the
+    /// report-only flag `trust.road_drop_scaled` reads it (the run does not).
+    pub ground_drop_scaled: bool,
     /// The re-solved prediction replaced the motion the rules left
     /// ([`crate::hypotheses::HypothesesOptions::predict_by_road`]).
     pub road_predicted: bool,
@@ -1938,6 +1954,9 @@ fn separate_with(
         );
         tracker.record_road(h, s);
         if opts.ground_drop > 0.0 {
+            let scaled = opts.count_scaled(opts.ground_drop_min, obs.len());
+            outcome.ground_drop_scaled = scaled < opts.ground_drop_min
+                && crate::ground_drop::fires(&tracker.ground_scores, s, opts.ground_drop, scaled);
             outcome.ground_drop = crate::ground_drop::observe(
                 &mut tracker.ground_scores,
                 s,

@@ -252,6 +252,18 @@ pub struct TrustOptions {
     /// static road's under a motion locked onto the vehicle (the kept stage is right). The
     /// estimate and the status are unchanged. Default 1 (seventy-fifth session); 0: off.
     pub guard_alternative_weight: f64,
+    /// On a frame with fewer matches than `odometry.separate.count_reference` (300), the road
+    /// score's drop (`odometry.separate.ground_drop`) is also tested against its
+    /// `ground_drop_min` (8 image cells) scaled to the frame's matches as the separation's
+    /// other counts are (`ceil(8 · n / 300)`: 3 cells at 100 matches). With 100-150 matches the
+    /// recent frames' median road score rarely reaches 8 cells, so the drop as written never
+    /// fires there, while a motion locked onto a vehicle that moves with the ego car puts no
+    /// static road point on the road plane (0-1 cells against the true motion's 7-12). Where
+    /// only the scaled test fires, an `estimated` frame is flagged `weak` / `road_score_drop`
+    /// and its reported covariance widened about the reported motion by the road's
+    /// alternatives ([`TrustOptions::road_alternative_weight`]), report only: the run goes on
+    /// as without it (no pose changes). Default true (seventy-fifth session); false: off.
+    pub road_drop_scaled: bool,
     /// The reported covariance of a moving frame is at least this factor `ρ` times the
     /// previous frame's (in every direction: [`widen`] with ratio 1; the previous frame's
     /// before any competing or alternative motion was added, itself floored, where it was the
@@ -564,6 +576,7 @@ impl Default for TrustOptions {
             road_alternative_weight: 1.0,
             after_flag_weight: 1.0,
             guard_alternative_weight: 1.0,
+            road_drop_scaled: true,
             covariance_memory: 0.0,
             report_grids: vec![[3, 1]],
             report_min_ratio: 3.0,

@@ -1089,6 +1089,87 @@ fn a_guarded_frames_covariance_covers_the_stage_without_the_left_out_matches() {
     assert!(covered >= 3, "{covered} guarded frames covered");
 }
 
+/// `trust.road_drop_scaled` (default true, report only): on frames with fewer matches than
+/// `separate.count_reference`, the road score's drop is also tested against `ground_drop_min`
+/// scaled to the frame's matches. Moving traffic with 100 matches per frame pair at 2 px (a
+/// bus holding most of them) along KITTI 09 (300 frames) and 01 (60 frames), seed 2, as the
+/// few100 set simulates them, against the rule off (skipped without `MOMO_DATA`):
+/// - every pose is unchanged;
+/// - every frame the rule flags was `estimated` and is now `weak` / `road_score_drop`, with a
+///   covariance at least as wide in every direction that covers the road's alternatives at
+///   one sigma;
+/// - every other frame keeps its status, reason and covariance bit for bit;
+/// - the flagged frames are the worse ones: their mean rotation error is above that of the
+///   frames left `estimated`.
+#[test]
+fn road_drop_scaled_flags_few_match_frames_that_lost_the_road_and_changes_no_pose() {
+    let bits = |d: &momo_vo::FrameDiagnostics| -> Vec<u64> {
+        d.covariance.iter().map(|v| v.to_bits()).collect()
+    };
+    let (mut flagged, mut flagged_error) = (0, 0.0);
+    let (mut kept, mut kept_error) = (0, 0.0);
+    for (trajectory, frames) in [("09", 300), ("01", 60)] {
+        let traffic = momo_sim::SimConfig {
+            matches_per_camera: 100,
+            ..momo_sim::SimConfig::moving_traffic()
+        };
+        let Some(sim) = crate::support::along_kitti(trajectory, frames, 2, 2.0, traffic) else {
+            return;
+        };
+        let mut off = Config::default();
+        off.trust.road_drop_scaled = false;
+        let off = errors_and_diagnostics(&sim, off);
+        let on = errors_and_diagnostics(&sim, Config::default());
+        for ((ea, da), (eb, db)) in off.iter().zip(&on) {
+            let k = da.frame;
+            assert_eq!(
+                (ea, &da.params),
+                (eb, &db.params),
+                "frame {k}: the pose is unchanged"
+            );
+            if (da.status, da.reason) == (db.status, db.reason) {
+                assert_eq!(bits(da), bits(db), "frame {k}");
+                kept += usize::from(db.status == FrameStatus::Estimated);
+                kept_error += if db.status == FrameStatus::Estimated {
+                    *eb
+                } else {
+                    0.0
+                };
+                continue;
+            }
+            assert_eq!(da.status, FrameStatus::Estimated, "frame {k}");
+            assert_eq!(
+                (db.status, db.reason),
+                (FrameStatus::Weak, Some(Reason::RoadScoreDrop)),
+                "frame {k}"
+            );
+            let n = db.free.len();
+            let a = nalgebra::DMatrix::from_row_slice(n, n, &da.covariance);
+            let b = nalgebra::DMatrix::from_row_slice(n, n, &db.covariance);
+            let wider = nalgebra::SymmetricEigen::new(&b - &a).eigenvalues.min();
+            assert!(wider >= -1e-12 * a.norm(), "frame {k}: narrower by {wider}");
+            if let Some(c) = &db.road_alternative {
+                let d = nalgebra::DVector::from_iterator(
+                    n,
+                    db.free.iter().map(|&i| c[i] - db.params[i]),
+                );
+                let m = (d.transpose() * b.clone().try_inverse().expect("invertible") * &d)[(0, 0)];
+                assert!(m <= 1.0 + 1e-6, "frame {k}: d'S^-1 d = {m}");
+            }
+            flagged += 1;
+            flagged_error += eb;
+        }
+    }
+    let (f, e) = (
+        flagged_error / flagged.max(1) as f64,
+        kept_error / kept.max(1) as f64,
+    );
+    assert!(
+        flagged >= 5 && f > e,
+        "{flagged} frames flagged (mean error {f:.3} deg), {kept} kept estimated ({e:.3} deg)"
+    );
+}
+
 /// `trust.covariance_memory` (off by default): a moving frame's reported covariance is at least
 /// `ρ` times the previous frame's, applied after the competing-motions test. On a moving-traffic
 /// drive the poses and every status stay as they are, every reported covariance is at least the
