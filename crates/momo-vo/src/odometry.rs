@@ -2364,6 +2364,7 @@ impl Odometry {
         // alternatives as where the drop flags the frame in the run.
         if self.config.trust.road_drop_scaled
             && ground_drop_scaled
+            && metric_arc_length.is_some()
             && moving
             && diag.status == FrameStatus::Estimated
         {

@@ -262,7 +262,11 @@ pub struct TrustOptions {
     /// only the scaled test fires, an `estimated` frame is flagged `weak` / `road_score_drop`
     /// and its reported covariance widened about the reported motion by the road's
     /// alternatives ([`TrustOptions::road_alternative_weight`]), report only: the run goes on
-    /// as without it (no pose changes). Default true (seventy-fifth session); false: off.
+    /// as without it (no pose changes). Only where the frame's arc length is metric (odometry,
+    /// or the road's, as the under-the-road test needs): at an arc length estimated from the
+    /// frame itself the road score of a scene without a road scatters (2-10 cells at 200
+    /// matches on `stereo_scale`'s test drive) and a true turn was flagged. Default true
+    /// (seventy-fifth session); false: off.
     pub road_drop_scaled: bool,
     /// The reported covariance of a moving frame is at least this factor `ρ` times the
     /// previous frame's (in every direction: [`widen`] with ratio 1; the previous frame's
