@@ -255,18 +255,19 @@ pub struct TrustOptions {
     /// On a frame with fewer matches than `odometry.separate.count_reference` (300), the road
     /// score's drop (`odometry.separate.ground_drop`) is also tested against its
     /// `ground_drop_min` (8 image cells) scaled to the frame's matches as the separation's
-    /// other counts are (`ceil(8 · n / 300)`: 3 cells at 100 matches). With 100-150 matches the
-    /// recent frames' median road score rarely reaches 8 cells, so the drop as written never
-    /// fires there, while a motion locked onto a vehicle that moves with the ego car puts no
-    /// static road point on the road plane (0-1 cells against the true motion's 7-12). Where
-    /// only the scaled test fires, an `estimated` frame is flagged `weak` / `road_score_drop`
-    /// and its reported covariance widened about the reported motion by the road's
-    /// alternatives ([`TrustOptions::road_alternative_weight`]), report only: the run goes on
-    /// as without it (no pose changes). Only where the frame's arc length is metric (odometry,
-    /// or the road's, as the under-the-road test needs): at an arc length estimated from the
-    /// frame itself the road score of a scene without a road scatters (2-10 cells at 200
-    /// matches on `stereo_scale`'s test drive) and a true turn was flagged. Default true
-    /// (seventy-fifth session); false: off.
+    /// other counts are (`ceil(8 · n / 300)`: 3 cells at 100 matches). With few matches the
+    /// recent frames' median road score stays below 8 cells (3-6 at 100 matches on few100 09
+    /// s2, a seventy-fifth session trace), so the drop as written does not fire, while a motion
+    /// locked onto a vehicle that moves with the ego car puts almost no static road point on
+    /// the road plane (0-2 cells there, against the true motion's 6-13). Where only the scaled
+    /// test fires, an `estimated` frame is flagged `weak` / `road_score_drop` and its reported
+    /// covariance widened about the reported motion by the road's alternatives
+    /// ([`TrustOptions::road_alternative_weight`]), report only: the run goes on as without it
+    /// (no pose changes). Only where the frame's arc length is metric (odometry, or the road's,
+    /// as the under-the-road test needs): at an arc length estimated from the frame itself the
+    /// road score of a scene without a road scatters (2-10 cells at 200 matches on
+    /// `stereo_scale`'s test drive) and a true turn was flagged. Default true (seventy-fifth
+    /// session); false: off.
     pub road_drop_scaled: bool,
     /// The reported covariance of a moving frame is at least this factor `ρ` times the
     /// previous frame's (in every direction: [`widen`] with ratio 1; the previous frame's
