@@ -1942,7 +1942,7 @@ impl Odometry {
                         obs,
                         &init,
                         &fixed,
-                        &sol,
+                        (&sol.free, &sol.params),
                         &mut diag,
                         &mut widened,
                     );
@@ -1966,13 +1966,13 @@ impl Odometry {
                 }
                 // The neighbourhood guard's reduced stage (`trust.guard_alternative_weight`).
                 let w = self.config.trust.guard_alternative_weight;
+                // (Set only by a moving frame's final stage.)
                 if let Some(r) = guard_alternative.as_deref()
-                    && !standstill
                     && w > 0.0
                 {
                     widened.widen(&[r], w, &sol.free, &sol.params, &mut diag);
                 }
-                diag.guard_alternative = guard_alternative.take();
+                diag.guard_alternative = guard_alternative;
                 // Standstill frames score another residual (rotation only): they do not count
                 // towards the running inlier ratio of the moving frames.
                 if !standstill {
@@ -2369,15 +2369,10 @@ impl Odometry {
             && diag.status == FrameStatus::Estimated
         {
             flag_weak_report_only(&mut diag, Reason::RoadScoreDrop);
-            let w = self.config.trust.road_alternative_weight;
-            if w > 0.0 {
-                let c = self.road_alternative(obs, &init, &fixed).map(|c| c.params);
-                let mut alternatives = vec![init.as_slice()];
-                alternatives.extend(c.as_deref());
+            if self.config.trust.road_alternative_weight > 0.0 {
                 let free = diag.free.clone();
-                if Self::widen_by_alternatives_at(&alternatives, w, &free, &report, &mut diag) {
-                    diag.road_alternative = c;
-                }
+                let about = (free.as_slice(), report.as_slice());
+                self.widen_by_road_alternative(obs, &init, &fixed, about, &mut diag, &mut widened);
             }
         }
         self.previous_reported = (report != params).then(|| report.clone());
@@ -3624,10 +3619,11 @@ impl Odometry {
     }
 
     /// Widens the reported covariance of a frame whose road score dropped by its road's
-    /// alternatives (`trust.road_alternative_weight` `w`): `Σ + w (d_c d_cᵀ + d_p d_pᵀ)`, `d_c`
-    /// the road's alternative ([`Odometry::road_alternative`], where there is one) less the
-    /// estimate, `d_p` the previous frame's motion `previous` less the estimate
-    /// ([`Odometry::widen_by_alternatives_at`]). Nothing where the weight is 0.
+    /// alternatives (`trust.road_alternative_weight` `w`) about the estimate `about` (`free`
+    /// its free parameters): `Σ + w (d_c d_cᵀ + d_p d_pᵀ)`, `d_c` the road's alternative
+    /// ([`Odometry::road_alternative`], where there is one) less the estimate, `d_p` the
+    /// previous frame's motion `previous` less the estimate ([`Widened::widen`]). Nothing where
+    /// the weight is 0.
     ///
     /// Returns the road's alternative's parameters where `odometry.decide_by_road` is to see
     /// them: where the frame's covariance can be widened (a free parameter, a covariance), as
@@ -3637,12 +3633,12 @@ impl Odometry {
         obs: &FrameObservations,
         previous: &[f64],
         fixed: &[bool],
-        sol: &FrameSolution,
+        (free, about): (&[usize], &[f64]),
         diag: &mut FrameDiagnostics,
         widened: &mut Widened,
     ) -> Option<Vec<f64>> {
         let w = self.config.trust.road_alternative_weight;
-        let k = sol.free.len();
+        let k = free.len();
         let widenable = k > 0 && diag.covariance.len() == k * k;
         if !(w > 0.0 || (self.config.odometry.decide_by_road > 0 && widenable)) {
             return None;
@@ -3652,7 +3648,7 @@ impl Odometry {
             .map(|c| c.params);
         let mut alternatives = vec![previous];
         alternatives.extend(c.as_deref());
-        if widened.widen(&alternatives, w, &sol.free, &sol.params, diag) {
+        if widened.widen(&alternatives, w, free, about, diag) {
             diag.road_alternative = c.clone();
         }
         c.filter(|_| widenable)
