@@ -58,6 +58,10 @@ pub struct FrameSolution {
     /// is within the loss scale at [`params`](Self::params) (the matches counted in
     /// [`inliers_per_camera`](Self::inliers_per_camera)).
     pub inlier_mask: Vec<bool>,
+    /// Where a later stage refitted this solution but reports an earlier stage's normal matrix,
+    /// cost and inliers (`momo-vo`'s `final_fit.first_stage_covariance`): the refit's own
+    /// normal matrix, final cost and support size. `None` otherwise.
+    pub refit_curvature: Option<(crate::NormalMatrix, f64, usize)>,
 }
 
 impl FrameSolution {
@@ -253,6 +257,7 @@ fn run<R: ResidualMetric>(
         report,
         inliers_per_camera: inliers,
         inlier_mask,
+        refit_curvature: None,
     })
 }
 

@@ -976,6 +976,11 @@ pub fn refit_supported(
     if opts.first_stage_covariance {
         // The covariance (and the inlier count and mask, which index all matches) of the
         // first stage: see `FinalFitOptions::first_stage_covariance`.
+        fin.refit_curvature = Some((
+            fin.report.normal_matrix,
+            fin.report.final_cost,
+            fin.inliers(),
+        ));
         fin.report.normal_matrix = first.report.normal_matrix;
         fin.report.final_cost = first.report.final_cost;
         fin.inliers_per_camera = first.inliers_per_camera;

@@ -1019,7 +1019,11 @@ impl Odometry {
     /// than [`SOFT_SIGMA_MIN_FRAMES`] trusted moving frames): the calibrated covariance without
     /// the soft prior's information (the width the estimate uses is the model's guess, not yet
     /// the data's). `None` otherwise.
-    fn unlearnt_prior_covariance(&self, sol: &FrameSolution) -> Option<nalgebra::DMatrix<f64>> {
+    fn unlearnt_prior_covariance(
+        &self,
+        sol: &FrameSolution,
+        adjust: &dyn Fn(&mut trust::CovarianceInputs),
+    ) -> Option<nalgebra::DMatrix<f64>> {
         if !self.config.trust.prior_spread_covariance
             || self.soft_inv_scale.is_empty()
             || self.soft_samples.len() >= SOFT_SIGMA_MIN_FRAMES
@@ -1028,6 +1032,7 @@ impl Odometry {
         }
         let (s, _, jq) = self.soft_prior_terms(sol)?;
         let mut inp = self.covariance_inputs(sol);
+        adjust(&mut inp);
         inp.normal -= self.soft_information(&jq) * (s * s);
         trust::calibrated_covariance(&inp)
     }
@@ -3782,29 +3787,65 @@ impl Odometry {
         nalgebra::DMatrix<f64>,
         GridJackknives,
     )> {
-        let mut cov = match self.unlearnt_prior_covariance(sol) {
-            Some(c) => c,
-            None => self.covariance(sol)?,
+        let n_params = self.estimator.param_names().len();
+        let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
+        let n = sol.free.len();
+        // The covariance before the widenings, from the first stage's inputs as `adjust` leaves
+        // them.
+        let base = |adjust: &dyn Fn(&mut trust::CovarianceInputs)| match self
+            .unlearnt_prior_covariance(sol, adjust)
+        {
+            Some(c) => Some(c),
+            None => {
+                let mut inp = self.covariance_inputs(sol);
+                adjust(&mut inp);
+                trust::calibrated_covariance(&inp)
+            }
         };
+        let mut cov = base(&|_| {})?;
+        // `trust.report_covariance`: the reported covariance's own chain from its own start,
+        // through the same widenings (report only: `cov` stays the status tests' and the
+        // jackknife's).
+        let mut rep = match self.config.trust.report_covariance {
+            trust::ReportCovariance::FirstStage => None,
+            trust::ReportCovariance::Sandwich => self
+                .sandwich_sigma2(obs, sol, &fixed)
+                .and_then(|s2| base(&|inp| inp.sigma2 = Some(s2))),
+            trust::ReportCovariance::Refit => sol.refit_curvature.as_ref().and_then(|r| {
+                base(&|inp| {
+                    let (normal, cost, support) = r;
+                    inp.normal = normal.view((0, 0), (n, n)).into_owned();
+                    inp.cost = *cost;
+                    inp.inliers = *support;
+                })
+            }),
+        }
+        .filter(|c| c.shape() == cov.shape());
         // Where the data contradict the soft prior, its pull on the estimate is an error the
         // posterior covariance does not hold: add it (`trust.prior_conflict_chi2`).
         if let Some(b) = self.prior_conflict_shift(sol, soft_view)
             && b.len() == cov.nrows()
         {
-            cov += &b * b.transpose();
+            let bb = &b * b.transpose();
+            if let Some(r) = rep.as_mut() {
+                *r += &bb;
+            }
+            cov += bb;
         }
         // Where the true slip is heavy-tailed, the prior at its learnt (median) width is
         // over-confident: hold it at the mean-square spread (`trust.prior_spread_covariance`).
         if let Some(w) = self.prior_spread_widening(sol)
             && w.nrows() == cov.nrows()
         {
+            if let Some(r) = rep.as_mut() {
+                *r += &w;
+            }
             cov += w;
         }
         if !jackknife {
-            return Some((cov.clone(), cov, Vec::new()));
+            let reported = rep.unwrap_or_else(|| cov.clone());
+            return Some((cov, reported, Vec::new()));
         }
-        let n_params = self.estimator.param_names().len();
-        let fixed: Vec<bool> = (0..n_params).map(|i| !sol.free.contains(&i)).collect();
         let t = &self.config.trust;
         let extra: &[[usize; 2]] = if clustered { &t.clustering_grids } else { &[] };
         // The one-linearisation jackknife: the frame's exact Hessian and gradient and every
@@ -3848,6 +3889,9 @@ impl Odometry {
             let j = trust::jackknife_covariance(&samples);
             if k < status_grids {
                 if let Some(j) = j {
+                    if let Some(r) = rep.as_mut() {
+                        *r = trust::widen(r, &j, t.jackknife_min_ratio);
+                    }
                     cov = trust::widen(&cov, &j, t.jackknife_min_ratio);
                 }
                 continue;
@@ -3858,6 +3902,9 @@ impl Odometry {
                 if t.report_pool_own
                     && let Some(j) = j.as_ref()
                 {
+                    if let Some(r) = rep.as_mut() {
+                        *r = trust::widen(r, j, t.report_min_ratio);
+                    }
                     cov = trust::widen(&cov, j, t.report_min_ratio);
                 }
                 self.pooled_report_jackknife(k - status_grids, sol, j.as_ref(), &cov)
@@ -3865,15 +3912,15 @@ impl Odometry {
                 j.clone()
             };
             if let Some(p) = pooled {
+                if let Some(r) = rep.as_mut() {
+                    *r = trust::widen(r, &p, t.report_min_ratio);
+                }
                 cov = trust::widen(&cov, &p, t.report_min_ratio);
             }
             report_jackknife.push(j);
         }
-        Some((
-            status_cov.unwrap_or_else(|| cov.clone()),
-            cov,
-            report_jackknife,
-        ))
+        let status = status_cov.unwrap_or_else(|| cov.clone());
+        Some((status, rep.unwrap_or(cov), report_jackknife))
     }
 
     /// The mean of the report grid `index`'s jackknife covariance over this frame's (`own`)
@@ -4365,7 +4412,66 @@ impl Odometry {
             prior_inv_sigma: self.motion_prior.rotation_inv_sigma,
             prior_scale: self.motion_prior.scale,
             sigma_floor: if scale.is_finite() { 0.05 * scale } else { 0.0 },
+            sigma2: None,
         }
+    }
+
+    /// The residual variance of `trust.report_covariance = "sandwich"` at the solution
+    /// ([`trust::sandwich_sigma2`]): the data terms' exact robust Hessian and every match's
+    /// gradient in one pass ([`momo_core::FrameEstimator::exact_data_terms_by_group`], each
+    /// match its own group), the Gauss-Newton normal matrix of the data terms as the solver's
+    /// linearisation with the matches less the one without. `None` where a linearisation
+    /// fails or the estimator cannot give them.
+    fn sandwich_sigma2(
+        &self,
+        obs: &FrameObservations,
+        sol: &FrameSolution,
+        fixed: &[bool],
+    ) -> Option<f64> {
+        let loss = self
+            .config
+            .refine_loss
+            .as_deref()
+            .unwrap_or(self.config.loss.as_ref());
+        let m: usize = obs
+            .per_camera
+            .iter()
+            .take(self.rig.len())
+            .map(Vec::len)
+            .sum();
+        let labels: Vec<usize> = (0..m).collect();
+        let data = self
+            .estimator
+            .exact_data_terms_by_group(
+                &self.stage_request(obs, loss, sol, fixed),
+                &sol.params,
+                &[(labels.as_slice(), m)],
+            )
+            .ok()??;
+        let empty = FrameObservations {
+            per_camera: vec![Vec::new(); obs.per_camera.len()],
+            cross_camera: Vec::new(),
+        };
+        let with = self
+            .estimator
+            .linearize(&self.stage_request(obs, loss, sol, fixed), &sol.params)
+            .ok()?;
+        let prior = self
+            .estimator
+            .linearize(&self.stage_request(&empty, loss, sol, fixed), &sol.params)
+            .ok()?;
+        let n = sol.free.len();
+        let exact = data.total.hessian.view((0, 0), (n, n)).into_owned();
+        let normal = (with.hessian - prior.hessian)
+            .view((0, 0), (n, n))
+            .into_owned();
+        let gradients: Vec<nalgebra::DVector<f64>> = data
+            .groups
+            .first()?
+            .iter()
+            .map(|l| l.gradient.rows(0, n).into_owned())
+            .collect();
+        trust::sandwich_sigma2(&exact, &normal, &gradients, sol.inliers())
     }
 
     /// Fills the solve's diagnostics and the reported covariance. On a moving frame

@@ -334,6 +334,11 @@ pub struct TrustOptions {
     /// then only widen. Default false (the pool replaces this frame's jackknife, so that its
     /// noise on a clean scene averages out).
     pub report_pool_own: bool,
+    /// What the reported covariance starts from ([`ReportCovariance`]); the status tests, the
+    /// jackknife's samples and every decision read the first stage's covariance whatever this
+    /// is, and the reported one takes the same widenings from its own start. Default
+    /// `first_stage`.
+    pub report_covariance: ReportCovariance,
     /// A car's yaw rate changes smoothly (along the KITTI trajectories 99.9 % of the
     /// frame-to-frame changes of the per-frame yaw are below 0.49 deg): where the yaw `ω_z`
     /// (`ω = log R`, vehicle frame) of a moving frame's reported motion differs from the
@@ -547,6 +552,30 @@ pub struct TrustOptions {
     pub contested_noise_slope: f64,
 }
 
+/// `trust.report_covariance`: the covariance the reported one starts from, before the
+/// widenings (jackknives, alternatives, memory).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReportCovariance {
+    /// The first stage's: its Gauss-Newton normal matrix over `σ² = 2 cost / (m − n)`
+    /// ([`calibrated_covariance`]; `odometry.final_fit.first_stage_covariance`).
+    #[default]
+    FirstStage,
+    /// The first stage's normal matrix over the residual variance of the robust fit's sandwich
+    /// ([`sandwich_sigma2`], Huber's covariance of an M-estimator): with `B` the data terms'
+    /// exact robust Hessian `Σ ρ' JᵀJ + 2ρ'' (Jᵀr)(rᵀJ)`, `M = Σ g gᵀ` over the matches'
+    /// gradients `g = ρ' Jᵀr` and `N` the Gauss-Newton normal matrix, `σ² = tr(B⁻¹ M B⁻¹ N) / n
+    /// · m / (m − n)`: the `σ²` for which `N / σ²` carries on average the information of the
+    /// sandwich `B M⁻¹ B`. It does not depend on the loss scale's ratio to the noise. Where `B`
+    /// is not positive definite the frame keeps the first stage's.
+    Sandwich,
+    /// The final stage's own curvature on its support ([`crate::final_fit`]: its normal
+    /// matrix, cost and support size), what `final_fit.first_stage_covariance = false` reports,
+    /// while the run's decisions keep the first stage's. The first stage's where the final
+    /// stage did not refit.
+    Refit,
+}
+
 impl Default for TrustOptions {
     fn default() -> Self {
         Self {
@@ -588,6 +617,7 @@ impl Default for TrustOptions {
             report_pool_frames: 10,
             report_pool_trim: 2,
             report_pool_own: false,
+            report_covariance: ReportCovariance::FirstStage,
             yaw_change: 0.0,
             yaw_change_weight: 1.0,
             min_inlier_share: 0.0,
@@ -1309,6 +1339,9 @@ pub struct CovarianceInputs {
     pub prior_scale: f64,
     /// The smallest residual standard deviation assumed (model error), in the metric's units.
     pub sigma_floor: f64,
+    /// The residual variance to use instead of `2 cost / (m - n)` (still at least
+    /// `sigma_floor²`); `None`: that one ([`ReportCovariance::Sandwich`]).
+    pub sigma2: Option<f64>,
 }
 
 /// The covariance of the free parameters from the robust fit:
@@ -1332,7 +1365,10 @@ pub fn calibrated_information(inp: &CovarianceInputs) -> Option<(DMatrix<f64>, f
         return None;
     }
     let m = inp.inliers.max(n + 1);
-    let sigma2 = (2.0 * inp.cost / (m - n) as f64).max(inp.sigma_floor * inp.sigma_floor);
+    let sigma2 = inp
+        .sigma2
+        .unwrap_or(2.0 * inp.cost / (m - n) as f64)
+        .max(inp.sigma_floor * inp.sigma_floor);
     if !(sigma2 > 0.0 && sigma2.is_finite()) {
         return None;
     }
@@ -1352,6 +1388,40 @@ pub fn calibrated_information(inp: &CovarianceInputs) -> Option<(DMatrix<f64>, f
     }
     let info = (&info + info.transpose()) * 0.5;
     Some((info, sigma2))
+}
+
+/// The residual variance of [`ReportCovariance::Sandwich`]: `σ² = tr(B⁻¹ M B⁻¹ N) / n ·
+/// m / (m − n)` with `B` the data terms' exact robust Hessian (`exact`), `N` their
+/// Gauss-Newton normal matrix (`normal`), `M = Σ g gᵀ` over the matches' gradients `g`
+/// (`gradients`, each of the `n` free parameters) and `m` the inliers (at least `n + 1`).
+/// With plain least squares (`B = N = JᵀJ`) and independent noise of variance `s²`,
+/// `E[M] = s² JᵀJ` and the expected value is `s²`. `None` where `B` is not positive definite
+/// or the result is not finite and positive.
+pub fn sandwich_sigma2(
+    exact: &DMatrix<f64>,
+    normal: &DMatrix<f64>,
+    gradients: &[DVector<f64>],
+    inliers: usize,
+) -> Option<f64> {
+    let n = exact.nrows();
+    if n == 0 || exact.ncols() != n || normal.shape() != (n, n) {
+        return None;
+    }
+    let b = (exact + exact.transpose()) * 0.5;
+    let chol = b.cholesky()?;
+    let mut meat = DMatrix::zeros(n, n);
+    for g in gradients {
+        if g.len() != n {
+            return None;
+        }
+        meat += g * g.transpose();
+    }
+    // B⁻¹ M B⁻¹ N, traced.
+    let left = chol.solve(&meat);
+    let c = chol.solve(&left.transpose());
+    let m = inliers.max(n + 1);
+    let s2 = (&c * normal).trace() / n as f64 * m as f64 / (m - n) as f64;
+    (s2.is_finite() && s2 > 0.0).then_some(s2)
 }
 
 /// The inverse of an information matrix; directions it does not constrain (eigenvalues below
@@ -1968,6 +2038,107 @@ pub fn mixture_dominates(cov: &DMatrix<f64>, a: &[f64], b: &[f64], w: f64) -> bo
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Standard normal samples from a fixed-seed generator (an LCG and Box-Muller).
+    fn normals(seed: u64, count: usize) -> Vec<f64> {
+        let mut state = seed;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        (0..count)
+            .map(|_| {
+                let (u, v) = (uniform(), uniform());
+                (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+            })
+            .collect()
+    }
+
+    /// [`sandwich_sigma2`] and `2 cost / (m − n)` of a linear problem with one-dimensional
+    /// residuals `r` and Jacobian rows `j` under a Cauchy loss of scale `c` (`None`: plain least
+    /// squares).
+    fn variances(rows: &[DVector<f64>], r: &[f64], c: Option<f64>) -> (f64, f64) {
+        let n = rows[0].len();
+        let (mut exact, mut normal) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+        let (mut gradients, mut cost, mut inliers) = (Vec::new(), 0.0, 0);
+        for (j, &r) in rows.iter().zip(r) {
+            let s = r * r;
+            // ρ, ρ', ρ'' at s.
+            let (rho, d1, d2) = match c {
+                None => (s, 1.0, 0.0),
+                Some(c) => {
+                    let q = 1.0 + s / (c * c);
+                    (c * c * q.ln(), 1.0 / q, -1.0 / (c * c * q * q))
+                }
+            };
+            let jj = j * j.transpose();
+            normal += &jj * d1;
+            exact += &jj * (d1 + 2.0 * s * d2);
+            gradients.push(j * (d1 * r));
+            cost += 0.5 * rho;
+            inliers += usize::from(c.is_none_or(|c| r.abs() <= c));
+        }
+        let sandwich = sandwich_sigma2(&exact, &normal, &gradients, inliers).expect("defined");
+        (sandwich, 2.0 * cost / (inliers - n) as f64)
+    }
+
+    #[test]
+    fn the_sandwich_variance_is_the_noise_variance_and_ignores_gross_mismatches() {
+        let (m, n, sigma) = (4000, 3, 0.002);
+        let z = normals(7, m * (n + 2));
+        let rows: Vec<DVector<f64>> = (0..m)
+            .map(|i| DVector::from_iterator(n, (0..n).map(|k| z[i * n + k])))
+            .collect();
+        let noise: Vec<f64> = (0..m).map(|i| sigma * z[m * n + i]).collect();
+        // Plain least squares: the residual variance.
+        let (ls, _) = variances(&rows, &noise, None);
+        assert!((ls / (sigma * sigma) - 1.0).abs() < 0.06, "{ls}");
+        // A Cauchy loss at the noise's scale: the M-estimator's asymptotic variance in units
+        // of its Gauss-Newton normal matrix, `E[ρ'] E[ψ²] / E[ψ']²` with `ψ = ρ' r` and
+        // `ψ' = ρ' + 2 s ρ''` (Huber), the expectations over the standard normal `z` at `c = σ`
+        // by quadrature: about 0.86.
+        let (mut w, mut psi2, mut dpsi) = (0.0, 0.0, 0.0);
+        let h = 1e-3;
+        for k in -12_000..=12_000 {
+            let z = k as f64 * h;
+            let p = (-0.5 * z * z).exp() / std::f64::consts::TAU.sqrt() * h;
+            let q = 1.0 / (1.0 + z * z);
+            w += p * q;
+            psi2 += p * q * q * z * z;
+            dpsi += p * (1.0 - z * z) * q * q;
+        }
+        let expected = w * psi2 / (dpsi * dpsi);
+        let (clean, clean_cost) = variances(&rows, &noise, Some(sigma));
+        let ratio = clean / (sigma * sigma);
+        assert!(
+            (ratio / expected - 1.0).abs() < 0.06,
+            "{ratio} against {expected}"
+        );
+        // 30 % of the matches gross mismatches (residuals of 30-60 sigmas): the sandwich's
+        // variance moves by a few percent, the cost's grows severalfold.
+        let mixed: Vec<f64> = noise
+            .iter()
+            .enumerate()
+            .map(|(i, &r)| {
+                if i % 10 < 3 {
+                    sigma * (30.0 + 30.0 * z[m * (n + 1) + i].abs().min(1.0)) * r.signum()
+                } else {
+                    r
+                }
+            })
+            .collect();
+        let (sandwich, cost) = variances(&rows, &mixed, Some(sigma));
+        assert!(
+            (sandwich / clean - 1.0).abs() < 0.15,
+            "{sandwich} against {clean}"
+        );
+        assert!(cost / clean_cost > 3.0, "{cost} against {clean_cost}");
+        // A Hessian that is not positive definite: no variance.
+        let bad = -DMatrix::<f64>::identity(n, n);
+        assert!(sandwich_sigma2(&bad, &bad, &[], 10).is_none());
+    }
 
     /// Runs [`ContestedYaw`] over frames `(yaw in degrees, competing)` (`None`: not moving)
     /// and returns, per frame, the yaw (degrees) of the motion it names where it fires.

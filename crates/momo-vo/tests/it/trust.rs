@@ -2043,3 +2043,81 @@ fn the_side_slip_hold_starts_after_a_frame_a_vehicle_pulled() {
         assert_eq!(b.reason, Some(Reason::SideSlip), "frame {k}");
     }
 }
+
+/// `trust.report_covariance`: the reported covariance's start (the first stage's curvature,
+/// the first stage's over the sandwich's residual variance, or the final stage's own
+/// curvature on its support) changes no pose and no status but the report-only
+/// `ill_conditioned` (a frame whose first-stage covariance had an unconstrained direction can
+/// report the refit's finite one). On the static `outliers` scenario (30 % mismatches) the
+/// first stage's Cauchy fit at the noise's scale is less efficient than the final stage's
+/// estimate it is reported with: the refit's curvature is narrower and still holds the
+/// errors (rotation NEES inside the 95 % chi-square bound).
+#[test]
+fn the_reported_covariance_can_start_from_the_refit_and_changes_no_pose() {
+    const CHI2_3_95: f64 = 7.814_727_903_251_178;
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames: 120,
+        seed: 2,
+        ..momo_sim::SimConfig::outliers()
+    })
+    .expect("simulated");
+    let seq = &sim.sequence;
+    let run = |report: momo_vo::trust::ReportCovariance| {
+        let mut config = Config::default();
+        config.trust.report_covariance = report;
+        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+        (1..seq.num_frames())
+            .map(|k| {
+                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+                let r = vo.process(&seq.frames[k], arc);
+                let nees = (r.diagnostics.status == FrameStatus::Estimated)
+                    .then(|| rotation_nees(&vo, &r.diagnostics, &sim.vehicle_motions[k].rotation))
+                    .flatten();
+                (r.motion, r.diagnostics, nees)
+            })
+            .collect::<Vec<_>>()
+    };
+    use momo_vo::trust::ReportCovariance as R;
+    assert_eq!(Config::default().trust.report_covariance, R::FirstStage);
+    let first = run(R::FirstStage);
+    let mean = |frames: &[(Pose<f64>, momo_vo::FrameDiagnostics, Option<f64>)]| {
+        let scored: Vec<f64> = frames.iter().filter_map(|f| f.2).collect();
+        let inside = scored.iter().filter(|n| **n <= CHI2_3_95).count();
+        (
+            scored.iter().sum::<f64>() / scored.len() as f64,
+            inside as f64 / scored.len() as f64,
+            scored.len(),
+        )
+    };
+    let (nees_first, _, n_first) = mean(&first);
+    for report in [R::Sandwich, R::Refit] {
+        let other = run(report);
+        let mut changed = 0;
+        for (k, (a, b)) in first.iter().zip(&other).enumerate() {
+            assert_eq!(a.0.rotation, b.0.rotation, "{report:?} frame {k}");
+            assert_eq!(a.0.translation, b.0.translation, "{report:?} frame {k}");
+            if (a.1.status, a.1.reason) != (b.1.status, b.1.reason) {
+                assert_eq!(
+                    a.1.reason,
+                    Some(Reason::IllConditioned),
+                    "{report:?} frame {k}"
+                );
+                assert_eq!(b.1.status, FrameStatus::Estimated, "{report:?} frame {k}");
+                changed += 1;
+            }
+            changed += usize::from(a.1.covariance != b.1.covariance);
+        }
+        assert!(changed > 0, "{report:?} changed no covariance");
+        let (nees, inside, n) = mean(&other);
+        eprintln!(
+            "{report:?}: mean NEES {nees:.3} (first stage {nees_first:.3} over {n_first} frames), {inside:.3} inside over {n}"
+        );
+        assert!(
+            n >= 100 && inside >= 0.95,
+            "{report:?}: {inside} inside over {n}"
+        );
+        if report == R::Refit {
+            assert!(nees > 1.3 * nees_first, "{nees} against {nees_first}");
+        }
+    }
+}
