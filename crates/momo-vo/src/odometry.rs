@@ -4003,11 +4003,7 @@ impl Odometry {
             rig: &self.rig,
             observations: obs,
             // The stage whose minimum the frame's solution is.
-            loss: self
-                .config
-                .refine_loss
-                .as_deref()
-                .unwrap_or(self.config.loss.as_ref()),
+            loss: self.solution_loss(),
             solver: self.config.solver.as_ref(),
             initial: &sol.params,
             fixed,
@@ -4049,6 +4045,31 @@ impl Odometry {
         }
     }
 
+    /// The loss whose minimum the frame's solution is (`refine_loss` where set, else `loss`).
+    fn solution_loss(&self) -> &dyn momo_core::RobustLoss {
+        self.config
+            .refine_loss
+            .as_deref()
+            .unwrap_or(self.config.loss.as_ref())
+    }
+
+    /// The prior terms' linearisation alone at the solution (no match), with `loss`.
+    fn prior_linearization(
+        &self,
+        obs: &FrameObservations,
+        loss: &dyn momo_core::RobustLoss,
+        sol: &FrameSolution,
+        fixed: &[bool],
+    ) -> Option<momo_core::Linearization> {
+        let empty = FrameObservations {
+            per_camera: vec![Vec::new(); obs.per_camera.len()],
+            cross_camera: Vec::new(),
+        };
+        self.estimator
+            .linearize(&self.stage_request(&empty, loss, sol, fixed), &sol.params)
+            .ok()
+    }
+
     /// The frame's part of the one-linearisation jackknife
     /// ([`trust::TrustOptions::jackknife_influence`]) for the cells of `grids`: the prior
     /// terms' linearisation alone (no match), then in one pass over the matches
@@ -4062,19 +4083,8 @@ impl Odometry {
         fixed: &[bool],
         grids: &[(usize, usize)],
     ) -> Option<InfluenceFrame> {
-        let loss = self
-            .config
-            .refine_loss
-            .as_deref()
-            .unwrap_or(self.config.loss.as_ref());
-        let empty = FrameObservations {
-            per_camera: vec![Vec::new(); obs.per_camera.len()],
-            cross_camera: Vec::new(),
-        };
-        let prior = self
-            .estimator
-            .linearize(&self.stage_request(&empty, loss, sol, fixed), &sol.params)
-            .ok()?;
+        let loss = self.solution_loss();
+        let prior = self.prior_linearization(obs, loss, sol, fixed)?;
         let labels: Vec<(Vec<usize>, usize)> = grids
             .iter()
             .map(|&g| trust::cell_labels(&self.rig, obs, g))
@@ -4428,11 +4438,7 @@ impl Odometry {
         sol: &FrameSolution,
         fixed: &[bool],
     ) -> Option<f64> {
-        let loss = self
-            .config
-            .refine_loss
-            .as_deref()
-            .unwrap_or(self.config.loss.as_ref());
+        let loss = self.solution_loss();
         let m: usize = obs
             .per_camera
             .iter()
@@ -4448,18 +4454,11 @@ impl Odometry {
                 &[(labels.as_slice(), m)],
             )
             .ok()??;
-        let empty = FrameObservations {
-            per_camera: vec![Vec::new(); obs.per_camera.len()],
-            cross_camera: Vec::new(),
-        };
         let with = self
             .estimator
             .linearize(&self.stage_request(obs, loss, sol, fixed), &sol.params)
             .ok()?;
-        let prior = self
-            .estimator
-            .linearize(&self.stage_request(&empty, loss, sol, fixed), &sol.params)
-            .ok()?;
+        let prior = self.prior_linearization(obs, loss, sol, fixed)?;
         let n = sol.free.len();
         let exact = data.total.hessian.view((0, 0), (n, n)).into_owned();
         let normal = (with.hessian - prior.hessian)
