@@ -3806,21 +3806,30 @@ impl Odometry {
         // `trust.report_covariance`: the reported covariance's own chain from its own start,
         // through the same widenings (report only: `cov` stays the status tests' and the
         // jackknife's).
-        let mut rep = match self.config.trust.report_covariance {
-            trust::ReportCovariance::FirstStage => None,
-            trust::ReportCovariance::Sandwich => self
-                .sandwich_sigma2(obs, sol, &fixed)
-                .and_then(|s2| base(&|inp| inp.sigma2 = Some(s2))),
-            trust::ReportCovariance::Refit => sol.refit_curvature.as_ref().and_then(|r| {
+        let refit = || {
+            sol.refit_curvature.as_ref().and_then(|r| {
                 base(&|inp| {
                     let (normal, cost, support) = r;
                     inp.normal = normal.view((0, 0), (n, n)).into_owned();
                     inp.cost = *cost;
                     inp.inliers = *support;
                 })
-            }),
+            })
+        };
+        let finite = |c: &nalgebra::DMatrix<f64>| c.iter().all(|v| v.is_finite());
+        let mut rep = match self.config.trust.report_covariance {
+            trust::ReportCovariance::FirstStage => None,
+            trust::ReportCovariance::Sandwich => self
+                .sandwich_sigma2(obs, sol, &fixed)
+                .and_then(|s2| base(&|inp| inp.sigma2 = Some(s2))),
+            trust::ReportCovariance::Refit => refit(),
         }
         .filter(|c| c.shape() == cov.shape());
+        // `trust.ill_conditioned_refit`: a first-stage covariance with an unconstrained
+        // direction, where the final stage's own curvature constrains every direction.
+        if rep.is_none() && self.config.trust.ill_conditioned_refit && !finite(&cov) {
+            rep = refit().filter(|c| c.shape() == cov.shape() && finite(c));
+        }
         // Where the data contradict the soft prior, its pull on the estimate is an error the
         // posterior covariance does not hold: add it (`trust.prior_conflict_chi2`).
         if let Some(b) = self.prior_conflict_shift(sol, soft_view)
