@@ -1675,6 +1675,9 @@ impl Odometry {
         let mut soft_level = None;
         // The alternatives the reported covariance is widened by about the frame's solution
         // (`tilt_hold_stage = "report"` moves those terms to the held twin it reports).
+        // `trust.ill_conditioned_refit` gave this frame's report its covariance (the frame
+        // does not confirm a contested start: `trust.unconfirmed_start`).
+        let mut refit_fallback = false;
         let mut widened = Widened::default();
         // The reduced stage's motion where `neighbour_guard` kept the given matches' stage
         // (`trust.guard_alternative_weight`).
@@ -1876,7 +1879,7 @@ impl Odometry {
                 } else {
                     self.covariance_floor(&sol)
                 };
-                let (base, report_jackknife) = self.fill_diagnostics(
+                let (base, report_jackknife, fallback) = self.fill_diagnostics(
                     obs,
                     &sol,
                     !standstill,
@@ -1886,6 +1889,7 @@ impl Odometry {
                     floor.as_ref(),
                     &mut diag,
                 );
+                refit_fallback = fallback;
                 // The competing motion's mixture (`fill_diagnostics` adds it wherever the frame
                 // has a covariance).
                 if let Some((b, w)) = &diag.competing
@@ -2275,6 +2279,7 @@ impl Odometry {
         if let Some((beta, _)) = slip
             && diag.status == FrameStatus::Estimated
             && diag.competing.is_none()
+            && !refit_fallback
         {
             let (mean, n) = &mut self.side_slip_centre;
             *n += 1;
@@ -2311,7 +2316,8 @@ impl Odometry {
         {
             flag_weak_report_only(&mut diag, Reason::UnconfirmedStart);
         }
-        self.start_confirmed |= diag.status == FrameStatus::Estimated && diag.competing.is_none();
+        self.start_confirmed |=
+            diag.status == FrameStatus::Estimated && diag.competing.is_none() && !refit_fallback;
         // `odometry.noise_reference`: the angular thresholds follow the run's noise, read off
         // the frames `estimated` without a competing motion before the report-only rules (from
         // the next frame on).
@@ -2352,7 +2358,9 @@ impl Odometry {
         // other rule reports it.
         if self.config.trust.unconfirmed_start && self.config.trust.unconfirmed_start_frames > 1 {
             let unsettled = !self.start_settled;
-            let clean = diag.status == FrameStatus::Estimated && diag.competing.is_none();
+            let clean = diag.status == FrameStatus::Estimated
+                && diag.competing.is_none()
+                && !refit_fallback;
             self.start_clean = if clean { self.start_clean + 1 } else { 0 };
             self.start_contested |= diag.competing.is_some();
             self.start_settled |= self.start_clean >= self.config.trust.unconfirmed_start_frames;
@@ -4501,7 +4509,7 @@ impl Odometry {
         soft_view: Option<&SoftView>,
         floor: Option<&nalgebra::DMatrix<f64>>,
         diag: &mut FrameDiagnostics,
-    ) -> (Option<nalgebra::DMatrix<f64>>, GridJackknives) {
+    ) -> (Option<nalgebra::DMatrix<f64>>, GridJackknives, bool) {
         diag.initial_cost = sol.report.initial_cost;
         diag.final_cost = sol.report.final_cost;
         diag.iterations = sol.report.iterations;
@@ -4525,6 +4533,11 @@ impl Odometry {
             Some((s, r, j)) => (Some(s), Some(r), j),
             None => (None, None, Vec::new()),
         };
+        // `trust.ill_conditioned_refit` gave the report a finite covariance where the first
+        // stage's is not.
+        let finite = |c: &nalgebra::DMatrix<f64>| c.iter().all(|v| v.is_finite());
+        let refit_fallback = status_cov.as_ref().is_some_and(|c| !finite(c))
+            && reported.as_ref().is_some_and(|c| finite(c));
         if let Some((b, w)) = &competing {
             diag.competing = Some((with_free(&sol.params, &sol.free, b), *w));
         }
@@ -4565,7 +4578,7 @@ impl Odometry {
             }
             diag.covariance = cov.transpose().iter().copied().collect();
         }
-        (base, report_jackknife)
+        (base, report_jackknife, refit_fallback)
     }
 
     /// The floor of this frame's reported covariance (`trust.covariance_memory` `ρ`): `ρ Σ'`
