@@ -4537,7 +4537,7 @@ impl Odometry {
         // stage's is not.
         let finite = |c: &nalgebra::DMatrix<f64>| c.iter().all(|v| v.is_finite());
         let refit_fallback = status_cov.as_ref().is_some_and(|c| !finite(c))
-            && reported.as_ref().is_some_and(|c| finite(c));
+            && reported.as_ref().is_some_and(finite);
         if let Some((b, w)) = &competing {
             diag.competing = Some((with_free(&sol.params, &sol.free, b), *w));
         }

@@ -2049,6 +2049,27 @@ fn the_side_slip_hold_starts_after_a_frame_a_vehicle_pulled() {
     }
 }
 
+/// The static `outliers` scenario (built-in drive, seed 2, 120 frames) through one odometry with
+/// `config`: each frame's motion, diagnostics and rotation NEES ([`rotation_nees`]).
+fn outliers_run(config: Config) -> Vec<(Pose<f64>, momo_vo::FrameDiagnostics, Option<f64>)> {
+    let sim = momo_sim::simulate(&momo_sim::SimConfig {
+        frames: 120,
+        seed: 2,
+        ..momo_sim::SimConfig::outliers()
+    })
+    .expect("simulated");
+    let seq = &sim.sequence;
+    let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
+    (1..seq.num_frames())
+        .map(|k| {
+            let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
+            let r = vo.process(&seq.frames[k], arc);
+            let nees = rotation_nees(&vo, &r.diagnostics, &sim.vehicle_motions[k].rotation);
+            (r.motion, r.diagnostics, nees)
+        })
+        .collect()
+}
+
 /// `trust.report_covariance`: the reported covariance's start (the first stage's curvature,
 /// the first stage's over the sandwich's residual variance, or the final stage's own
 /// curvature on its support) changes no pose and no status but the report-only
@@ -2060,33 +2081,20 @@ fn the_side_slip_hold_starts_after_a_frame_a_vehicle_pulled() {
 #[test]
 fn the_reported_covariance_can_start_from_the_refit_and_changes_no_pose() {
     const CHI2_3_95: f64 = 7.814_727_903_251_178;
-    let sim = momo_sim::simulate(&momo_sim::SimConfig {
-        frames: 120,
-        seed: 2,
-        ..momo_sim::SimConfig::outliers()
-    })
-    .expect("simulated");
-    let seq = &sim.sequence;
     let run = |report: momo_vo::trust::ReportCovariance| {
         let mut config = Config::default();
         config.trust.report_covariance = report;
-        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
-        (1..seq.num_frames())
-            .map(|k| {
-                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-                let r = vo.process(&seq.frames[k], arc);
-                let nees = (r.diagnostics.status == FrameStatus::Estimated)
-                    .then(|| rotation_nees(&vo, &r.diagnostics, &sim.vehicle_motions[k].rotation))
-                    .flatten();
-                (r.motion, r.diagnostics, nees)
-            })
-            .collect::<Vec<_>>()
+        outliers_run(config)
     };
     use momo_vo::trust::ReportCovariance as R;
     assert_eq!(Config::default().trust.report_covariance, R::FirstStage);
     let first = run(R::FirstStage);
     let mean = |frames: &[(Pose<f64>, momo_vo::FrameDiagnostics, Option<f64>)]| {
-        let scored: Vec<f64> = frames.iter().filter_map(|f| f.2).collect();
+        let scored: Vec<f64> = frames
+            .iter()
+            .filter(|f| f.1.status == FrameStatus::Estimated)
+            .filter_map(|f| f.2)
+            .collect();
         let inside = scored.iter().filter(|n| **n <= CHI2_3_95).count();
         (
             scored.iter().sum::<f64>() / scored.len() as f64,
@@ -2137,25 +2145,10 @@ fn the_reported_covariance_can_start_from_the_refit_and_changes_no_pose() {
 #[test]
 fn an_ill_conditioned_first_stage_reports_the_refits_covariance() {
     const CHI2_3_999: f64 = 16.266_236_196_238_1;
-    let sim = momo_sim::simulate(&momo_sim::SimConfig {
-        frames: 120,
-        seed: 2,
-        ..momo_sim::SimConfig::outliers()
-    })
-    .expect("simulated");
-    let seq = &sim.sequence;
     let run = |on: bool| {
         let mut config = Config::default();
         config.trust.ill_conditioned_refit = on;
-        let mut vo = Odometry::new(seq.rig.clone(), config).expect("valid");
-        (1..seq.num_frames())
-            .map(|k| {
-                let arc = seq.arc_lengths.as_ref().and_then(|a| a[k]);
-                let r = vo.process(&seq.frames[k], arc);
-                let nees = rotation_nees(&vo, &r.diagnostics, &sim.vehicle_motions[k].rotation);
-                (r.motion, r.diagnostics, nees)
-            })
-            .collect::<Vec<_>>()
+        outliers_run(config)
     };
     assert!(Config::default().trust.ill_conditioned_refit);
     let (off, on) = (run(false), run(true));
