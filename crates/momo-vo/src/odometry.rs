@@ -3814,6 +3814,9 @@ impl Odometry {
         // `trust.report_covariance`: the reported covariance's own chain from its own start,
         // through the same widenings (report only: `cov` stays the status tests' and the
         // jackknife's).
+        // (With `trust.prior_spread_covariance` before the soft prior is learnt, the soft
+        // prior's information is taken out of the refit's normal matrix in the first stage's
+        // units.)
         let refit = || {
             sol.refit_curvature.as_ref().and_then(|r| {
                 base(&|inp| {
@@ -3838,26 +3841,30 @@ impl Odometry {
         if rep.is_none() && self.config.trust.ill_conditioned_refit && !finite(&cov) {
             rep = refit().filter(|c| c.shape() == cov.shape() && finite(c));
         }
+        // Every widening below acts on both chains alike.
+        let both =
+            |cov: &mut nalgebra::DMatrix<f64>,
+             rep: &mut Option<nalgebra::DMatrix<f64>>,
+             f: &dyn Fn(&nalgebra::DMatrix<f64>) -> nalgebra::DMatrix<f64>| {
+                if let Some(r) = rep.as_mut() {
+                    *r = f(r);
+                }
+                *cov = f(cov);
+            };
         // Where the data contradict the soft prior, its pull on the estimate is an error the
         // posterior covariance does not hold: add it (`trust.prior_conflict_chi2`).
         if let Some(b) = self.prior_conflict_shift(sol, soft_view)
             && b.len() == cov.nrows()
         {
             let bb = &b * b.transpose();
-            if let Some(r) = rep.as_mut() {
-                *r += &bb;
-            }
-            cov += bb;
+            both(&mut cov, &mut rep, &|c| c + &bb);
         }
         // Where the true slip is heavy-tailed, the prior at its learnt (median) width is
         // over-confident: hold it at the mean-square spread (`trust.prior_spread_covariance`).
         if let Some(w) = self.prior_spread_widening(sol)
             && w.nrows() == cov.nrows()
         {
-            if let Some(r) = rep.as_mut() {
-                *r += &w;
-            }
-            cov += w;
+            both(&mut cov, &mut rep, &|c| c + &w);
         }
         if !jackknife {
             let reported = rep.unwrap_or_else(|| cov.clone());
@@ -3906,10 +3913,9 @@ impl Odometry {
             let j = trust::jackknife_covariance(&samples);
             if k < status_grids {
                 if let Some(j) = j {
-                    if let Some(r) = rep.as_mut() {
-                        *r = trust::widen(r, &j, t.jackknife_min_ratio);
-                    }
-                    cov = trust::widen(&cov, &j, t.jackknife_min_ratio);
+                    both(&mut cov, &mut rep, &|c| {
+                        trust::widen(c, &j, t.jackknife_min_ratio)
+                    });
                 }
                 continue;
             }
@@ -3919,20 +3925,18 @@ impl Odometry {
                 if t.report_pool_own
                     && let Some(j) = j.as_ref()
                 {
-                    if let Some(r) = rep.as_mut() {
-                        *r = trust::widen(r, j, t.report_min_ratio);
-                    }
-                    cov = trust::widen(&cov, j, t.report_min_ratio);
+                    both(&mut cov, &mut rep, &|c| {
+                        trust::widen(c, j, t.report_min_ratio)
+                    });
                 }
                 self.pooled_report_jackknife(k - status_grids, sol, j.as_ref(), &cov)
             } else {
                 j.clone()
             };
             if let Some(p) = pooled {
-                if let Some(r) = rep.as_mut() {
-                    *r = trust::widen(r, &p, t.report_min_ratio);
-                }
-                cov = trust::widen(&cov, &p, t.report_min_ratio);
+                both(&mut cov, &mut rep, &|c| {
+                    trust::widen(c, &p, t.report_min_ratio)
+                });
             }
             report_jackknife.push(j);
         }

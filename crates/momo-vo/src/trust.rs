@@ -348,8 +348,8 @@ pub struct TrustOptions {
     /// fast, put an eigenvalue of 3.6e11 beside 0.07 on a clean-looking frame (KITTI 00
     /// trajectory, seed 81, frame 125; the other eigenvalues 78, 32 and 2.3). Report only: the
     /// status tests and decisions read the first stage's. Default true (seventy-sixth session:
-    /// 0.15 % of the static scenes' frames and about 0.5 % of the traffic sets' were flagged so,
-    /// at mean errors of 0.03-0.15 deg).
+    /// 0.12-0.15 % of the static scenes' frames and 0.16-0.83 % of the traffic sets' were flagged
+    /// so, at mean errors of 0.03-0.15 deg).
     pub ill_conditioned_refit: bool,
     /// A car's yaw rate changes smoothly (along the KITTI trajectories 99.9 % of the
     /// frame-to-frame changes of the per-frame yaw are below 0.49 deg): where the yaw `ω_z`
