@@ -199,6 +199,17 @@ pub struct HypothesesOptions {
     /// by [`HypothesesOptions::tilt_reference_frames`] `= 1`. A config file's
     /// `[odometry.separate.hypotheses]` section gets false unless it writes it.
     pub tilt_replace: bool,
+    /// With [`HypothesesOptions::tilt_replace`]: the converse's own test applied to its
+    /// replacement — among the alternatives flatter than A by the margin, only those within
+    /// [`HypothesesOptions::tilt_margin`] of the flattest of them compete (the highest positive
+    /// road score among those replaces A). Without it a replacement tilted more than another
+    /// qualifying alternative by the margin can win on one more road match, and the rule would
+    /// then reject its own choice (seventy-seventh session: `conf3` 08 s87 frame 78 chose a
+    /// 1.08°-pitched bus fit, road score 13, over the static world's 0.10° fit, road score 12;
+    /// the lock-in it started reached 1.04° at frame 80). See
+    /// [`HypothesesOptions::flattest_within_margin`]. Off in `HypothesesOptions::default()`;
+    /// a config file's `[odometry.separate.hypotheses]` section gets false unless it writes it.
+    pub tilt_replace_flattest: bool,
     /// Odometry consistency of the yaw (in standard deviations of the rotation prior; 0: off;
     /// twenty-first session, yaw35): where the motion prior is active (the previous frame was
     /// estimated, trusted and had no competing motion: `odometry.rotation_change_sigma`, the
@@ -524,6 +535,7 @@ impl Default for HypothesesOptions {
             road_span_vouched: false,
             tilt_margin: 0.0,
             tilt_replace: false,
+            tilt_replace_flattest: false,
             yaw_jump: 0.0,
             tilt_reference_frames: 0,
             tilt_reference_margin: 0.0,
@@ -553,6 +565,35 @@ impl Default for HypothesesOptions {
 }
 
 impl HypothesesOptions {
+    /// The converse's candidates ([`HypothesesOptions::tilt_replace`]) that may replace A:
+    /// `(road score, candidate, tilt)` of the alternatives flatter than A by the margin, all of
+    /// them, or with [`HypothesesOptions::tilt_replace_flattest`] only those whose tilt is
+    /// within [`HypothesesOptions::tilt_margin`] of the flattest one's (order kept).
+    ///
+    /// ```
+    /// use momo_vo::hypotheses::HypothesesOptions;
+    ///
+    /// let on = HypothesesOptions { tilt_margin: 0.01, tilt_replace: true, tilt_replace_flattest: true, ..Default::default() };
+    /// // A bus fit pitched 0.019 rad with one more road match than the static world's 0.002.
+    /// let q = vec![(13, "bus", 0.019), (12, "static", 0.002), (3, "other", 0.011)];
+    /// let kept: Vec<_> = on.flattest_within_margin(q.clone()).map(|(_, c, _)| c).collect();
+    /// assert_eq!(kept, ["static", "other"]);
+    /// let off = HypothesesOptions { tilt_replace_flattest: false, ..on };
+    /// assert_eq!(off.flattest_within_margin(q).count(), 3);
+    /// ```
+    pub fn flattest_within_margin<T>(
+        &self,
+        qualified: Vec<(usize, T, f64)>,
+    ) -> impl DoubleEndedIterator<Item = (usize, T, f64)> {
+        let flattest = qualified.iter().map(|q| q.2).fold(f64::INFINITY, f64::min);
+        let bound = if self.tilt_replace_flattest {
+            flattest + self.tilt_margin
+        } else {
+            f64::INFINITY
+        };
+        qualified.into_iter().filter(move |q| q.2 <= bound)
+    }
+
     /// Checks the options; the message names the first bad one.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.parallax.is_finite() && self.parallax > 0.0) {

@@ -673,6 +673,7 @@ impl SeparateOptions {
                 tilt_margin: 0.01,
                 yaw_jump: 7.0,
                 tilt_replace: true,
+                tilt_replace_flattest: true,
                 tilt_reference_frames: 1,
                 tilt_reference_margin: 0.01,
                 yaw_history_frames: 1,
@@ -1646,12 +1647,17 @@ fn separate_with(
                     let m = ctx.estimator.motion(&alt.0.params);
                     let t = crate::hypotheses::tilt(&m);
                     (t.is_finite() && t < tilt_a - tilt_margin)
-                        .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt))
+                        .then(|| (score(h, ctx.rig, &m, obs, &alt.1), alt, t))
                 })
                 // `tilt_replace_roadless`: also without road where the ground cue does not
                 // apply between A and it.
-                .filter(|(s, _)| HypothesisTracker::converse_qualifies(h, *s, score_a));
-            tilted_a = first_highest(qualified);
+                .filter(|(s, _, _)| HypothesisTracker::converse_qualifies(h, *s, score_a))
+                .collect();
+            // `tilt_replace_flattest`: the converse's test applied to its replacement too.
+            tilted_a = first_highest(
+                h.flattest_within_margin(qualified)
+                    .map(|(s, alt, _)| (s, alt)),
+            );
         }
         if h.yaw_jump > 0.0 {
             jumped_a = yaw_jump_replacement(ctx, h, obs, &chosen, &alternatives);

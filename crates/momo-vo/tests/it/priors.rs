@@ -335,7 +335,8 @@ fn slow_frames_can_be_solved_without_the_rotation_prior() {
 /// (the default since the seventy-fourth session) the run's state stays as without the hold;
 /// frames 78-80 do not move (rules chose their motions after the final stage), 18 of the first
 /// 80 frames do, and their error sum drops (9.248 -> 8.995 deg); no status changes, and 17
-/// covariances do (widened about the held twins). Needs `MOMO_DATA` (skips without it).
+/// covariances do (widened about the held twins). Run with `tilt_replace_flattest` off, as
+/// before the seventy-seventh session. Needs `MOMO_DATA` (skips without it).
 #[test]
 fn the_tilt_hold_keeps_doubted_frames_level() {
     let Some(sim) =
@@ -345,6 +346,16 @@ fn the_tilt_hold_keeps_doubted_frames_level() {
     };
     let run = |sigma: f64, stage: TiltHoldStage| {
         let mut config = Config::default();
+        // The reproduction predates `tilt_replace_flattest` (seventy-seventh session), which
+        // keeps frame 78 on the static world and so clears these frames without the hold.
+        if let Some(h) = config
+            .odometry
+            .separate
+            .as_mut()
+            .and_then(|s| s.hypotheses.as_mut())
+        {
+            h.tilt_replace_flattest = false;
+        }
         config.odometry.tilt_hold_sigma = sigma;
         config.odometry.tilt_hold_stage = stage;
         crate::support::first_errors_and_diagnostics(&sim, config, 80)
