@@ -298,28 +298,16 @@ fn beyond_the_yaw_margin_decide_by_road_keeps_the_turn() {
 #[test]
 fn predict_by_slip_takes_the_turn_from_a_sliding_lead_vehicle() {
     let default = Config::default();
-    let slip = |c: &Config| {
-        c.odometry
-            .separate
-            .as_ref()
-            .and_then(|s| s.hypotheses.as_ref())
-            .map(|h| h.predict_by_slip)
-    };
-    assert_eq!(slip(&default), Some(6.0));
+    assert_eq!(
+        crate::support::hypotheses_of(&default).map(|h| h.predict_by_slip),
+        Some(6.0)
+    );
     let Some(sim) =
         crate::support::along_kitti("02", 500, 44, 1.0, momo_sim::SimConfig::moving_traffic())
     else {
         return;
     };
-    let mut off = Config::default();
-    if let Some(h) = off
-        .odometry
-        .separate
-        .as_mut()
-        .and_then(|s| s.hypotheses.as_mut())
-    {
-        h.predict_by_slip = 0.0;
-    }
+    let off = crate::support::default_with_hypotheses(|h| h.predict_by_slip = 0.0);
     let worst = |config: Config| {
         crate::support::first_errors_and_diagnostics(&sim, config, 169)[165..]
             .iter()
@@ -341,32 +329,18 @@ fn predict_by_slip_takes_the_turn_from_a_sliding_lead_vehicle() {
 /// slide. The simulation is the set's (500 frames), run over its first 107 frame pairs.
 #[test]
 fn predict_by_slip_alternatives_take_the_static_world_from_a_sliding_lead_vehicle() {
-    let on = |c: &Config| {
-        c.odometry
-            .separate
-            .as_ref()
-            .and_then(|s| s.hypotheses.as_ref())
-            .map(|h| h.predict_by_slip_alternatives)
-    };
-    assert_eq!(on(&Config::default()), Some(true));
+    assert_eq!(
+        crate::support::hypotheses_of(&Config::default()).map(|h| h.predict_by_slip_alternatives),
+        Some(true)
+    );
     let sim = momo_sim::simulate(&momo_sim::SimConfig {
         frames: 500,
         seed: 44,
         ..momo_sim::SimConfig::moving_traffic()
     })
     .expect("simulation");
-    let with = |on: bool| {
-        let mut c = Config::default();
-        if let Some(h) = c
-            .odometry
-            .separate
-            .as_mut()
-            .and_then(|s| s.hypotheses.as_mut())
-        {
-            h.predict_by_slip_alternatives = on;
-        }
-        c
-    };
+    let with =
+        |on: bool| crate::support::default_with_hypotheses(|h| h.predict_by_slip_alternatives = on);
     let worst = |config: Config| {
         crate::support::first_errors_and_diagnostics(&sim, config, 107)[102..]
             .iter()
@@ -398,28 +372,16 @@ fn predict_by_slip_alternatives_take_the_static_world_from_a_sliding_lead_vehicl
 /// the static world. Needs `MOMO_DATA` (skips without it).
 #[test]
 fn the_tilt_converse_takes_the_flattest_alternative() {
-    let flattest = |c: &Config| {
-        c.odometry
-            .separate
-            .as_ref()
-            .and_then(|s| s.hypotheses.as_ref())
-            .map(|h| h.tilt_replace_flattest)
-    };
-    assert_eq!(flattest(&Config::default()), Some(true));
+    assert_eq!(
+        crate::support::hypotheses_of(&Config::default()).map(|h| h.tilt_replace_flattest),
+        Some(true)
+    );
     let Some(sim) =
         crate::support::along_kitti("08", 500, 87, 1.0, momo_sim::SimConfig::moving_traffic())
     else {
         return;
     };
-    let mut off = Config::default();
-    if let Some(h) = off
-        .odometry
-        .separate
-        .as_mut()
-        .and_then(|s| s.hypotheses.as_mut())
-    {
-        h.tilt_replace_flattest = false;
-    }
+    let off = crate::support::default_with_hypotheses(|h| h.tilt_replace_flattest = false);
     let errors = |config: Config| -> Vec<f64> {
         crate::support::first_errors_and_diagnostics(&sim, config, 80)
             .into_iter()

@@ -345,17 +345,10 @@ fn the_tilt_hold_keeps_doubted_frames_level() {
         return;
     };
     let run = |sigma: f64, stage: TiltHoldStage| {
-        let mut config = Config::default();
         // The reproduction predates `tilt_replace_flattest` (seventy-seventh session), which
         // keeps frame 78 on the static world and so clears these frames without the hold.
-        if let Some(h) = config
-            .odometry
-            .separate
-            .as_mut()
-            .and_then(|s| s.hypotheses.as_mut())
-        {
-            h.tilt_replace_flattest = false;
-        }
+        let mut config =
+            crate::support::default_with_hypotheses(|h| h.tilt_replace_flattest = false);
         config.odometry.tilt_hold_sigma = sigma;
         config.odometry.tilt_hold_stage = stage;
         crate::support::first_errors_and_diagnostics(&sim, config, 80)

@@ -243,3 +243,28 @@ pub fn along_kitti(
     });
     Some(sim.expect("simulated"))
 }
+
+/// The `[odometry.separate.hypotheses]` options of `config` (`None` without them).
+pub fn hypotheses_of(config: &momo_vo::Config) -> Option<&momo_vo::hypotheses::HypothesesOptions> {
+    config
+        .odometry
+        .separate
+        .as_ref()
+        .and_then(|s| s.hypotheses.as_ref())
+}
+
+/// `Config::default()` with its `[odometry.separate.hypotheses]` options changed by `change`.
+pub fn default_with_hypotheses(
+    change: impl FnOnce(&mut momo_vo::hypotheses::HypothesesOptions),
+) -> momo_vo::Config {
+    let mut config = momo_vo::Config::default();
+    if let Some(h) = config
+        .odometry
+        .separate
+        .as_mut()
+        .and_then(|s| s.hypotheses.as_mut())
+    {
+        change(h);
+    }
+    config
+}
