@@ -2792,12 +2792,7 @@ impl Odometry {
         }
         // Where the inliers are. With an angular metric at its loss scale, the solver's own
         // inliers (its residual is the angle to the epipolar plane): no second pass.
-        let in_rig: usize = obs
-            .per_camera
-            .iter()
-            .take(self.rig.len())
-            .map(Vec::len)
-            .sum();
+        let in_rig = self.rig_matches(obs);
         if self.metric_is_angular
             && self.inlier_angle() == self.config.loss.scale()
             && sol.inlier_mask.len() == in_rig
@@ -3827,7 +3822,6 @@ impl Odometry {
                 })
             })
         };
-        let finite = |c: &nalgebra::DMatrix<f64>| c.iter().all(|v| v.is_finite());
         let mut rep = match self.config.trust.report_covariance {
             trust::ReportCovariance::FirstStage => None,
             trust::ReportCovariance::Sandwich => self
@@ -3838,8 +3832,8 @@ impl Odometry {
         .filter(|c| c.shape() == cov.shape());
         // `trust.ill_conditioned_refit`: a first-stage covariance with an unconstrained
         // direction, where the final stage's own curvature constrains every direction.
-        if rep.is_none() && self.config.trust.ill_conditioned_refit && !finite(&cov) {
-            rep = refit().filter(|c| c.shape() == cov.shape() && finite(c));
+        if rep.is_none() && self.config.trust.ill_conditioned_refit && !all_finite(&cov) {
+            rep = refit().filter(|c| c.shape() == cov.shape() && all_finite(c));
         }
         // Every widening below acts on both chains alike.
         let both =
@@ -4064,6 +4058,16 @@ impl Odometry {
             rotation_only: false,
             motion_prior: Some(&self.motion_prior),
         }
+    }
+
+    /// The number of matches of the rig's cameras (the matches a stage's per-match terms and
+    /// masks index).
+    fn rig_matches(&self, obs: &FrameObservations) -> usize {
+        obs.per_camera
+            .iter()
+            .take(self.rig.len())
+            .map(Vec::len)
+            .sum()
     }
 
     /// The loss whose minimum the frame's solution is (`refine_loss` where set, else `loss`).
@@ -4460,25 +4464,14 @@ impl Odometry {
         fixed: &[bool],
     ) -> Option<f64> {
         let loss = self.solution_loss();
-        let m: usize = obs
-            .per_camera
-            .iter()
-            .take(self.rig.len())
-            .map(Vec::len)
-            .sum();
+        let m = self.rig_matches(obs);
         let labels: Vec<usize> = (0..m).collect();
+        let request = self.stage_request(obs, loss, sol, fixed);
         let data = self
             .estimator
-            .exact_data_terms_by_group(
-                &self.stage_request(obs, loss, sol, fixed),
-                &sol.params,
-                &[(labels.as_slice(), m)],
-            )
+            .exact_data_terms_by_group(&request, &sol.params, &[(labels.as_slice(), m)])
             .ok()??;
-        let with = self
-            .estimator
-            .linearize(&self.stage_request(obs, loss, sol, fixed), &sol.params)
-            .ok()?;
+        let with = self.estimator.linearize(&request, &sol.params).ok()?;
         let prior = self.prior_linearization(obs, loss, sol, fixed)?;
         let n = sol.free.len();
         let exact = data.total.hessian.view((0, 0), (n, n)).into_owned();
@@ -4537,11 +4530,11 @@ impl Odometry {
             Some((s, r, j)) => (Some(s), Some(r), j),
             None => (None, None, Vec::new()),
         };
-        // `trust.ill_conditioned_refit` gave the report a finite covariance where the first
-        // stage's is not.
-        let finite = |c: &nalgebra::DMatrix<f64>| c.iter().all(|v| v.is_finite());
-        let refit_fallback = status_cov.as_ref().is_some_and(|c| !finite(c))
-            && reported.as_ref().is_some_and(finite);
+        // The report's covariance is finite where the first stage's is not: its own start
+        // (`trust.ill_conditioned_refit`, or a `trust.report_covariance` other than
+        // `first_stage`) constrained what the first stage did not.
+        let refit_fallback = status_cov.as_ref().is_some_and(|c| !all_finite(c))
+            && reported.as_ref().is_some_and(all_finite);
         if let Some((b, w)) = &competing {
             diag.competing = Some((with_free(&sol.params, &sol.free, b), *w));
         }
@@ -5283,6 +5276,11 @@ fn apply_recheck(params: &[f64], b: &[f64], w: f64, diag: &mut FrameDiagnostics)
     }
     diag.covariance = mixed.transpose().iter().copied().collect();
     diag.competing = Some((with_free(params, &diag.free, b), w));
+}
+
+/// Whether every entry of a covariance is finite (no unconstrained direction).
+fn all_finite(c: &nalgebra::DMatrix<f64>) -> bool {
+    c.iter().all(|v| v.is_finite())
 }
 
 /// The full parameters `params` with the free ones (indices `free`) replaced by `values`: a
