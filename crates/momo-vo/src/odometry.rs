@@ -2340,6 +2340,7 @@ impl Odometry {
             yaw: omega.z,
             noise_scale: diag.noise_scale,
             competing: diag.competing.is_some(),
+            doubted: diag.status != FrameStatus::Estimated,
             params: &report,
         });
         if let Some(before) = self.contested_yaw.step(&self.config.trust, frame)
