@@ -246,8 +246,10 @@ pub struct HypothesesOptions {
     /// `tilt_reference_margin = 0.01` since the twenty-first session (moving-traffic grid 7 -> 4
     /// frames above 1 deg; seeds 11-15, the static scenes along KITTI, the built-in drive and
     /// real KITTI 00 byte-identical; seeds 16-20 one frame changed, 0.68 -> 0.21 deg;
-    /// docs/RESULTS.md §9, twenty-first session, tilt35). A config file's
-    /// `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
+    /// docs/RESULTS.md §9, twenty-first session, tilt35), and `K = 3` with
+    /// `tilt_reference = "minimum"` where a frame among them had two motions compete
+    /// ([`HypothesesOptions::tilt_reference_contested`]) since the seventy-eighth session. A
+    /// config file's `[odometry.separate.hypotheses]` section gets 0 unless it writes it.
     pub tilt_reference_frames: usize,
     /// The margin (radians) by which A's tilt must exceed the history's reference tilt for
     /// [`HypothesesOptions::tilt_reference_frames`] to let the converse replace A.
@@ -338,6 +340,18 @@ pub struct HypothesesOptions {
     /// their median (`"median"`, default; `K = 1`: the previous frame's) or their minimum
     /// (`"minimum"`).
     pub tilt_reference: TiltReference,
+    /// The reference over [`HypothesesOptions::tilt_reference_frames`] frames only where two
+    /// motions competed (the separation's `competing`) on one of those frames; elsewhere the
+    /// previous frame's tilt (seventy-eighth session; off in `HypothesesOptions::default()`,
+    /// on in the default configuration with `tilt_reference_frames = 3`, `tilt_reference =
+    /// "minimum"`). The minimum over a few frames meets a lock-in whose tilt ramps onto an
+    /// object by less than the margin per frame (a bus filling the image's left half along
+    /// KITTI 10, seed 86, frames 223-225: roll 0.007 -> 0.016 -> 0.022 rad, 1.08 deg off), and
+    /// such a ramp needs an object that competes; where nothing competed the truth's own tilt
+    /// change over a few frames is met against the previous frame alone (a static scene with
+    /// 30 % mismatches along KITTI 00, seed 2, frame 117: the minimum of three frames let a
+    /// flatter alternative of 8 matches replace a correct motion, 0.04 -> 0.47 deg).
+    pub tilt_reference_contested: bool,
     /// With [`HypothesesOptions::tilt_replace`]: a flatter alternative also qualifies for the
     /// converse without a positive road score where the ground cue does not apply between A
     /// and it — their road scores sum below [`HypothesesOptions::min_matches`], the same test
@@ -540,6 +554,7 @@ impl Default for HypothesesOptions {
             tilt_reference_frames: 0,
             tilt_reference_margin: 0.0,
             tilt_reference: TiltReference::Median,
+            tilt_reference_contested: false,
             yaw_history_frames: 0,
             yaw_history_margin: 0.0,
             yaw_history_tie: 0.0,
@@ -772,6 +787,9 @@ pub struct HypothesisTracker {
     /// The recent frames' chosen motions' tilts, newest last
     /// ([`HypothesesOptions::tilt_reference_frames`]).
     tilts: std::collections::VecDeque<f64>,
+    /// Whether two motions competed on each of the recent frames, newest last
+    /// ([`HypothesesOptions::tilt_reference_contested`]).
+    contested: std::collections::VecDeque<bool>,
     /// The recent frames' chosen motions' yaws, newest last
     /// ([`HypothesesOptions::yaw_history_frames`]), each with its standard deviation where
     /// known ([`HypothesisTracker::set_last_yaw_sigma`]).
@@ -1584,11 +1602,32 @@ impl HypothesisTracker {
         }
     }
 
+    /// Records whether two motions competed on a frame (the separation's `competing`), keeping
+    /// the last [`HypothesesOptions::tilt_reference_frames`] (nothing unless
+    /// [`HypothesesOptions::tilt_reference_contested`]).
+    pub fn record_contested(&mut self, opts: &HypothesesOptions, competing: bool) {
+        if !opts.tilt_reference_contested || opts.tilt_reference_frames == 0 {
+            return;
+        }
+        self.contested.push_back(competing);
+        while self.contested.len() > opts.tilt_reference_frames {
+            self.contested.pop_front();
+        }
+    }
+
     /// The reference tilt of the recorded frames ([`HypothesesOptions::tilt_reference`]):
-    /// their median or their minimum; `None` before any frame was recorded.
+    /// their median or their minimum; `None` before any frame was recorded. With
+    /// [`HypothesesOptions::tilt_reference_contested`] the previous frame's tilt where no
+    /// recorded frame had two motions compete.
     pub fn tilt_reference(&self, opts: &HypothesesOptions) -> Option<f64> {
         // The last `K` of the recorded tilts (more are kept for `tilt_weak_road_frames`).
-        let k = opts.tilt_reference_frames.min(self.tilts.len());
+        let contested = !opts.tilt_reference_contested || self.contested.contains(&true);
+        let frames = if contested {
+            opts.tilt_reference_frames
+        } else {
+            opts.tilt_reference_frames.min(1)
+        };
+        let k = frames.min(self.tilts.len());
         let tilts = self.tilts.iter().skip(self.tilts.len() - k).copied();
         match opts.tilt_reference {
             TiltReference::Minimum => crate::stats::minimum(tilts),
@@ -2287,6 +2326,30 @@ mod tests {
         let tilted = run(&min3, &[0.9, 0.2, 0.3, 0.95]);
         assert!((tilted.tilt_reference(&min3).unwrap() - 0.2 * d).abs() < 1e-12);
         assert!(tilted.tilt_jumps(&min3, 0.8 * d));
+        // `tilt_reference_contested`: the minimum of the three only where two motions
+        // competed on one of them; otherwise the previous frame's tilt.
+        let contested_min3 = HypothesesOptions {
+            tilt_reference_contested: true,
+            ..min3.clone()
+        };
+        let run_contested = |competing: &[bool]| {
+            let mut t = HypothesisTracker::default();
+            for (&x, &c) in [0.9, 0.2, 0.3, 0.95].iter().zip(competing) {
+                t.record_tilt(&contested_min3, x * d);
+                t.record_contested(&contested_min3, c);
+            }
+            t
+        };
+        let quiet = run_contested(&[true, false, false, false]);
+        assert!((quiet.tilt_reference(&contested_min3).unwrap() - 0.95 * d).abs() < 1e-12);
+        assert!(!quiet.tilt_jumps(&contested_min3, 1.40 * d));
+        let ramp = run_contested(&[false, true, false, false]);
+        assert!((ramp.tilt_reference(&contested_min3).unwrap() - 0.2 * d).abs() < 1e-12);
+        assert!(ramp.tilt_jumps(&contested_min3, 0.8 * d));
+        // Nothing is recorded without the option.
+        let mut plain = HypothesisTracker::default();
+        plain.record_contested(&min3, true);
+        assert!(plain.contested.is_empty());
         // An even count: the mean of the middle two; a non-finite tilt is not recorded.
         let four = run(
             &opts(4, TiltReference::Median),

@@ -31,8 +31,8 @@
 //!    horizon is no farther than the road.
 
 use crate::hypotheses::{
-    HypothesesOptions, Hypothesis, HypothesisTracker, MatchMemory, UnderRoad, ground_mask, score,
-    under_road_mask,
+    HypothesesOptions, Hypothesis, HypothesisTracker, MatchMemory, TiltReference, UnderRoad,
+    ground_mask, score, under_road_mask,
 };
 use momo_core::{
     FrameEstimator, FrameObservations, FrameSolution, MotionPrior, Pose, RobustLoss, SolveRequest,
@@ -674,7 +674,9 @@ impl SeparateOptions {
                 yaw_jump: 7.0,
                 tilt_replace: true,
                 tilt_replace_flattest: true,
-                tilt_reference_frames: 1,
+                tilt_reference_frames: 3,
+                tilt_reference: TiltReference::Minimum,
+                tilt_reference_contested: true,
                 tilt_reference_margin: 0.01,
                 yaw_history_frames: 1,
                 yaw_history_margin: 0.01745,
@@ -1942,6 +1944,7 @@ fn separate_with(
     if let Some(h) = opts.hypotheses() {
         let t = crate::hypotheses::tilt(&ctx.estimator.motion(&chosen.0.params));
         tracker.record_tilt(h, t);
+        tracker.record_contested(h, outcome.competing);
         let yaw = momo_core::so3_log(&ctx.estimator.motion(&chosen.0.params).rotation).z;
         tracker.record_yaw(h, yaw);
     }
