@@ -1910,12 +1910,16 @@ fn a_start_beside_a_vehicle_is_flagged_until_three_frames_settle_it() {
         ..momo_sim::SimConfig::moving_traffic()
     })
     .expect("simulated");
-    let run = |frames: usize| {
+    // `trust.contested_hold_doubted` off: since the seventy-eighth session the yaw-change
+    // rule's hold, which the competing frames 1-8 no longer spend, flags frames 9 and 10 too
+    // (checked below); this test isolates the start's confirmation.
+    let run = |frames: usize, hold_doubted: bool| {
         let mut config = Config::default();
         config.trust.unconfirmed_start_frames = frames;
+        config.trust.contested_hold_doubted = hold_doubted;
         first_errors_and_diagnostics(&sim, config, 12)
     };
-    let (one, three) = (run(1), run(3));
+    let (one, three) = (run(1, false), run(3, false));
     // Entry k - 1 is frame k.
     let (error, d) = &one[9];
     assert_eq!(d.status, FrameStatus::Estimated);
@@ -1936,6 +1940,19 @@ fn a_start_beside_a_vehicle_is_flagged_until_three_frames_settle_it() {
     for (a, b) in one.iter().zip(&three) {
         assert_eq!(a.0, b.0);
         assert_eq!(a.1.covariance, b.1.covariance);
+    }
+    // With the hold kept through doubted frames (the default) and one frame confirming the
+    // start, the yaw-change rule flags frames 9 and 10 itself: the jump onto the vehicle came
+    // after competing frames, which do not spend the hold.
+    let held = run(1, true);
+    for k in [9, 10] {
+        let d = &held[k - 1].1;
+        assert_eq!(
+            (d.status, d.reason),
+            (FrameStatus::Weak, Some(Reason::YawChange)),
+            "frame {k}"
+        );
+        assert_eq!(held[k - 1].0, one[k - 1].0, "frame {k}");
     }
 }
 
@@ -1982,7 +1999,18 @@ fn a_yaw_jump_where_two_motions_compete_is_flagged_and_changes_no_pose() {
             "frame {}",
             k + 1
         );
-        let before = &off[k.saturating_sub(1 + t.contested_hold + 3)..k];
+        // The motion before the jump: among the three frames before it, and the hold spans
+        // `contested_hold` frames besides those another rule already doubts
+        // (`contested_hold_doubted`).
+        let mut start = k;
+        let mut counted = 0;
+        while start > 0 && counted < 1 + t.contested_hold + 3 {
+            start -= 1;
+            if off[start].1.status == FrameStatus::Estimated || !t.contested_hold_doubted {
+                counted += 1;
+            }
+        }
+        let before = &off[start..k];
         assert!(
             before
                 .iter()
