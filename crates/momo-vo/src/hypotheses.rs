@@ -349,7 +349,7 @@ pub struct HypothesesOptions {
     /// KITTI 10, seed 86, frames 223-225: roll 0.007 -> 0.016 -> 0.022 rad, 1.08 deg off), and
     /// such a ramp needs an object that competes; where nothing competed the truth's own tilt
     /// change over a few frames is met against the previous frame alone (a static scene with
-    /// 30 % mismatches along KITTI 00, seed 2, frame 117: the minimum of three frames let a
+    /// 30 % mismatches along KITTI 00, seed 2, frame 118: the minimum of three frames let a
     /// flatter alternative of 8 matches replace a correct motion, 0.04 -> 0.47 deg).
     pub tilt_reference_contested: bool,
     /// With [`HypothesesOptions::tilt_replace`]: a flatter alternative also qualifies for the

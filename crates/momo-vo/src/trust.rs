@@ -561,7 +561,7 @@ pub struct TrustOptions {
     /// ends only after that many held frames the rule itself had to flag. A lock-in whose run
     /// stays doubted for longer than the hold does not confirm the motion it jumped to (few100h
     /// KITTI 08 seed 7 with `tilt_reference_frames = 3`: frames 494-497 `weak`, held, frame 498
-    /// `estimated` 3.3 deg off at 3 sigma once the hold had run out). With `false` every held
+    /// `estimated` 3.4 deg off at 3 sigma once the hold had run out). With `false` every held
     /// frame counts.
     pub contested_hold_doubted: bool,
     /// How [`TrustOptions::contested_yaw_change`]'s bound follows the run's measured noise:
