@@ -2213,6 +2213,16 @@ mod tests {
             .collect()
     }
 
+    /// Whether [`contested_doubted`] fires on each frame of a run of moving frames
+    /// `(yaw in degrees, competing, doubted)` at the configured noise.
+    fn fires_doubted(t: &TrustOptions, run: &[(f64, bool, bool)]) -> Vec<bool> {
+        let frames: Vec<_> = run.iter().copied().map(Some).collect();
+        contested_doubted(t, &frames, 1.0)
+            .iter()
+            .map(Option::is_some)
+            .collect()
+    }
+
     /// Whether [`contested`] fires on each frame of a run of moving frames.
     fn fires(t: &TrustOptions, run: &[(f64, bool)]) -> Vec<bool> {
         let frames: Vec<_> = run.iter().copied().map(Some).collect();
@@ -2328,54 +2338,50 @@ mod tests {
         // after them, reported `estimated` and still 3 deg from the motion before the jump, is
         // held too.
         let run = [
-            Some((-2.55, true, false)),
-            Some((-2.40, true, true)),
-            Some((-2.84, true, true)),
-            Some((-0.30, true, true)),
-            Some((0.10, true, true)),
-            Some((-0.20, true, true)),
-            Some((0.15, true, true)),
-            Some((0.45, true, false)),
+            (-2.55, true, false),
+            (-2.40, true, true),
+            (-2.84, true, true),
+            (-0.30, true, true),
+            (0.10, true, true),
+            (-0.20, true, true),
+            (0.15, true, true),
+            (0.45, true, false),
         ];
         let t = TrustOptions::default();
         assert!(t.contested_hold_doubted);
-        let fired: Vec<_> = contested_doubted(&t, &run, 1.0)
-            .iter()
-            .map(Option::is_some)
-            .collect();
-        assert_eq!(fired, [false, false, false, true, true, true, true, true]);
+        assert_eq!(
+            fires_doubted(&t, &run),
+            [false, false, false, true, true, true, true, true]
+        );
         // With every held frame counted, the hold runs out before the last frame.
         let counted = TrustOptions {
             contested_hold_doubted: false,
             ..TrustOptions::default()
         };
-        let fired: Vec<_> = contested_doubted(&counted, &run, 1.0)
-            .iter()
-            .map(Option::is_some)
-            .collect();
-        assert_eq!(fired, [false, false, false, true, true, true, true, false]);
+        assert_eq!(
+            fires_doubted(&counted, &run),
+            [false, false, false, true, true, true, true, false]
+        );
         // Only the frames the rule itself flags spend the hold: three `estimated` held frames
         // end it however many doubted ones lie between them.
         let mixed = [
-            Some((0.0, true, false)),
-            Some((1.0, true, false)),
-            Some((1.1, true, true)),
-            Some((1.2, true, false)),
-            Some((1.1, true, true)),
-            Some((1.2, true, false)),
-            Some((1.3, true, false)),
-            Some((1.2, true, false)),
+            (0.0, true, false),
+            (1.0, true, false),
+            (1.1, true, true),
+            (1.2, true, false),
+            (1.1, true, true),
+            (1.2, true, false),
+            (1.3, true, false),
+            (1.2, true, false),
         ];
-        let fired: Vec<_> = contested_doubted(&t, &mixed, 1.0)
-            .iter()
-            .map(Option::is_some)
-            .collect();
-        assert_eq!(fired, [false, true, true, true, true, true, true, false]);
-        let fired: Vec<_> = contested_doubted(&counted, &mixed, 1.0)
-            .iter()
-            .map(Option::is_some)
-            .collect();
-        assert_eq!(fired, [false, true, true, true, true, false, false, false]);
+        assert_eq!(
+            fires_doubted(&t, &mixed),
+            [false, true, true, true, true, true, true, false]
+        );
+        assert_eq!(
+            fires_doubted(&counted, &mixed),
+            [false, true, true, true, true, false, false, false]
+        );
     }
 
     #[test]
