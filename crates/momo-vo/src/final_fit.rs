@@ -256,6 +256,14 @@ pub struct FinalFitOptions {
     /// sets (180 sequences) it changes the mean efficiency by at most 0.0007 and no frame
     /// above 1 deg (forty-second session, nbdef57).
     pub neighbour_guard: f64,
+    /// With [`FinalFitOptions::neighbour_guard`]: the guard does not keep the given matches'
+    /// stage where its tilt (roll and pitch, `(ω_x, ω_y)` of the vehicle-frame rotation) lies
+    /// more than this angle from the trusted frames' running mean tilt (the one
+    /// `odometry.tilt_hold_sigma` holds to, within `tilt_hold_frames` of the last trusted
+    /// frame) while the reduced stage's lies within it (radians; 0: off, the default;
+    /// seventy-ninth session). A vehicle does not roll or pitch by a degree from one frame to
+    /// the next; the guard cannot tell which stage is right, the vehicle model can.
+    pub guard_tilt: f64,
     /// Re-admission on a rig of several cameras ([`readmit_kept`]; 0.5 by default since the
     /// twenty-ninth session, 0: off): after the final stage, a match that the separation's mask (or the neighbourhood test) did not
     /// hand to it is added where, at the stage's final motion, its residual is within
@@ -328,6 +336,7 @@ impl Default for FinalFitOptions {
             neighbour_count: 8,
             neighbour_min_cameras: 1,
             neighbour_guard: NEIGHBOUR_GUARD_DEFAULT,
+            guard_tilt: 0.01,
             // Since the twenty-ninth session (docs/RESULTS.md §9, twenty-ninth session,
             // readmit43 and lead): no effect on a single camera.
             readmit_share: 0.5,
@@ -463,6 +472,12 @@ impl FinalFitOptions {
         }
         if self.neighbour_min_cameras == 0 {
             return Err("odometry.final_fit.neighbour_min_cameras must be at least 1".into());
+        }
+        if !(self.guard_tilt.is_finite() && self.guard_tilt >= 0.0) {
+            return Err(format!(
+                "odometry.final_fit.guard_tilt must be a finite angle >= 0, found {}",
+                self.guard_tilt
+            ));
         }
         if !(self.neighbour_guard.is_finite() && self.neighbour_guard >= 0.0) {
             return Err(format!(
@@ -1655,6 +1670,40 @@ pub fn support_at(
     }
 }
 
+/// [`FinalFitOptions::guard_tilt`] `= m`: whether the neighbourhood guard keeps the reduced
+/// stage (vehicle-frame rotation `reduced`) instead of the given matches' stage (`given`):
+/// the given stage's tilt `(ω_x, ω_y)` (of `ω = log R`) lies more than `m` from `trusted`, the
+/// trusted frames' running mean tilt, and the reduced stage's within `m` of it. False with
+/// `m = 0` or without `trusted`.
+///
+/// ```
+/// use momo_vo::final_fit::guard_tilt_keeps_reduced;
+/// use momo_core::so3_exp;
+/// use nalgebra::Vector3;
+///
+/// let rolled = so3_exp(&Vector3::new(0.021, -0.007, 0.011));
+/// let level = so3_exp(&Vector3::new(0.001, 0.005, 0.008));
+/// assert!(guard_tilt_keeps_reduced(0.01, Some([0.0, 0.0]), &rolled, &level));
+/// assert!(!guard_tilt_keeps_reduced(0.01, Some([0.0, 0.0]), &level, &rolled));
+/// assert!(!guard_tilt_keeps_reduced(0.0, Some([0.0, 0.0]), &rolled, &level));
+/// assert!(!guard_tilt_keeps_reduced(0.01, None, &rolled, &level));
+/// ```
+pub fn guard_tilt_keeps_reduced(
+    m: f64,
+    trusted: Option<[f64; 2]>,
+    given: &nalgebra::Matrix3<f64>,
+    reduced: &nalgebra::Matrix3<f64>,
+) -> bool {
+    let Some(t) = trusted.filter(|_| m > 0.0) else {
+        return false;
+    };
+    let off = |r: &nalgebra::Matrix3<f64>| {
+        let w = momo_core::so3_log(r);
+        (w.x - t[0]).hypot(w.y - t[1])
+    };
+    off(given) > m && off(reduced) <= m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -2517,6 +2566,15 @@ mod tests {
             FinalFitOptions::default().neighbour_guard,
             NEIGHBOUR_GUARD_DEFAULT
         );
+        for tilt in [-0.01, f64::NAN, f64::INFINITY] {
+            let bad = FinalFitOptions {
+                guard_tilt: tilt,
+                ..FinalFitOptions::default()
+            };
+            assert!(bad.validate().unwrap_err().contains("guard_tilt"));
+        }
+        let off: FinalFitOptions = toml::from_str("guard_tilt = 0").unwrap();
+        assert_eq!(off.guard_tilt, 0.0);
         let two: FinalFitOptions = toml::from_str("neighbour_min_cameras = 2").unwrap();
         assert_eq!((two.neighbour_min_cameras, two.neighbour_share), (2, 0.375));
         for share in [-0.1, 1.5, f64::NAN] {

@@ -787,6 +787,23 @@ impl Odometry {
         }
     }
 
+    /// `odometry.final_fit.guard_tilt`: whether the neighbourhood guard keeps the reduced stage
+    /// (rotation `reduced`) over the given matches' stage (rotation `given`), against the
+    /// trusted frames' running mean tilt where a trusted frame lies within `tilt_hold_frames`
+    /// ([`crate::final_fit::guard_tilt_keeps_reduced`]).
+    fn guard_tilt_keeps_reduced(
+        &self,
+        given: &nalgebra::Matrix3<f64>,
+        reduced: &nalgebra::Matrix3<f64>,
+    ) -> bool {
+        let o = &self.config.odometry;
+        let trusted = self
+            .tilt_hold
+            .filter(|(_, n)| *n <= o.tilt_hold_frames)
+            .map(|(t, _)| t);
+        crate::final_fit::guard_tilt_keeps_reduced(o.final_fit.guard_tilt, trusted, given, reduced)
+    }
+
     /// `odometry.tilt_hold_sigma`: the per-parameter prior (centre, inverse sigmas; full
     /// vectors) of a frame whose change-of-motion prior has no centre: `rot_x` and `rot_y`
     /// held at the trusted frames' running mean tilt with standard deviation
@@ -1787,6 +1804,7 @@ impl Odometry {
                         let rb = self.estimator.motion(&sol.params).rotation;
                         if so3_log(&(ra.transpose() * rb)).norm()
                             > self.config.odometry.final_fit.neighbour_guard
+                            && !self.guard_tilt_keeps_reduced(&ra, &rb)
                         {
                             guard_alternative = Some(sol.params.clone());
                             (sol, tally, support) = (alt, alt_tally, alt_support);
