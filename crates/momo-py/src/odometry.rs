@@ -274,9 +274,11 @@ impl PyDiagnostics {
             .as_ref()
             .map(|p| PyArray1::from_slice(py, p))
     }
-    /// The final stage's motion without the matches its support tests left out, where the
-    /// neighbourhood guard kept the stage on the given matches instead (all of the model's
-    /// parameters; it widened the covariance), or None.
+    /// The final stage the neighbourhood guard did not keep, where the stage without the
+    /// matches its support tests left out and the stage on the given matches turned apart:
+    /// the reduced stage's motion where the guard kept the given one, the given one's where
+    /// `final_fit.guard_tilt` kept the reduced one (all of the model's parameters; it widened
+    /// the covariance), or None.
     #[getter]
     fn guard_alternative<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
         self.inner

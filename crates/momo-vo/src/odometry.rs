@@ -126,13 +126,14 @@ pub struct FrameDiagnostics {
     /// (all of the model's); `None` where there was none.
     #[serde(default)]
     pub road_alternative: Option<Vec<f64>>,
-    /// The final stage's motion without the matches the neighbourhood test (or, on one
-    /// camera, the guarded under-the-road test) left out, where `odometry.final_fit
-    /// .neighbour_guard` kept the stage on the matches it was given instead (the two turned
-    /// apart by more than the guard's angle): its parameters (all of the model's). It widened
-    /// the reported covariance (`trust.guard_alternative_weight`,
-    /// [`trust::alternatives_covariance`]) where that weight is positive. `None` (not
-    /// written) where the guard did not act.
+    /// The final stage the neighbourhood guard did not keep, where the stage without the
+    /// matches the neighbourhood test (or, on one camera, the guarded under-the-road test) left
+    /// out and the stage on the matches it was given turned apart by more than
+    /// `odometry.final_fit.neighbour_guard`: the reduced stage's motion where the guard kept
+    /// the given matches' stage, the given one's where `final_fit.guard_tilt` kept the reduced
+    /// stage (its parameters, all of the model's). It widened the reported covariance
+    /// (`trust.guard_alternative_weight`, [`trust::alternatives_covariance`]) where that
+    /// weight is positive. `None` (not written) where the two stages did not turn apart.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub guard_alternative: Option<Vec<f64>>,
     /// The factor the driver's angular thresholds were scaled by on this frame for the run's
@@ -1802,13 +1803,15 @@ impl Odometry {
                             self.guard_stage(obs, &given, start, &fixed, diag.scale, competing);
                         let ra = self.estimator.motion(&alt.params).rotation;
                         let rb = self.estimator.motion(&sol.params).rotation;
-                        if so3_log(&(ra.transpose() * rb)).norm()
-                            > self.config.odometry.final_fit.neighbour_guard
-                            && !self.guard_tilt_keeps_reduced(&ra, &rb)
-                        {
+                        let apart = so3_log(&(ra.transpose() * rb)).norm()
+                            > self.config.odometry.final_fit.neighbour_guard;
+                        if apart && !self.guard_tilt_keeps_reduced(&ra, &rb) {
                             guard_alternative = Some(sol.params.clone());
                             (sol, tally, support) = (alt, alt_tally, alt_support);
                             next_stage = given;
+                        } else if apart {
+                            // `guard_tilt` kept the reduced stage: the given one is the other.
+                            guard_alternative = Some(alt.params);
                         }
                     }
                     // Re-admission at the final motion (`final_fit.readmit_share`).
