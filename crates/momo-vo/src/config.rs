@@ -650,6 +650,15 @@ pub struct OdometryOptions {
     /// of the last this many moving frames' reported tilts; above 1 the previous motion
     /// competes under the same test. Default 1 (the previous frame's).
     pub decide_by_road_tilt_frames: usize,
+    /// With `decide_by_road`: where the previous moving frame did not centre the prior
+    /// (flagged, competing or with a low inlier ratio), the previous motion does not compete
+    /// where its tilt `(ω_x, ω_y)` lies more than `final_fit.guard_tilt` from the trusted
+    /// frames' running mean tilt (the one `tilt_hold_sigma` holds to, within
+    /// `tilt_hold_frames` of the last trusted frame) and the frame's own motion's within it
+    /// ([`crate::final_fit::guard_tilt_keeps_reduced`]): a doubted frame's rolled motion is not
+    /// taken back by road score. Default true since the eightieth session (docs/RESULTS.md);
+    /// false: the previous motion always competes.
+    pub decide_by_road_tilt_trusted: bool,
     /// With `decide_by_road`: a replacement moves the separation's tilt, yaw and road history
     /// but not its match memory. false (the default): the memory moves to the replacement's
     /// support too.
@@ -822,6 +831,7 @@ impl Default for OdometryOptions {
             decide_by_road_tilt: true,
             decide_by_road_tilt_vector: false,
             decide_by_road_tilt_frames: 1,
+            decide_by_road_tilt_trusted: true,
             decide_by_road_keep_memory: false,
             report_support: false,
             noise_reference: 0.0019,

@@ -2052,7 +2052,7 @@ impl Odometry {
                         .iter()
                         .map(|c| c.0.clone())
                         .chain(road_candidate)
-                        .chain(std::iter::once(previous))
+                        .chain(Some(previous).filter(|p| self.previous_competes(p, &params)))
                         .collect();
                     if let Some(p) = self.decide_by_road(obs, &params, alternatives.clone()) {
                         // The reported covariance, widened about the chosen motion, is widened
@@ -2626,6 +2626,22 @@ impl Odometry {
             crate::hypotheses::score(h, &self.rig, &motion, obs, &support),
             support,
         ))
+    }
+
+    /// `odometry.decide_by_road_tilt_trusted`: whether the previous motion `previous` competes
+    /// with the chosen one (`chosen`) in `decide_by_road`. After a frame that did not centre the
+    /// prior, not where `final_fit.guard_tilt` would keep `chosen` over it (its tilt lies beyond
+    /// the margin from the trusted frames' running mean tilt and the chosen motion's within
+    /// it); otherwise always.
+    fn previous_competes(&self, previous: &[f64], chosen: &[f64]) -> bool {
+        if !self.config.odometry.decide_by_road_tilt_trusted || self.prior_ready {
+            return true;
+        }
+        let (p, c) = (
+            self.estimator.motion(previous),
+            self.estimator.motion(chosen),
+        );
+        !self.guard_tilt_keeps_reduced(&p.rotation, &c.rotation)
     }
 
     /// `odometry.decide_by_road`: the alternative whose road score exceeds the chosen motion's

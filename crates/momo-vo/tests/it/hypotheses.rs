@@ -408,3 +408,44 @@ fn the_tilt_converse_takes_the_flattest_alternative() {
     // Frames before 78 are the same run.
     assert_eq!(without[..77], with[..77]);
 }
+
+/// `odometry.decide_by_road_tilt_trusted` (default true): moving traffic along KITTI 07, seed
+/// 100, the confirmation set conf4's frames 246-247 (the simulation is the set's, 500 frames,
+/// run over its first 247 frame pairs; needs `MOMO_DATA`). Frame 246 is doubted (`weak`, two
+/// motions compete on 72 inliers) and rolled 1.1 deg. At 247 the frame's own motion is level
+/// and right, but without the option `decide_by_road` takes the previous motion back by road
+/// score: 247 repeats 246's roll, 1.39 deg off. With it, the previous motion does not
+/// compete there (it tilts beyond `final_fit.guard_tilt` from the trusted frames' running mean
+/// and the frame's own motion does not), and every earlier frame is unchanged.
+#[test]
+fn decide_by_road_does_not_take_back_a_doubted_frames_roll() {
+    let Some(sim) =
+        crate::support::along_kitti("07", 500, 100, 1.0, momo_sim::SimConfig::moving_traffic())
+    else {
+        return;
+    };
+    let run = |trusted: bool| {
+        let mut config = Config::default();
+        config.odometry.decide_by_road_tilt_trusted = trusted;
+        crate::support::first_errors_and_diagnostics(&sim, config, 247)
+    };
+    let (on, off) = (run(true), run(false));
+    let (k, j) = (246, 245);
+    eprintln!(
+        "frame 247: without the option {:.3} deg, with it {:.3} deg",
+        off[k].0, on[k].0
+    );
+    for i in 0..k {
+        assert_eq!(on[i].1.params, off[i].1.params, "frame {}", i + 1);
+    }
+    assert_eq!(off[j].1.status, momo_vo::FrameStatus::Weak);
+    // 246 reports its motion's held twin (roll 0.019 rad); 247 repeats the motion (0.021).
+    let (roll_246, roll_247) = (off[j].1.params[0], off[k].1.params[0]);
+    assert!(
+        roll_247 > 0.015 && (roll_247 - roll_246).abs() < 0.005,
+        "247 rolls as 246 did: {roll_247} against {roll_246}"
+    );
+    assert!(on[k].1.params[0].abs() < 0.005, "{}", on[k].1.params[0]);
+    assert!(off[k].0 > 1.0, "without the option: {}", off[k].0);
+    assert!(on[k].0 < 0.5, "with it: {}", on[k].0);
+}
