@@ -1041,9 +1041,9 @@ fn the_road_alternatives_covariance_covers_each_alternative() {
 /// `trust.guard_alternative_weight` (default 1, report only): where the final stage's
 /// neighbourhood guard (`odometry.final_fit.neighbour_guard`) kept the stage on the matches it
 /// was given, the diagnostics carry the stage's motion without the matches its tests left out
-/// (`guard_alternative`; the given stage's where `final_fit.guard_tilt` kept that one), and the
-/// reported covariance covers that motion at one standard
-/// deviation from the reported one (`dᵀ Σ⁻¹ d <= 1/w`). Every pose, status and
+/// (`guard_alternative`; the given stage's where `final_fit.guard_tilt` kept the reduced one),
+/// and the reported covariance covers that motion at one standard deviation from the reported
+/// one (`dᵀ Σ⁻¹ d <= 1/w`). Every pose, status and
 /// `guard_alternative` is the run's with the weight 0, and every other frame's covariance is
 /// that run's bit for bit. Moving traffic (100 matches per frame pair, a bus holding most of
 /// them: the guard acts there), seeds 4 and 5, 120 frames.
