@@ -640,8 +640,9 @@ pub struct OdometryOptions {
     /// With `decide_by_road`: only the alternatives whose tilt ([`crate::hypotheses::tilt`],
     /// the norm of roll and pitch) lies at least as close to the previous frame's reported
     /// motion's tilt as the chosen motion's compete (a tilt that leaves the run's tilt is no
-    /// candidate; the previous motion itself always competes). Default true since the
-    /// thirty-first session (docs/RESULTS.md, thirtieth session, dbr44); false: no tilt test.
+    /// candidate; the previous motion itself competes, but see `decide_by_road_tilt_trusted`).
+    /// Default true since the thirty-first session (docs/RESULTS.md, thirtieth session, dbr44);
+    /// false: no tilt test.
     pub decide_by_road_tilt: bool,
     /// With `decide_by_road_tilt`: the tilt compared as the vector `(ω_x, ω_y)` (roll and
     /// pitch; the distance of the vectors) instead of its norm. false (the default): the norm.
