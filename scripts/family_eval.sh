@@ -20,6 +20,9 @@
 #        conf4     the same, seeds 91-100 (a fourth confirmation set, added in the 79th session
 #                  and first run on the 78th session's defaults; keep for confirmation: choose
 #                  nothing on it)
+#        conf5     the same, seeds 101-110 (a fifth confirmation set, added in the 82nd session
+#                  and first run on the 81st session's defaults; keep for confirmation: choose
+#                  nothing on it)
 #        few200    moving_traffic with 200 matches per frame pair instead of the scenario's 300
 #                  (`momo simulate --matches 200`: the same traffic as grid's seeds 1-5, the
 #                  objects keep their 30-70 % share and the outliers their 5 %: static matches
@@ -168,13 +171,13 @@ export -f run_one
 list_set() {
     local s="$1" seeds trajs="00 01 02 03 04 05 06 07 08 09 10" sc t seed n
     case "$s" in
-    grid | holdout | fresh | dev | dev2 | dev3 | conf | conf2 | conf3 | conf4)
+    grid | holdout | fresh | dev | dev2 | dev3 | conf | conf2 | conf3 | conf4 | conf5)
         case "$s" in
         grid) seeds="$(seq 1 10)" ;; holdout) seeds="$(seq 11 15)" ;;
         fresh) seeds="$(seq 16 20)" ;; dev) seeds="$(seq 21 30)" ;; dev2) seeds="$(seq 31 40)" ;;
         dev3) seeds="$(seq 41 50)" ;; conf) seeds="$(seq 51 60)" ;;
         conf2) seeds="$(seq 61 70)" ;; conf3) seeds="$(seq 81 90)" ;;
-        conf4) seeds="$(seq 91 100)" ;;
+        conf4) seeds="$(seq 91 100)" ;; conf5) seeds="$(seq 101 110)" ;;
         esac
         for t in $trajs drive; do for seed in $seeds; do
             echo "$sets_dir/family/moving_traffic_${t}_s$seed moving_traffic $t $seed $frames"
