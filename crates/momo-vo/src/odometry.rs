@@ -246,6 +246,8 @@ pub struct Odometry {
     /// `trust.unconfirmed_start_frames`: the frames in a row reported `estimated` without a
     /// competing motion.
     start_clean: usize,
+    /// `trust.unconfirmed_start_distance`: the arc length of the frames in `start_clean`.
+    start_clean_distance: f64,
     /// `trust.unconfirmed_start_frames`: a competing motion was found since the start (or the
     /// reset).
     start_contested: bool,
@@ -483,6 +485,7 @@ impl Odometry {
             start_confirmed: false,
             start_settled: false,
             start_clean: 0,
+            start_clean_distance: 0.0,
             start_contested: false,
             separation_settled: false,
             previous_omega: None,
@@ -1228,6 +1231,7 @@ impl Odometry {
         self.start_confirmed = false;
         self.start_settled = false;
         self.start_clean = 0;
+        self.start_clean_distance = 0.0;
         self.start_contested = false;
         self.separation_settled = false;
         self.previous_omega = None;
@@ -2378,14 +2382,24 @@ impl Odometry {
         }
         // `trust.unconfirmed_start_frames`, report only: the last flag, on the frame as every
         // other rule reports it.
-        if self.config.trust.unconfirmed_start && self.config.trust.unconfirmed_start_frames > 1 {
+        if self.config.trust.unconfirmed_start
+            && (self.config.trust.unconfirmed_start_frames > 1
+                || self.config.trust.unconfirmed_start_distance > 0.0)
+        {
             let unsettled = !self.start_settled;
             let clean = diag.status == FrameStatus::Estimated
                 && diag.competing.is_none()
                 && !refit_fallback;
             self.start_clean = if clean { self.start_clean + 1 } else { 0 };
+            let arc = arc_index.map_or(0.0, |i| report[i].abs());
+            self.start_clean_distance = if clean {
+                self.start_clean_distance + arc
+            } else {
+                0.0
+            };
             self.start_contested |= diag.competing.is_some();
-            self.start_settled |= self.start_clean >= self.config.trust.unconfirmed_start_frames;
+            self.start_settled |= self.start_clean >= self.config.trust.unconfirmed_start_frames
+                && self.start_clean_distance >= self.config.trust.unconfirmed_start_distance;
             if unsettled
                 && (diag.competing.is_some()
                     || (clean && self.start_contested && !self.start_settled))

@@ -457,6 +457,12 @@ pub struct TrustOptions {
     /// every pose, covariance and other flag is the one with 1. Default 3 (sixty-seventh
     /// session).
     pub unconfirmed_start_frames: usize,
+    /// With [`TrustOptions::unconfirmed_start_frames`]: the frames in a row that settle the
+    /// start must also have travelled at least this far together (metres, the reported arc
+    /// lengths; 0: off). A clean frame says little where the vehicle barely moves: at a slow
+    /// start the static world's matches hardly leave a large vehicle's motion's support, and
+    /// the competing-motions check cannot find it.
+    pub unconfirmed_start_distance: f64,
     /// Before the run's noise is read (`odometry.noise_reference`: fewer than
     /// `odometry.noise_start_frames` readings, [`crate::noise`]), on a
     /// moving frame reported `estimated` where the competing-motions check and its recheck
@@ -651,6 +657,7 @@ impl Default for TrustOptions {
             unconfirmed_scale: true,
             unconfirmed_start: true,
             unconfirmed_start_frames: 3,
+            unconfirmed_start_distance: 0.0,
             start_own_noise: true,
             support_change_share: 0.15,
             support_change_yaw: 0.00873,
@@ -814,6 +821,16 @@ impl TrustOptions {
                     format!("{key} must be within 0..=pi radians, got {v}"),
                 ));
             }
+        }
+        if !(self.unconfirmed_start_distance.is_finite() && self.unconfirmed_start_distance >= 0.0)
+        {
+            out.push((
+                vec!["trust.unconfirmed_start_distance"],
+                format!(
+                    "trust.unconfirmed_start_distance must be a finite distance of at least 0 m, got {}",
+                    self.unconfirmed_start_distance
+                ),
+            ));
         }
         if self.unconfirmed_start_frames == 0 {
             out.push((
