@@ -1857,6 +1857,59 @@ fn unconfirmed_start_flags_the_competing_frames_before_the_run_confirmed_a_motio
     assert!(flagged >= 1 && kept >= 5, "flagged {flagged}, kept {kept}");
 }
 
+/// The start rule of `trust.unconfirmed_start_frames` / `trust.unconfirmed_start_distance`
+/// replayed on a run without it: a contested start settles once `frames` clean frames in a row
+/// (reported `estimated` without a competing motion) have travelled `distance` metres together.
+struct StartReplay {
+    frames: usize,
+    distance: f64,
+    clean_run: usize,
+    run_distance: f64,
+    contested: bool,
+    settled: bool,
+}
+
+impl StartReplay {
+    fn new(frames: usize, distance: f64) -> Self {
+        let (clean_run, run_distance, contested, settled) = (0, 0.0, false, false);
+        Self {
+            frames,
+            distance,
+            clean_run,
+            run_distance,
+            contested,
+            settled,
+        }
+    }
+
+    /// Whether the rule flags the frame `a` (`arc`: the arc length's index in its parameters).
+    fn fires(&mut self, a: &Frame, arc: usize) -> bool {
+        let unsettled = !self.settled;
+        let competing = a.1.competing.is_some();
+        let estimated = a.1.status == FrameStatus::Estimated;
+        let clean = estimated && !competing;
+        self.clean_run = if clean { self.clean_run + 1 } else { 0 };
+        self.run_distance = if clean {
+            self.run_distance + a.1.params[arc].abs()
+        } else {
+            0.0
+        };
+        self.contested |= competing;
+        self.settled |= self.clean_run >= self.frames && self.run_distance >= self.distance;
+        estimated && unsettled && (competing || (clean && self.contested && !self.settled))
+    }
+}
+
+/// The index of the arc length among a run's parameters.
+fn arc_index(run: &[Frame]) -> usize {
+    run[0]
+        .1
+        .param_names
+        .iter()
+        .position(|n| n == "arc_length")
+        .expect("an arc length")
+}
+
 /// `trust.unconfirmed_start_frames` (report only): with 3, the run is the run with 1 except
 /// that, until three frames in a row are reported `estimated` without a competing motion, every
 /// `estimated` frame with a competing motion, and after a competing motion every such frame but
@@ -1871,27 +1924,22 @@ fn unconfirmed_start_frames_flags_a_contested_start_until_it_settles() {
         config.trust.unconfirmed_start_distance = 0.0;
         config
     };
-    let (mut clean_run, mut contested, mut settled, mut clean_flagged) = (0, false, false, 0);
+    let off = process_all(seq, config(1));
+    let arc = arc_index(&off);
+    let mut rule = StartReplay::new(3, 0.0);
+    let mut clean_flagged = 0;
     let (flagged, kept) = assert_report_only(
-        &process_all(seq, config(1)),
+        &off,
         &process_all(seq, config(3)),
         Reason::UnconfirmedStart,
         |_, a, _| {
-            let unsettled = !settled;
-            let competing = a.1.competing.is_some();
-            let clean = a.1.status == FrameStatus::Estimated && !competing;
-            clean_run = if clean { clean_run + 1 } else { 0 };
-            contested |= competing;
-            settled |= clean_run >= 3;
-            let fires = a.1.status == FrameStatus::Estimated
-                && unsettled
-                && (competing || (clean && contested && !settled));
-            clean_flagged += usize::from(fires && clean);
+            let fires = rule.fires(a, arc);
+            clean_flagged += usize::from(fires && a.1.competing.is_none());
             fires
         },
     );
     assert!(
-        settled && clean_flagged >= 1 && kept >= 10,
+        rule.settled && clean_flagged >= 1 && kept >= 10,
         "flagged {flagged} ({clean_flagged} without a competing motion), kept {kept}"
     );
     let e = config_error("[trust]\nunconfirmed_start_frames = 0\n");
@@ -1900,8 +1948,9 @@ fn unconfirmed_start_frames_flags_a_contested_start_until_it_settles() {
 
 /// `trust.unconfirmed_start_distance` (report only): with 3 frames and 3 m, the run is the run
 /// with 3 frames alone except that the start settles only once the clean frames in a row have
-/// also travelled 3 m together (at about 0.85 m per frame here, a fourth frame) (the reported arc lengths); the frames flagged in between are
-/// `weak` / `unconfirmed_start`, poses and covariances identical.
+/// also travelled 3 m together (their reported arc lengths; at about 0.85 m per frame here, a
+/// fourth frame); the frames flagged in between are `weak` / `unconfirmed_start`, poses and
+/// covariances identical.
 #[test]
 fn unconfirmed_start_distance_holds_the_start_until_the_clean_frames_travelled_that_far() {
     let seq = &traffic(120, 1);
@@ -1911,47 +1960,22 @@ fn unconfirmed_start_distance_holds_the_start_until_the_clean_frames_travelled_t
         config
     };
     let off = process_all(seq, config(0.0));
-    let arc = off[0]
-        .1
-        .param_names
-        .iter()
-        .position(|n| n == "arc_length")
-        .expect("an arc length");
-    let (mut clean_run, mut run_distance, mut contested) = (0, 0.0, false);
-    // The start's state with the distance, and with three frames alone.
-    let (mut settled, mut settled_frames) = (false, false);
+    let arc = arc_index(&off);
+    // The rule with the distance, and with three frames alone.
+    let (mut rule, mut frames_alone) = (StartReplay::new(3, 3.0), StartReplay::new(3, 0.0));
     let mut newly = 0;
     let (flagged, kept) = assert_report_only(
         &off,
         &process_all(seq, config(3.0)),
         Reason::UnconfirmedStart,
         |_, a, _| {
-            let unsettled = !settled;
-            let competing = a.1.competing.is_some();
-            let clean = a.1.status == FrameStatus::Estimated && !competing;
-            clean_run = if clean { clean_run + 1 } else { 0 };
-            run_distance = if clean {
-                run_distance + a.1.params[arc].abs()
-            } else {
-                0.0
-            };
-            contested |= competing;
-            let rule = |unsettled: bool, settled: bool| {
-                a.1.status == FrameStatus::Estimated
-                    && unsettled
-                    && (competing || (clean && contested && !settled))
-            };
-            let unsettled_frames = !settled_frames;
-            settled_frames |= clean_run >= 3;
-            settled |= clean_run >= 3 && run_distance >= 3.0;
-            let fires = rule(unsettled, settled);
-            // Frames the rule with three frames alone leaves.
-            newly += usize::from(fires && !rule(unsettled_frames, settled_frames));
+            let (fires, fires_alone) = (rule.fires(a, arc), frames_alone.fires(a, arc));
+            newly += usize::from(fires && !fires_alone);
             fires
         },
     );
     assert!(
-        settled && newly >= 1 && kept >= 5,
+        rule.settled && newly >= 1 && kept >= 5,
         "flagged {flagged} ({newly} more than with three frames alone), kept {kept}"
     );
     let e = config_error("[trust]\nunconfirmed_start_distance = -1.0\n");
