@@ -2398,8 +2398,11 @@ impl Odometry {
                 0.0
             };
             self.start_contested |= diag.competing.is_some();
-            self.start_settled |= self.start_clean >= self.config.trust.unconfirmed_start_frames
-                && self.start_clean_distance >= self.config.trust.unconfirmed_start_distance;
+            // A model without an arc length (rotation only): the frame count alone.
+            let travelled = arc_index.is_none()
+                || self.start_clean_distance >= self.config.trust.unconfirmed_start_distance;
+            self.start_settled |=
+                self.start_clean >= self.config.trust.unconfirmed_start_frames && travelled;
             if unsettled
                 && (diag.competing.is_some()
                     || (clean && self.start_contested && !self.start_settled))

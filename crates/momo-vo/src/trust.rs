@@ -464,7 +464,8 @@ pub struct TrustOptions {
     /// the competing-motions check cannot find it (2 px, KITTI 07 seed 102: a bus holds 64 %
     /// of the matches at 0.19-0.21 m per frame, and three clean frames on it settled the
     /// start 1.24 deg off, `estimated`, 9.6 yaw sigmas off). Without odometry the arc lengths
-    /// are the run's own scale. Report only, as [`TrustOptions::unconfirmed_start_frames`]:
+    /// are the run's own scale; a model without an arc length settles by the frame count alone.
+    /// Report only, as [`TrustOptions::unconfirmed_start_frames`]:
     /// poses, covariances and every other flag unchanged. Default 1 m (eighty-second
     /// session: 0.02-0.48 % of the `estimated` frames newly flagged at 1 px, 0.09-0.40 % at
     /// 2 px, 0.10 % at 3 px, none on static scenes or real KITTI 00; docs/RESULTS.md).
