@@ -101,11 +101,14 @@ fn check(data: &Path, seq: &str, stereo: bool, tmp: &Path) {
             );
         }
     }
+    let (run_diag, vo_diag) = (work.join("run.jsonl"), work.join("vo.jsonl"));
     momo(&[
         "run".as_ref(),
         seq_dir.as_os_str(),
         "-o".as_ref(),
         run_est.as_os_str(),
+        "--diagnostics".as_ref(),
+        run_diag.as_os_str(),
         "-q".as_ref(),
     ]);
     let mut args: Vec<&std::ffi::OsStr> = vec!["vo".as_ref()];
@@ -117,9 +120,27 @@ fn check(data: &Path, seq: &str, stereo: bool, tmp: &Path) {
         odo.as_os_str(),
         "-o".as_ref(),
         vo_est.as_os_str(),
+        "--diagnostics".as_ref(),
+        vo_diag.as_os_str(),
         "-q".as_ref(),
     ]);
     momo(&args);
+    // ... and the same per-frame diagnostics (status, reason, covariance), all but the timing.
+    let rows = |p: &Path| -> Vec<serde_json::Value> {
+        std::fs::read_to_string(p)
+            .expect("diagnostics")
+            .lines()
+            .map(|l| {
+                let mut v: serde_json::Value = serde_json::from_str(l).expect("json line");
+                v.as_object_mut().expect("object").remove("time_us");
+                v
+            })
+            .collect()
+    };
+    let (run_rows, vo_rows) = (rows(&run_diag), rows(&vo_diag));
+    assert_eq!(run_rows.len(), FRAMES - 1, "{name}: one row per frame pair");
+    assert!(run_rows.iter().all(|r| r.get("status").is_some()));
+    assert_eq!(vo_rows, run_rows, "{name}: diagnostics of vo and run");
     let (median, max) = rotation_errors(&gt, &run_est);
     let (vo_median, vo_max) = rotation_errors(&gt, &vo_est);
     eprintln!(

@@ -105,6 +105,7 @@ pub(crate) struct MatchArgs {
 #[derive(clap::Args, Debug)]
 #[command(after_help = "Examples:\n  \
     momo vo seq06 -o est.txt            (a directory made by `momo import-kitti`)\n  \
+    momo vo seq06 -o est.txt -d diag.csv  (with each frame's status and covariance)\n  \
     momo vo image_0 image_1 --rig rig.json --odometry odometry.csv -o est.txt")]
 pub(crate) struct VoArgs {
     /// Image folders, one per camera of the rig; or one sequence directory made by `momo
@@ -122,6 +123,11 @@ pub(crate) struct VoArgs {
     /// Output trajectory, written atomically.
     #[arg(short, long)]
     output: PathBuf,
+    /// Write per-frame diagnostics (status and reason, covariance, parameters, inliers, cost,
+    /// time, scale source), as `momo run --diagnostics`: CSV if the name ends in .csv, JSON
+    /// lines otherwise. Written with the trajectory: both or neither.
+    #[arg(short, long)]
+    diagnostics: Option<PathBuf>,
     /// Output format: kitti, or tum (timestamps from --times).
     #[arg(long, value_enum, default_value = "kitti")]
     format: OutputFormat,
@@ -189,13 +195,16 @@ pub(crate) fn vo_cmd(args: VoArgs) -> Result<(), Failure> {
     inputs.extend(odometry.clone());
     inputs.extend(args.config.clone());
     let inputs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
-    crate::common::check_outputs(&inputs, &[args.output.as_path()])?;
+    let mut outputs = vec![args.output.as_path()];
+    outputs.extend(args.diagnostics.as_deref());
+    crate::common::check_outputs(&inputs, &outputs)?;
     let config = load_config(args.config.as_deref())?;
     let run = momo_match::VoRun {
         folders,
         rig,
         odometry,
         output: args.output,
+        diagnostics: args.diagnostics,
         estimator: args.estimator.into(),
     };
     let frames = momo_match::ImageSequence::open(&run.folders)

@@ -169,6 +169,7 @@ fn accuracy(data: &Path, out: &Path, options: MatchOptions) -> Result<(), MatchE
                 rig: rig_path,
                 odometry: Some(odometry.clone()),
                 output: output.clone(),
+                diagnostics: None,
                 estimator: momo_vo::EstimatorKind::Momo,
             };
             let front = FrontEndOptions {

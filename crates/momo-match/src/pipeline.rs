@@ -298,6 +298,9 @@ pub struct VoRun {
     pub odometry: Option<PathBuf>,
     /// The KITTI-format camera-0 trajectory written (atomically), one line per image frame.
     pub output: PathBuf,
+    /// Per-frame diagnostics written with the trajectory (both or neither), as `momo run`'s
+    /// ([`momo_vo::DiagnosticsWriter`]: CSV if the name ends in `.csv`, JSON lines otherwise).
+    pub diagnostics: Option<PathBuf>,
     /// The estimator.
     pub estimator: EstimatorKind,
 }
@@ -339,6 +342,11 @@ pub fn vo_from_images(
         };
     let mut vo = momo_vo::driver(run.estimator, &rig, config)?;
     let mut poses = PoseWriter::create(&run.output)?;
+    let mut diagnostics = run
+        .diagnostics
+        .as_deref()
+        .map(momo_vo::DiagnosticsWriter::create)
+        .transpose()?;
     let totals = momo_vo::run_loop(
         vo.as_mut(),
         &rig,
@@ -348,6 +356,9 @@ pub fn vo_from_images(
         |pose, result| {
             poses.push(pose)?;
             if let Some(result) = result {
+                if let Some(d) = diagnostics.as_mut() {
+                    d.push(&result.diagnostics)?;
+                }
                 on_frame(result);
             }
             Ok(())
@@ -359,7 +370,10 @@ pub fn vo_from_images(
     };
     summary.run.road_mount = road_mount;
     summary.poses = poses.len();
-    poses.finish()?;
+    // Poses and diagnostics are committed together: both or neither.
+    let mut outputs = vec![poses.into_file()];
+    outputs.extend(diagnostics.map(momo_vo::DiagnosticsWriter::into_file));
+    momo_io::commit_all(outputs)?;
     summary.front_end = front.stats();
     Ok(summary)
 }

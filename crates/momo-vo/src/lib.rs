@@ -51,7 +51,7 @@ pub use odometry::{
     FrameDiagnostics, FrameResult, FrameStatus, Odometry, ScaleSource, Trajectory, VoError,
 };
 pub use pipeline::{
-    EstimatorKind, RoadMount, RunError, RunOptions, RunSummary, driver, road_scale_setup,
-    run_in_memory, run_loop, run_sequence,
+    DiagnosticsWriter, EstimatorKind, RoadMount, RunError, RunOptions, RunSummary, driver,
+    road_scale_setup, run_in_memory, run_loop, run_sequence,
 };
 pub use trust::{Constraint, Reason, TrustOptions};

@@ -315,15 +315,20 @@ impl RunSummary {
     }
 }
 
-/// Writes diagnostics rows as CSV or JSON lines.
-struct DiagnosticsWriter {
+/// Writes the per-frame diagnostics ([`FrameDiagnostics`]) of a run, one row per frame pair,
+/// atomically: CSV if the name ends in `.csv`, JSON lines otherwise. The file appears only when
+/// committed ([`DiagnosticsWriter::into_file`] with [`momo_io::commit_all`], together with the
+/// trajectory); dropping the writer before removes the temporary file. `momo run` and `momo vo`
+/// write the same rows.
+pub struct DiagnosticsWriter {
     file: AtomicFile,
     csv: bool,
     header_written: bool,
 }
 
 impl DiagnosticsWriter {
-    fn create(path: &Path) -> Result<Self, IoError> {
+    /// Starts writing `path` (a temporary file in the same directory).
+    pub fn create(path: &Path) -> Result<Self, IoError> {
         let csv = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
@@ -334,7 +339,8 @@ impl DiagnosticsWriter {
         })
     }
 
-    fn push(&mut self, d: &FrameDiagnostics) -> Result<(), IoError> {
+    /// Appends the row of the next frame pair.
+    pub fn push(&mut self, d: &FrameDiagnostics) -> Result<(), IoError> {
         let path = self.file.path().to_path_buf();
         let err = |e: std::io::Error| IoError::io(&path, e);
         if !self.csv {
@@ -400,7 +406,9 @@ impl DiagnosticsWriter {
         writeln!(w).map_err(err)
     }
 
-    fn into_file(self) -> AtomicFile {
+    /// The file being written, to commit it together with the trajectory
+    /// ([`momo_io::commit_all`]).
+    pub fn into_file(self) -> AtomicFile {
         self.file
     }
 }

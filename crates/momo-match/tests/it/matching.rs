@@ -332,6 +332,7 @@ fn match_writes_a_sequence_that_momo_reads() {
         rig,
         odometry: Some(odo),
         output: poses.clone(),
+        diagnostics: None,
         estimator: momo_vo::EstimatorKind::Momo,
     };
     let mut frames = 0;
@@ -446,8 +447,9 @@ fn errors_name_the_file() {
 }
 
 /// One camera without odometry.csv: `momo vo` holds back the first frame pairs' matches for
-/// `odometry.road_scale_mount` and then runs them, so it gives the poses and the calibration
-/// outcome of `momo match` followed by `momo run` (`run_sequence`).
+/// `odometry.road_scale_mount` and then runs them, so it gives the poses, the per-frame
+/// diagnostics (statuses, reasons, sigmas; all but the timing) and the calibration outcome of
+/// `momo match` followed by `momo run` (`run_sequence`).
 #[test]
 fn vo_without_odometry_calibrates_as_match_and_run_do() {
     let dir = tempfile::tempdir().expect("tmp");
@@ -467,7 +469,7 @@ fn vo_without_odometry_calibrates_as_match_and_run_do() {
     let options = momo_vo::RunOptions {
         estimator: momo_vo::EstimatorKind::Momo,
         output: run_poses.clone(),
-        diagnostics: None,
+        diagnostics: Some(dir.path().join("run.csv")),
         rig: None,
     };
     let ran =
@@ -478,6 +480,7 @@ fn vo_without_odometry_calibrates_as_match_and_run_do() {
         rig,
         odometry: None,
         output: vo_poses.clone(),
+        diagnostics: Some(dir.path().join("vo.csv")),
         estimator: momo_vo::EstimatorKind::Momo,
     };
     let mut frames = 0;
@@ -495,4 +498,23 @@ fn vo_without_odometry_calibrates_as_match_and_run_do() {
         std::fs::read(&vo_poses).expect("vo poses"),
         std::fs::read(&run_poses).expect("run poses")
     );
+    // The diagnostics rows without the time column (`time_us`, the 12th).
+    let rows = |name: &str| -> Vec<Vec<String>> {
+        std::fs::read_to_string(dir.path().join(name))
+            .expect("diagnostics")
+            .lines()
+            .map(|l| {
+                let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+                f.remove(11);
+                f
+            })
+            .collect()
+    };
+    let (run_rows, vo_rows) = (rows("run.csv"), rows("vo.csv"));
+    assert_eq!(
+        run_rows[0][..2],
+        ["frame".to_string(), "status".to_string()]
+    );
+    assert_eq!(run_rows.len(), 6, "a header and one row per frame pair");
+    assert_eq!(vo_rows, run_rows);
 }
