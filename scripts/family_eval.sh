@@ -81,6 +81,10 @@
 #               (`momo simulate --pixel-noise`; default: each scenario's own, 1 px for the traffic
 #               sets) kept under SETS_DIR/noiseNOISE; bound.csv is the bound at that noise (added
 #               in the fifty-ninth session)
+#   STATIC_TRACKS  environment variable: the share of each frame pair's static matches that
+#               continue a static match of the previous pair, as a tracker gives them (`momo
+#               simulate --static-tracks`; default 0: every static match a new point), kept
+#               under SETS_DIR/tracksSTATIC_TRACKS (added in the eighty-third session)
 #   MOMO        environment variable: the momo binary (default target/release/momo)
 #   MOMO_CONFIG environment variable: a `momo run --config` file (default: the built-in one)
 #   SIM_MOMO    environment variable: the momo binary that simulates missing sequences (default
@@ -111,6 +115,8 @@ along_travel="${ALONG_TRAVEL:-0}"
 [[ "$along_travel" == 1 ]] && sets_dir="$sets_dir/along_travel"
 noise="${NOISE:-}"
 [[ -n "$noise" ]] && sets_dir="$sets_dir/noise$noise"
+static_tracks="${STATIC_TRACKS:-}"
+[[ -n "$static_tracks" ]] && sets_dir="$sets_dir/tracks$static_tracks"
 data="$(abs "${MOMO_DATA:-$root/../shared/data}")"
 frames="${FRAMES:-500}"
 jobs="${JOBS:-2}"
@@ -124,7 +130,7 @@ for b in "$momo" "$sim_momo"; do
         exit 2
     fi
 done
-export momo sim_momo cfg data frames along_travel noise
+export momo sim_momo cfg data frames along_travel noise static_tracks
 
 # make_seq DIR SCENARIO TRAJECTORY SEED [FRAMES [MATCHES [START]]]: simulates one sequence unless
 # it is there (MATCHES: `momo simulate --matches`, default the scenario's, `-` for it; START:
@@ -137,6 +143,7 @@ make_seq() {
     [[ -n "${6:-}" && "${6:-}" != - ]] && m=(--matches "$6")
     [[ -n "${7:-}" ]] && traj+=(--trajectory-start "$7")
     [[ -n "$noise" ]] && m+=(--pixel-noise "$noise")
+    [[ -n "$static_tracks" ]] && m+=(--static-tracks "$static_tracks")
     rm -rf "$dir"
     mkdir -p "$(dirname "$dir")"
     if ! "$sim_momo" simulate --scenario "$sc" "${traj[@]}" --frames "$n" --seed "$seed" "${m[@]}" "$dir" \

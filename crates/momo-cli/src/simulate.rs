@@ -46,6 +46,12 @@ pub(crate) struct SimulateArgs {
     /// is the bound at this noise.
     #[arg(long)]
     pixel_noise: Option<f64>,
+    /// The share (0 to 1) of each frame pair's static matches that continue a static match of
+    /// the previous pair (the same scene point and the same pixel in the shared frame), as a
+    /// tracker or a matcher that re-finds the same corners gives them. Default 0: every static
+    /// match is a new point.
+    #[arg(long, default_value_t = 0.0)]
+    static_tracks: f64,
     /// Output directory (created; an existing one must be empty unless --force; removed
     /// again on failure if this created it).
     out_dir: PathBuf,
@@ -114,6 +120,7 @@ pub(crate) fn simulate(args: SimulateArgs) -> Result<(), Failure> {
     if let Some(sigma) = args.pixel_noise {
         cfg.pixel_noise = sigma;
     }
+    cfg.static_tracks = args.static_tracks;
     let sim = momo_sim::simulate(&cfg).map_err(Failure::input)?;
     if std::fs::metadata(&args.out_dir).is_ok() {
         let written = crate::common::sequence_files(&args.out_dir);

@@ -345,11 +345,13 @@ pub fn scenarios() -> Vec<&'static str> {
 /// frame pair (default: the scenario's); `trajectory`: drive along these camera-0 poses
 /// ((N, 4, 4) array, or a path to a KITTI poses file) instead of a generated drive, at most
 /// `frames` of them; `rig`: a `Rig` instead of the scenario's; `along_travel`: the trajectory
-/// turned by its travel elevation first (`momo simulate --trajectory-along-travel`). Returns a `Sequence` with ground
+/// turned by its travel elevation first (`momo simulate --trajectory-along-travel`);
+/// `static_tracks`: the share (0 to 1) of each frame pair's static matches that continue one of
+/// the previous pair, as a tracker gives them (`momo simulate --static-tracks`). Returns a `Sequence` with ground
 /// truth (and the true arc lengths as odometry where the scenario has them) and
 /// `vehicle_poses`.
 #[pyfunction]
-#[pyo3(signature = (scenario = "clean_pinhole", frames = 400, seed = 1, matches = None, trajectory = None, rig = None, along_travel = false))]
+#[pyo3(signature = (scenario = "clean_pinhole", frames = 400, seed = 1, matches = None, trajectory = None, rig = None, along_travel = false, static_tracks = 0.0))]
 pub fn simulate(
     py: Python<'_>,
     scenario: &str,
@@ -359,6 +361,7 @@ pub fn simulate(
     trajectory: Option<&Bound<'_, PyAny>>,
     rig: Option<&Bound<'_, PyRig>>,
     along_travel: bool,
+    static_tracks: f64,
 ) -> PyResult<PySequence> {
     let Some(mut cfg) = momo_sim::SimConfig::scenario(scenario) else {
         return Err(SimulationError::new_err(format!(
@@ -390,6 +393,7 @@ pub fn simulate(
     if let Some(m) = matches {
         cfg.matches_per_camera = m;
     }
+    cfg.static_tracks = static_tracks;
     let sim = py
         .detach(|| momo_sim::simulate(&cfg))
         .map_err(|e| SimulationError::new_err(e.to_string()))?;

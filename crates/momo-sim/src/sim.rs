@@ -181,6 +181,14 @@ pub struct SimConfig {
     /// fisheye's front camera, 10°) as `P`, the vehicle would sink along its path at that angle.
     /// `None` (the default): the rig's camera 0.
     pub trajectory_mount: Option<Pose<f64>>,
+    /// The share, in `[0, 1]`, of a frame pair's static matches that continue a static match of
+    /// the previous pair, as a feature tracker or a matcher that re-finds the same corners
+    /// reports them: the same scene point, whose pixel in frame `k-1` is the previous pair's
+    /// pixel in frame `k-1` (its noise included), while it stays in view, unoccluded and in
+    /// front. 0 (the default): every static match is a new point (no tracks; the match memory
+    /// then finds few neighbours among the static matches). Objects' matches are drawn as
+    /// before (`momo simulate --static-tracks`).
+    pub static_tracks: f64,
 }
 
 impl Default for SimConfig {
@@ -206,6 +214,7 @@ impl Default for SimConfig {
             odometry_noise: 0.0,
             camera_trajectory: None,
             trajectory_mount: None,
+            static_tracks: 0.0,
         }
     }
 }
@@ -429,6 +438,7 @@ impl SimConfig {
             ("outlier_ratio", self.outlier_ratio),
             ("near_outlier_fraction", self.near_outlier_fraction),
             ("scene.far_fraction", self.scene.far_fraction),
+            ("static_tracks", self.static_tracks),
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return bad(format!("{name} must be in [0, 1], found {v}"));
@@ -623,6 +633,14 @@ type Generated = (
     Vec<Option<usize>>,
 );
 
+/// A static match of the previous frame pair that the next may continue
+/// ([`SimConfig::static_tracks`]): its noisy pixel in the shared frame and the point in that
+/// frame's camera coordinates.
+struct Track {
+    px: Vector2<f64>,
+    point: Vector3<f64>,
+}
+
 /// One camera of one frame pair.
 struct CameraFrame<'a> {
     cfg: &'a SimConfig,
@@ -701,6 +719,35 @@ impl CameraFrame<'_> {
         Observation::new(model, px0n, px1n).map(|o| (o, x0))
     }
 
+    /// Tries to continue `track` (a static point of the previous pair: its noisy pixel in frame
+    /// k-1 and the point in camera coordinates at k-1) into this pair; `None` where it is
+    /// occluded, leaves the image or lies behind. Also returns the point at k-1, as
+    /// [`CameraFrame::try_match`] does.
+    fn try_continue(&self, rng: &mut StdRng, track: &Track) -> Option<(Observation, Vector3<f64>)> {
+        let model = &self.camera.model;
+        let (px0n, x0) = (track.px, track.point);
+        if self
+            .traffic
+            .as_ref()
+            .is_some_and(|t| t.occludes(model, &px0n))
+        {
+            return None;
+        }
+        let x1 = self.static_motion.transform_point(&x0);
+        if x1.norm() < 0.1 {
+            return None;
+        }
+        let px1 = model.project(&x1)?;
+        if !model.contains(&px1, 0.0) || model.unproject(&px1)?.dot(&x1.normalize()) < 1.0 - 1e-12 {
+            return None;
+        }
+        let px1n = px1 + gaussian(rng, self.cfg.pixel_noise);
+        if !model.contains(&px1n, 0.0) {
+            return None;
+        }
+        Observation::new(model, px0n, px1n).map(|o| (o, x0))
+    }
+
     /// A wrong pixel in frame k for `obs` (keeping its pixel in frame k-1).
     fn outlier(&self, rng: &mut StdRng, obs: &Observation) -> Option<Observation> {
         let model = &self.camera.model;
@@ -729,7 +776,9 @@ impl CameraFrame<'_> {
         None
     }
 
-    fn generate(&self, rng: &mut StdRng, blind: Option<BlindMode>) -> Generated {
+    /// The matches of this camera and frame pair; `tracks` are the previous pair's static
+    /// matches that [`SimConfig::static_tracks`] may continue (empty where it is 0).
+    fn generate(&self, rng: &mut StdRng, blind: Option<BlindMode>, tracks: &[Track]) -> Generated {
         let n = self.cfg.matches_per_camera;
         let model = &self.camera.model;
         match blind {
@@ -762,13 +811,32 @@ impl CameraFrame<'_> {
         kinds.truncate(n);
         kinds.resize(n, Kind::Static);
         kinds.shuffle(rng);
+        // The tracks to continue (`static_tracks`): that share of the static matches, from the
+        // previous pair's in a random order, each tried once.
+        let mut queue: Vec<&Track> = Vec::new();
+        let mut budget = 0usize;
+        if self.cfg.static_tracks > 0.0 && !tracks.is_empty() {
+            let n_static = kinds.iter().filter(|k| **k == Kind::Static).count();
+            budget = (self.cfg.static_tracks * n_static as f64).round() as usize;
+            queue = tracks.iter().collect();
+            queue.shuffle(rng);
+        }
         let mut obs = Vec::with_capacity(n);
         let mut labels = Vec::with_capacity(n);
         let mut points = Vec::with_capacity(n);
         let mut objects = Vec::with_capacity(n);
         for kind in kinds {
+            let mut continued = None;
+            while kind == Kind::Static && budget > 0 {
+                let Some(track) = queue.pop() else { break };
+                if let Some(m) = self.try_continue(rng, track) {
+                    budget -= 1;
+                    continued = Some(m);
+                    break;
+                }
+            }
             for _ in 0..100 {
-                if let Some((o, x0)) = self.try_match(rng, kind) {
+                if let Some((o, x0)) = continued.take().or_else(|| self.try_match(rng, kind)) {
                     obs.push(o);
                     let on_object = kind != Kind::Static;
                     points.push((!on_object).then_some(x0));
@@ -855,6 +923,8 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
     let mut labels = vec![vec![Vec::new(); n_cams]];
     let mut static_points = vec![vec![Vec::new(); n_cams]];
     let mut objects = vec![vec![Vec::new(); n_cams]];
+    // The previous pair's static matches per camera (`static_tracks`; empty where it is 0).
+    let mut tracks: Vec<Vec<Track>> = (0..n_cams).map(|_| Vec::new()).collect();
     for k in 1..n_frames {
         let m = &vehicle_motions[k];
         let mut frame = FrameObservations::new(n_cams);
@@ -883,7 +953,21 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
                     .as_ref()
                     .and_then(|(t, tr)| CameraTraffic::new(t, tr, camera, k)),
             };
-            let (obs, lab, pts, objs) = cf.generate(&mut rng, blind);
+            let (obs, lab, pts, objs) = cf.generate(&mut rng, blind, &tracks[j]);
+            if cfg.static_tracks > 0.0 {
+                tracks[j] = obs
+                    .iter()
+                    .zip(&lab)
+                    .zip(&pts)
+                    .filter(|((_, l), _)| **l == MatchLabel::Inlier)
+                    .filter_map(|((o, _), x0)| {
+                        Some(Track {
+                            px: o.px1,
+                            point: cf.static_motion.transform_point(x0.as_ref()?),
+                        })
+                    })
+                    .collect();
+            }
             frame.per_camera[j] = obs;
             frame_labels[j] = lab;
             frame_points[j] = pts;

@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 
 import momo
 from conftest import cli
@@ -100,6 +101,20 @@ def test_simulate_equals_momo_simulate(simulated):
     out = s["tmp"] / "rewritten"
     seq.write(out)
     assert momo.Sequence.read(out) == seq
+
+
+def test_simulate_with_static_tracks_equals_momo_simulate(simulated, momo_bin):
+    """`static_tracks` as `momo simulate --static-tracks`; out of [0, 1] it is an error."""
+    s = simulated
+    out = s["tmp"] / "tracked"
+    cli(momo_bin, "simulate", "--scenario", s["scenario"], "--frames", s["frames"],
+        "--seed", s["seed"], "--matches", s["matches"], "--static-tracks", 0.8, out, "-q")
+    kw = dict(frames=s["frames"], seed=s["seed"], matches=s["matches"])
+    seq = momo.simulate(s["scenario"], static_tracks=0.8, **kw)
+    assert seq == momo.Sequence.read(out)
+    assert seq != momo.simulate(s["scenario"], **kw)
+    with pytest.raises(momo.SimulationError, match="static_tracks"):
+        momo.simulate(s["scenario"], static_tracks=1.5, **kw)
 
 
 def test_simulate_in_memory_loop_equals_cli(simulated):
