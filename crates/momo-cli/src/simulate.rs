@@ -48,8 +48,7 @@ pub(crate) struct SimulateArgs {
     pixel_noise: Option<f64>,
     /// The share (0 to 1) of each frame pair's static matches that continue a static match of
     /// the previous pair (the same scene point and the same pixel in the shared frame), as a
-    /// tracker or a matcher that re-finds the same corners gives them. Default 0: every static
-    /// match is a new point.
+    /// feature tracker (KLT) gives them. Default 0: every static match is a new point.
     #[arg(long, default_value_t = 0.0)]
     static_tracks: f64,
     /// Output directory (created; an existing one must be empty unless --force; removed

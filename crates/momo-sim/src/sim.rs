@@ -182,10 +182,9 @@ pub struct SimConfig {
     /// `None` (the default): the rig's camera 0.
     pub trajectory_mount: Option<Pose<f64>>,
     /// The share, in `[0, 1]`, of a frame pair's static matches that continue a static match of
-    /// the previous pair, as a feature tracker or a matcher that re-finds the same corners
-    /// reports them: the same scene point, whose pixel in frame `k-1` is the previous pair's
-    /// pixel in frame `k-1` (its noise included), while it stays in view, unoccluded and in
-    /// front. 0 (the default): every static match is a new point (no tracks; the match memory
+    /// the previous pair, as a feature tracker (KLT) reports them: the same scene point, whose
+    /// pixel in frame `k-1` is the previous pair's pixel in frame `k-1` (its noise included),
+    /// while it stays in view, unoccluded and in front. 0 (the default): every static match is a new point (no tracks; the match memory
     /// then finds few neighbours among the static matches). Objects' matches are drawn as
     /// before (`momo simulate --static-tracks`).
     pub static_tracks: f64,
@@ -686,11 +685,7 @@ impl CameraFrame<'_> {
             }
             _ => {
                 let px0 = random_pixel(rng, (w, h));
-                if self
-                    .traffic
-                    .as_ref()
-                    .is_some_and(|t| t.occludes(model, &px0))
-                {
+                if self.occluded(&px0) {
                     return None;
                 }
                 let b0 = model.unproject(&px0)?;
@@ -698,7 +693,28 @@ impl CameraFrame<'_> {
                 (px0, b0 * range, &self.static_motion)
             }
         };
-        let x1 = motion.transform_point(&x0);
+        let px1 = self.moved_pixel(&x0, motion)?;
+        let px0n = px0 + gaussian(rng, self.cfg.pixel_noise);
+        let px1n = px1 + gaussian(rng, self.cfg.pixel_noise);
+        if !(model.contains(&px0n, 0.0) && model.contains(&px1n, 0.0)) {
+            return None;
+        }
+        Observation::new(model, px0n, px1n).map(|o| (o, x0))
+    }
+
+    /// Whether the static scene is hidden at pixel `px` of frame k-1 (a traffic object's box
+    /// covers it).
+    fn occluded(&self, px: &Vector2<f64>) -> bool {
+        self.traffic
+            .as_ref()
+            .is_some_and(|t| t.occludes(&self.camera.model, px))
+    }
+
+    /// The noise-free pixel in frame k of `x0` (camera coordinates at k-1) moved by `motion`;
+    /// `None` where the point comes within 0.1 m of the camera or leaves the image.
+    fn moved_pixel(&self, x0: &Vector3<f64>, motion: &Pose<f64>) -> Option<Vector2<f64>> {
+        let model = &self.camera.model;
+        let x1 = motion.transform_point(x0);
         if x1.norm() < 0.1 {
             return None;
         }
@@ -711,12 +727,7 @@ impl CameraFrame<'_> {
         if model.unproject(&px1)?.dot(&x1.normalize()) < 1.0 - 1e-12 {
             return None;
         }
-        let px0n = px0 + gaussian(rng, self.cfg.pixel_noise);
-        let px1n = px1 + gaussian(rng, self.cfg.pixel_noise);
-        if !(model.contains(&px0n, 0.0) && model.contains(&px1n, 0.0)) {
-            return None;
-        }
-        Observation::new(model, px0n, px1n).map(|o| (o, x0))
+        Some(px1)
     }
 
     /// Tries to continue `track` (a static point of the previous pair: its noisy pixel in frame
@@ -726,21 +737,10 @@ impl CameraFrame<'_> {
     fn try_continue(&self, rng: &mut StdRng, track: &Track) -> Option<(Observation, Vector3<f64>)> {
         let model = &self.camera.model;
         let (px0n, x0) = (track.px, track.point);
-        if self
-            .traffic
-            .as_ref()
-            .is_some_and(|t| t.occludes(model, &px0n))
-        {
+        if self.occluded(&px0n) {
             return None;
         }
-        let x1 = self.static_motion.transform_point(&x0);
-        if x1.norm() < 0.1 {
-            return None;
-        }
-        let px1 = model.project(&x1)?;
-        if !model.contains(&px1, 0.0) || model.unproject(&px1)?.dot(&x1.normalize()) < 1.0 - 1e-12 {
-            return None;
-        }
+        let px1 = self.moved_pixel(&x0, &self.static_motion)?;
         let px1n = px1 + gaussian(rng, self.cfg.pixel_noise);
         if !model.contains(&px1n, 0.0) {
             return None;
@@ -955,12 +955,11 @@ pub fn simulate(cfg: &SimConfig) -> Result<Simulation, SimError> {
             };
             let (obs, lab, pts, objs) = cf.generate(&mut rng, blind, &tracks[j]);
             if cfg.static_tracks > 0.0 {
+                // The static matches: those with a scene point (`Simulation::static_points`).
                 tracks[j] = obs
                     .iter()
-                    .zip(&lab)
                     .zip(&pts)
-                    .filter(|((_, l), _)| **l == MatchLabel::Inlier)
-                    .filter_map(|((o, _), x0)| {
+                    .filter_map(|(o, x0)| {
                         Some(Track {
                             px: o.px1,
                             point: cf.static_motion.transform_point(x0.as_ref()?),
